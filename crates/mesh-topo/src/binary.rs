@@ -1,0 +1,146 @@
+//! The one place where binary encoding happens.
+//!
+//! Every binary file of the project (meshes here, multiresolution pyramids in the
+//! subdivision crates) goes through [`encode`] and [`decode`]: a 8-byte magic number
+//! naming the payload, a little-endian `u32` format version, then the payload encoded
+//! with `bincode` 2 (standard configuration) through its serde support. Swapping the
+//! encoder means changing this module only.
+//!
+//! A truncated, corrupted or foreign file is an error, never a panic, and decoding never
+//! reserves more memory than the input can fill, so a corrupted length prefix cannot
+//! exhaust memory.
+
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use thiserror::Error;
+
+use crate::mesh::HalfedgeMesh;
+use crate::soup::PolygonSoup;
+
+/// Magic number of a binary mesh file.
+pub const MESH_MAGIC: [u8; 8] = *b"MRSMESH\0";
+/// Current version of the binary mesh format.
+pub const MESH_VERSION: u32 = 1;
+
+/// Why a binary payload could not be read or written.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum BinaryError {
+    /// The data is shorter than the 12-byte header.
+    #[error("truncated header: {len} bytes, need at least 12")]
+    TruncatedHeader {
+        /// Bytes available.
+        len: usize,
+    },
+    /// The magic number names another kind of file.
+    #[error("not a {expected} file (magic number {found:?})")]
+    WrongMagic {
+        /// What was expected, in words.
+        expected: String,
+        /// The 8 bytes found.
+        found: [u8; 8],
+    },
+    /// The file was written by another version of the format.
+    #[error("unsupported format version {found} (this build reads version {supported})")]
+    UnsupportedVersion {
+        /// Version in the file.
+        found: u32,
+        /// Version this build reads.
+        supported: u32,
+    },
+    /// The payload could not be decoded (truncated or corrupted).
+    #[error("corrupted or truncated payload at byte {offset}: {message}")]
+    Corrupted {
+        /// Byte offset in the file where decoding stopped (after the header).
+        offset: usize,
+        /// What the decoder reported.
+        message: String,
+    },
+    /// Bytes were left over after the payload.
+    #[error("{extra} unexpected bytes after the payload")]
+    TrailingBytes {
+        /// Number of extra bytes.
+        extra: usize,
+    },
+    /// The payload decoded but is not valid (e.g. the mesh it holds is not manifold).
+    #[error("invalid content: {0}")]
+    Invalid(String),
+    /// Encoding failed.
+    #[error("encoding failed: {0}")]
+    Encode(String),
+    /// Reading or writing the file failed.
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+}
+
+fn config() -> impl bincode::config::Config {
+    bincode::config::standard()
+}
+
+/// Encodes `value` behind a header with `magic` and `version`.
+///
+/// # Errors
+/// [`BinaryError::Encode`] if the value cannot be serialized.
+pub fn encode<T: Serialize>(magic: [u8; 8], version: u32, value: &T) -> Result<Vec<u8>, BinaryError> {
+    let mut out = Vec::with_capacity(64);
+    out.extend_from_slice(&magic);
+    out.extend_from_slice(&version.to_le_bytes());
+    let payload = bincode::serde::encode_to_vec(value, config()).map_err(|e| BinaryError::Encode(e.to_string()))?;
+    out.extend_from_slice(&payload);
+    Ok(out)
+}
+
+/// Decodes a value written by [`encode`] with the same `magic` and `version`.
+/// `what` names the file kind in error messages.
+///
+/// # Errors
+/// Header, version, corruption and trailing-byte errors as [`BinaryError`].
+pub fn decode<T: DeserializeOwned>(bytes: &[u8], magic: [u8; 8], version: u32, what: &str) -> Result<T, BinaryError> {
+    if bytes.len() < 12 {
+        return Err(BinaryError::TruncatedHeader { len: bytes.len() });
+    }
+    let found: [u8; 8] = bytes[..8].try_into().expect("internal: 8-byte slice");
+    if found != magic {
+        return Err(BinaryError::WrongMagic { expected: what.to_string(), found });
+    }
+    let file_version = u32::from_le_bytes(bytes[8..12].try_into().expect("internal: 4-byte slice"));
+    if file_version != version {
+        return Err(BinaryError::UnsupportedVersion { found: file_version, supported: version });
+    }
+    let payload = &bytes[12..];
+    // serde pre-allocates sequences cautiously (bounded by a small constant), so a
+    // corrupted length prefix runs out of input and fails instead of reserving memory.
+    let (value, used): (T, usize) = bincode::serde::decode_from_slice(payload, config())
+        .map_err(|e| BinaryError::Corrupted { offset: 12, message: e.to_string() })?;
+    if used != payload.len() {
+        return Err(BinaryError::TrailingBytes { extra: payload.len() - used });
+    }
+    Ok(value)
+}
+
+/// Encodes a mesh (as its polygon soup: positions and faces in order).
+///
+/// # Errors
+/// See [`encode`].
+pub fn encode_mesh(mesh: &HalfedgeMesh) -> Result<Vec<u8>, BinaryError> {
+    encode(MESH_MAGIC, MESH_VERSION, &mesh.to_soup())
+}
+
+/// Decodes and validates a mesh written by [`encode_mesh`].
+///
+/// ```
+/// use glam::DVec3;
+/// use mesh_topo::{HalfedgeMesh, binary};
+/// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+/// let bytes = binary::encode_mesh(&mesh)?;
+/// assert_eq!(binary::decode_mesh(&bytes)?, mesh);
+/// assert!(binary::decode_mesh(&bytes[..bytes.len() - 1]).is_err());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// See [`decode`]; a payload that is not a valid mesh gives [`BinaryError::Invalid`].
+pub fn decode_mesh(bytes: &[u8]) -> Result<HalfedgeMesh, BinaryError> {
+    let soup: PolygonSoup = decode(bytes, MESH_MAGIC, MESH_VERSION, "multires binary mesh")?;
+    HalfedgeMesh::from_soup(&soup).map_err(|e| BinaryError::Invalid(e.to_string()))
+}

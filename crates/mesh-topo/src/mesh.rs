@@ -1,0 +1,827 @@
+//! The half-edge mesh: construction from a soup with full validation, element access
+//! and circulators.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{InvariantError, MeshError};
+use crate::ids::{EdgeId, FaceId, HalfedgeId, MAX_ELEMENTS, VertexId};
+use crate::soup::PolygonSoup;
+
+/// Sentinel for "no element" in the raw connectivity arrays.
+pub(crate) const INVALID: u32 = u32::MAX;
+
+/// A manifold, consistently oriented polygon mesh with boundaries, stored as half-edges.
+///
+/// # Layout
+/// Struct-of-arrays with `u32` indices: one array per relation (`to_vertex`, `next`,
+/// `prev`, `face` per half-edge; one outgoing half-edge per vertex; one half-edge per
+/// face). Half-edges come in twin pairs `2e`, `2e + 1`, so [`HalfedgeId::twin`] and
+/// [`HalfedgeId::edge`] are index arithmetic (the layout of pmp and OpenMesh).
+///
+/// # Order guarantees
+/// Building keeps everything the caller gave: vertex `i` of the soup is [`VertexId`] `i`
+/// (unreferenced vertices included), face `f` is [`FaceId`] `f`, and
+/// [`face_vertices`](Self::face_vertices) starts at the face's first corner as given.
+/// Edges are numbered in order of first appearance when the faces are scanned in order,
+/// corner by corner; half-edge `2e` is that first appearance (it always has a face) and
+/// `2e + 1` its twin (a face or the boundary). [`to_soup`](Self::to_soup) therefore
+/// returns the input soup exactly.
+///
+/// # Circulation order
+/// Faces are counter-clockwise seen from outside. Around a vertex,
+/// [`outgoing_halfedges`](Self::outgoing_halfedges) turns counter-clockwise; for a
+/// boundary vertex it starts at the outgoing *boundary* half-edge (whose face is `None`),
+/// so the faces follow in fan order.
+///
+/// ```
+/// use glam::DVec3;
+/// use mesh_topo::{HalfedgeMesh, PolygonSoup};
+///
+/// // A square split into two triangles.
+/// let soup = PolygonSoup::from_faces(
+///     vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
+///     [[0u32, 1, 2], [0, 2, 3]],
+/// );
+/// let mesh = HalfedgeMesh::from_soup(&soup)?;
+/// assert_eq!((mesh.vertex_count(), mesh.edge_count(), mesh.face_count()), (4, 5, 2));
+/// let v0 = mesh.vertex(0).unwrap();
+/// assert!(mesh.is_boundary_vertex(v0));
+/// assert_eq!(mesh.valence(v0), 3);
+/// assert_eq!(mesh.to_soup(), soup);
+/// # Ok::<(), mesh_topo::MeshError>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(into = "PolygonSoup", try_from = "PolygonSoup")]
+pub struct HalfedgeMesh {
+    positions: Vec<DVec3>,
+    /// Outgoing half-edge per vertex (the boundary one for boundary vertices), or INVALID.
+    vertex_halfedge: Vec<u32>,
+    /// Target vertex per half-edge.
+    halfedge_to: Vec<u32>,
+    halfedge_next: Vec<u32>,
+    halfedge_prev: Vec<u32>,
+    /// Face on the left of each half-edge, INVALID on the boundary.
+    halfedge_face: Vec<u32>,
+    /// Half-edge leaving the face's first corner.
+    face_halfedge: Vec<u32>,
+}
+
+impl From<HalfedgeMesh> for PolygonSoup {
+    fn from(mesh: HalfedgeMesh) -> Self {
+        mesh.to_soup()
+    }
+}
+
+impl TryFrom<PolygonSoup> for HalfedgeMesh {
+    type Error = MeshError;
+    fn try_from(soup: PolygonSoup) -> Result<Self, MeshError> {
+        HalfedgeMesh::from_soup(&soup)
+    }
+}
+
+impl HalfedgeMesh {
+    /// Builds a mesh from positions and per-face vertex index lists.
+    ///
+    /// # Errors
+    /// See [`from_soup`](Self::from_soup).
+    pub fn from_faces<F, I>(positions: Vec<DVec3>, faces: F) -> Result<Self, MeshError>
+    where
+        F: IntoIterator<Item = I>,
+        I: AsRef<[u32]>,
+    {
+        Self::from_soup(&PolygonSoup::from_faces(positions, faces))
+    }
+
+    /// Builds the half-edge structure of a polygon soup, checking every condition for a
+    /// manifold, consistently oriented mesh. Runs in time linear in the number of face
+    /// corners (plus a sort of each vertex's outgoing edges by target).
+    ///
+    /// # Errors
+    /// The first problem found, as a [`MeshError`] naming the face, vertex or edge:
+    /// non-finite coordinates, index out of range, faces with fewer than 3 corners or a
+    /// repeated vertex, non-manifold edges, inconsistent orientation, non-manifold
+    /// vertices, or more elements than `u32` indices address. Building never panics.
+    pub fn from_soup(soup: &PolygonSoup) -> Result<Self, MeshError> {
+        Builder::new(soup)?.build()
+    }
+
+    // ----------------------------------------------------------------------------------
+    // Counts and element handles.
+
+    /// Number of vertices, isolated ones included.
+    #[inline]
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Number of half-edges (twice the number of edges).
+    #[inline]
+    pub fn halfedge_count(&self) -> usize {
+        self.halfedge_to.len()
+    }
+
+    /// Number of undirected edges.
+    #[inline]
+    pub fn edge_count(&self) -> usize {
+        self.halfedge_to.len() / 2
+    }
+
+    /// Number of faces.
+    #[inline]
+    pub fn face_count(&self) -> usize {
+        self.face_halfedge.len()
+    }
+
+    /// The vertex with index `i`, if it exists.
+    pub fn vertex(&self, i: usize) -> Option<VertexId> {
+        (i < self.vertex_count()).then(|| VertexId::new(i as u32))
+    }
+
+    /// The face with index `i`, if it exists.
+    pub fn face(&self, i: usize) -> Option<FaceId> {
+        (i < self.face_count()).then(|| FaceId::new(i as u32))
+    }
+
+    /// The edge with index `i`, if it exists.
+    pub fn edge(&self, i: usize) -> Option<EdgeId> {
+        (i < self.edge_count()).then(|| EdgeId::new(i as u32))
+    }
+
+    /// The half-edge with index `i`, if it exists.
+    pub fn halfedge(&self, i: usize) -> Option<HalfedgeId> {
+        (i < self.halfedge_count()).then(|| HalfedgeId::new(i as u32))
+    }
+
+    /// All vertices in index order.
+    pub fn vertices(&self) -> impl ExactSizeIterator<Item = VertexId> + '_ {
+        (0..self.vertex_count() as u32).map(VertexId::new)
+    }
+
+    /// All faces in index order.
+    pub fn faces(&self) -> impl ExactSizeIterator<Item = FaceId> + '_ {
+        (0..self.face_count() as u32).map(FaceId::new)
+    }
+
+    /// All edges in index order.
+    pub fn edges(&self) -> impl ExactSizeIterator<Item = EdgeId> + '_ {
+        (0..self.edge_count() as u32).map(EdgeId::new)
+    }
+
+    /// All half-edges in index order.
+    pub fn halfedges(&self) -> impl ExactSizeIterator<Item = HalfedgeId> + '_ {
+        (0..self.halfedge_count() as u32).map(HalfedgeId::new)
+    }
+
+    // ----------------------------------------------------------------------------------
+    // Geometry.
+
+    /// All positions, indexed by vertex index.
+    #[inline]
+    pub fn positions(&self) -> &[DVec3] {
+        &self.positions
+    }
+
+    /// Mutable positions. Connectivity cannot be changed through this; a non-finite
+    /// value written here is reported by [`validate`](Self::validate).
+    #[inline]
+    pub fn positions_mut(&mut self) -> &mut [DVec3] {
+        &mut self.positions
+    }
+
+    /// Position of a vertex.
+    #[inline]
+    pub fn position(&self, v: VertexId) -> DVec3 {
+        self.positions[v.index()]
+    }
+
+    /// Replaces all positions (same count). Returns the old ones.
+    ///
+    /// # Errors
+    /// [`MeshError::TooLarge`] is never returned; a count mismatch or a non-finite value
+    /// gives the corresponding error and leaves the mesh unchanged.
+    pub fn replace_positions(&mut self, positions: Vec<DVec3>) -> Result<Vec<DVec3>, PositionsError> {
+        if positions.len() != self.positions.len() {
+            return Err(PositionsError::CountMismatch { expected: self.positions.len(), found: positions.len() });
+        }
+        check_finite(&positions).map_err(PositionsError::Mesh)?;
+        Ok(std::mem::replace(&mut self.positions, positions))
+    }
+
+    // ----------------------------------------------------------------------------------
+    // Connectivity.
+
+    /// The half-edge after `h` in its face (or boundary loop).
+    #[inline]
+    pub fn next(&self, h: HalfedgeId) -> HalfedgeId {
+        HalfedgeId::new(self.halfedge_next[h.index()])
+    }
+
+    /// The half-edge before `h` in its face (or boundary loop).
+    #[inline]
+    pub fn prev(&self, h: HalfedgeId) -> HalfedgeId {
+        HalfedgeId::new(self.halfedge_prev[h.index()])
+    }
+
+    /// The twin (opposite) half-edge. Same as [`HalfedgeId::twin`].
+    #[inline]
+    pub fn twin(&self, h: HalfedgeId) -> HalfedgeId {
+        h.twin()
+    }
+
+    /// The vertex `h` points to.
+    #[inline]
+    pub fn target(&self, h: HalfedgeId) -> VertexId {
+        VertexId::new(self.halfedge_to[h.index()])
+    }
+
+    /// The vertex `h` starts from.
+    #[inline]
+    pub fn origin(&self, h: HalfedgeId) -> VertexId {
+        VertexId::new(self.halfedge_to[h.twin().index()])
+    }
+
+    /// The face on the left of `h`, or `None` for a boundary half-edge.
+    #[inline]
+    pub fn halfedge_face(&self, h: HalfedgeId) -> Option<FaceId> {
+        let f = self.halfedge_face[h.index()];
+        (f != INVALID).then(|| FaceId::new(f))
+    }
+
+    /// True if `h` has no face (it runs along a hole).
+    #[inline]
+    pub fn is_boundary_halfedge(&self, h: HalfedgeId) -> bool {
+        self.halfedge_face[h.index()] == INVALID
+    }
+
+    /// True if one side of the edge has no face.
+    #[inline]
+    pub fn is_boundary_edge(&self, e: EdgeId) -> bool {
+        self.is_boundary_halfedge(e.halfedge(0)) || self.is_boundary_halfedge(e.halfedge(1))
+    }
+
+    /// An outgoing half-edge of `v` (the boundary one if `v` is on the boundary), or
+    /// `None` for an isolated vertex.
+    #[inline]
+    pub fn vertex_halfedge(&self, v: VertexId) -> Option<HalfedgeId> {
+        let h = self.vertex_halfedge[v.index()];
+        (h != INVALID).then(|| HalfedgeId::new(h))
+    }
+
+    /// The half-edge leaving the first corner of face `f`.
+    #[inline]
+    pub fn face_halfedge(&self, f: FaceId) -> HalfedgeId {
+        HalfedgeId::new(self.face_halfedge[f.index()])
+    }
+
+    /// The two end vertices of an edge, in the direction of its half-edge 0.
+    #[inline]
+    pub fn edge_vertices(&self, e: EdgeId) -> [VertexId; 2] {
+        let h = e.halfedge(0);
+        [self.origin(h), self.target(h)]
+    }
+
+    /// True if `v` has no incident edge.
+    #[inline]
+    pub fn is_isolated(&self, v: VertexId) -> bool {
+        self.vertex_halfedge[v.index()] == INVALID
+    }
+
+    /// True if `v` lies on a boundary loop.
+    #[inline]
+    pub fn is_boundary_vertex(&self, v: VertexId) -> bool {
+        self.vertex_halfedge(v).is_some_and(|h| self.is_boundary_halfedge(h))
+    }
+
+    /// Number of edges at `v`. For an interior vertex this is also its number of faces;
+    /// a boundary vertex has one face fewer than its valence.
+    pub fn valence(&self, v: VertexId) -> usize {
+        self.outgoing_halfedges(v).count()
+    }
+
+    /// Number of corners of face `f`.
+    pub fn face_degree(&self, f: FaceId) -> usize {
+        self.face_halfedges(f).count()
+    }
+
+    /// The half-edge from `from` to `to`, if that edge exists.
+    pub fn find_halfedge(&self, from: VertexId, to: VertexId) -> Option<HalfedgeId> {
+        self.outgoing_halfedges(from).find(|&h| self.target(h) == to)
+    }
+
+    // ----------------------------------------------------------------------------------
+    // Circulators.
+
+    /// The outgoing half-edges of `v`, counter-clockwise, starting at
+    /// [`vertex_halfedge`](Self::vertex_halfedge) (the boundary half-edge for a boundary
+    /// vertex). Empty for an isolated vertex.
+    pub fn outgoing_halfedges(&self, v: VertexId) -> VertexCirculator<'_> {
+        let start = self.vertex_halfedge[v.index()];
+        VertexCirculator { mesh: self, start, current: start }
+    }
+
+    /// The neighbours of `v` (targets of its outgoing half-edges), counter-clockwise.
+    pub fn vertex_neighbors(&self, v: VertexId) -> impl Iterator<Item = VertexId> + '_ {
+        self.outgoing_halfedges(v).map(|h| self.target(h))
+    }
+
+    /// The faces around `v`, counter-clockwise (for a boundary vertex from the face after
+    /// the boundary to the face before it).
+    pub fn vertex_faces(&self, v: VertexId) -> impl Iterator<Item = FaceId> + '_ {
+        self.outgoing_halfedges(v).filter_map(|h| self.halfedge_face(h))
+    }
+
+    /// The half-edges of face `f` in order, starting at its first corner.
+    pub fn face_halfedges(&self, f: FaceId) -> LoopCirculator<'_> {
+        let start = self.face_halfedge[f.index()];
+        LoopCirculator { mesh: self, start, current: start }
+    }
+
+    /// The half-edges of the loop through `h` (a face or a boundary loop), starting at `h`.
+    pub fn halfedge_loop(&self, h: HalfedgeId) -> LoopCirculator<'_> {
+        LoopCirculator { mesh: self, start: h.raw(), current: h.raw() }
+    }
+
+    /// The corners of face `f` in order, as given when the mesh was built.
+    pub fn face_vertices(&self, f: FaceId) -> impl Iterator<Item = VertexId> + '_ {
+        self.face_halfedges(f).map(|h| self.origin(h))
+    }
+
+    /// The faces sharing an edge with `f`, in the order of `f`'s half-edges (boundary
+    /// edges skipped).
+    pub fn face_neighbors(&self, f: FaceId) -> impl Iterator<Item = FaceId> + '_ {
+        self.face_halfedges(f).filter_map(|h| self.halfedge_face(h.twin()))
+    }
+
+    // ----------------------------------------------------------------------------------
+    // Conversion and checks.
+
+    /// The mesh as a polygon soup: positions and faces exactly as given to
+    /// [`from_soup`](Self::from_soup).
+    pub fn to_soup(&self) -> PolygonSoup {
+        let mut soup = PolygonSoup::with_capacity(self.vertex_count(), self.face_count(), self.halfedge_count());
+        soup.positions.extend_from_slice(&self.positions);
+        for f in self.faces() {
+            soup.indices.extend(self.face_vertices(f).map(VertexId::raw));
+            soup.offsets.push(soup.indices.len() as u32);
+        }
+        soup
+    }
+
+    /// Checks every internal invariant of the half-edge structure (twins, next/prev
+    /// cycles, face and vertex references, boundary conventions, manifold fans, finite
+    /// positions). Building from a soup always gives a valid mesh; this exists for tests
+    /// and for code that edits meshes.
+    ///
+    /// # Errors
+    /// The first broken invariant, described in words.
+    pub fn validate(&self) -> Result<(), InvariantError> {
+        let fail = |msg: String| Err(InvariantError(msg));
+        let nh = self.halfedge_count() as u32;
+        let nv = self.vertex_count() as u32;
+        let nf = self.face_count() as u32;
+        if !self.halfedge_to.len().is_multiple_of(2) {
+            return fail("odd number of half-edges".into());
+        }
+        for (name, len) in
+            [("next", self.halfedge_next.len()), ("prev", self.halfedge_prev.len()), ("face", self.halfedge_face.len())]
+        {
+            if len != nh as usize {
+                return fail(format!("half-edge array {name} has length {len}, expected {nh}"));
+            }
+        }
+        if self.vertex_halfedge.len() != nv as usize {
+            return fail("vertex array length mismatch".into());
+        }
+        if let Err(e) = check_finite(&self.positions) {
+            return fail(e.to_string());
+        }
+        for h in 0..nh {
+            let (next, prev, to, face) = (
+                self.halfedge_next[h as usize],
+                self.halfedge_prev[h as usize],
+                self.halfedge_to[h as usize],
+                self.halfedge_face[h as usize],
+            );
+            if next >= nh || prev >= nh || to >= nv || (face != INVALID && face >= nf) {
+                return fail(format!("half-edge {h}: reference out of range"));
+            }
+            if self.halfedge_prev[next as usize] != h || self.halfedge_next[prev as usize] != h {
+                return fail(format!("half-edge {h}: next/prev are not inverse"));
+            }
+            if self.halfedge_face[next as usize] != face {
+                return fail(format!("half-edge {h}: next lies in another face"));
+            }
+            let origin_of_next = self.halfedge_to[(next ^ 1) as usize];
+            if origin_of_next != to {
+                return fail(format!("half-edge {h}: next does not start at its target"));
+            }
+            if to == self.halfedge_to[(h ^ 1) as usize] {
+                return fail(format!("half-edge {h}: loop edge"));
+            }
+            if face == INVALID && self.halfedge_face[(h ^ 1) as usize] == INVALID {
+                return fail(format!("edge {}: both sides are boundary", h / 2));
+            }
+        }
+        for f in 0..nf {
+            let h = self.face_halfedge[f as usize];
+            if h >= nh || self.halfedge_face[h as usize] != f {
+                return fail(format!("face {f}: its half-edge does not belong to it"));
+            }
+            let degree = self.face_halfedges(FaceId::new(f)).take(nh as usize + 1).count();
+            if degree < 3 || degree > nh as usize {
+                return fail(format!("face {f}: degree {degree}"));
+            }
+        }
+        let mut seen_out = vec![0u32; nv as usize];
+        for h in 0..nh {
+            seen_out[self.halfedge_to[(h ^ 1) as usize] as usize] += 1;
+        }
+        for v in 0..nv {
+            let h = self.vertex_halfedge[v as usize];
+            if h == INVALID {
+                if seen_out[v as usize] != 0 {
+                    return fail(format!("vertex {v}: has edges but no half-edge"));
+                }
+                continue;
+            }
+            if h >= nh || self.halfedge_to[(h ^ 1) as usize] != v {
+                return fail(format!("vertex {v}: its half-edge does not start there"));
+            }
+            let boundary_out = self
+                .outgoing_halfedges(VertexId::new(v))
+                .take(nh as usize + 1)
+                .filter(|&o| self.is_boundary_halfedge(o))
+                .count();
+            let valence = self.outgoing_halfedges(VertexId::new(v)).take(nh as usize + 1).count();
+            if valence != seen_out[v as usize] as usize {
+                return fail(format!(
+                    "vertex {v}: circulation reaches {valence} of {} half-edges",
+                    seen_out[v as usize]
+                ));
+            }
+            if boundary_out > 1 || (boundary_out == 1 && !self.is_boundary_halfedge(HalfedgeId::new(h))) {
+                return fail(format!("vertex {v}: boundary half-edge convention broken"));
+            }
+        }
+        Ok(())
+    }
+
+    /// Raw target-vertex array, one entry per half-edge (for algorithms that want flat
+    /// arrays; see the type docs for the layout).
+    #[inline]
+    pub fn raw_halfedge_targets(&self) -> &[u32] {
+        &self.halfedge_to
+    }
+
+    /// Raw next array, one entry per half-edge.
+    #[inline]
+    pub fn raw_halfedge_next(&self) -> &[u32] {
+        &self.halfedge_next
+    }
+
+    /// Raw face array, one entry per half-edge (`u32::MAX` on the boundary).
+    #[inline]
+    pub fn raw_halfedge_faces(&self) -> &[u32] {
+        &self.halfedge_face
+    }
+}
+
+/// Error from [`HalfedgeMesh::replace_positions`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PositionsError {
+    /// The new array has another length than the vertex count.
+    #[error("expected {expected} positions, got {found}")]
+    CountMismatch {
+        /// Vertex count of the mesh.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+    /// A new position is not finite.
+    #[error(transparent)]
+    Mesh(MeshError),
+}
+
+/// Counter-clockwise iterator over the outgoing half-edges of a vertex.
+#[derive(Clone)]
+pub struct VertexCirculator<'a> {
+    mesh: &'a HalfedgeMesh,
+    start: u32,
+    current: u32,
+}
+
+impl Iterator for VertexCirculator<'_> {
+    type Item = HalfedgeId;
+    #[inline]
+    fn next(&mut self) -> Option<HalfedgeId> {
+        if self.current == INVALID {
+            return None;
+        }
+        let h = self.current;
+        // Counter-clockwise: the twin of the previous half-edge leaves the same vertex.
+        let following = self.mesh.halfedge_prev[h as usize] ^ 1;
+        self.current = if following == self.start { INVALID } else { following };
+        Some(HalfedgeId::new(h))
+    }
+}
+
+/// Iterator over the half-edges of one face or boundary loop.
+#[derive(Clone)]
+pub struct LoopCirculator<'a> {
+    mesh: &'a HalfedgeMesh,
+    start: u32,
+    current: u32,
+}
+
+impl Iterator for LoopCirculator<'_> {
+    type Item = HalfedgeId;
+    #[inline]
+    fn next(&mut self) -> Option<HalfedgeId> {
+        if self.current == INVALID {
+            return None;
+        }
+        let h = self.current;
+        let following = self.mesh.halfedge_next[h as usize];
+        self.current = if following == self.start { INVALID } else { following };
+        Some(HalfedgeId::new(h))
+    }
+}
+
+fn check_finite(positions: &[DVec3]) -> Result<(), MeshError> {
+    for (vertex, p) in positions.iter().enumerate() {
+        if !p.is_finite() {
+            let axis = (0..3).find(|&a| !p[a].is_finite()).unwrap_or(0);
+            return Err(MeshError::NonFiniteCoordinate { vertex, axis, value: p[axis] });
+        }
+    }
+    Ok(())
+}
+
+/// One-shot construction state for [`HalfedgeMesh::from_soup`].
+struct Builder<'a> {
+    soup: &'a PolygonSoup,
+    /// For every corner (global index into `soup.indices`), the face it belongs to.
+    corner_face: Vec<u32>,
+    /// Corners grouped by origin vertex (CSR), each group sorted by target vertex.
+    out_offsets: Vec<u32>,
+    out_corners: Vec<u32>,
+}
+
+impl<'a> Builder<'a> {
+    fn new(soup: &'a PolygonSoup) -> Result<Self, MeshError> {
+        let nv = soup.positions.len();
+        let corners = soup.indices.len();
+        if nv > MAX_ELEMENTS {
+            return Err(MeshError::TooLarge { what: "vertices", count: nv, max: MAX_ELEMENTS });
+        }
+        // Every corner can create up to two half-edges.
+        if corners > MAX_ELEMENTS / 2 {
+            return Err(MeshError::TooLarge { what: "face corners", count: corners, max: MAX_ELEMENTS / 2 });
+        }
+        check_finite(&soup.positions)?;
+        let faces = soup.face_count();
+        let valid_offsets = soup.offsets.first().is_none_or(|&o| o == 0)
+            && soup.offsets.last().is_none_or(|&o| o as usize == corners)
+            && soup.offsets.windows(2).all(|w| w[0] <= w[1]);
+        if !valid_offsets || (soup.offsets.is_empty() && corners != 0) {
+            // A malformed offsets array can only come from building a soup by hand; it
+            // is reported on the first face whose range is wrong.
+            let face = soup.offsets.windows(2).position(|w| w[0] > w[1]).unwrap_or(0);
+            return Err(MeshError::FaceTooSmall { face, len: 0 });
+        }
+
+        // Per-face checks and the corner -> face map.
+        let mut corner_face = vec![0u32; corners];
+        let mut last_face_of_vertex = vec![u32::MAX; nv];
+        for f in 0..faces {
+            let (begin, end) = (soup.offsets[f] as usize, soup.offsets[f + 1] as usize);
+            let face = &soup.indices[begin..end];
+            if face.len() < 3 {
+                return Err(MeshError::FaceTooSmall { face: f, len: face.len() });
+            }
+            for (corner, &v) in face.iter().enumerate() {
+                if v as usize >= nv {
+                    return Err(MeshError::IndexOutOfRange { face: f, corner, index: v as u64, vertex_count: nv });
+                }
+                if last_face_of_vertex[v as usize] == f as u32 {
+                    return Err(MeshError::RepeatedVertex { face: f, vertex: v });
+                }
+                last_face_of_vertex[v as usize] = f as u32;
+            }
+            corner_face[begin..end].fill(f as u32);
+        }
+
+        // Group corners by origin vertex.
+        let mut out_offsets = vec![0u32; nv + 1];
+        for &v in &soup.indices {
+            out_offsets[v as usize + 1] += 1;
+        }
+        for i in 0..nv {
+            out_offsets[i + 1] += out_offsets[i];
+        }
+        let mut fill = out_offsets.clone();
+        let mut out_corners = vec![0u32; corners];
+        for (c, &v) in soup.indices.iter().enumerate() {
+            out_corners[fill[v as usize] as usize] = c as u32;
+            fill[v as usize] += 1;
+        }
+        let mut builder = Self { soup, corner_face, out_offsets, out_corners };
+        for v in 0..nv {
+            let (b, e) = (builder.out_offsets[v] as usize, builder.out_offsets[v + 1] as usize);
+            let mut group = std::mem::take(&mut builder.out_corners);
+            // Sort by (target, corner): stable and deterministic.
+            group[b..e].sort_unstable_by_key(|&c| (builder.corner_target(c), c));
+            builder.out_corners = group;
+        }
+        Ok(builder)
+    }
+
+    /// Target vertex of the half-edge leaving corner `c` inside its face.
+    #[inline]
+    fn corner_target(&self, c: u32) -> u32 {
+        self.soup.indices[self.next_corner(c) as usize]
+    }
+
+    #[inline]
+    fn next_corner(&self, c: u32) -> u32 {
+        let f = self.corner_face[c as usize] as usize;
+        let end = self.soup.offsets[f + 1];
+        if c + 1 == end { self.soup.offsets[f] } else { c + 1 }
+    }
+
+    #[inline]
+    fn prev_corner(&self, c: u32) -> u32 {
+        let f = self.corner_face[c as usize] as usize;
+        let begin = self.soup.offsets[f];
+        if c == begin { self.soup.offsets[f + 1] - 1 } else { c - 1 }
+    }
+
+    /// The corners leaving `from` towards `to` (a sorted range of the CSR group).
+    fn corners_between(&self, from: u32, to: u32) -> &[u32] {
+        let (b, e) = (self.out_offsets[from as usize] as usize, self.out_offsets[from as usize + 1] as usize);
+        let group = &self.out_corners[b..e];
+        let lo = group.partition_point(|&c| self.corner_target(c) < to);
+        let hi = group.partition_point(|&c| self.corner_target(c) <= to);
+        &group[lo..hi]
+    }
+
+    fn build(self) -> Result<HalfedgeMesh, MeshError> {
+        let soup = self.soup;
+        let nv = soup.positions.len();
+        let corners = soup.indices.len();
+
+        // Pair corners into edges, in order of first appearance.
+        let mut corner_halfedge = vec![INVALID; corners];
+        let mut halfedge_to: Vec<u32> = Vec::with_capacity(corners * 2);
+        let mut halfedge_corner: Vec<u32> = Vec::with_capacity(corners * 2);
+        for c in 0..corners as u32 {
+            if corner_halfedge[c as usize] != INVALID {
+                continue;
+            }
+            let from = soup.indices[c as usize];
+            let to = self.corner_target(c);
+            let forward = self.corners_between(from, to);
+            let backward = self.corners_between(to, from);
+            if forward.len() + backward.len() > 2 {
+                let mut faces = forward.iter().chain(backward).map(|&k| self.corner_face[k as usize] as usize);
+                let mut three = [0usize; 3];
+                for slot in &mut three {
+                    *slot = faces.next().unwrap_or(0);
+                }
+                three.sort_unstable();
+                return Err(MeshError::NonManifoldEdge { from: from.min(to), to: from.max(to), faces: three });
+            }
+            if forward.len() == 2 {
+                return Err(MeshError::InconsistentOrientation {
+                    from,
+                    to,
+                    first_face: self.corner_face[forward[0] as usize] as usize,
+                    second_face: self.corner_face[forward[1] as usize] as usize,
+                });
+            }
+            let h = halfedge_to.len() as u32;
+            corner_halfedge[c as usize] = h;
+            halfedge_to.push(to);
+            halfedge_corner.push(c);
+            halfedge_to.push(from);
+            match backward.first() {
+                Some(&twin_corner) => {
+                    corner_halfedge[twin_corner as usize] = h + 1;
+                    halfedge_corner.push(twin_corner);
+                }
+                None => halfedge_corner.push(INVALID),
+            }
+        }
+        let nh = halfedge_to.len();
+
+        let mut halfedge_next = vec![INVALID; nh];
+        let mut halfedge_prev = vec![INVALID; nh];
+        let mut halfedge_face = vec![INVALID; nh];
+        for h in 0..nh {
+            let c = halfedge_corner[h];
+            if c != INVALID {
+                halfedge_face[h] = self.corner_face[c as usize];
+                halfedge_next[h] = corner_halfedge[self.next_corner(c) as usize];
+                halfedge_prev[h] = corner_halfedge[self.prev_corner(c) as usize];
+            }
+        }
+
+        // Boundary half-edges: at most one may leave each vertex, else the vertex joins
+        // two fans through a hole.
+        let mut boundary_out = vec![INVALID; nv];
+        for h in (1..nh).step_by(2) {
+            if halfedge_corner[h] != INVALID {
+                continue;
+            }
+            let origin = halfedge_to[h - 1];
+            if boundary_out[origin as usize] != INVALID {
+                let other = boundary_out[origin as usize] as usize;
+                return Err(MeshError::NonManifoldVertex {
+                    vertex: origin,
+                    fans: 2,
+                    example_faces: [halfedge_face[other ^ 1] as usize, halfedge_face[h ^ 1] as usize],
+                });
+            }
+            boundary_out[origin as usize] = h as u32;
+        }
+        for h in (1..nh).step_by(2) {
+            if halfedge_corner[h] == INVALID {
+                let next = boundary_out[halfedge_to[h] as usize];
+                halfedge_next[h] = next;
+                halfedge_prev[next as usize] = h as u32;
+            }
+        }
+
+        // Vertex half-edges: the boundary one, else the first corner in face order.
+        let mut vertex_halfedge = boundary_out;
+        for (v, slot) in vertex_halfedge.iter_mut().enumerate() {
+            if *slot == INVALID {
+                let (b, e) = (self.out_offsets[v] as usize, self.out_offsets[v + 1] as usize);
+                if let Some(&c) = self.out_corners[b..e].iter().min() {
+                    *slot = corner_halfedge[c as usize];
+                }
+            }
+        }
+
+        let face_halfedge = soup.offsets.iter().take(soup.face_count()).map(|&o| corner_halfedge[o as usize]).collect();
+
+        let mesh = HalfedgeMesh {
+            positions: soup.positions.clone(),
+            vertex_halfedge,
+            halfedge_to,
+            halfedge_next,
+            halfedge_prev,
+            halfedge_face,
+            face_halfedge,
+        };
+        mesh.check_single_fans(&self.out_offsets)?;
+        Ok(mesh)
+    }
+}
+
+impl HalfedgeMesh {
+    /// Every vertex's circulation must reach all its outgoing half-edges; otherwise its
+    /// faces form several fans (e.g. two cones touching at the apex).
+    fn check_single_fans(&self, corner_out_offsets: &[u32]) -> Result<(), MeshError> {
+        for v in self.vertices() {
+            let corner_out = (corner_out_offsets[v.index() + 1] - corner_out_offsets[v.index()]) as usize;
+            if corner_out == 0 {
+                continue;
+            }
+            let reached_faces = self.vertex_faces(v).take(corner_out + 1).count();
+            if reached_faces != corner_out {
+                // Count the fans: the circulation cycles among v's outgoing half-edges.
+                let outgoing: Vec<HalfedgeId> = self.halfedges().filter(|&h| self.origin(h) == v).collect();
+                let mut cycle_of: Vec<Option<usize>> = vec![None; outgoing.len()];
+                let mut fans = 0;
+                let mut first_face_of_fan = Vec::new();
+                for i in 0..outgoing.len() {
+                    if cycle_of[i].is_some() {
+                        continue;
+                    }
+                    let mut h = outgoing[i];
+                    let mut face = None;
+                    loop {
+                        let k = outgoing.iter().position(|&o| o == h).expect("internal: outgoing half-edge");
+                        if cycle_of[k].is_some() {
+                            break;
+                        }
+                        cycle_of[k] = Some(fans);
+                        face = face.or(self.halfedge_face(h));
+                        h = self.prev(h).twin();
+                    }
+                    first_face_of_fan.push(face.map_or(0, FaceId::index));
+                    fans += 1;
+                }
+                return Err(MeshError::NonManifoldVertex {
+                    vertex: v.raw(),
+                    fans,
+                    example_faces: [first_face_of_fan[0], first_face_of_fan[1]],
+                });
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,94 @@
+//! Polygon soups: positions plus faces as vertex index lists, the form meshes are
+//! read from files in and built from.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// Positions plus faces as lists of vertex indices, stored compactly (one flat index
+/// array plus offsets, struct-of-arrays).
+///
+/// A soup carries no adjacency and no guarantee of validity; [`HalfedgeMesh::from_soup`]
+/// checks it. Face `f` is `indices[offsets[f] .. offsets[f + 1]]`.
+///
+/// [`HalfedgeMesh::from_soup`]: crate::HalfedgeMesh::from_soup
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct PolygonSoup {
+    /// Vertex positions.
+    pub positions: Vec<DVec3>,
+    /// Start of each face in `indices`, plus one final entry equal to `indices.len()`.
+    /// Empty for a soup without faces.
+    pub offsets: Vec<u32>,
+    /// Concatenated vertex indices of all faces.
+    pub indices: Vec<u32>,
+}
+
+impl PolygonSoup {
+    /// An empty soup with room for `vertices` positions, `faces` faces and `corners`
+    /// face corners in total.
+    pub fn with_capacity(vertices: usize, faces: usize, corners: usize) -> Self {
+        let mut offsets = Vec::with_capacity(faces + 1);
+        offsets.push(0);
+        Self { positions: Vec::with_capacity(vertices), offsets, indices: Vec::with_capacity(corners) }
+    }
+
+    /// A soup from positions and per-face index lists.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use mesh_topo::PolygonSoup;
+    /// let soup = PolygonSoup::from_faces(
+    ///     vec![DVec3::ZERO, DVec3::X, DVec3::Y],
+    ///     [[0u32, 1, 2]],
+    /// );
+    /// assert_eq!(soup.face_count(), 1);
+    /// assert_eq!(soup.face(0), &[0, 1, 2]);
+    /// ```
+    pub fn from_faces<F, I>(positions: Vec<DVec3>, faces: F) -> Self
+    where
+        F: IntoIterator<Item = I>,
+        I: AsRef<[u32]>,
+    {
+        let mut soup = Self { positions, offsets: vec![0], indices: Vec::new() };
+        for face in faces {
+            soup.push_face(face.as_ref());
+        }
+        soup
+    }
+
+    /// Appends a face.
+    pub fn push_face(&mut self, face: &[u32]) {
+        if self.offsets.is_empty() {
+            self.offsets.push(0);
+        }
+        self.indices.extend_from_slice(face);
+        self.offsets.push(self.indices.len() as u32);
+    }
+
+    /// Number of vertices.
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Number of faces.
+    pub fn face_count(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    /// The vertex indices of face `f`.
+    ///
+    /// # Panics
+    /// If `f >= self.face_count()`.
+    pub fn face(&self, f: usize) -> &[u32] {
+        &self.indices[self.offsets[f] as usize..self.offsets[f + 1] as usize]
+    }
+
+    /// Iterator over the faces as index slices.
+    pub fn faces(&self) -> impl ExactSizeIterator<Item = &[u32]> + '_ {
+        self.offsets.windows(2).map(|w| &self.indices[w[0] as usize..w[1] as usize])
+    }
+
+    /// True if every face has exactly three corners.
+    pub fn is_triangle_soup(&self) -> bool {
+        self.offsets.windows(2).all(|w| w[1] - w[0] == 3)
+    }
+}

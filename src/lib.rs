@@ -1,0 +1,17 @@
+//! `multires`: subdivision-based geometry in one crate.
+//!
+//! This facade re-exports the member crates of the workspace, one module each; it
+//! defines no algorithm of its own.
+//!
+//! | module | crate | what |
+//! |---|---|---|
+//! | [`mesh`] | `mesh-topo` | half-edge meshes, validation, traversal, mesh files |
+//!
+//! ```
+//! use multires::mesh::{HalfedgeMesh, shapes};
+//! let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+//! assert_eq!(cube.topology_stats().genus, 0);
+//! # Ok::<(), multires::mesh::MeshError>(())
+//! ```
+
+pub use mesh_topo as mesh;

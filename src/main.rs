@@ -1,0 +1,5 @@
+//! The `multires` command-line tool.
+
+fn main() {
+    println!("multires");
+}

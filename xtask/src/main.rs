@@ -1,0 +1,239 @@
+//! Project automation, run as `cargo xtask <task>`.
+//!
+//! - `ci`: everything CI checks, in order, stopping at the first failure: formatting,
+//!   clippy with warnings denied, the layering rules, the dependency diet of each library
+//!   crate, all tests and doctests, docs with warnings denied, and that benches compile.
+//! - `bench [crate]`: runs the criterion benches and prints a compact table (also written
+//!   to `target/bench-summary.md`).
+//! - `golden [--bless]`: checks the golden files under `tests/golden/`, or re-blesses them
+//!   and shows the diff for review.
+
+use std::collections::BTreeMap;
+use std::env;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+use std::time::Instant;
+
+/// Project crates each crate may depend on (normal dependencies). The facade may use
+/// all of them; a crate missing from this table is an error, so new crates must state
+/// their place in the layering.
+const LAYERS: &[(&str, &[&str])] = &[
+    ("mesh-topo", &[]),
+    ("subdiv-curve", &[]),
+    ("subdiv-loop", &["mesh-topo"]),
+    ("subdiv-doo", &["mesh-topo", "subdiv-curve"]),
+    ("tri-spline", &["mesh-topo", "subdiv-loop"]),
+    ("ifs-nonlinear", &["subdiv-curve"]),
+    ("multires", &["mesh-topo", "subdiv-curve", "subdiv-loop", "subdiv-doo", "tri-spline", "ifs-nonlinear"]),
+    ("xtask", &[]),
+];
+
+/// Heavy application-level crates no library crate may pull in (they belong to the CLI).
+const CLI_ONLY_DEPENDENCIES: &[&str] = &["clap", "image", "plotters", "indicatif"];
+
+fn main() -> ExitCode {
+    let args: Vec<String> = env::args().skip(1).collect();
+    let result = match args.first().map(String::as_str) {
+        Some("ci") => ci(),
+        Some("bench") => bench(args.get(1).map(String::as_str)),
+        Some("golden") => golden(args.iter().any(|a| a == "--bless")),
+        Some("layering") => layering(),
+        _ => {
+            eprintln!("usage: cargo xtask ci | bench [crate] | golden [--bless] | layering");
+            return ExitCode::from(2);
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("xtask: {message}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("xtask lives in the workspace").to_path_buf()
+}
+
+fn cargo() -> Command {
+    let mut command = Command::new(env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    command.current_dir(workspace_root());
+    command
+}
+
+fn run(step: &str, command: &mut Command) -> Result<(), String> {
+    eprintln!("==> {step}");
+    let start = Instant::now();
+    let status = command.status().map_err(|e| format!("{step}: cannot start: {e}"))?;
+    eprintln!("    {step}: {:.1} s", start.elapsed().as_secs_f64());
+    if status.success() { Ok(()) } else { Err(format!("{step} failed ({status})")) }
+}
+
+fn ci() -> Result<(), String> {
+    let total = Instant::now();
+    run("fmt", cargo().args(["fmt", "--all", "--", "--check"]))?;
+    run("clippy", cargo().args(["clippy", "--workspace", "--all-targets", "--", "-D", "warnings"]))?;
+    layering()?;
+    run("test", cargo().args(["test", "--workspace"]))?;
+    run("doc", cargo().args(["doc", "--workspace", "--no-deps"]).env("RUSTDOCFLAGS", "-D warnings"))?;
+    run("bench --no-run", cargo().args(["bench", "--workspace", "--no-run"]))?;
+    eprintln!("==> ci passed in {:.0} s", total.elapsed().as_secs_f64());
+    Ok(())
+}
+
+fn cargo_metadata() -> Result<serde_json::Value, String> {
+    let output =
+        cargo().args(["metadata", "--format-version", "1"]).output().map_err(|e| format!("cargo metadata: {e}"))?;
+    if !output.status.success() {
+        return Err(format!("cargo metadata failed: {}", String::from_utf8_lossy(&output.stderr)));
+    }
+    serde_json::from_slice(&output.stdout).map_err(|e| format!("cargo metadata output: {e}"))
+}
+
+/// Checks the dependency arrows between project crates, and that no library crate
+/// depends (normally, transitively) on a CLI-only crate.
+fn layering() -> Result<(), String> {
+    eprintln!("==> layering");
+    let metadata = cargo_metadata()?;
+    let members: Vec<String> = metadata["workspace_members"]
+        .as_array()
+        .ok_or("metadata: no workspace_members")?
+        .iter()
+        .filter_map(|m| m.as_str().map(str::to_string))
+        .collect();
+    let packages = metadata["packages"].as_array().ok_or("metadata: no packages")?;
+    let project_names: Vec<&str> = packages
+        .iter()
+        .filter(|p| members.iter().any(|m| Some(m.as_str()) == p["id"].as_str()))
+        .filter_map(|p| p["name"].as_str())
+        .collect();
+    let mut problems = Vec::new();
+    for package in packages {
+        let Some(name) = package["name"].as_str() else { continue };
+        if !project_names.contains(&name) {
+            continue;
+        }
+        let Some((_, allowed)) = LAYERS.iter().find(|(crate_name, _)| *crate_name == name) else {
+            problems.push(format!("crate `{name}` is not in the layering table (xtask/src/main.rs)"));
+            continue;
+        };
+        for dependency in package["dependencies"].as_array().into_iter().flatten() {
+            let dep_name = dependency["name"].as_str().unwrap_or_default();
+            let is_normal = dependency["kind"].is_null();
+            if is_normal && project_names.contains(&dep_name) && !allowed.contains(&dep_name) {
+                problems.push(format!("`{name}` must not depend on `{dep_name}`"));
+            }
+        }
+    }
+    // Dependency diet: a user depending on one library crate gets no CLI machinery.
+    let library_crates: Vec<&str> =
+        project_names.iter().copied().filter(|n| *n != "multires" && *n != "xtask").collect();
+    for name in library_crates {
+        let output = cargo()
+            .args(["tree", "-p", name, "-e", "normal", "--prefix", "none", "--format", "{p}"])
+            .output()
+            .map_err(|e| format!("cargo tree: {e}"))?;
+        let tree = String::from_utf8_lossy(&output.stdout);
+        for line in tree.lines() {
+            let dep = line.split_whitespace().next().unwrap_or_default();
+            if CLI_ONLY_DEPENDENCIES.contains(&dep) {
+                problems.push(format!("`{name}` pulls in `{dep}` (a CLI-only dependency)"));
+            }
+        }
+    }
+    if problems.is_empty() {
+        eprintln!("    layering: ok ({} crates)", project_names.len());
+        Ok(())
+    } else {
+        Err(format!("layering:\n  {}", problems.join("\n  ")))
+    }
+}
+
+fn bench(krate: Option<&str>) -> Result<(), String> {
+    let mut command = cargo();
+    command.arg("bench");
+    match krate {
+        Some(name) => command.args(["-p", name]),
+        None => command.arg("--workspace"),
+    };
+    run("bench", &mut command)?;
+    let criterion_dir = workspace_root().join("target/criterion");
+    let mut rows = BTreeMap::new();
+    collect_estimates(&criterion_dir, &criterion_dir, &mut rows);
+    let mut table = String::from("| benchmark | mean | throughput |\n|---|---:|---:|\n");
+    for (name, (mean_ns, throughput)) in &rows {
+        table.push_str(&format!("| {name} | {} | {} |\n", format_time(*mean_ns), throughput));
+    }
+    println!("{table}");
+    let summary = workspace_root().join("target/bench-summary.md");
+    fs::write(&summary, format!("# Benchmark summary\n\n{table}"))
+        .map_err(|e| format!("{}: {e}", summary.display()))?;
+    eprintln!("    written to {}", summary.display());
+    Ok(())
+}
+
+/// Finds `<id>/new/estimates.json` under the criterion directory: mean time and, when
+/// the benchmark declared one, its throughput.
+fn collect_estimates(root: &Path, dir: &Path, rows: &mut BTreeMap<String, (f64, String)>) {
+    let Ok(entries) = fs::read_dir(dir) else { return };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        if !path.is_dir() {
+            continue;
+        }
+        if path.file_name().is_some_and(|n| n == "new") {
+            let estimates = fs::read_to_string(path.join("estimates.json")).ok();
+            let benchmark = fs::read_to_string(path.join("benchmark.json")).ok();
+            let mean = estimates
+                .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
+                .and_then(|v| v["mean"]["point_estimate"].as_f64());
+            let Some(mean_ns) = mean else { continue };
+            let throughput = benchmark
+                .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
+                .map(|v| format_throughput(&v["throughput"], mean_ns))
+                .unwrap_or_default();
+            let id = dir.strip_prefix(root).unwrap_or(dir).display().to_string();
+            rows.insert(id, (mean_ns, throughput));
+        } else if path.file_name().is_some_and(|n| n != "report") {
+            collect_estimates(root, &path, rows);
+        }
+    }
+}
+
+fn format_throughput(throughput: &serde_json::Value, mean_ns: f64) -> String {
+    let per_second = |count: f64| count / (mean_ns * 1e-9);
+    if let Some(elements) = throughput["Elements"].as_f64() {
+        format!("{:.2} M elem/s", per_second(elements) / 1e6)
+    } else if let Some(bytes) = throughput["Bytes"].as_f64() {
+        format!("{:.2} GB/s", per_second(bytes) / 1e9)
+    } else {
+        String::new()
+    }
+}
+
+fn format_time(ns: f64) -> String {
+    match ns {
+        t if t < 1e3 => format!("{t:.1} ns"),
+        t if t < 1e6 => format!("{:.2} µs", t / 1e3),
+        t if t < 1e9 => format!("{:.2} ms", t / 1e6),
+        t => format!("{:.3} s", t / 1e9),
+    }
+}
+
+fn golden(bless: bool) -> Result<(), String> {
+    let mut command = cargo();
+    command.args(["test", "--workspace", "--test", "golden"]);
+    if bless {
+        command.env("MULTIRES_BLESS", "1");
+    }
+    run(if bless { "golden --bless" } else { "golden" }, &mut command)?;
+    if bless {
+        // Show what changed so the re-bless is reviewed, not rubber-stamped.
+        let _ =
+            Command::new("git").current_dir(workspace_root()).args(["diff", "--stat", "--", "tests/golden"]).status();
+        eprintln!("    review the changes with: git diff tests/golden");
+    }
+    Ok(())
+}
