@@ -1,0 +1,295 @@
+//! Command-line front end: argument definitions and dispatch.
+//!
+//! Each member crate's commands live in their own file (`mesh_cmds`, `loop_cmds`,
+//! `doo_cmds`, `curve_cmds`, `spline_cmds`, `ifs_cmds`); commands that span several
+//! crates (`subdivide`, `reverse`, `decompose`, `reconstruct`, `analyze`) are dispatched
+//! here by scheme.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+mod curve_cmds;
+mod doo_cmds;
+mod ifs_cmds;
+mod loop_cmds;
+mod mesh_cmds;
+mod spline_cmds;
+
+/// Errors of the command-line tool: one line for the user, no backtrace.
+#[derive(Debug, thiserror::Error)]
+#[allow(dead_code)] // `Input` is used as the commands land.
+pub enum CliError {
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        source: std::io::Error,
+    },
+    /// The input was rejected (bad mesh, bad parameters, ...), with the reason.
+    #[error("{0}")]
+    Input(String),
+    /// The command or option is not available in this build.
+    #[error("{0} is not available yet")]
+    Unavailable(&'static str),
+}
+
+/// Result type of the CLI.
+pub type CliResult<T = ()> = Result<T, CliError>;
+
+/// Turns any displayable error into a user-facing input error, prefixed with context.
+#[allow(dead_code)] // Used as the commands land.
+pub fn input_error(context: impl std::fmt::Display, error: impl std::fmt::Display) -> CliError {
+    CliError::Input(format!("{context}: {error}"))
+}
+
+/// Subdivision-based geometry: subdivide, reverse, decompose and reconstruct meshes and
+/// curves, fit triangular splines, render fractals. Without a command, runs the demo.
+#[derive(Debug, Parser)]
+#[command(name = "multires", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do (default: the demo).
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+/// The commands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Print counts, histograms, boundary loops, components, Euler characteristic, genus
+    /// and manifold status of a mesh.
+    Info(mesh_cmds::InfoArgs),
+    /// Compare two meshes: counts and symmetric nearest-vertex distances.
+    Compare(mesh_cmds::CompareArgs),
+    /// Convert between OBJ, OFF and PLY, losslessly (vertex and face order kept).
+    Convert(mesh_cmds::ConvertArgs),
+    /// Subdivide a mesh with one of the surface schemes.
+    Subdivide(SubdivideArgs),
+    /// Reverse subdivision: compute the coarser mesh(es) of a mesh with subdivision connectivity.
+    Reverse(ReverseArgs),
+    /// Decompose a mesh into a base mesh plus per-level details (a `.mres` pyramid).
+    Decompose(DecomposeArgs),
+    /// Rebuild a mesh from a `.mres` pyramid, optionally keeping only the largest details.
+    Reconstruct(ReconstructArgs),
+    /// Spectral analysis of a scheme's local subdivision matrix (smoothness checks).
+    Analyze(AnalyzeArgs),
+    /// Subdivide a curve (a polygon from a text file) and draw it as SVG.
+    Curve(curve_cmds::CurveArgs),
+    /// Fit a triangular Bézier / B-patch / triangular B-spline surface to a triangle mesh.
+    Fit(spline_cmds::FitArgs),
+    /// Render the attractor of an iterated function system (subdivision as IFS).
+    Ifs(ifs_cmds::IfsArgs),
+    /// Render a mesh to PNG with a small software rasterizer.
+    Render(mesh_cmds::RenderArgs),
+    /// Run the demo into a directory.
+    Demo(mesh_cmds::DemoArgs),
+}
+
+/// Surface subdivision schemes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SurfaceScheme {
+    /// Loop subdivision with Loop's original vertex weights.
+    Loop,
+    /// Loop subdivision with Warren's simplified weights.
+    LoopWarren,
+    /// Ternary (1-to-9) Loop subdivision.
+    TernaryLoop,
+    /// Quaternary (1-to-16) Loop subdivision.
+    QuaternaryLoop,
+    /// Doo-Sabin subdivision with the original weights.
+    DooSabin,
+    /// Doo-Sabin with the simple averaging rule.
+    DooSimple,
+    /// Doo-Sabin topology with the centroid-contraction rule (not C1 on faces with 4+ sides).
+    DooCentroid,
+}
+
+/// Options of `subdivide`.
+#[derive(Debug, Args)]
+pub struct SubdivideArgs {
+    /// Input mesh (OBJ, OFF or PLY).
+    pub mesh: PathBuf,
+    /// Output mesh (OBJ, OFF or PLY).
+    pub out: PathBuf,
+    /// The scheme.
+    #[arg(long, value_enum)]
+    pub scheme: SurfaceScheme,
+    /// Number of subdivision steps.
+    #[arg(long, default_value_t = 1)]
+    pub levels: u32,
+    /// Keep boundary corners (valence-2 boundary vertices) fixed (Loop schemes).
+    #[arg(long)]
+    pub keep_corners: bool,
+}
+
+/// Families of reversible schemes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ReverseScheme {
+    /// Reverse Loop subdivision.
+    Loop,
+    /// Reverse Doo-Sabin subdivision.
+    Doo,
+}
+
+/// Options of `reverse`.
+#[derive(Debug, Args)]
+pub struct ReverseArgs {
+    /// Input mesh with subdivision connectivity.
+    pub mesh: PathBuf,
+    /// Output (coarse) mesh.
+    pub out: PathBuf,
+    /// The scheme to reverse.
+    #[arg(long, value_enum)]
+    pub scheme: ReverseScheme,
+    /// Number of levels to reverse.
+    #[arg(long, default_value_t = 1)]
+    pub levels: u32,
+    /// A face known to come from a coarse face (Doo-Sabin); found automatically if absent.
+    #[arg(long)]
+    pub seed_face: Option<u32>,
+}
+
+/// Options of `decompose`.
+#[derive(Debug, Args)]
+pub struct DecomposeArgs {
+    /// Input mesh with subdivision connectivity.
+    pub mesh: PathBuf,
+    /// Output pyramid (`.mres`).
+    pub out: PathBuf,
+    /// The scheme to reverse.
+    #[arg(long, value_enum)]
+    pub scheme: ReverseScheme,
+    /// Number of levels to decompose.
+    #[arg(long, default_value_t = 1, conflicts_with = "max")]
+    pub levels: u32,
+    /// Decompose as many levels as the connectivity allows.
+    #[arg(long)]
+    pub max: bool,
+    /// Print a rate-distortion table (fraction of details kept vs error).
+    #[arg(long)]
+    pub report: bool,
+}
+
+/// Options of `reconstruct`.
+#[derive(Debug, Args)]
+pub struct ReconstructArgs {
+    /// Input pyramid (`.mres`).
+    pub input: PathBuf,
+    /// Output mesh.
+    pub out: PathBuf,
+    /// Level to rebuild (0 = base mesh; default: the finest).
+    #[arg(long)]
+    pub level: Option<u32>,
+    /// Keep only this fraction of the details, the largest ones (compression).
+    #[arg(long)]
+    pub keep: Option<f64>,
+}
+
+/// Schemes that `analyze` knows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum AnalyzeScheme {
+    /// Loop, original weights.
+    Loop,
+    /// Loop, Warren's weights.
+    LoopWarren,
+    /// Ternary Loop.
+    TernaryLoop,
+    /// Quaternary Loop.
+    QuaternaryLoop,
+    /// Doo-Sabin, original weights.
+    DooSabin,
+    /// Doo-Sabin, simple averaging rule.
+    DooSimple,
+    /// Doo-Sabin topology, centroid contraction.
+    DooCentroid,
+    /// Dyn-Levin-Gregory four-point curve scheme.
+    FourPoint,
+    /// Cubic B-spline curve scheme.
+    CubicBspline,
+    /// Chaikin corner cutting.
+    Chaikin,
+    /// The two-parameter interpolatory/approximating curve framework.
+    Combined,
+}
+
+/// Options of `analyze`.
+#[derive(Debug, Args)]
+pub struct AnalyzeArgs {
+    /// The scheme.
+    #[arg(long, value_enum)]
+    pub scheme: AnalyzeScheme,
+    /// Valence of the extraordinary vertex (or face size for Doo-Sabin); surfaces only.
+    #[arg(long)]
+    pub valence: Option<u32>,
+    /// Parameter omega1 of the combined curve framework (interpolated pairs).
+    #[arg(long, allow_hyphen_values = true)]
+    pub omega1: Option<f64>,
+    /// Parameter omega2 of the combined curve framework (approximated pairs).
+    #[arg(long, allow_hyphen_values = true)]
+    pub omega2: Option<f64>,
+    /// Parameter gamma of the combined curve framework.
+    #[arg(long, allow_hyphen_values = true)]
+    pub gamma: Option<f64>,
+    /// Tension w of the four-point scheme.
+    #[arg(long, allow_hyphen_values = true)]
+    pub tension: Option<f64>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs one command (the demo when none is given).
+pub fn run(cli: Cli) -> CliResult {
+    match cli.command {
+        None => mesh_cmds::demo(&mesh_cmds::DemoArgs::default()),
+        Some(Command::Info(args)) => mesh_cmds::info(&args),
+        Some(Command::Compare(args)) => mesh_cmds::compare(&args),
+        Some(Command::Convert(args)) => mesh_cmds::convert(&args),
+        Some(Command::Render(args)) => mesh_cmds::render(&args),
+        Some(Command::Demo(args)) => mesh_cmds::demo(&args),
+        Some(Command::Subdivide(args)) => match args.scheme {
+            SurfaceScheme::Loop
+            | SurfaceScheme::LoopWarren
+            | SurfaceScheme::TernaryLoop
+            | SurfaceScheme::QuaternaryLoop => loop_cmds::subdivide(&args),
+            SurfaceScheme::DooSabin | SurfaceScheme::DooSimple | SurfaceScheme::DooCentroid => {
+                doo_cmds::subdivide(&args)
+            }
+        },
+        Some(Command::Reverse(args)) => match args.scheme {
+            ReverseScheme::Loop => loop_cmds::reverse(&args),
+            ReverseScheme::Doo => doo_cmds::reverse(&args),
+        },
+        Some(Command::Decompose(args)) => match args.scheme {
+            ReverseScheme::Loop => loop_cmds::decompose(&args),
+            ReverseScheme::Doo => doo_cmds::decompose(&args),
+        },
+        Some(Command::Reconstruct(args)) => reconstruct(&args),
+        Some(Command::Analyze(args)) => match args.scheme {
+            AnalyzeScheme::Loop
+            | AnalyzeScheme::LoopWarren
+            | AnalyzeScheme::TernaryLoop
+            | AnalyzeScheme::QuaternaryLoop => loop_cmds::analyze(&args),
+            AnalyzeScheme::DooSabin | AnalyzeScheme::DooSimple | AnalyzeScheme::DooCentroid => doo_cmds::analyze(&args),
+            AnalyzeScheme::FourPoint
+            | AnalyzeScheme::CubicBspline
+            | AnalyzeScheme::Chaikin
+            | AnalyzeScheme::Combined => curve_cmds::analyze(&args),
+        },
+        Some(Command::Curve(args)) => curve_cmds::curve(&args),
+        Some(Command::Fit(args)) => spline_cmds::fit(&args),
+        Some(Command::Ifs(args)) => ifs_cmds::ifs(&args),
+    }
+}
+
+/// `.mres` files say which scheme wrote them; dispatch on that.
+fn reconstruct(args: &ReconstructArgs) -> CliResult {
+    let bytes = std::fs::read(&args.input).map_err(|source| CliError::Io { path: args.input.clone(), source })?;
+    if doo_cmds::is_doo_pyramid(&bytes) {
+        doo_cmds::reconstruct(args, &bytes)
+    } else {
+        loop_cmds::reconstruct(args, &bytes)
+    }
+}
