@@ -6,6 +6,7 @@
 //! | module | crate | what |
 //! |---|---|---|
 //! | [`mesh`] | `mesh-topo` | half-edge meshes, validation, traversal, mesh files |
+//! | [`loop_subdiv`] | `subdiv-loop` | Loop subdivision, reverse Loop, M-band Loop, analysis |
 //!
 //! ```
 //! use multires::mesh::{HalfedgeMesh, shapes};
@@ -15,3 +16,4 @@
 //! ```
 
 pub use mesh_topo as mesh;
+pub use subdiv_loop as loop_subdiv;
