@@ -43,4 +43,13 @@ pub enum LoopError {
         /// The other end.
         to: u32,
     },
+    /// Two triangles glued along all three edges (a closed "pillow" whose vertices
+    /// have interior valence 2): one Loop step would make the mesh non-manifold.
+    #[error("interior vertex {vertex} has valence 2 (face {face} shares all its edges with one other face)")]
+    InteriorValenceTwo {
+        /// A vertex of valence 2.
+        vertex: u32,
+        /// A face of the pillow.
+        face: usize,
+    },
 }

@@ -15,9 +15,10 @@
 //!   [`LoopOptions::keep_corners`] a boundary vertex of valence 2 (one incident face)
 //!   stays where it is. Interior edges that touch the boundary use the interior rule.
 //!
-//! Isolated vertices are copied. An interior vertex of valence 2 (two triangles glued
-//! along all their edges) is legal in a manifold mesh and uses the same formula with
-//! `n = 2`.
+//! Isolated vertices are copied. The only manifold triangle meshes with interior
+//! vertices of valence 2 are closed "pillows" (two triangles glued along all three
+//! edges); their subdivision would not be a manifold, so they are rejected
+//! ([`LoopError::InteriorValenceTwo`]).
 //!
 //! # Output order (a stable contract)
 //! One step on a mesh with `V` vertices, `E` edges and `F` faces gives `V + E` vertices
@@ -32,11 +33,12 @@
 //!   `4f = (a, m_ab, m_ca)`, `4f + 1 = (b, m_bc, m_ab)`, `4f + 2 = (c, m_ca, m_bc)` and
 //!   the central face `4f + 3 = (m_ab, m_bc, m_ca)`.
 //!
-//! Several levels are exactly repeated single steps, each numbering the edges of the
-//! previous level's output as above: `subdivide(m, 2)` equals
-//! `subdivide(subdivide(m, 1).to_halfedge_mesh(), 1)` bit for bit. So at every level
-//! vertex `i < V` is an *even* vertex (it came from coarse vertex `i`), the others are
-//! *odd*, and detail vectors can be addressed across levels by index.
+//! Several levels are repeated single steps, each numbering the edges of the previous
+//! level's output as above: `subdivide(m, 2)` has the vertex and face order of
+//! `subdivide(subdivide(m, 1).to_halfedge_mesh(), 1)` and the same positions up to
+//! rounding (neighbours may be summed in another order). So at every level vertex
+//! `i < V` is an *even* vertex (it came from coarse vertex `i`), the others are *odd*,
+//! and detail vectors can be addressed across levels by index.
 //!
 //! # Performance
 //! After the initial conversion of the [`HalfedgeMesh`] the refinement never touches a
@@ -73,7 +75,7 @@ pub use matrix::SubdivisionMatrix;
 
 use crate::LoopError;
 use kernel::Rules;
-use topology::{BASE_MASK, MAX_HALFEDGES, Topology};
+use topology::{BASE_MASK, MAX_FACES, Topology};
 
 /// The vertex weights of interior vertices.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -322,16 +324,16 @@ fn check_sizes(topology: &Topology, levels: u32) -> Result<(), LoopError> {
         Err(MeshError::TooLarge { what, count: count.min(usize::MAX as u64) as usize, max: max as usize }.into())
     };
     for _ in 0..levels {
-        if f.saturating_mul(3) > MAX_HALFEDGES {
-            return too_large("half-edges", f.saturating_mul(3), MAX_HALFEDGES);
+        if f > MAX_FACES {
+            return too_large("faces", f, MAX_FACES);
         }
         if e > BASE_MASK as u64 {
             return too_large("edges", e, BASE_MASK as u64);
         }
         (v, e, f) = (v.saturating_add(e), e.saturating_mul(2).saturating_add(f.saturating_mul(3)), f.saturating_mul(4));
     }
-    if v > MAX_HALFEDGES {
-        return too_large("vertices", v, MAX_HALFEDGES);
+    if v >= u32::MAX as u64 {
+        return too_large("vertices", v, u32::MAX as u64 - 1);
     }
     Ok(())
 }

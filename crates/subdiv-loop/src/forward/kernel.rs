@@ -1,17 +1,18 @@
 //! One Loop step on the compact topology: fine values, fine triangles and (unless it is
 //! the last level) the fine topology, all by index arithmetic and in parallel.
 //!
-//! Work is split into chunks of faces (edge points, fine faces, fine twins) and chunks
-//! of vertices (vertex points). Every output element is written by exactly one chunk
-//! with a fixed formula, so results are bit-identical for any number of threads.
+//! Work is split into chunks of faces (edge points, vertex points of odd vertices, fine
+//! faces, fine links) and chunks of even vertices (vertex points by a one-ring walk).
+//! Every output element is written by exactly one chunk with a fixed formula, so results
+//! are bit-identical for any number of threads.
 
 use rayon::prelude::*;
 
 use super::attribute::Attribute;
-use super::topology::{BASE_BITS, BASE_MASK, INVALID, Topology, is_first};
+use super::topology::{BASE_BITS, INVALID, NEXT, PREV, Topology, edge_at, edge_base, is_first};
 use super::{LoopOptions, VertexWeights};
 
-/// Faces per parallel work item.
+/// Faces per parallel work item (a multiple of 4: chunks hold whole groups).
 const FACE_CHUNK: usize = 2048;
 /// Vertices per parallel work item.
 const VERTEX_CHUNK: usize = 4096;
@@ -81,14 +82,15 @@ struct FaceWork<'a, T> {
     faces: std::ops::Range<usize>,
     first_edge: usize,
     edge_values: &'a mut [T],
+    first_odd: usize,
+    odd_values: &'a mut [T],
+    odd_starts: &'a mut [u32],
     triangles: &'a mut [[u32; 3]],
-    twins: &'a mut [u32],
-    face_info: &'a mut [u32],
-    edge_starts: &'a mut [u32],
+    links: &'a mut [[u32; 4]],
 }
 
 /// Splits `n` elements off the front of `slice` (nothing if `slice` is empty: outputs
-/// that are not computed at the last level).
+/// that are not computed).
 fn take_front<'a, T>(slice: &mut &'a mut [T], n: usize) -> &'a mut [T] {
     if slice.is_empty() {
         return &mut [];
@@ -98,13 +100,27 @@ fn take_front<'a, T>(slice: &mut &'a mut [T], n: usize) -> &'a mut [T] {
     front
 }
 
-/// One Loop step of `values` on `topo`. With `refine_topology` the fine twins, face
-/// information and vertex starts are produced too (needed for a further step).
+/// The first half of half-edge `h = 4f + k`: half-edge 0 of child `4f + k`.
+#[inline(always)]
+fn first_half(h: u32) -> u32 {
+    4 * h
+}
+
+/// The second half of half-edge `h = 4f + k`: half-edge 2 of child `4f + k + 1`.
+#[inline(always)]
+fn second_half(h: u32) -> u32 {
+    4 * (h - (h & 3) + NEXT[(h & 3) as usize] as u32) + 2
+}
+
+/// One Loop step of `values` on `topo`. With `refine_topology` the fine links and
+/// vertex starts are produced too (needed for a further step).
 pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, refine_topology: bool) -> Step<T> {
     let nv = topo.vertex_count;
     let ne = topo.edge_count;
     let nf = topo.face_count();
+    let even = topo.vertex_halfedge.len();
     debug_assert_eq!(values.len(), nv, "internal: one value per vertex");
+    debug_assert!(even == nv || nf % 4 == 0, "internal: a refined level has whole groups");
     let fine_vertex_count = nv + ne;
 
     let mut fine_values: Vec<T> = Vec::with_capacity(fine_vertex_count);
@@ -114,50 +130,66 @@ pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, r
         fine_values.par_extend(rayon::iter::repeat_n(placeholder.clone(), fine_vertex_count));
     }
     let mut fine_triangles = vec![[0u32; 3]; 4 * nf];
-    let (mut fine_twins, mut fine_info, mut fine_starts) = if refine_topology {
-        (vec![0u32; 12 * nf], vec![0u32; 4 * nf], vec![INVALID; fine_vertex_count])
-    } else {
-        (Vec::new(), Vec::new(), Vec::new())
-    };
+    let (mut fine_links, mut fine_starts) =
+        if refine_topology { (vec![[0u32; 4]; 4 * nf], vec![0u32; nv]) } else { (Vec::new(), Vec::new()) };
 
     let (vertex_values, edge_values) = fine_values.split_at_mut(nv.min(fine_vertex_count));
-    let (vertex_starts, edge_starts) = fine_starts.split_at_mut(if refine_topology { nv } else { 0 });
+    let (even_values, odd_values) = vertex_values.split_at_mut(even.min(vertex_values.len()));
+    let (even_starts, odd_starts) = fine_starts.split_at_mut(if refine_topology { even } else { 0 });
 
-    // Face chunks: edge points, fine faces, fine twins and face information.
+    // Face chunks: edge points, odd vertex points, fine faces and fine links.
     let mut work = Vec::with_capacity(nf.div_ceil(FACE_CHUNK));
     {
-        let (mut ev, mut tr, mut tw, mut fi, mut es) =
-            (edge_values, &mut fine_triangles[..], &mut fine_twins[..], &mut fine_info[..], edge_starts);
-        let edge_base = |f: usize| if f == nf { ne } else { (topo.face_info[f] & BASE_MASK) as usize };
+        let (mut ev, mut ov, mut os, mut tr, mut li) =
+            (edge_values, odd_values, odd_starts, &mut fine_triangles[..], &mut fine_links[..]);
+        let edges_before = |f: usize| if f == nf { ne } else { edge_base(topo.links[f][3]) as usize };
+        // Odd vertices are the edge points of the level before, numbered by its edges:
+        // group g has 3g + 2 e_g edges before it, e_g of the level before.
+        let odd_before = |f: usize| {
+            if even == nv {
+                0
+            } else if f == nf {
+                nv - even
+            } else {
+                (edges_before(f) - 3 * (f / 4)) / 2
+            }
+        };
         let mut f0 = 0;
         while f0 < nf {
             let f1 = (f0 + FACE_CHUNK).min(nf);
-            let edges = edge_base(f1) - edge_base(f0);
+            let edges = edges_before(f1) - edges_before(f0);
+            let odd = odd_before(f1) - odd_before(f0);
             work.push(FaceWork {
                 faces: f0..f1,
-                first_edge: edge_base(f0),
+                first_edge: edges_before(f0),
                 edge_values: take_front(&mut ev, edges),
+                first_odd: even + odd_before(f0),
+                odd_values: take_front(&mut ov, odd),
+                odd_starts: take_front(&mut os, odd),
                 triangles: take_front(&mut tr, 4 * (f1 - f0)),
-                twins: take_front(&mut tw, 12 * (f1 - f0)),
-                face_info: take_front(&mut fi, 4 * (f1 - f0)),
-                edge_starts: take_front(&mut es, edges),
+                links: take_front(&mut li, 4 * (f1 - f0)),
             });
             f0 = f1;
         }
     }
-    work.into_par_iter().for_each(|w| face_chunk(topo, values, w, refine_topology));
+    work.into_par_iter().for_each(|mut w| {
+        if even < nv {
+            odd_chunk(topo, values, rules, &mut w, refine_topology);
+        }
+        face_chunk(topo, values, w, refine_topology);
+    });
 
-    // Vertex chunks: vertex points.
-    vertex_values.par_chunks_mut(VERTEX_CHUNK).enumerate().for_each(|(chunk, out)| {
+    // Vertex chunks: vertex points of even vertices.
+    even_values.par_chunks_mut(VERTEX_CHUNK).enumerate().for_each(|(chunk, out)| {
         let first = chunk * VERTEX_CHUNK;
         for (i, slot) in out.iter_mut().enumerate() {
             *slot = vertex_point(topo, values, rules, (first + i) as u32);
         }
     });
     if refine_topology {
-        // Corner k of face f becomes corner 0 of child 4f + k: its outgoing half-edge
-        // 3f + k becomes 12f + 3k, with the same boundary status.
-        vertex_starts.par_chunks_mut(VERTEX_CHUNK).enumerate().for_each(|(chunk, out)| {
+        // Corner k of face f becomes corner 0 of child 4f + k: the outgoing half-edge
+        // becomes its first half, with the same boundary status.
+        even_starts.par_chunks_mut(VERTEX_CHUNK).enumerate().for_each(|(chunk, out)| {
             let first = chunk * VERTEX_CHUNK;
             for (i, slot) in out.iter_mut().enumerate() {
                 let h = topo.vertex_halfedge[first + i];
@@ -168,8 +200,7 @@ pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, r
 
     let topology = Topology {
         triangles: fine_triangles,
-        twins: fine_twins,
-        face_info: fine_info,
+        links: fine_links,
         vertex_halfedge: fine_starts,
         vertex_count: fine_vertex_count,
         edge_count: 2 * ne + 3 * nf,
@@ -177,64 +208,105 @@ pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, r
     Step { values: fine_values, topology }
 }
 
-/// Edge points, fine faces and (optionally) fine topology of one chunk of faces.
+/// Vertex points of the odd vertices owned by a chunk of groups.
 ///
-/// Face `f = (c0, c1, c2)` with edge points `m_k` on half-edge `3f + k` (from `c_k` to
+/// Group `g` (faces `4g .. 4g + 3`) has corner faces `4g + k = (c_k, m_k, m_{k-1})` and
+/// the centre face `4g + 3 = (m_0, m_1, m_2)`. The odd vertex `m_k` is owned by the group
+/// where its edge `c_k c_{k+1}` was first seen (half-edge 0 of face `4g + k` is first).
+/// Inside, it has valence 6 and its neighbours are `c_k, c_{k+1}`, the other two centre
+/// vertices of its group and the other two centre vertices of the group across the edge;
+/// on the boundary it has valence 4 and boundary neighbours `c_k, c_{k+1}`.
+#[inline(never)]
+fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut FaceWork<'_, T>, refine: bool) {
+    let tri = &topo.triangles[..];
+    let links = &topo.links[..];
+    let (alpha, beta) = rules.interior(6);
+    for g in w.faces.start / 4..w.faces.end / 4 {
+        let centre = tri[4 * g + 3];
+        for k in 0..3usize {
+            let corner_face = 4 * g + k;
+            if links[corner_face][3] & (1 << BASE_BITS) == 0 {
+                continue;
+            }
+            let m = centre[k];
+            let slot = m as usize - w.first_odd;
+            let p = &values[m as usize];
+            let mut ends = values[tri[corner_face][0] as usize].clone();
+            ends.add(&values[tri[4 * g + NEXT[k]][0] as usize]);
+            let across = links[corner_face][0];
+            if across == INVALID {
+                let mut point = p.scaled(0.75);
+                point.add_scaled(&ends, 0.125);
+                w.odd_values[slot] = point;
+                if refine {
+                    w.odd_starts[slot] = first_half(second_half(corner_face as u32));
+                }
+            } else {
+                // `across` is the second half of the twin edge: half-edge 2 of face
+                // 4g' + j of the group g' across, whose centre vertex j - 1 is m.
+                let face = (across >> 2) as usize;
+                let other = tri[(face & !3) + 3];
+                let j = face & 3;
+                debug_assert_eq!(other[PREV[j]], m, "internal: odd vertex across groups");
+                let mut sum = ends;
+                sum.add(&values[centre[NEXT[k]] as usize]);
+                sum.add(&values[centre[PREV[k]] as usize]);
+                sum.add(&values[other[j] as usize]);
+                sum.add(&values[other[NEXT[j]] as usize]);
+                let mut point = p.scaled(alpha);
+                point.add_scaled(&sum, beta);
+                w.odd_values[slot] = point;
+                if refine {
+                    w.odd_starts[slot] = first_half((4 * corner_face + 1) as u32);
+                }
+            }
+        }
+    }
+}
+
+/// Edge points, fine faces and (optionally) fine links of one chunk of faces.
+///
+/// Face `f = (c0, c1, c2)` with edge points `m_k` on half-edge `4f + k` (from `c_k` to
 /// `c_{k+1}`) gives the children `4f + k = (c_k, m_k, m_{k-1})` for `k = 0, 1, 2` and
-/// `4f + 3 = (m0, m1, m2)`. Child half-edges: `12f + 3k` is the first half of `3f + k`,
-/// `12f + 3k + 1` runs `m_k -> m_{k-1}`, `12f + 3k + 2` is the second half of
-/// `3f + k - 1`, `12f + 9 + j` runs `m_j -> m_{j+1}`.
+/// `4f + 3 = (m0, m1, m2)`. Child half-edges: `(4f + k, 0)` is the first half of
+/// `4f + k`, `(4f + k, 1)` runs `m_k -> m_{k-1}`, `(4f + k, 2)` is the second half of
+/// `4f + k - 1`, `(4f + 3, j)` runs `m_j -> m_{j+1}`.
 #[inline(never)]
 fn face_chunk<T: Attribute>(topo: &Topology, values: &[T], w: FaceWork<'_, T>, refine_topology: bool) {
     let nv = topo.vertex_count as u32;
     let tri = &topo.triangles[..];
-    let twins = &topo.twins[..];
-    let info_of = &topo.face_info[..];
+    let links = &topo.links[..];
     let first_face = w.faces.start;
     for f in w.faces {
         let local = f - first_face;
         let c = tri[f];
-        let h0 = 3 * f as u32;
-        let tw = [twins[3 * f], twins[3 * f + 1], twins[3 * f + 2]];
-        let info = info_of[f];
-        let mut next_edge = info & BASE_MASK;
+        let link = links[f];
+        let h0 = 4 * f as u32;
+        let info = link[3];
+        let mut next_edge = edge_base(info);
         let mut m = [0u32; 3];
         for k in 0..3 {
-            let t = tw[k];
+            let t = link[k];
             if is_first(h0 + k as u32, t) {
                 let e = next_edge;
                 next_edge += 1;
                 m[k] = nv + e;
-                let slot = e as usize - w.first_edge;
                 let a = &values[c[k] as usize];
-                let b = &values[c[(k + 1) % 3] as usize];
+                let b = &values[c[NEXT[k]] as usize];
                 let mut point = a.clone();
                 point.add(b);
-                w.edge_values[slot] = if t == INVALID {
+                w.edge_values[e as usize - w.first_edge] = if t == INVALID {
                     point.scaled(0.5)
                 } else {
-                    let d = tri[(t / 3) as usize][((t % 3 + 2) % 3) as usize];
-                    let mut wings = values[c[(k + 2) % 3] as usize].clone();
+                    let d = tri[(t >> 2) as usize][PREV[(t & 3) as usize]];
+                    let mut wings = values[c[PREV[k]] as usize].clone();
                     wings.add(&values[d as usize]);
                     let mut point = point.scaled(0.375);
                     point.add_scaled(&wings, 0.125);
                     point
                 };
-                if refine_topology {
-                    // A boundary edge point starts at the second half of its edge (the
-                    // fine half-edge without twin); an interior one at its smallest
-                    // outgoing half-edge, the start `HalfedgeMesh` would choose, so that
-                    // neighbours are summed in the same order whether the levels are
-                    // run at once or one by one.
-                    let k = k as u32;
-                    let offset = if t == INVALID || k == 2 { 3 * ((k + 1) % 3) + 2 } else { 3 * k + 1 };
-                    w.edge_starts[slot] = 12 * f as u32 + offset;
-                }
             } else {
-                let g = t / 3;
-                let info = info_of[g as usize];
-                let below = (1u32 << (t % 3)) - 1;
-                m[k] = nv + (info & BASE_MASK) + ((info >> BASE_BITS) & below).count_ones();
+                m[k] = nv + edge_at(links[(t >> 2) as usize][3], t & 3);
             }
         }
         let out = &mut w.triangles[4 * local..4 * local + 4];
@@ -243,46 +315,32 @@ fn face_chunk<T: Attribute>(topo: &Topology, values: &[T], w: FaceWork<'_, T>, r
         out[2] = [c[2], m[2], m[1]];
         out[3] = [m[0], m[1], m[2]];
         if refine_topology {
-            let base = 12 * f as u32;
-            let out = &mut w.twins[12 * local..12 * local + 12];
-            for k in 0..3usize {
-                let first = 3 * k;
-                let second_half = 3 * ((k + 1) % 3) + 2;
-                let t = tw[k];
-                if t == INVALID {
-                    out[first] = INVALID;
-                    out[second_half] = INVALID;
-                } else {
-                    let (g, l) = (t / 3, t % 3);
-                    out[first] = 12 * g + 3 * ((l + 1) % 3) + 2;
-                    out[second_half] = first_half(t);
-                }
-                out[3 * k + 1] = base + 9 + ((k as u32 + 2) % 3);
-                out[9 + k] = base + 3 * ((k as u32 + 1) % 3) + 1;
-            }
-            // Fine first-masks: child k holds the first half of 3f + k (bit 0), an
-            // interior edge (bit 1, always first) and the second half of 3f + k - 1
+            let base = 16 * f as u32;
+            // Fine first-masks: child k holds the first half of 4f + k (bit 0), an
+            // interior edge (bit 1, always first) and the second half of 4f + k - 1
             // (bit 2); the centre face holds no first half-edge.
             let first = (info >> BASE_BITS) & 7;
-            let bit = |k: u32| (first >> k) & 1;
-            let masks = [bit(0) | 2 | (bit(2) << 2), bit(1) | 2 | (bit(0) << 2), bit(2) | 2 | (bit(1) << 2), 0];
-            let mut edge_base = 3 * f as u32 + 2 * (info & BASE_MASK);
-            let out = &mut w.face_info[4 * local..4 * local + 4];
-            for (slot, mask) in out.iter_mut().zip(masks) {
-                *slot = edge_base | (mask << BASE_BITS);
-                edge_base += mask.count_ones();
+            let bit = |k: usize| (first >> k) & 1;
+            let mut edges = 3 * f as u32 + 2 * edge_base(info);
+            let out = &mut w.links[4 * local..4 * local + 4];
+            for k in 0..3usize {
+                let outer = link[k];
+                let inner = link[PREV[k]];
+                let mask = bit(k) | 2 | (bit(PREV[k]) << 2);
+                out[k] = [
+                    if outer == INVALID { INVALID } else { second_half(outer) },
+                    base + 12 + PREV[k] as u32,
+                    if inner == INVALID { INVALID } else { first_half(inner) },
+                    edges | (mask << BASE_BITS),
+                ];
+                edges += mask.count_ones();
             }
+            out[3] = [base + 5, base + 9, base + 1, edges];
         }
     }
 }
 
-/// The first half of half-edge `h = 3f + k`: half-edge `12f + 3k` of child `4f + k`.
-#[inline(always)]
-fn first_half(h: u32) -> u32 {
-    4 * h - h % 3
-}
-
-/// The vertex point of coarse vertex `v`.
+/// The vertex point of even vertex `v`, by a walk around its one-ring.
 #[inline]
 fn vertex_point<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, v: u32) -> T {
     let start = topo.vertex_halfedge[v as usize];
@@ -291,36 +349,35 @@ fn vertex_point<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, v: u
         return p.clone();
     }
     let tri = &topo.triangles[..];
-    let twins = &topo.twins[..];
-    let mut h = start;
-    let mut corners = tri[(h / 3) as usize];
-    let mut k = (h % 3) as usize;
-    let mut sum = values[corners[(k + 1) % 3] as usize].clone();
+    let links = &topo.links[..];
+    let mut f = (start >> 2) as usize;
+    let mut k = (start & 3) as usize;
+    let mut corners = tri[f];
+    let mut sum = values[corners[NEXT[k]] as usize].clone();
     let mut valence = 1usize;
     loop {
-        let prev = h - k as u32 + ((k as u32 + 2) % 3);
-        let t = twins[prev as usize];
+        let t = links[f][PREV[k]];
         if t == INVALID {
-            // Boundary: the fan ends here; the two boundary neighbours are the targets
-            // of the first and the origin of the last fan half-edge.
+            // Boundary: the fan ends here; the two boundary neighbours are the target of
+            // the first and the origin of the last fan half-edge.
             if rules.is_fixed_corner(valence + 1) {
                 return p.clone();
             }
-            let start_corners = tri[(start / 3) as usize];
-            let mut ends = values[start_corners[((start % 3 + 1) % 3) as usize] as usize].clone();
-            ends.add(&values[corners[(k + 2) % 3] as usize]);
+            let first = tri[(start >> 2) as usize][NEXT[(start & 3) as usize]];
+            let mut ends = values[first as usize].clone();
+            ends.add(&values[corners[PREV[k]] as usize]);
             let mut point = p.scaled(0.75);
             point.add_scaled(&ends, 0.125);
             return point;
         }
-        if t == start || valence > twins.len() {
+        if t == start || valence > tri.len() {
             debug_assert!(t == start, "internal: one-ring walk did not close");
             break;
         }
-        h = t;
-        corners = tri[(h / 3) as usize];
-        k = (h % 3) as usize;
-        sum.add(&values[corners[(k + 1) % 3] as usize]);
+        f = (t >> 2) as usize;
+        k = (t & 3) as usize;
+        corners = tri[f];
+        sum.add(&values[corners[NEXT[k]] as usize]);
         valence += 1;
     }
     let (alpha, beta) = rules.interior(valence);

