@@ -120,7 +120,7 @@ pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, r
     let nf = topo.face_count();
     let even = topo.vertex_halfedge.len();
     debug_assert_eq!(values.len(), nv, "internal: one value per vertex");
-    debug_assert!(even == nv || nf % 4 == 0, "internal: a refined level has whole groups");
+    debug_assert!(even == nv || nf.is_multiple_of(4), "internal: a refined level has whole groups");
     let fine_vertex_count = nv + ne;
 
     let mut fine_values: Vec<T> = Vec::with_capacity(fine_vertex_count);
