@@ -5,49 +5,19 @@
 //! `from_soup+subdivide` also times building the half-edge mesh from the face list (like
 //! OpenSubdiv's topology refiner creation).
 
+#[path = "../examples/support/mesh_file.rs"]
+mod mesh_file;
+
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use subdiv_loop::forward::{LoopOptions, subdivide};
 
-/// Minimal OBJ/OFF reader for the benchmark inputs (triangles, `v`/`f` lines or OFF).
 fn read_mesh(name: &str) -> PolygonSoup {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(name);
-    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let mut positions = Vec::new();
-    let mut faces: Vec<Vec<u32>> = Vec::new();
-    if name.ends_with(".off") {
-        let mut tokens = text.lines().filter(|l| !l.trim_start().starts_with('#')).flat_map(str::split_whitespace);
-        assert_eq!(tokens.next(), Some("OFF"));
-        let mut number = || tokens.next().expect("OFF: truncated").parse::<f64>().expect("OFF: number");
-        let (nv, nf, _) = (number() as usize, number() as usize, number());
-        for _ in 0..nv {
-            positions.push(DVec3::new(number(), number(), number()));
-        }
-        for _ in 0..nf {
-            let n = number() as usize;
-            faces.push((0..n).map(|_| number() as u32).collect());
-        }
-    } else {
-        for line in text.lines() {
-            let mut parts = line.split_whitespace();
-            match parts.next() {
-                Some("v") => {
-                    let c: Vec<f64> = parts.take(3).map(|t| t.parse().expect("OBJ: number")).collect();
-                    positions.push(DVec3::new(c[0], c[1], c[2]));
-                }
-                Some("f") => faces.push(
-                    parts.map(|t| t.split('/').next().unwrap().parse::<u32>().expect("OBJ: index") - 1).collect(),
-                ),
-                _ => {}
-            }
-        }
-    }
-    PolygonSoup::from_faces(positions, faces)
+    mesh_file::read_mesh(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(name))
 }
 
 fn bench_forward(c: &mut Criterion) {
