@@ -1,1 +1,676 @@
-//! See the crate documentation.
+//! Recognising Loop (1-to-4) subdivision connectivity in a plain triangle mesh.
+//!
+//! One Loop step turns every coarse vertex into a *vertex point* (an **even** fine
+//! vertex) and every coarse edge into an *edge point* (an **odd** fine vertex), and every
+//! coarse triangle `(a, b, c)` into three *corner faces* `(a, ab, ca)`, `(b, bc, ab)`,
+//! `(c, ca, bc)` and one *inner face* `(ab, bc, ca)`. [`detect`] recovers all of this from
+//! the fine mesh alone (ALGORITHMS.md §7.4, after Taubin 2001, "Detecting and
+//! reconstructing subdivision connectivity"):
+//!
+//! 1. **Seed.** Every edge point has valence 6 (inside) or 4 (on the boundary), so a
+//!    vertex of any other valence must be a vertex point: the lowest-numbered such vertex
+//!    of each connected component is the seed. A component where every valence is
+//!    regular (a torus, say) admits several labelings; then the lowest-numbered vertex
+//!    and, failing that, each of its neighbours is tried in turn (one of them is a vertex
+//!    point of any valid labeling, so this finds one if any exists). A seed given by the
+//!    caller ([`DetectOptions::seed_vertex`]) replaces the search in its component.
+//! 2. **Propagation** (breadth-first). The neighbours of a vertex point are edge points;
+//!    from vertex point `v` through edge point `m`, the next vertex point is the
+//!    neighbour of `m` straight across from `v` (opposite in `m`'s 6-ring inside, the
+//!    other boundary neighbour on the boundary). Each vertex is labelled once, so this
+//!    is linear; the labeling from a seed is forced, hence unique.
+//! 3. **Validation.** Every face must have one vertex point (a corner face) or none (an
+//!    inner face); the three faces across an inner face's edges must be corner faces;
+//!    every face must belong to exactly one such group of four; the three vertex points
+//!    of a group must be distinct; each edge point must lie on the same coarse edge in
+//!    both coarse faces that share it and on the boundary in both halves or in neither;
+//!    two edge points around a vertex point must not lead to the same vertex point. A
+//!    mesh passing these checks is exactly the Loop refinement of the coarse mesh found,
+//!    up to numbering.
+//!
+//! Any failure is a [`LoopError::NotLoopConnectivity`] naming the fine vertex or face
+//! where the structure breaks.
+//!
+//! # Numbering
+//! Coarse vertex `i` is the `i`-th vertex point in fine order (isolated fine vertices are
+//! vertex points of isolated coarse vertices, so that reversal loses nothing). Coarse
+//! faces are numbered in the order their first fine face appears, and each starts at the
+//! corner whose corner face comes first. Coarse edges are numbered as `mesh_topo` numbers
+//! the edges of the coarse mesh. With this choice a fine mesh in the *canonical order*
+//! (vertex points first, in coarse order, then one edge point per coarse edge in edge
+//! order; coarse face `f = (a, b, c)` refined into faces `4f .. 4f + 4` =
+//! `(a, ab, ca)`, `(b, bc, ab)`, `(c, ca, bc)`, `(ab, bc, ca)`, ALGORITHMS.md §6.1) is
+//! recognised with the identity [`FineOrder`], so a pyramid of such a mesh stores no
+//! connectivity at all. Any other numbering is recorded as a [`FineOrder`].
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+
+use mesh_topo::HalfedgeMesh;
+
+use crate::LoopError;
+use crate::corner_table::{CornerTable, NONE, next, prev};
+
+/// A fine-mesh element named by an error.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum FineElement {
+    /// A vertex, by index.
+    Vertex(u32),
+    /// A face, by index.
+    Face(u32),
+}
+
+impl fmt::Display for FineElement {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            FineElement::Vertex(v) => write!(f, "vertex {v}"),
+            FineElement::Face(face) => write!(f, "face {face}"),
+        }
+    }
+}
+
+/// Options of [`detect`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct DetectOptions {
+    /// A vertex known to be a vertex point (even). Its component is labelled from it,
+    /// without search; the other components are searched as usual. Needed only to pick
+    /// one of several valid labelings of a mesh whose valences are all regular.
+    pub seed_vertex: Option<u32>,
+}
+
+/// How a fine mesh is numbered relative to the canonical refinement of its coarse mesh
+/// (see the [module docs](self)).
+///
+/// Canonical fine vertex `i` (coarse vertex `i` for `i < V`, else the edge point of
+/// coarse edge `i - V`) is fine vertex `vertex_of_canonical[i]`. Canonical fine face `K`
+/// is fine face `face_of_canonical[K] / 3`, whose corner `j` is corner
+/// `(j + face_of_canonical[K] % 3) % 3` of the canonical face.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FineOrder {
+    /// Fine vertex of each canonical fine vertex (a permutation).
+    pub vertex_of_canonical: Vec<u32>,
+    /// `3 * face + rotation` of each canonical fine face (faces form a permutation).
+    pub face_of_canonical: Vec<u32>,
+}
+
+impl FineOrder {
+    /// Checks that this is an order for a fine mesh with `vertices` vertices and `faces`
+    /// faces: two permutations, rotations below 3.
+    ///
+    /// # Errors
+    /// A sentence saying what is wrong.
+    pub fn check(&self, vertices: usize, faces: usize) -> Result<(), String> {
+        if self.vertex_of_canonical.len() != vertices {
+            return Err(format!(
+                "vertex order has {} entries for {vertices} vertices",
+                self.vertex_of_canonical.len()
+            ));
+        }
+        if self.face_of_canonical.len() != faces {
+            return Err(format!("face order has {} entries for {faces} faces", self.face_of_canonical.len()));
+        }
+        let mut seen = vec![false; vertices];
+        for (i, &v) in self.vertex_of_canonical.iter().enumerate() {
+            if v as usize >= vertices || std::mem::replace(&mut seen[v as usize], true) {
+                return Err(format!("vertex order entry {i} ({v}) is out of range or repeated"));
+            }
+        }
+        let mut seen = vec![false; faces];
+        for (k, &code) in self.face_of_canonical.iter().enumerate() {
+            let face = (code / 3) as usize;
+            if face >= faces || std::mem::replace(&mut seen[face], true) {
+                return Err(format!("face order entry {k} (face {face}) is out of range or repeated"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The Loop structure of a fine mesh: which fine vertices are vertex points and edge
+/// points, and the coarse mesh they came from. Made by [`detect`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LoopConnectivity {
+    pub(crate) coarsening: Coarsening,
+}
+
+/// The coarse connectivity plus the map from coarse elements to fine ones.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Coarsening {
+    pub(crate) coarse: CornerTable,
+    /// Fine vertex of each coarse vertex.
+    pub(crate) vertex_point: Vec<u32>,
+    /// Fine vertex of each coarse edge.
+    pub(crate) edge_point: Vec<u32>,
+    /// See [`FineOrder::face_of_canonical`].
+    pub(crate) face_of_canonical: Vec<u32>,
+}
+
+impl Coarsening {
+    /// True if the fine mesh is in canonical order.
+    pub(crate) fn is_canonical(&self) -> bool {
+        let nv = self.vertex_point.len() as u32;
+        self.vertex_point.iter().enumerate().all(|(i, &v)| v == i as u32)
+            && self.edge_point.iter().enumerate().all(|(e, &v)| v == nv + e as u32)
+            && self.face_of_canonical.iter().enumerate().all(|(k, &code)| code == 3 * k as u32)
+    }
+
+    /// The fine order, `None` when canonical.
+    pub(crate) fn fine_order(&self) -> Option<FineOrder> {
+        (!self.is_canonical()).then(|| FineOrder {
+            vertex_of_canonical: self.vertex_point.iter().chain(&self.edge_point).copied().collect(),
+            face_of_canonical: self.face_of_canonical.clone(),
+        })
+    }
+}
+
+impl LoopConnectivity {
+    /// Number of coarse vertices (= vertex points).
+    pub fn coarse_vertex_count(&self) -> usize {
+        self.coarsening.coarse.vertex_count()
+    }
+
+    /// Number of coarse edges (= edge points).
+    pub fn coarse_edge_count(&self) -> usize {
+        self.coarsening.coarse.edge_count()
+    }
+
+    /// Number of coarse faces (a quarter of the fine faces).
+    pub fn coarse_face_count(&self) -> usize {
+        self.coarsening.coarse.face_count()
+    }
+
+    /// The fine vertex (vertex point) of each coarse vertex, in increasing order.
+    pub fn vertex_points(&self) -> &[u32] {
+        &self.coarsening.vertex_point
+    }
+
+    /// The fine vertex (edge point) of each coarse edge, coarse edges numbered as
+    /// `mesh_topo` numbers the edges of the coarse mesh.
+    pub fn edge_points(&self) -> &[u32] {
+        &self.coarsening.edge_point
+    }
+
+    /// The coarse faces as coarse vertex indices, counter-clockwise like the fine faces.
+    pub fn coarse_faces(&self) -> Vec<[u32; 3]> {
+        let t = &self.coarsening.coarse;
+        (0..t.face_count() as u32).map(|f| [t.vertex(3 * f), t.vertex(3 * f + 1), t.vertex(3 * f + 2)]).collect()
+    }
+
+    /// The two coarse vertices of coarse edge `e`, or `None` if it does not exist.
+    pub fn coarse_edge(&self, e: usize) -> Option<[u32; 2]> {
+        let t = &self.coarsening.coarse;
+        (e < t.edge_count()).then(|| {
+            let c = t.edge_corner(e as u32);
+            [t.vertex(c), t.vertex(next(c))]
+        })
+    }
+
+    /// How the fine mesh is numbered relative to the canonical refinement of the coarse
+    /// mesh; `None` if it is the canonical order itself.
+    pub fn fine_order(&self) -> Option<FineOrder> {
+        self.coarsening.fine_order()
+    }
+}
+
+/// Finds the Loop structure of a triangle mesh: its vertex points, edge points and
+/// coarse faces (see the [module docs](self) for the method and the numbering).
+///
+/// Linear in the mesh size (at most seven propagation attempts in a component whose
+/// valences are all regular, one otherwise).
+///
+/// ```
+/// use glam::DVec3;
+/// use mesh_topo::HalfedgeMesh;
+/// use subdiv_loop::detect::{DetectOptions, detect};
+///
+/// // One triangle split 1-to-4: vertex points 0, 1, 2, edge points 3 (01), 4 (12), 5 (20).
+/// let positions = vec![
+///     DVec3::ZERO, DVec3::X, DVec3::Y,
+///     DVec3::new(0.5, 0.0, 0.0), DVec3::new(0.5, 0.5, 0.0), DVec3::new(0.0, 0.5, 0.0),
+/// ];
+/// let fine = HalfedgeMesh::from_faces(positions, [[0u32, 3, 5], [1, 4, 3], [2, 5, 4], [3, 4, 5]])?;
+/// let structure = detect(&fine, &DetectOptions::default())?;
+/// assert_eq!(structure.vertex_points(), &[0, 1, 2]);
+/// assert_eq!(structure.edge_points(), &[3, 4, 5]);
+/// assert_eq!(structure.coarse_faces(), vec![[0, 1, 2]]);
+/// assert!(structure.fine_order().is_none()); // canonical order
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// [`LoopError::NotTriangle`] for a face that is not a triangle,
+/// [`LoopError::SeedOutOfRange`] for a seed that does not exist, and
+/// [`LoopError::NotLoopConnectivity`] naming the fine vertex or face where the Loop
+/// structure breaks.
+pub fn detect(fine: &HalfedgeMesh, options: &DetectOptions) -> Result<LoopConnectivity, LoopError> {
+    let table = CornerTable::from_mesh(fine)?;
+    Ok(LoopConnectivity { coarsening: detect_table(&table, options.seed_vertex)? })
+}
+
+const UNKNOWN: u8 = 0;
+const EVEN: u8 = 1;
+const ODD: u8 = 2;
+
+fn broken(at: FineElement, reason: String) -> LoopError {
+    LoopError::NotLoopConnectivity { at, reason }
+}
+
+/// [`detect`] on a corner table.
+pub(crate) fn detect_table(fine: &CornerTable, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
+    let nv = fine.vertex_count();
+    if let Some(seed) = seed_vertex
+        && seed as usize >= nv
+    {
+        return Err(LoopError::SeedOutOfRange { vertex: seed, vertex_count: nv });
+    }
+    let mut labeler = Labeler::new(fine);
+    let mut component = Vec::new();
+    let mut component_faces = Vec::new();
+    for v in 0..nv as u32 {
+        if fine.is_isolated(v) {
+            labeler.label[v as usize] = EVEN;
+            continue;
+        }
+        if labeler.component_of[v as usize] != NONE {
+            continue;
+        }
+        labeler.collect_component(v, &mut component, &mut component_faces);
+        let candidates: Vec<u32> = match seed_vertex.filter(|s| labeler.component_of[*s as usize] == v) {
+            Some(seed) => vec![seed],
+            None => match component.iter().copied().filter(|&u| !labeler.is_regular(u)).min() {
+                Some(irregular) => vec![irregular],
+                // All valences regular: `v` (the lowest index) or one of its neighbours is
+                // a vertex point of any valid labeling.
+                None => std::iter::once(v).chain(fine.outgoing(v).map(|c| fine.vertex(next(c)))).collect(),
+            },
+        };
+        let mut first_error = None;
+        for &seed in &candidates {
+            match labeler.label_component(seed, &component, &component_faces) {
+                Ok(()) => {
+                    first_error = None;
+                    break;
+                }
+                Err(error) => {
+                    first_error.get_or_insert(error);
+                }
+            }
+        }
+        if let Some(error) = first_error {
+            return Err(error);
+        }
+    }
+    Ok(labeler.assemble())
+}
+
+/// Labelling state shared by the attempts on all components.
+struct Labeler<'a> {
+    fine: &'a CornerTable,
+    label: Vec<u8>,
+    /// Lowest vertex of each vertex's component (NONE until collected).
+    component_of: Vec<u32>,
+    /// The inner face each face is grouped with (itself for an inner face).
+    inner_of_face: Vec<u32>,
+    /// Per vertex point during propagation: the last vertex point that reached it (for
+    /// the double-edge check).
+    stamp: Vec<u32>,
+    queue: std::collections::VecDeque<u32>,
+}
+
+/// The coarse triangle of an inner face: vertex points `y` and the edge point `m[k]` of
+/// each coarse half-edge `y[k] -> y[k+1]`; `child[k]` is the corner face of `y[k]`.
+struct Group {
+    y: [u32; 3],
+    m: [u32; 3],
+    child: [u32; 3],
+}
+
+impl<'a> Labeler<'a> {
+    fn new(fine: &'a CornerTable) -> Self {
+        let nv = fine.vertex_count();
+        Self {
+            fine,
+            label: vec![UNKNOWN; nv],
+            component_of: vec![NONE; nv],
+            inner_of_face: vec![NONE; fine.face_count()],
+            stamp: vec![NONE; nv],
+            queue: std::collections::VecDeque::new(),
+        }
+    }
+
+    /// Valence 6 inside or 4 on the boundary: could be an edge point.
+    fn is_regular(&self, v: u32) -> bool {
+        let target = if self.fine.is_boundary_vertex(v) { 3 } else { 6 };
+        // Count outgoing corners (one fewer than the valence on the boundary), stopping early.
+        self.fine.outgoing(v).take(target + 1).count() == target
+    }
+
+    /// The vertices (breadth-first) and faces of the component of `start`.
+    fn collect_component(&mut self, start: u32, vertices: &mut Vec<u32>, faces: &mut Vec<u32>) {
+        vertices.clear();
+        faces.clear();
+        self.component_of[start as usize] = start;
+        vertices.push(start);
+        let mut i = 0;
+        while i < vertices.len() {
+            let v = vertices[i];
+            i += 1;
+            for c in self.fine.outgoing(v) {
+                if c.is_multiple_of(3) {
+                    faces.push(c / 3);
+                }
+                for w in [self.fine.vertex(next(c)), self.fine.vertex(prev(c))] {
+                    if self.component_of[w as usize] == NONE {
+                        self.component_of[w as usize] = start;
+                        vertices.push(w);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Labels one component from `seed` and validates its faces.
+    fn label_component(&mut self, seed: u32, vertices: &[u32], faces: &[u32]) -> Result<(), LoopError> {
+        for &v in vertices {
+            self.label[v as usize] = UNKNOWN;
+            self.stamp[v as usize] = NONE;
+        }
+        for &f in faces {
+            self.inner_of_face[f as usize] = NONE;
+        }
+        self.propagate(seed)?;
+        if let Some(&v) = vertices.iter().find(|&&v| self.label[v as usize] == UNKNOWN) {
+            return Err(broken(
+                FineElement::Vertex(v),
+                format!("not reached from vertex point {seed} through the vertex-point / edge-point pattern"),
+            ));
+        }
+        self.group_faces(faces)?;
+        self.check_coarse_edges(faces)
+    }
+
+    /// Breadth-first propagation of vertex points through edge points.
+    fn propagate(&mut self, seed: u32) -> Result<(), LoopError> {
+        let fine = self.fine;
+        self.queue.clear();
+        self.label[seed as usize] = EVEN;
+        self.queue.push_back(seed);
+        while let Some(v) = self.queue.pop_front() {
+            for c in fine.outgoing(v) {
+                let m = fine.vertex(next(c));
+                match self.label[m as usize] {
+                    EVEN => {
+                        return Err(broken(
+                            FineElement::Vertex(m),
+                            format!(
+                                "it and its neighbour {v} would both be vertex points (the neighbours of a vertex point are edge points)"
+                            ),
+                        ));
+                    }
+                    UNKNOWN => self.label[m as usize] = ODD,
+                    _ => {}
+                }
+                let w = self.across(m, v)?;
+                match self.label[w as usize] {
+                    ODD => {
+                        return Err(broken(
+                            FineElement::Vertex(w),
+                            format!(
+                                "it is an edge point, but also the vertex point across edge point {m} from vertex point {v}"
+                            ),
+                        ));
+                    }
+                    UNKNOWN => {
+                        self.label[w as usize] = EVEN;
+                        self.queue.push_back(w);
+                    }
+                    _ => {}
+                }
+                if std::mem::replace(&mut self.stamp[w as usize], v) == v {
+                    return Err(broken(
+                        FineElement::Vertex(v),
+                        format!("two of its edge points lead to the same vertex point {w} (a doubled coarse edge)"),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The neighbour of edge point `m` straight across from vertex point `v`.
+    fn across(&self, m: u32, v: u32) -> Result<u32, LoopError> {
+        let mut ring = [NONE; 6];
+        let mut count = 0usize;
+        let star = self.fine.visit_star(m, |_, w| {
+            if count < 6 {
+                ring[count] = w;
+            }
+            count += 1;
+        });
+        let boundary = matches!(star, crate::corner_table::VertexStar::Boundary { .. });
+        let expected = if boundary { 4 } else { 6 };
+        if count != expected {
+            return Err(broken(
+                FineElement::Vertex(m),
+                format!(
+                    "as a neighbour of vertex point {v} it must be an edge point, but it has valence {count} ({}); an edge point has valence 6 inside and 4 on the boundary",
+                    if boundary { "on the boundary" } else { "inside" }
+                ),
+            ));
+        }
+        if boundary {
+            // ring[0] and ring[3] are the boundary neighbours.
+            if ring[0] == v {
+                return Ok(ring[3]);
+            }
+            if ring[3] == v {
+                return Ok(ring[0]);
+            }
+            return Err(broken(
+                FineElement::Vertex(m),
+                format!("boundary edge point whose neighbour {v}, a vertex point, is not on the boundary"),
+            ));
+        }
+        let i = ring.iter().position(|&w| w == v).expect("internal: v is a neighbour of m");
+        Ok(ring[(i + 3) % 6])
+    }
+
+    /// Checks the face pattern and groups every corner face with its inner face.
+    fn group_faces(&mut self, faces: &[u32]) -> Result<(), LoopError> {
+        let fine = self.fine;
+        for &f in faces {
+            let evens = (0..3).filter(|&j| self.label[fine.vertex(3 * f + j) as usize] == EVEN).count();
+            match evens {
+                0 => {
+                    for j in 0..3 {
+                        let t = fine.twin(3 * f + j);
+                        let (a, b) = (fine.vertex(3 * f + j), fine.vertex(next(3 * f + j)));
+                        if t == NONE {
+                            return Err(broken(
+                                FineElement::Face(f),
+                                format!("inner face (all edge points) with boundary edge ({a}, {b})"),
+                            ));
+                        }
+                        let opposite = fine.vertex(prev(t));
+                        if self.label[opposite as usize] != EVEN {
+                            return Err(broken(
+                                FineElement::Face(f),
+                                format!(
+                                    "inner face (all edge points) whose neighbour across edge ({a}, {b}) is face {}, not a corner face",
+                                    t / 3
+                                ),
+                            ));
+                        }
+                        debug_assert_eq!(self.inner_of_face[(t / 3) as usize], NONE);
+                        self.inner_of_face[(t / 3) as usize] = f;
+                    }
+                    self.inner_of_face[f as usize] = f;
+                    let group = self.group(f);
+                    let [a, b, c] = group.y;
+                    if a == b || b == c || c == a {
+                        return Err(broken(
+                            FineElement::Face(f),
+                            format!("inner face spans the coarse triangle ({a}, {b}, {c}) with a repeated vertex"),
+                        ));
+                    }
+                }
+                1 => {}
+                _ => {
+                    return Err(broken(
+                        FineElement::Face(f),
+                        format!(
+                            "has {evens} vertex points; a face has one (corner face) or none (inner face) in a Loop mesh"
+                        ),
+                    ));
+                }
+            }
+        }
+        if let Some(&f) = faces.iter().find(|&&f| self.inner_of_face[f as usize] == NONE) {
+            return Err(broken(FineElement::Face(f), "corner face with no inner face across its edge-point edge".into()));
+        }
+        Ok(())
+    }
+
+    /// The coarse triangle of inner face `f` (labels and grouping valid).
+    fn group(&self, f: u32) -> Group {
+        let fine = self.fine;
+        // Inner face (ab, bc, ca): across ab -> bc is b's corner face, across bc -> ca
+        // c's, across ca -> ab a's.
+        let across = |j: u32| {
+            let t = fine.twin(3 * f + j);
+            (fine.vertex(prev(t)), t / 3)
+        };
+        let (b, child_b) = across(0);
+        let (c, child_c) = across(1);
+        let (a, child_a) = across(2);
+        Group {
+            y: [a, b, c],
+            m: [fine.vertex(3 * f), fine.vertex(3 * f + 1), fine.vertex(3 * f + 2)],
+            child: [child_a, child_b, child_c],
+        }
+    }
+
+    /// The corner of corner face `g` at its vertex point.
+    fn even_corner(&self, g: u32) -> u32 {
+        (3 * g..3 * g + 3).find(|&c| self.label[self.fine.vertex(c) as usize] == EVEN).expect("internal: corner face")
+    }
+
+    /// Each edge point must sit on the same coarse edge in both coarse faces sharing it,
+    /// and be on the boundary in both halves or in neither.
+    fn check_coarse_edges(&self, faces: &[u32]) -> Result<(), LoopError> {
+        let fine = self.fine;
+        for &f in faces {
+            if self.inner_of_face[f as usize] != f {
+                continue;
+            }
+            let group = self.group(f);
+            for k in 0..3 {
+                let (from, to, m) = (group.y[k], group.y[(k + 1) % 3], group.m[k]);
+                // First half from -> m (corner face of `from`), second half m -> to
+                // (corner face of `to`, corner at m).
+                let first = self.even_corner(group.child[k]);
+                let second = prev(self.even_corner(group.child[(k + 1) % 3]));
+                debug_assert_eq!(fine.vertex(next(first)), m);
+                debug_assert_eq!((fine.vertex(second), fine.vertex(next(second))), (m, to));
+                let (t1, t2) = (fine.twin(first), fine.twin(second));
+                if (t1 == NONE) != (t2 == NONE) {
+                    return Err(broken(
+                        FineElement::Vertex(m),
+                        format!("edge point of coarse edge ({from}, {to}) is on the boundary on one side only"),
+                    ));
+                }
+                if t1 == NONE {
+                    continue;
+                }
+                // The other coarse face: its corner face of `from` holds m -> from.
+                let other = self.group(self.inner_of_face[(t1 / 3) as usize]);
+                let l = other.y.iter().position(|&y| y == from);
+                let consistent = l.is_some_and(|l| {
+                    let before = (l + 2) % 3;
+                    other.child[l] == t1 / 3
+                        && other.y[before] == to
+                        && other.m[before] == m
+                        && other.child[before] == t2 / 3
+                });
+                if !consistent {
+                    return Err(broken(
+                        FineElement::Vertex(m),
+                        format!("edge point of coarse edge ({from}, {to}) in one face but not in its neighbour"),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Numbers the coarse mesh (all components labelled and validated).
+    fn assemble(&self) -> Coarsening {
+        let fine = self.fine;
+        let nv = fine.vertex_count();
+        let mut coarse_of_fine = vec![NONE; nv];
+        let mut vertex_point = Vec::new();
+        for v in 0..nv {
+            if self.label[v] == EVEN {
+                coarse_of_fine[v] = vertex_point.len() as u32;
+                vertex_point.push(v as u32);
+            }
+        }
+        let faces = fine.face_count();
+        let coarse_faces = faces / 4;
+        let mut coarse_of_inner = vec![NONE; faces];
+        let mut canonical_of_face = vec![NONE; faces];
+        let mut face_of_canonical = vec![NONE; faces];
+        let mut corner_vertex = Vec::with_capacity(3 * coarse_faces);
+        let mut corner_edge_point = Vec::with_capacity(3 * coarse_faces);
+        // Fine corner at the vertex point of each coarse corner (first half of its half-edge).
+        let mut corner_child_corner = Vec::with_capacity(3 * coarse_faces);
+        for f in 0..faces as u32 {
+            let inner = self.inner_of_face[f as usize];
+            if coarse_of_inner[inner as usize] != NONE {
+                continue;
+            }
+            let coarse = (corner_vertex.len() / 3) as u32;
+            coarse_of_inner[inner as usize] = coarse;
+            let group = self.group(inner);
+            // Start at the corner whose corner face comes first.
+            let r = (0..3).min_by_key(|&k| group.child[k]).expect("internal: three corners");
+            for s in 0..3 {
+                let k = (r + s) % 3;
+                let child = group.child[k];
+                corner_vertex.push(coarse_of_fine[group.y[k] as usize]);
+                corner_edge_point.push(group.m[k]);
+                let even = self.even_corner(child);
+                corner_child_corner.push(even);
+                let canonical = 4 * coarse + s as u32;
+                canonical_of_face[child as usize] = canonical;
+                // Canonical corner 0 is the vertex point: actual corner j -> rotation (3 - j) % 3.
+                face_of_canonical[canonical as usize] = 3 * child + (3 - even % 3) % 3;
+            }
+            let canonical = 4 * coarse + 3;
+            canonical_of_face[inner as usize] = canonical;
+            face_of_canonical[canonical as usize] = 3 * inner + (3 - r as u32) % 3;
+        }
+        debug_assert_eq!(corner_vertex.len(), 3 * coarse_faces);
+        let twin = corner_child_corner
+            .iter()
+            .map(|&first| {
+                let t = fine.twin(first);
+                if t == NONE {
+                    return NONE;
+                }
+                // t = m -> y_l in the corner face of coarse corner l of the other face;
+                // the coarse twin is that face's half-edge l - 1 -> l.
+                let canonical = canonical_of_face[(t / 3) as usize];
+                let (other, l) = (canonical / 4, canonical % 4);
+                debug_assert!(l < 3);
+                3 * other + (l + 2) % 3
+            })
+            .collect();
+        let coarse = CornerTable::from_parts(vertex_point.len(), corner_vertex, twin);
+        let edge_point =
+            (0..coarse.edge_count() as u32).map(|e| corner_edge_point[coarse.edge_corner(e) as usize]).collect();
+        debug_assert_eq!(vertex_point.len() + coarse.edge_count(), nv);
+        Coarsening { coarse, vertex_point, edge_point, face_of_canonical }
+    }
+}
