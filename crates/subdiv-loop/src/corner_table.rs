@@ -242,11 +242,7 @@ impl CornerTable {
         for f in 0..faces as u32 {
             let base = 3 * f;
             let x = [self.vertex(base), self.vertex(base + 1), self.vertex(base + 2)];
-            let m = [
-                nv + self.corner_edge(base),
-                nv + self.corner_edge(base + 1),
-                nv + self.corner_edge(base + 2),
-            ];
+            let m = [nv + self.corner_edge(base), nv + self.corner_edge(base + 1), nv + self.corner_edge(base + 2)];
             let fine = 12 * f;
             for k in 0..3u32 {
                 let child = fine + 3 * k;

@@ -102,10 +102,7 @@ impl FineOrder {
     /// A sentence saying what is wrong.
     pub fn check(&self, vertices: usize, faces: usize) -> Result<(), String> {
         if self.vertex_of_canonical.len() != vertices {
-            return Err(format!(
-                "vertex order has {} entries for {vertices} vertices",
-                self.vertex_of_canonical.len()
-            ));
+            return Err(format!("vertex order has {} entries for {vertices} vertices", self.vertex_of_canonical.len()));
         }
         if self.face_of_canonical.len() != faces {
             return Err(format!("face order has {} entries for {faces} faces", self.face_of_canonical.len()));
@@ -527,7 +524,10 @@ impl<'a> Labeler<'a> {
             }
         }
         if let Some(&f) = faces.iter().find(|&&f| self.inner_of_face[f as usize] == NONE) {
-            return Err(broken(FineElement::Face(f), "corner face with no inner face across its edge-point edge".into()));
+            return Err(broken(
+                FineElement::Face(f),
+                "corner face with no inner face across its edge-point edge".into(),
+            ));
         }
         Ok(())
     }
@@ -610,9 +610,9 @@ impl<'a> Labeler<'a> {
         let nv = fine.vertex_count();
         let mut coarse_of_fine = vec![NONE; nv];
         let mut vertex_point = Vec::new();
-        for v in 0..nv {
-            if self.label[v] == EVEN {
-                coarse_of_fine[v] = vertex_point.len() as u32;
+        for (v, (&label, coarse)) in self.label.iter().zip(&mut coarse_of_fine).enumerate() {
+            if label == EVEN {
+                *coarse = vertex_point.len() as u32;
                 vertex_point.push(v as u32);
             }
         }
@@ -672,5 +672,235 @@ impl<'a> Labeler<'a> {
             (0..coarse.edge_count() as u32).map(|e| corner_edge_point[coarse.edge_corner(e) as usize]).collect();
         debug_assert_eq!(vertex_point.len() + coarse.edge_count(), nv);
         Coarsening { coarse, vertex_point, edge_point, face_of_canonical }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reference::{
+        bipyramid, cylinder, flip_edge, loop_step, open_fan, perturb, random_diagonal_grid, scramble, swap_vertices,
+    };
+    use crate::reverse::LoopRules;
+    use glam::DVec3;
+    use mesh_topo::PolygonSoup;
+    use mesh_topo::shapes::{self, CellKind};
+    use proptest::prelude::*;
+
+    fn mesh(soup: &PolygonSoup) -> HalfedgeMesh {
+        HalfedgeMesh::from_soup(soup).expect("valid test mesh")
+    }
+
+    fn refined(soup: &PolygonSoup) -> PolygonSoup {
+        loop_step(&mesh(soup), &LoopRules::default())
+    }
+
+    fn detect_soup(soup: &PolygonSoup, seed_vertex: Option<u32>) -> Result<LoopConnectivity, LoopError> {
+        detect(&mesh(soup), &DetectOptions { seed_vertex })
+    }
+
+    #[test]
+    fn detection_recovers_the_coarse_mesh_of_a_refinement() {
+        let shapes = [
+            shapes::tetrahedron(),
+            shapes::icosahedron(),
+            shapes::grid(4, 3, CellKind::Triangles),
+            shapes::torus(4, 3, CellKind::Triangles),
+            bipyramid(9),
+            open_fan(3),
+            cylinder(5, 2),
+        ];
+        for soup in shapes {
+            let coarse = mesh(&soup);
+            let structure = detect_soup(&refined(&soup), None).unwrap();
+            let nv = coarse.vertex_count() as u32;
+            assert_eq!(structure.vertex_points(), (0..nv).collect::<Vec<_>>());
+            assert_eq!(structure.edge_points(), (nv..nv + coarse.edge_count() as u32).collect::<Vec<_>>());
+            let faces: Vec<[u32; 3]> = soup.faces().map(|f| [f[0], f[1], f[2]]).collect();
+            assert_eq!(structure.coarse_faces(), faces);
+            for e in coarse.edges() {
+                let [a, b] = coarse.edge_vertices(e);
+                assert_eq!(structure.coarse_edge(e.index()), Some([a.raw(), b.raw()]));
+            }
+            assert_eq!(structure.coarse_edge(coarse.edge_count()), None);
+            assert!(structure.fine_order().is_none());
+        }
+    }
+
+    #[test]
+    fn detection_finds_the_vertex_points_of_a_renumbered_refinement() {
+        let soup = shapes::torus(5, 4, CellKind::Triangles);
+        let fine = refined(&soup);
+        let scrambled = scramble(&fine, 99);
+        let structure = detect_soup(&scrambled, None).unwrap();
+        assert_eq!(structure.coarse_vertex_count(), 20);
+        assert_eq!(structure.coarse_edge_count(), 60);
+        assert_eq!(structure.coarse_face_count(), 40);
+        let order = structure.fine_order().expect("renumbered");
+        order.check(scrambled.vertex_count(), scrambled.face_count()).unwrap();
+        // Every canonical fine face, mapped through the order, is an input face.
+        let table = structure.coarsening.coarse.refine();
+        for (k, &code) in order.face_of_canonical.iter().enumerate() {
+            let (face, rotation) = ((code / 3) as usize, code % 3);
+            for j in 0..3u32 {
+                let canonical_corner = 3 * k as u32 + (j + rotation) % 3;
+                let expected = order.vertex_of_canonical[table.vertex(canonical_corner) as usize];
+                assert_eq!(scrambled.face(face)[j as usize], expected);
+            }
+        }
+    }
+
+    #[test]
+    fn any_seed_of_a_regular_torus_gives_a_valid_labeling() {
+        let fine = refined(&shapes::torus(4, 4, CellKind::Triangles));
+        for seed in 0..fine.vertex_count() as u32 {
+            let structure = detect_soup(&fine, Some(seed)).unwrap();
+            assert!(structure.vertex_points().contains(&seed));
+            assert_eq!(structure.coarse_vertex_count(), 16);
+        }
+    }
+
+    #[test]
+    fn regular_meshes_fall_back_to_other_seed_candidates() {
+        // On a cylinder only vertices of even rows can be vertex points. Make vertex 0
+        // an edge point of a vertical edge, so the first candidate fails.
+        let coarse = cylinder(4, 2);
+        let fine = refined(&coarse);
+        let coarse_mesh = mesh(&coarse);
+        let vertical = coarse_mesh
+            .edges()
+            .find(|&e| {
+                let [a, b] = coarse_mesh.edge_vertices(e);
+                a.raw() / 4 != b.raw() / 4
+            })
+            .unwrap();
+        let odd_row_vertex = (coarse_mesh.vertex_count() + vertical.index()) as u32;
+        let swapped = swap_vertices(&fine, 0, odd_row_vertex);
+        assert!(detect_soup(&swapped, Some(0)).is_err(), "an odd-row vertex cannot be a vertex point of the cylinder");
+        let structure = detect_soup(&swapped, None).unwrap();
+        assert_eq!(structure.coarse_vertex_count(), 12);
+        assert!(!structure.vertex_points().contains(&0));
+    }
+
+    fn assert_not_loop(soup: &PolygonSoup, what: &str) {
+        match detect_soup(soup, None) {
+            Err(LoopError::NotLoopConnectivity { at, reason }) => {
+                let index = match at {
+                    FineElement::Vertex(v) => v as usize,
+                    FineElement::Face(f) => f as usize,
+                };
+                let bound = if matches!(at, FineElement::Vertex(_)) { soup.vertex_count() } else { soup.face_count() };
+                assert!(index < bound && !reason.is_empty(), "{what}: {at} {reason}");
+            }
+            other => panic!("{what}: expected NotLoopConnectivity, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn meshes_without_loop_connectivity_are_rejected_with_a_location() {
+        assert_not_loop(&shapes::icosahedron(), "icosahedron");
+        assert_not_loop(&shapes::octahedron(), "octahedron");
+        assert_not_loop(&shapes::tetrahedron(), "tetrahedron");
+        assert_not_loop(&shapes::grid(5, 5, CellKind::Triangles), "regular grid with odd sides");
+        for seed in 0..5 {
+            assert_not_loop(&random_diagonal_grid(8, seed), "irregular triangulation");
+        }
+        // A refined mesh with one edge flipped, for every kind of edge.
+        let fine = refined(&bipyramid(5));
+        let fine_mesh = mesh(&fine);
+        for e in fine_mesh.edges() {
+            let [a, b] = fine_mesh.edge_vertices(e);
+            assert_not_loop(&flip_edge(&fine, a.raw(), b.raw()), &format!("flipped edge {e:?}"));
+        }
+        // A refined mesh with one face removed, for every face of one coarse face.
+        for removed in 0..4 {
+            let mut holed = PolygonSoup::from_faces(fine.positions.clone(), Vec::<[u32; 3]>::new());
+            for (f, face) in fine.faces().enumerate() {
+                if f != removed {
+                    holed.push_face(face);
+                }
+            }
+            assert_not_loop(&holed, &format!("face {removed} removed"));
+        }
+    }
+
+    #[test]
+    fn seed_out_of_range_and_quads_are_errors() {
+        let fine = refined(&shapes::octahedron());
+        assert_eq!(
+            detect_soup(&fine, Some(18)).unwrap_err(),
+            LoopError::SeedOutOfRange { vertex: 18, vertex_count: 18 }
+        );
+        assert!(matches!(
+            detect(&mesh(&shapes::cube()), &DetectOptions::default()),
+            Err(LoopError::NotTriangle { face: 0, corners: 4 })
+        ));
+        // A vertex point given as seed works, an edge point of a non-regular mesh does not.
+        assert!(detect_soup(&fine, Some(0)).is_ok());
+        assert!(detect_soup(&fine, Some(6)).is_err());
+    }
+
+    #[test]
+    fn isolated_vertices_are_kept_as_isolated_coarse_vertices() {
+        let mut coarse = shapes::octahedron();
+        coarse.positions.push(DVec3::new(5.0, 5.0, 5.0));
+        let fine = refined(&coarse);
+        let structure = detect_soup(&fine, None).unwrap();
+        assert_eq!(structure.coarse_vertex_count(), 7);
+        assert!(structure.fine_order().is_none());
+    }
+
+    #[test]
+    fn several_components_are_detected_independently() {
+        let a = scramble(&refined(&shapes::icosahedron()), 3);
+        let b = refined(&cylinder(3, 1));
+        let offset = a.vertex_count() as u32;
+        let mut both = a.clone();
+        both.positions.extend(b.positions.iter().map(|p| *p + DVec3::X * 5.0));
+        for face in b.faces() {
+            both.push_face(&face.iter().map(|v| v + offset).collect::<Vec<_>>());
+        }
+        let structure = detect_soup(&both, None).unwrap();
+        assert_eq!(structure.coarse_vertex_count(), 12 + 6);
+        assert_eq!(structure.coarse_face_count(), 20 + 6);
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Detection never panics; when it succeeds on an arbitrary mesh, the coarse mesh
+        /// is valid and its canonical refinement, renumbered, is the input.
+        #[test]
+        fn detection_is_total_and_sound(
+            soup in mesh_topo::testing::arb_triangle_mesh(),
+            refine in any::<bool>(),
+            flips in 0usize..3,
+            seed in any::<u64>(),
+        ) {
+            let mut soup = if refine { scramble(&refined(&soup), seed) } else { soup };
+            let mut rng = crate::reference::Rng::new(seed);
+            for _ in 0..flips {
+                let m = mesh(&soup);
+                let e = m.edge(rng.below(m.edge_count())).unwrap();
+                if !m.is_boundary_edge(e) {
+                    let [a, b] = m.edge_vertices(e);
+                    let flipped = flip_edge(&soup, a.raw(), b.raw());
+                    if HalfedgeMesh::from_soup(&flipped).is_ok() {
+                        soup = flipped;
+                    }
+                }
+            }
+            let soup = perturb(&soup, 0.01, seed);
+            if let Ok(structure) = detect_soup(&soup, None) {
+                let coarse = structure.coarsening.coarse.to_soup(vec![DVec3::ZERO; structure.coarse_vertex_count()]);
+                prop_assert!(HalfedgeMesh::from_soup(&coarse).is_ok());
+                let canonical = structure.coarsening.coarse.refine();
+                let actual = match structure.fine_order() {
+                    None => canonical,
+                    Some(order) => canonical.permuted(&order.vertex_of_canonical, &order.face_of_canonical),
+                };
+                prop_assert_eq!(actual.to_soup(soup.positions.clone()), soup);
+            }
+        }
     }
 }

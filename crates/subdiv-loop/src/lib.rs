@@ -19,8 +19,8 @@ pub mod forward;
 pub mod limit;
 pub mod mband;
 pub mod pyramid;
-pub mod reverse;
 #[cfg(test)]
 mod reference;
+pub mod reverse;
 
 pub use error::LoopError;

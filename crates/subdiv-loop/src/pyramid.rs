@@ -267,9 +267,8 @@ impl LoopPyramid {
         for (l, level) in self.levels.iter().enumerate() {
             ranked.extend(level.details.iter().enumerate().map(|(i, d)| (d.length_squared(), l as u32, i as u32)));
         }
-        let larger_first = |a: &(f64, u32, u32), b: &(f64, u32, u32)| {
-            b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2))
-        };
+        let larger_first =
+            |a: &(f64, u32, u32), b: &(f64, u32, u32)| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2));
         if keep > 0 {
             ranked.select_nth_unstable_by(keep - 1, larger_first);
         }
@@ -388,4 +387,177 @@ pub fn bounding_box_diagonal(points: &[DVec3]) -> f64 {
     let Some(first) = points.first() else { return 0.0 };
     let (lo, hi) = points.iter().fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
     lo.distance(hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reference::{cylinder, loop_steps, open_fan, perturb, relative_distance, scramble};
+    use crate::reverse::{ReverseOptions, Weights, reverse};
+    use mesh_topo::shapes::{self, CellKind};
+    use proptest::prelude::*;
+
+    fn mesh(soup: &PolygonSoup) -> HalfedgeMesh {
+        HalfedgeMesh::from_soup(soup).expect("valid test mesh")
+    }
+
+    fn max_levels(rules: LoopRules) -> DecomposeOptions {
+        DecomposeOptions { rules, levels: Levels::Max, seed_vertex: None }
+    }
+
+    #[test]
+    fn decomposition_reconstructs_every_level() {
+        let rules = LoopRules { weights: Weights::Loop, fixed_corners: true };
+        for (name, coarse) in [
+            ("icosahedron", shapes::icosahedron()),
+            ("open fan", open_fan(4)),
+            ("cylinder", cylinder(5, 2)),
+            ("grid", shapes::grid(3, 3, CellKind::Triangles)),
+        ] {
+            // Perturb every level so that every level has details.
+            let mut levels = vec![coarse.clone()];
+            for i in 0..3 {
+                let next = perturb(&loop_steps(levels.last().unwrap(), &rules, 1), 0.05, i);
+                levels.push(next);
+            }
+            let fine = scramble(levels.last().unwrap(), 5);
+            let pyramid = decompose(&mesh(&fine), &DecomposeOptions { levels: Levels::Count(3), ..max_levels(rules) })
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(pyramid.level_count(), 3);
+            // Storage: base vertices plus all details = fine vertices.
+            assert_eq!(pyramid.base.vertex_count() + pyramid.detail_count(), fine.vertex_count(), "{name}");
+            let error = relative_distance(&pyramid.reconstruct(3).unwrap(), &fine);
+            assert!(error < 1e-12, "{name}: {error}");
+            // Level k equals reversing the input 3 - k times.
+            let mut reversed = fine.clone();
+            for k in (0..3).rev() {
+                let level = reverse(&mesh(&reversed), &ReverseOptions { rules, seed_vertex: None }).unwrap();
+                reversed = level.coarse.to_soup();
+                let error = relative_distance(&pyramid.reconstruct(k).unwrap(), &reversed);
+                assert!(error < 1e-12, "{name} level {k}: {error}");
+            }
+            assert_eq!(pyramid.base.indices, reversed.indices);
+            // The unscrambled coarse levels are found again (numbering aside).
+            assert_eq!(pyramid.base.vertex_count(), coarse.vertex_count());
+            assert_eq!(pyramid.base.face_count(), coarse.face_count());
+        }
+    }
+
+    #[test]
+    fn max_levels_stops_where_the_connectivity_ends() {
+        let rules = LoopRules::default();
+        let fine = loop_steps(&shapes::icosahedron(), &rules, 3);
+        let pyramid = decompose(&mesh(&fine), &max_levels(rules)).unwrap();
+        assert_eq!(pyramid.level_count(), 3);
+        assert_eq!(pyramid.base.indices, shapes::icosahedron().indices);
+        let error = relative_distance(&pyramid.base, &shapes::icosahedron());
+        assert!(error < 1e-12, "{error}");
+        assert!(pyramid.levels.iter().all(|l| l.order.is_none()), "canonical meshes store no order");
+        for level in &pyramid.levels {
+            assert!(level.details.iter().all(|d| d.length() < 1e-12));
+        }
+        let too_many = DecomposeOptions { levels: Levels::Count(4), ..max_levels(rules) };
+        assert!(matches!(decompose(&mesh(&fine), &too_many), Err(LoopError::NotLoopConnectivity { .. })));
+        // No connectivity at all: Max reports why.
+        assert!(matches!(
+            decompose(&mesh(&shapes::icosahedron()), &max_levels(rules)),
+            Err(LoopError::NotLoopConnectivity { .. })
+        ));
+        let zero = DecomposeOptions { levels: Levels::Count(0), ..max_levels(rules) };
+        assert_eq!(decompose(&mesh(&fine), &zero).unwrap().base, fine);
+    }
+
+    #[test]
+    fn smooth_pyramid_is_reference_subdivision() {
+        for rules in [LoopRules::default(), LoopRules { weights: Weights::Warren, fixed_corners: true }] {
+            for soup in [shapes::octahedron(), open_fan(2)] {
+                let pyramid = LoopPyramid::smooth(soup.clone(), rules, 3).unwrap();
+                for k in 0..=3 {
+                    let error = relative_distance(&pyramid.reconstruct(k).unwrap(), &loop_steps(&soup, &rules, k));
+                    assert!(error < 1e-12, "{rules:?} level {k}: {error}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn compression_keeps_the_largest_details() {
+        let rules = LoopRules::default();
+        let fine = perturb(&loop_steps(&shapes::octahedron(), &rules, 3), 0.02, 1);
+        let pyramid = decompose(&mesh(&fine), &max_levels(rules)).unwrap();
+        let total = pyramid.detail_count();
+        assert_eq!(pyramid.compressed(1.0).unwrap(), pyramid);
+        let none = pyramid.compressed(0.0).unwrap();
+        assert!(none.levels.iter().all(|l| l.details.iter().all(|d| *d == DVec3::ZERO)));
+        let smooth = LoopPyramid::smooth(pyramid.base.clone(), rules, 3).unwrap();
+        assert!(relative_distance(&none.reconstruct(3).unwrap(), &smooth.reconstruct(3).unwrap()) < 1e-12);
+        let half = pyramid.compressed(0.5).unwrap();
+        let kept: Vec<f64> =
+            half.levels.iter().flat_map(|l| &l.details).filter(|d| **d != DVec3::ZERO).map(|d| d.length()).collect();
+        assert_eq!(kept.len(), (total as f64 * 0.5).round() as usize);
+        let smallest_kept = kept.iter().copied().fold(f64::INFINITY, f64::min);
+        let largest_dropped = pyramid
+            .levels
+            .iter()
+            .zip(&half.levels)
+            .flat_map(|(a, b)| a.details.iter().zip(&b.details))
+            .filter(|(_, b)| **b == DVec3::ZERO)
+            .map(|(a, _)| a.length())
+            .fold(0.0, f64::max);
+        assert!(smallest_kept >= largest_dropped);
+        let rows = pyramid.rate_distortion(&[1.0, 0.5, 0.1, 0.0]).unwrap();
+        assert_eq!(rows[0].max_error, 0.0);
+        for pair in rows.windows(2) {
+            assert!(pair[0].kept >= pair[1].kept);
+            assert!(pair[1].rms_error > 0.0 && pair[1].rms_error <= pair[1].max_error);
+        }
+        assert!(matches!(pyramid.compressed(1.5), Err(LoopError::InvalidParameter { .. })));
+        assert!(matches!(pyramid.compressed(f64::NAN), Err(LoopError::InvalidParameter { .. })));
+        assert!(matches!(pyramid.reconstruct(4), Err(LoopError::InvalidParameter { .. })));
+    }
+
+    #[test]
+    fn files_round_trip_and_corruption_is_an_error() {
+        let rules = LoopRules { weights: Weights::Warren, fixed_corners: false };
+        let fine = scramble(&perturb(&loop_steps(&open_fan(3), &rules, 2), 0.1, 3), 4);
+        let pyramid = decompose(&mesh(&fine), &max_levels(rules)).unwrap();
+        let bytes = pyramid.to_bytes().unwrap();
+        assert!(LoopPyramid::is_loop_pyramid(&bytes));
+        assert_eq!(LoopPyramid::from_bytes(&bytes).unwrap(), pyramid);
+        for len in 0..bytes.len() {
+            assert!(LoopPyramid::from_bytes(&bytes[..len]).is_err(), "truncated to {len}");
+        }
+        // Every single-byte corruption either fails to load or loads a valid pyramid.
+        for i in 0..bytes.len() {
+            for delta in [1u8, 0x80] {
+                let mut corrupted = bytes.clone();
+                corrupted[i] = corrupted[i].wrapping_add(delta);
+                if let Ok(p) = LoopPyramid::from_bytes(&corrupted) {
+                    let _ = p.reconstruct(p.level_count());
+                }
+            }
+        }
+        let mut wrong_version = bytes.clone();
+        wrong_version[8] = 9;
+        assert!(matches!(LoopPyramid::from_bytes(&wrong_version), Err(LoopError::Binary(_))));
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+
+        /// Multi-level exact reconstruction on random perturbed two-level Loop meshes.
+        #[test]
+        fn decompose_then_reconstruct_is_exact(
+            soup in mesh_topo::testing::arb_triangle_mesh(),
+            seed in any::<u64>(),
+            warren in any::<bool>(),
+        ) {
+            let rules = LoopRules { weights: if warren { Weights::Warren } else { Weights::Loop }, fixed_corners: !warren };
+            let fine = scramble(&perturb(&loop_steps(&soup, &rules, 2), 0.1, seed), seed);
+            let pyramid = decompose(&mesh(&fine), &DecomposeOptions { levels: Levels::Count(2), ..max_levels(rules) }).unwrap();
+            prop_assert!(relative_distance(&pyramid.reconstruct(2).unwrap(), &fine) < 1e-12);
+            let decoded = LoopPyramid::from_bytes(&pyramid.to_bytes().unwrap()).unwrap();
+            prop_assert_eq!(decoded, pyramid);
+        }
+    }
 }

@@ -172,3 +172,84 @@ pub(crate) fn relative_distance(actual: &PolygonSoup, expected: &PolygonSoup) ->
     let diagonal = crate::pyramid::bounding_box_diagonal(&expected.positions).max(f64::MIN_POSITIVE);
     actual.positions.iter().zip(&expected.positions).map(|(p, q)| p.distance(*q)).fold(0.0, f64::max) / diagonal
 }
+
+/// An open cylinder: `around` cells around, `along` cells along; every interior vertex
+/// has valence 6 and every boundary vertex valence 4 (all valences regular).
+pub(crate) fn cylinder(around: u32, along: u32) -> PolygonSoup {
+    let index = |i: u32, j: u32| (i % around) + around * j;
+    let mut positions = Vec::new();
+    for j in 0..=along {
+        for i in 0..around {
+            let t = std::f64::consts::TAU * i as f64 / around as f64;
+            positions.push(DVec3::new(t.cos(), t.sin(), j as f64 * 0.7));
+        }
+    }
+    let mut faces = Vec::new();
+    for j in 0..along {
+        for i in 0..around {
+            faces.push([index(i, j), index(i + 1, j), index(i + 1, j + 1)]);
+            faces.push([index(i, j), index(i + 1, j + 1), index(i, j + 1)]);
+        }
+    }
+    PolygonSoup::from_faces(positions, faces)
+}
+
+/// Replaces the diagonal of the two triangles sharing edge (a, b) by the other one.
+/// Panics if (a, b) is not an interior edge.
+pub(crate) fn flip_edge(soup: &PolygonSoup, a: u32, b: u32) -> PolygonSoup {
+    let mut faces: Vec<Vec<u32>> = soup.faces().map(<[u32]>::to_vec).collect();
+    let find = |from: u32, to: u32, faces: &[Vec<u32>]| {
+        faces.iter().position(|f| (0..3).any(|k| f[k] == from && f[(k + 1) % 3] == to)).expect("edge of a face")
+    };
+    let (f, g) = (find(a, b, &faces), find(b, a, &faces));
+    let third = |face: &[u32]| *face.iter().find(|&&v| v != a && v != b).expect("triangle");
+    let (c, d) = (third(&faces[f]), third(&faces[g]));
+    faces[f] = vec![a, d, c];
+    faces[g] = vec![d, b, c];
+    PolygonSoup::from_faces(soup.positions.clone(), faces)
+}
+
+/// A square grid whose cells are split along a random diagonal each: an irregular
+/// triangulation without subdivision connectivity.
+pub(crate) fn random_diagonal_grid(n: u32, seed: u64) -> PolygonSoup {
+    let mut rng = Rng::new(seed);
+    let index = |i: u32, j: u32| i + (n + 1) * j;
+    let mut positions = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            positions.push(DVec3::new(
+                i as f64 + 0.2 * rng.signed(),
+                j as f64 + 0.2 * rng.signed(),
+                0.1 * rng.signed(),
+            ));
+        }
+    }
+    let mut faces = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let (a, b, c, d) = (index(i, j), index(i + 1, j), index(i + 1, j + 1), index(i, j + 1));
+            if rng.below(2) == 0 {
+                faces.push([a, b, c]);
+                faces.push([a, c, d]);
+            } else {
+                faces.push([a, b, d]);
+                faces.push([b, c, d]);
+            }
+        }
+    }
+    PolygonSoup::from_faces(positions, faces)
+}
+
+/// Swaps the numbers of vertices `a` and `b`.
+pub(crate) fn swap_vertices(soup: &PolygonSoup, a: u32, b: u32) -> PolygonSoup {
+    let mut out = soup.clone();
+    out.positions.swap(a as usize, b as usize);
+    for v in &mut out.indices {
+        if *v == a {
+            *v = b;
+        } else if *v == b {
+            *v = a;
+        }
+    }
+    out
+}

@@ -381,7 +381,10 @@ mod tests {
             ("icosahedron".to_string(), shapes::icosahedron()),
             ("grid 3x2".to_string(), shapes::grid(3, 2, CellKind::Triangles)),
             ("torus 4x3".to_string(), shapes::torus(4, 3, CellKind::Triangles)),
-            ("single triangle".to_string(), PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])),
+            (
+                "single triangle".to_string(),
+                PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]]),
+            ),
         ];
         for n in 3..=12 {
             out.push((format!("bipyramid {n}"), bipyramid(n)));
@@ -509,14 +512,18 @@ mod tests {
         huge[0] = DVec3::splat(f64::MAX);
         huge[1] = DVec3::splat(f64::MAX);
         assert!(matches!(reconstruct(&coarse, &huge, None, &rules), Err(LoopError::NonFiniteResult { .. })));
-        let bad_order = FineOrder { vertex_of_canonical: vec![0; 18], face_of_canonical: (0..32).map(|k| 3 * k).collect() };
+        let bad_order =
+            FineOrder { vertex_of_canonical: vec![0; 18], face_of_canonical: (0..32).map(|k| 3 * k).collect() };
         let zeros = vec![DVec3::ZERO; coarse.edge_count()];
         assert!(matches!(
             reconstruct(&coarse, &zeros, Some(&bad_order), &rules),
             Err(LoopError::InvalidDetails { .. })
         ));
         let quads = mesh(&shapes::cube());
-        assert!(matches!(reverse(&quads, &ReverseOptions::default()), Err(LoopError::NotTriangle { face: 0, corners: 4 })));
+        assert!(matches!(
+            reverse(&quads, &ReverseOptions::default()),
+            Err(LoopError::NotTriangle { face: 0, corners: 4 })
+        ));
         let mut fine = reconstruct(&coarse, &zeros, None, &rules).unwrap();
         fine.positions_mut()[4].x = f64::NAN;
         assert!(matches!(reverse(&fine, &ReverseOptions::default()), Err(LoopError::Mesh(_))));
