@@ -100,24 +100,28 @@ impl CornerTable {
     /// # Errors
     /// [`LoopError::NotTriangle`] naming the first face that is not a triangle.
     pub(crate) fn from_mesh(mesh: &HalfedgeMesh) -> Result<Self, LoopError> {
+        let next_halfedge = mesh.raw_halfedge_next();
+        let targets = mesh.raw_halfedge_targets();
+        let faces = mesh.face_count();
         let mut corner_of_halfedge = vec![NONE; mesh.halfedge_count()];
-        let mut corner_vertex = Vec::with_capacity(3 * mesh.face_count());
+        let mut corner_vertex = vec![0u32; 3 * faces];
+        let mut halfedge_of_corner = vec![0u32; 3 * faces];
         for f in mesh.faces() {
-            let corners = mesh.face_degree(f);
-            if corners != 3 {
-                return Err(LoopError::NotTriangle { face: f.index(), corners });
+            let h0 = mesh.face_halfedge(f).raw();
+            let h1 = next_halfedge[h0 as usize];
+            let h2 = next_halfedge[h1 as usize];
+            if next_halfedge[h2 as usize] != h0 {
+                return Err(LoopError::NotTriangle { face: f.index(), corners: mesh.face_degree(f) });
             }
-            for h in mesh.face_halfedges(f) {
-                corner_of_halfedge[h.index()] = corner_vertex.len() as u32;
-                corner_vertex.push(mesh.origin(h).raw());
+            let c = 3 * f.raw();
+            // Corner k holds the origin of half-edge k, i.e. the target of half-edge k - 1.
+            for (k, (h, before)) in [(h0, h2), (h1, h0), (h2, h1)].into_iter().enumerate() {
+                corner_of_halfedge[h as usize] = c + k as u32;
+                corner_vertex[(c as usize) + k] = targets[before as usize];
+                halfedge_of_corner[(c as usize) + k] = h;
             }
         }
-        let mut twin = vec![NONE; corner_vertex.len()];
-        for f in mesh.faces() {
-            for h in mesh.face_halfedges(f) {
-                twin[corner_of_halfedge[h.index()] as usize] = corner_of_halfedge[h.twin().index()];
-            }
-        }
+        let twin = halfedge_of_corner.iter().map(|&h| corner_of_halfedge[(h ^ 1) as usize]).collect();
         let table = Self::from_parts(mesh.vertex_count(), corner_vertex, twin);
         debug_assert_eq!(table.edge_count(), mesh.edge_count(), "internal: edge numbering differs from mesh-topo");
         Ok(table)

@@ -254,6 +254,11 @@ fn broken(at: FineElement, reason: String) -> LoopError {
 }
 
 /// [`detect`] on a corner table.
+///
+/// Components with an irregular vertex (the common case) are labelled by one
+/// propagation from their lowest irregular vertex and their faces validated in one pass
+/// in face order; only components whose valences are all regular go through the
+/// candidate search, each attempt validating the component's own faces.
 pub(crate) fn detect_table(fine: &CornerTable, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
     let nv = fine.vertex_count();
     if let Some(seed) = seed_vertex
@@ -262,26 +267,47 @@ pub(crate) fn detect_table(fine: &CornerTable, seed_vertex: Option<u32>) -> Resu
         return Err(LoopError::SeedOutOfRange { vertex: seed, vertex_count: nv });
     }
     let mut labeler = Labeler::new(fine);
-    let mut component = Vec::new();
-    let mut component_faces = Vec::new();
+    // Valence class of every vertex, in one pass over the corners.
+    let mut outgoing = vec![0u8; nv];
+    let mut boundary = vec![false; nv];
+    for c in 0..fine.corner_count() as u32 {
+        let v = fine.vertex(c) as usize;
+        outgoing[v] = outgoing[v].saturating_add(1);
+        boundary[v] |= fine.twin(c) == NONE;
+    }
+    // Outgoing corners: the valence inside, one fewer on the boundary.
+    let irregular = |v: usize| outgoing[v] != if boundary[v] { 3 } else { 6 };
+
+    if let Some(seed) = seed_vertex
+        && !fine.is_isolated(seed)
+    {
+        labeler.propagate(seed)?;
+    }
     for v in 0..nv as u32 {
         if fine.is_isolated(v) {
             labeler.label[v as usize] = EVEN;
-            continue;
+        } else if labeler.label[v as usize] == UNKNOWN && irregular(v as usize) {
+            labeler.propagate(v)?;
         }
-        if labeler.component_of[v as usize] != NONE {
+    }
+    // What is left: vertices not reached (an error) or components of regular valences.
+    let mut component = Vec::new();
+    let mut component_faces = Vec::new();
+    for v in 0..nv as u32 {
+        if labeler.label[v as usize] != UNKNOWN || labeler.component_of[v as usize] != NONE {
             continue;
         }
         labeler.collect_component(v, &mut component, &mut component_faces);
-        let candidates: Vec<u32> = match seed_vertex.filter(|s| labeler.component_of[*s as usize] == v) {
-            Some(seed) => vec![seed],
-            None => match component.iter().copied().filter(|&u| !labeler.is_regular(u)).min() {
-                Some(irregular) => vec![irregular],
-                // All valences regular: `v` (the lowest index) or one of its neighbours is
-                // a vertex point of any valid labeling.
-                None => std::iter::once(v).chain(fine.outgoing(v).map(|c| fine.vertex(next(c)))).collect(),
-            },
-        };
+        if component.iter().any(|&u| labeler.label[u as usize] != UNKNOWN || irregular(u as usize)) {
+            return Err(broken(
+                FineElement::Vertex(v),
+                "not reached from the vertex points of its component through the vertex-point / edge-point pattern"
+                    .into(),
+            ));
+        }
+        // `v` (the lowest index) or one of its neighbours is a vertex point of any valid
+        // labeling.
+        let candidates: Vec<u32> = std::iter::once(v).chain(fine.outgoing(v).map(|c| fine.vertex(next(c)))).collect();
         let mut first_error = None;
         for &seed in &candidates {
             match labeler.label_component(seed, &component, &component_faces) {
@@ -298,7 +324,20 @@ pub(crate) fn detect_table(fine: &CornerTable, seed_vertex: Option<u32>) -> Resu
             return Err(error);
         }
     }
+    let ungrouped: Vec<u32> =
+        (0..fine.face_count() as u32).filter(|&f| labeler.group_of_face[f as usize] == NONE).collect();
+    labeler.group_faces(&ungrouped)?;
     Ok(labeler.assemble())
+}
+
+/// The coarse triangle of an inner face `(ab, bc, ca)`: vertex points `y = (a, b, c)`,
+/// the edge point `m[k]` of each coarse half-edge `y[k] -> y[k+1]`, and `corner[k]`, the
+/// fine corner at `y[k]` in its corner face (whose half-edge is `y[k] -> m[k]`).
+#[derive(Debug, Clone, Copy)]
+struct Group {
+    y: [u32; 3],
+    m: [u32; 3],
+    corner: [u32; 3],
 }
 
 /// Labelling state shared by the attempts on all components.
@@ -307,20 +346,15 @@ struct Labeler<'a> {
     label: Vec<u8>,
     /// Lowest vertex of each vertex's component (NONE until collected).
     component_of: Vec<u32>,
-    /// The inner face each face is grouped with (itself for an inner face).
-    inner_of_face: Vec<u32>,
+    /// The two vertex points of each edge point (its coarse edge).
+    line: Vec<[u32; 2]>,
+    /// Group (index into `groups`) of each face.
+    group_of_face: Vec<u32>,
+    groups: Vec<Group>,
     /// Per vertex point during propagation: the last vertex point that reached it (for
     /// the double-edge check).
     stamp: Vec<u32>,
     queue: std::collections::VecDeque<u32>,
-}
-
-/// The coarse triangle of an inner face: vertex points `y` and the edge point `m[k]` of
-/// each coarse half-edge `y[k] -> y[k+1]`; `child[k]` is the corner face of `y[k]`.
-struct Group {
-    y: [u32; 3],
-    m: [u32; 3],
-    child: [u32; 3],
 }
 
 impl<'a> Labeler<'a> {
@@ -330,21 +364,17 @@ impl<'a> Labeler<'a> {
             fine,
             label: vec![UNKNOWN; nv],
             component_of: vec![NONE; nv],
-            inner_of_face: vec![NONE; fine.face_count()],
+            line: vec![[NONE; 2]; nv],
+            group_of_face: vec![NONE; fine.face_count()],
+            groups: Vec::with_capacity(fine.face_count() / 4),
             stamp: vec![NONE; nv],
             queue: std::collections::VecDeque::new(),
         }
     }
 
-    /// Valence 6 inside or 4 on the boundary: could be an edge point.
-    fn is_regular(&self, v: u32) -> bool {
-        let target = if self.fine.is_boundary_vertex(v) { 3 } else { 6 };
-        // Count outgoing corners (one fewer than the valence on the boundary), stopping early.
-        self.fine.outgoing(v).take(target + 1).count() == target
-    }
-
-    /// The vertices (breadth-first) and faces of the component of `start`.
+    /// Collects the vertices (breadth-first) and faces of the component of `start`.
     fn collect_component(&mut self, start: u32, vertices: &mut Vec<u32>, faces: &mut Vec<u32>) {
+        let fine = self.fine;
         vertices.clear();
         faces.clear();
         self.component_of[start as usize] = start;
@@ -353,11 +383,13 @@ impl<'a> Labeler<'a> {
         while i < vertices.len() {
             let v = vertices[i];
             i += 1;
-            for c in self.fine.outgoing(v) {
+            for c in fine.outgoing(v) {
                 if c.is_multiple_of(3) {
                     faces.push(c / 3);
                 }
-                for w in [self.fine.vertex(next(c)), self.fine.vertex(prev(c))] {
+                // Both ends of the face's other corners: covers the last neighbour of an
+                // open fan, which is not the target of a corner of v.
+                for w in [fine.vertex(next(c)), fine.vertex(prev(c))] {
                     if self.component_of[w as usize] == NONE {
                         self.component_of[w as usize] = start;
                         vertices.push(w);
@@ -373,9 +405,6 @@ impl<'a> Labeler<'a> {
             self.label[v as usize] = UNKNOWN;
             self.stamp[v as usize] = NONE;
         }
-        for &f in faces {
-            self.inner_of_face[f as usize] = NONE;
-        }
         self.propagate(seed)?;
         if let Some(&v) = vertices.iter().find(|&&v| self.label[v as usize] == UNKNOWN) {
             return Err(broken(
@@ -383,8 +412,12 @@ impl<'a> Labeler<'a> {
                 format!("not reached from vertex point {seed} through the vertex-point / edge-point pattern"),
             ));
         }
-        self.group_faces(faces)?;
-        self.check_coarse_edges(faces)
+        let first_group = self.groups.len();
+        let result = self.group_faces(faces);
+        if result.is_err() {
+            self.groups.truncate(first_group);
+        }
+        result
     }
 
     /// Breadth-first propagation of vertex points through edge points.
@@ -396,8 +429,26 @@ impl<'a> Labeler<'a> {
         while let Some(v) = self.queue.pop_front() {
             for c in fine.outgoing(v) {
                 let m = fine.vertex(next(c));
-                match self.label[m as usize] {
-                    EVEN => {
+                let w = match self.label[m as usize] {
+                    UNKNOWN => {
+                        let w = self.across(m, v)?;
+                        self.label[m as usize] = ODD;
+                        self.line[m as usize] = [v, w];
+                        w
+                    }
+                    ODD => match self.line[m as usize] {
+                        [a, b] if a == v => b,
+                        [a, b] if b == v => a,
+                        [a, b] => {
+                            return Err(broken(
+                                FineElement::Vertex(m),
+                                format!(
+                                    "edge point between vertex points {a} and {b} is also next to vertex point {v}"
+                                ),
+                            ));
+                        }
+                    },
+                    _ => {
                         return Err(broken(
                             FineElement::Vertex(m),
                             format!(
@@ -405,10 +456,7 @@ impl<'a> Labeler<'a> {
                             ),
                         ));
                     }
-                    UNKNOWN => self.label[m as usize] = ODD,
-                    _ => {}
-                }
-                let w = self.across(m, v)?;
+                };
                 match self.label[w as usize] {
                     ODD => {
                         return Err(broken(
@@ -437,21 +485,29 @@ impl<'a> Labeler<'a> {
 
     /// The neighbour of edge point `m` straight across from vertex point `v`.
     fn across(&self, m: u32, v: u32) -> Result<u32, LoopError> {
-        let mut ring = [NONE; 6];
+        let fine = self.fine;
+        // The ring of m, counter-clockwise; the last neighbour of an open fan is not the
+        // target of a corner. Stop early on a high valence.
+        let boundary = fine.is_boundary_vertex(m);
+        let mut ring = [NONE; 8];
         let mut count = 0usize;
-        let star = self.fine.visit_star(m, |_, w| {
-            if count < 6 {
-                ring[count] = w;
-            }
+        let mut last = NONE;
+        for c in fine.outgoing(m).take(7) {
+            ring[count] = fine.vertex(next(c));
             count += 1;
-        });
-        let boundary = matches!(star, crate::corner_table::VertexStar::Boundary { .. });
+            last = c;
+        }
+        if boundary && count < 7 {
+            ring[count] = fine.vertex(prev(last));
+            count += 1;
+        }
         let expected = if boundary { 4 } else { 6 };
         if count != expected {
+            let valence = if count >= 7 { fine.outgoing(m).count() + usize::from(boundary) } else { count };
             return Err(broken(
                 FineElement::Vertex(m),
                 format!(
-                    "as a neighbour of vertex point {v} it must be an edge point, but it has valence {count} ({}); an edge point has valence 6 inside and 4 on the boundary",
+                    "as a neighbour of vertex point {v} it must be an edge point, but it has valence {valence} ({}); an edge point has valence 6 inside and 4 on the boundary",
                     if boundary { "on the boundary" } else { "inside" }
                 ),
             ));
@@ -469,50 +525,23 @@ impl<'a> Labeler<'a> {
                 format!("boundary edge point whose neighbour {v}, a vertex point, is not on the boundary"),
             ));
         }
-        let i = ring.iter().position(|&w| w == v).expect("internal: v is a neighbour of m");
+        let i = ring[..6].iter().position(|&w| w == v).expect("internal: v is a neighbour of m");
         Ok(ring[(i + 3) % 6])
     }
 
-    /// Checks the face pattern and groups every corner face with its inner face.
+    /// Checks the face pattern and groups every corner face with its inner face; checks
+    /// that each edge point of a group lies on the coarse edge of the group.
     fn group_faces(&mut self, faces: &[u32]) -> Result<(), LoopError> {
         let fine = self.fine;
         for &f in faces {
-            let evens = (0..3).filter(|&j| self.label[fine.vertex(3 * f + j) as usize] == EVEN).count();
+            self.group_of_face[f as usize] = NONE;
+        }
+        for &f in faces {
+            let corners = [3 * f, 3 * f + 1, 3 * f + 2];
+            let evens = corners.iter().filter(|&&c| self.label[fine.vertex(c) as usize] == EVEN).count();
             match evens {
-                0 => {
-                    for j in 0..3 {
-                        let t = fine.twin(3 * f + j);
-                        let (a, b) = (fine.vertex(3 * f + j), fine.vertex(next(3 * f + j)));
-                        if t == NONE {
-                            return Err(broken(
-                                FineElement::Face(f),
-                                format!("inner face (all edge points) with boundary edge ({a}, {b})"),
-                            ));
-                        }
-                        let opposite = fine.vertex(prev(t));
-                        if self.label[opposite as usize] != EVEN {
-                            return Err(broken(
-                                FineElement::Face(f),
-                                format!(
-                                    "inner face (all edge points) whose neighbour across edge ({a}, {b}) is face {}, not a corner face",
-                                    t / 3
-                                ),
-                            ));
-                        }
-                        debug_assert_eq!(self.inner_of_face[(t / 3) as usize], NONE);
-                        self.inner_of_face[(t / 3) as usize] = f;
-                    }
-                    self.inner_of_face[f as usize] = f;
-                    let group = self.group(f);
-                    let [a, b, c] = group.y;
-                    if a == b || b == c || c == a {
-                        return Err(broken(
-                            FineElement::Face(f),
-                            format!("inner face spans the coarse triangle ({a}, {b}, {c}) with a repeated vertex"),
-                        ));
-                    }
-                }
-                1 => {}
+                0 => {}
+                1 => continue,
                 _ => {
                     return Err(broken(
                         FineElement::Face(f),
@@ -522,84 +551,65 @@ impl<'a> Labeler<'a> {
                     ));
                 }
             }
+            // An inner face (ab, bc, ca): across ab -> bc lies b's corner face, across
+            // bc -> ca c's, across ca -> ab a's.
+            let mut y = [NONE; 3];
+            let mut corner = [NONE; 3];
+            let group = self.groups.len() as u32;
+            for j in 0..3u32 {
+                let t = fine.twin(3 * f + j);
+                let (a, b) = (fine.vertex(3 * f + j), fine.vertex(next(3 * f + j)));
+                if t == NONE {
+                    return Err(broken(
+                        FineElement::Face(f),
+                        format!("inner face (all edge points) with boundary edge ({a}, {b})"),
+                    ));
+                }
+                let even = prev(t);
+                if self.label[fine.vertex(even) as usize] != EVEN {
+                    return Err(broken(
+                        FineElement::Face(f),
+                        format!(
+                            "inner face (all edge points) whose neighbour across edge ({a}, {b}) is face {}, not a corner face",
+                            t / 3
+                        ),
+                    ));
+                }
+                let k = (j as usize + 1) % 3;
+                y[k] = fine.vertex(even);
+                corner[k] = even;
+                debug_assert_eq!(self.group_of_face[(t / 3) as usize], NONE);
+                self.group_of_face[(t / 3) as usize] = group;
+            }
+            self.group_of_face[f as usize] = group;
+            let m = [fine.vertex(3 * f), fine.vertex(3 * f + 1), fine.vertex(3 * f + 2)];
+            let [a, b, c] = y;
+            if a == b || b == c || c == a {
+                return Err(broken(
+                    FineElement::Face(f),
+                    format!("inner face spans the coarse triangle ({a}, {b}, {c}) with a repeated vertex"),
+                ));
+            }
+            for k in 0..3 {
+                let (from, to) = (y[k], y[(k + 1) % 3]);
+                let line = self.line[m[k] as usize];
+                if line != [from, to] && line != [to, from] {
+                    return Err(broken(
+                        FineElement::Vertex(m[k]),
+                        format!(
+                            "edge point between vertex points {} and {} is used by the coarse triangle ({a}, {b}, {c}) as the edge point of ({from}, {to})",
+                            line[0], line[1]
+                        ),
+                    ));
+                }
+            }
+            self.groups.push(Group { y, m, corner });
         }
-        if let Some(&f) = faces.iter().find(|&&f| self.inner_of_face[f as usize] == NONE) {
+        if let Some(&f) = faces.iter().find(|&&f| self.group_of_face[f as usize] == NONE) {
             return Err(broken(
                 FineElement::Face(f),
                 "corner face with no inner face across its edge-point edge".into(),
             ));
-        }
-        Ok(())
-    }
-
-    /// The coarse triangle of inner face `f` (labels and grouping valid).
-    fn group(&self, f: u32) -> Group {
-        let fine = self.fine;
-        // Inner face (ab, bc, ca): across ab -> bc is b's corner face, across bc -> ca
-        // c's, across ca -> ab a's.
-        let across = |j: u32| {
-            let t = fine.twin(3 * f + j);
-            (fine.vertex(prev(t)), t / 3)
-        };
-        let (b, child_b) = across(0);
-        let (c, child_c) = across(1);
-        let (a, child_a) = across(2);
-        Group {
-            y: [a, b, c],
-            m: [fine.vertex(3 * f), fine.vertex(3 * f + 1), fine.vertex(3 * f + 2)],
-            child: [child_a, child_b, child_c],
-        }
-    }
-
-    /// The corner of corner face `g` at its vertex point.
-    fn even_corner(&self, g: u32) -> u32 {
-        (3 * g..3 * g + 3).find(|&c| self.label[self.fine.vertex(c) as usize] == EVEN).expect("internal: corner face")
-    }
-
-    /// Each edge point must sit on the same coarse edge in both coarse faces sharing it,
-    /// and be on the boundary in both halves or in neither.
-    fn check_coarse_edges(&self, faces: &[u32]) -> Result<(), LoopError> {
-        let fine = self.fine;
-        for &f in faces {
-            if self.inner_of_face[f as usize] != f {
-                continue;
-            }
-            let group = self.group(f);
-            for k in 0..3 {
-                let (from, to, m) = (group.y[k], group.y[(k + 1) % 3], group.m[k]);
-                // First half from -> m (corner face of `from`), second half m -> to
-                // (corner face of `to`, corner at m).
-                let first = self.even_corner(group.child[k]);
-                let second = prev(self.even_corner(group.child[(k + 1) % 3]));
-                debug_assert_eq!(fine.vertex(next(first)), m);
-                debug_assert_eq!((fine.vertex(second), fine.vertex(next(second))), (m, to));
-                let (t1, t2) = (fine.twin(first), fine.twin(second));
-                if (t1 == NONE) != (t2 == NONE) {
-                    return Err(broken(
-                        FineElement::Vertex(m),
-                        format!("edge point of coarse edge ({from}, {to}) is on the boundary on one side only"),
-                    ));
-                }
-                if t1 == NONE {
-                    continue;
-                }
-                // The other coarse face: its corner face of `from` holds m -> from.
-                let other = self.group(self.inner_of_face[(t1 / 3) as usize]);
-                let l = other.y.iter().position(|&y| y == from);
-                let consistent = l.is_some_and(|l| {
-                    let before = (l + 2) % 3;
-                    other.child[l] == t1 / 3
-                        && other.y[before] == to
-                        && other.m[before] == m
-                        && other.child[before] == t2 / 3
-                });
-                if !consistent {
-                    return Err(broken(
-                        FineElement::Vertex(m),
-                        format!("edge point of coarse edge ({from}, {to}) in one face but not in its neighbour"),
-                    ));
-                }
-            }
         }
         Ok(())
     }
@@ -609,7 +619,7 @@ impl<'a> Labeler<'a> {
         let fine = self.fine;
         let nv = fine.vertex_count();
         let mut coarse_of_fine = vec![NONE; nv];
-        let mut vertex_point = Vec::new();
+        let mut vertex_point = Vec::with_capacity(nv / 4 + 1);
         for (v, (&label, coarse)) in self.label.iter().zip(&mut coarse_of_fine).enumerate() {
             if label == EVEN {
                 *coarse = vertex_point.len() as u32;
@@ -617,42 +627,44 @@ impl<'a> Labeler<'a> {
             }
         }
         let faces = fine.face_count();
-        let coarse_faces = faces / 4;
-        let mut coarse_of_inner = vec![NONE; faces];
+        let coarse_faces = self.groups.len();
+        debug_assert_eq!(4 * coarse_faces, faces);
+        let mut coarse_of_group = vec![NONE; coarse_faces];
         let mut canonical_of_face = vec![NONE; faces];
         let mut face_of_canonical = vec![NONE; faces];
         let mut corner_vertex = Vec::with_capacity(3 * coarse_faces);
         let mut corner_edge_point = Vec::with_capacity(3 * coarse_faces);
         // Fine corner at the vertex point of each coarse corner (first half of its half-edge).
-        let mut corner_child_corner = Vec::with_capacity(3 * coarse_faces);
+        let mut first_half = Vec::with_capacity(3 * coarse_faces);
         for f in 0..faces as u32 {
-            let inner = self.inner_of_face[f as usize];
-            if coarse_of_inner[inner as usize] != NONE {
+            let g = self.group_of_face[f as usize] as usize;
+            if coarse_of_group[g] != NONE {
                 continue;
             }
             let coarse = (corner_vertex.len() / 3) as u32;
-            coarse_of_inner[inner as usize] = coarse;
-            let group = self.group(inner);
+            coarse_of_group[g] = coarse;
+            let group = &self.groups[g];
             // Start at the corner whose corner face comes first.
-            let r = (0..3).min_by_key(|&k| group.child[k]).expect("internal: three corners");
+            let r = (0..3).min_by_key(|&k| group.corner[k]).expect("internal: three corners");
             for s in 0..3 {
                 let k = (r + s) % 3;
-                let child = group.child[k];
+                let even = group.corner[k];
                 corner_vertex.push(coarse_of_fine[group.y[k] as usize]);
                 corner_edge_point.push(group.m[k]);
-                let even = self.even_corner(child);
-                corner_child_corner.push(even);
+                first_half.push(even);
                 let canonical = 4 * coarse + s as u32;
-                canonical_of_face[child as usize] = canonical;
+                canonical_of_face[(even / 3) as usize] = canonical;
                 // Canonical corner 0 is the vertex point: actual corner j -> rotation (3 - j) % 3.
-                face_of_canonical[canonical as usize] = 3 * child + (3 - even % 3) % 3;
+                face_of_canonical[canonical as usize] = 3 * (even / 3) + (3 - even % 3) % 3;
             }
+            // The inner face is the one across the corner faces' edge-point edges.
+            let inner = fine.twin(next(group.corner[0])) / 3;
             let canonical = 4 * coarse + 3;
             canonical_of_face[inner as usize] = canonical;
             face_of_canonical[canonical as usize] = 3 * inner + (3 - r as u32) % 3;
         }
         debug_assert_eq!(corner_vertex.len(), 3 * coarse_faces);
-        let twin = corner_child_corner
+        let twin = first_half
             .iter()
             .map(|&first| {
                 let t = fine.twin(first);
@@ -681,7 +693,7 @@ mod tests {
     use crate::reference::{
         bipyramid, cylinder, flip_edge, loop_step, open_fan, perturb, random_diagonal_grid, scramble, swap_vertices,
     };
-    use crate::reverse::LoopRules;
+    use crate::reverse::LoopOptions;
     use glam::DVec3;
     use mesh_topo::PolygonSoup;
     use mesh_topo::shapes::{self, CellKind};
@@ -692,7 +704,7 @@ mod tests {
     }
 
     fn refined(soup: &PolygonSoup) -> PolygonSoup {
-        loop_step(&mesh(soup), &LoopRules::default())
+        loop_step(&mesh(soup), &LoopOptions::default())
     }
 
     fn detect_soup(soup: &PolygonSoup, seed_vertex: Option<u32>) -> Result<LoopConnectivity, LoopError> {

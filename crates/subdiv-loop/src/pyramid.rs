@@ -3,7 +3,7 @@
 //! file format.
 //!
 //! # Layout
-//! A [`LoopPyramid`] holds the [`LoopRules`] it was made with, the coarsest mesh
+//! A [`LoopPyramid`] holds the [`LoopOptions`] it was made with, the coarsest mesh
 //! (`base`, a polygon soup), and one [`DetailLevel`] per refinement step, **coarsest
 //! first**: `levels[0]` refines the base to level 1, `levels.last()` rebuilds the input
 //! mesh. A level holds one detail per edge of the mesh it refines (in that mesh's edge
@@ -34,7 +34,7 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
 use crate::LoopError;
 use crate::corner_table::CornerTable;
 use crate::detect::{FineOrder, detect_table};
-use crate::reverse::{LoopRules, check_finite, check_level, refine_level, reverse_positions};
+use crate::reverse::{LoopOptions, check_finite, check_level, refine_level, reverse_positions};
 
 /// Magic number of a Loop pyramid file.
 pub const PYRAMID_MAGIC: [u8; 8] = *b"MRSLOOP\0";
@@ -54,7 +54,7 @@ pub struct DetailLevel {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LoopPyramid {
     /// The subdivision rules of every level.
-    pub rules: LoopRules,
+    pub rules: LoopOptions,
     /// The coarsest mesh.
     pub base: PolygonSoup,
     /// The refinement steps, coarsest first.
@@ -74,7 +74,7 @@ pub enum Levels {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct DecomposeOptions {
     /// The subdivision rules.
-    pub rules: LoopRules,
+    pub rules: LoopOptions,
     /// How many levels.
     pub levels: Levels,
     /// A vertex point of the input mesh, for the first level only (see
@@ -85,7 +85,7 @@ pub struct DecomposeOptions {
 impl Default for DecomposeOptions {
     /// Loop's rules, one level, automatic seed.
     fn default() -> Self {
-        Self { rules: LoopRules::default(), levels: Levels::Count(1), seed_vertex: None }
+        Self { rules: LoopOptions::default(), levels: Levels::Count(1), seed_vertex: None }
     }
 }
 
@@ -111,11 +111,11 @@ pub struct RateDistortion {
 /// ```
 /// use mesh_topo::{HalfedgeMesh, shapes};
 /// use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, decompose};
-/// use subdiv_loop::reverse::LoopRules;
+/// use subdiv_loop::reverse::LoopOptions;
 ///
 /// // An icosahedron refined twice (zero details = Loop subdivision).
 /// let ico = HalfedgeMesh::from_soup(&shapes::icosahedron())?;
-/// let smooth = LoopPyramid::smooth(ico.to_soup(), LoopRules::default(), 2)?;
+/// let smooth = LoopPyramid::smooth(ico.to_soup(), LoopOptions::default(), 2)?;
 /// let fine = HalfedgeMesh::from_soup(&smooth.reconstruct(2)?)?;
 /// assert_eq!(fine.face_count(), 20 * 16);
 ///
@@ -177,7 +177,7 @@ impl LoopPyramid {
     ///
     /// # Errors
     /// Any [`mesh_topo::MeshError`] of `base`, or [`LoopError::NotTriangle`].
-    pub fn smooth(base: PolygonSoup, rules: LoopRules, levels: usize) -> Result<Self, LoopError> {
+    pub fn smooth(base: PolygonSoup, rules: LoopOptions, levels: usize) -> Result<Self, LoopError> {
         let mut table = CornerTable::from_soup(&base)?;
         let mut detail_levels = Vec::with_capacity(levels);
         for _ in 0..levels {
@@ -284,9 +284,9 @@ impl LoopPyramid {
     /// ```
     /// use mesh_topo::shapes;
     /// use subdiv_loop::pyramid::LoopPyramid;
-    /// use subdiv_loop::reverse::LoopRules;
+    /// use subdiv_loop::reverse::LoopOptions;
     ///
-    /// let mut pyramid = LoopPyramid::smooth(shapes::octahedron(), LoopRules::default(), 2)?;
+    /// let mut pyramid = LoopPyramid::smooth(shapes::octahedron(), LoopOptions::default(), 2)?;
     /// pyramid.levels[1].details[5] = glam::DVec3::new(0.0, 0.0, 0.1); // one bump
     /// let rows = pyramid.rate_distortion(&[1.0, 0.0])?;
     /// assert_eq!(rows[0].max_error, 0.0);
@@ -339,9 +339,9 @@ impl LoopPyramid {
     /// ```
     /// use mesh_topo::shapes;
     /// use subdiv_loop::pyramid::LoopPyramid;
-    /// use subdiv_loop::reverse::LoopRules;
+    /// use subdiv_loop::reverse::LoopOptions;
     ///
-    /// let pyramid = LoopPyramid::smooth(shapes::tetrahedron(), LoopRules::default(), 1)?;
+    /// let pyramid = LoopPyramid::smooth(shapes::tetrahedron(), LoopOptions::default(), 1)?;
     /// let bytes = pyramid.to_bytes()?;
     /// assert!(LoopPyramid::is_loop_pyramid(&bytes));
     /// assert_eq!(LoopPyramid::from_bytes(&bytes)?, pyramid);
@@ -393,7 +393,7 @@ pub fn bounding_box_diagonal(points: &[DVec3]) -> f64 {
 mod tests {
     use super::*;
     use crate::reference::{cylinder, loop_steps, open_fan, perturb, relative_distance, scramble};
-    use crate::reverse::{ReverseOptions, Weights, reverse};
+    use crate::reverse::{ReverseOptions, VertexWeights, reverse};
     use mesh_topo::shapes::{self, CellKind};
     use proptest::prelude::*;
 
@@ -401,13 +401,13 @@ mod tests {
         HalfedgeMesh::from_soup(soup).expect("valid test mesh")
     }
 
-    fn max_levels(rules: LoopRules) -> DecomposeOptions {
+    fn max_levels(rules: LoopOptions) -> DecomposeOptions {
         DecomposeOptions { rules, levels: Levels::Max, seed_vertex: None }
     }
 
     #[test]
     fn decomposition_reconstructs_every_level() {
-        let rules = LoopRules { weights: Weights::Loop, fixed_corners: true };
+        let rules = LoopOptions { weights: VertexWeights::Loop, keep_corners: true };
         for (name, coarse) in [
             ("icosahedron", shapes::icosahedron()),
             ("open fan", open_fan(4)),
@@ -445,7 +445,7 @@ mod tests {
 
     #[test]
     fn max_levels_stops_where_the_connectivity_ends() {
-        let rules = LoopRules::default();
+        let rules = LoopOptions::default();
         let fine = loop_steps(&shapes::icosahedron(), &rules, 3);
         let pyramid = decompose(&mesh(&fine), &max_levels(rules)).unwrap();
         assert_eq!(pyramid.level_count(), 3);
@@ -469,7 +469,7 @@ mod tests {
 
     #[test]
     fn smooth_pyramid_is_reference_subdivision() {
-        for rules in [LoopRules::default(), LoopRules { weights: Weights::Warren, fixed_corners: true }] {
+        for rules in [LoopOptions::default(), LoopOptions { weights: VertexWeights::Warren, keep_corners: true }] {
             for soup in [shapes::octahedron(), open_fan(2)] {
                 let pyramid = LoopPyramid::smooth(soup.clone(), rules, 3).unwrap();
                 for k in 0..=3 {
@@ -482,7 +482,7 @@ mod tests {
 
     #[test]
     fn compression_keeps_the_largest_details() {
-        let rules = LoopRules::default();
+        let rules = LoopOptions::default();
         let fine = perturb(&loop_steps(&shapes::octahedron(), &rules, 3), 0.02, 1);
         let pyramid = decompose(&mesh(&fine), &max_levels(rules)).unwrap();
         let total = pyramid.detail_count();
@@ -518,7 +518,7 @@ mod tests {
 
     #[test]
     fn files_round_trip_and_corruption_is_an_error() {
-        let rules = LoopRules { weights: Weights::Warren, fixed_corners: false };
+        let rules = LoopOptions { weights: VertexWeights::Warren, keep_corners: false };
         let fine = scramble(&perturb(&loop_steps(&open_fan(3), &rules, 2), 0.1, 3), 4);
         let pyramid = decompose(&mesh(&fine), &max_levels(rules)).unwrap();
         let bytes = pyramid.to_bytes().unwrap();
@@ -552,7 +552,7 @@ mod tests {
             seed in any::<u64>(),
             warren in any::<bool>(),
         ) {
-            let rules = LoopRules { weights: if warren { Weights::Warren } else { Weights::Loop }, fixed_corners: !warren };
+            let rules = LoopOptions { weights: if warren { VertexWeights::Warren } else { VertexWeights::Loop }, keep_corners: !warren };
             let fine = scramble(&perturb(&loop_steps(&soup, &rules, 2), 0.1, seed), seed);
             let pyramid = decompose(&mesh(&fine), &DecomposeOptions { levels: Levels::Count(2), ..max_levels(rules) }).unwrap();
             prop_assert!(relative_distance(&pyramid.reconstruct(2).unwrap(), &fine) < 1e-12);

@@ -4,12 +4,12 @@
 use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 
-use crate::reverse::LoopRules;
+use crate::reverse::LoopOptions;
 
 /// One Loop step of a triangle mesh, canonical output order: vertex `v` stays `v`, edge
 /// `e` becomes vertex `V + e`, face `f = (a, b, c)` becomes faces `4f..4f+4` =
 /// `(a, ab, ca)`, `(b, bc, ab)`, `(c, ca, bc)`, `(ab, bc, ca)`.
-pub(crate) fn loop_step(mesh: &HalfedgeMesh, rules: &LoopRules) -> PolygonSoup {
+pub(crate) fn loop_step(mesh: &HalfedgeMesh, rules: &LoopOptions) -> PolygonSoup {
     let nv = mesh.vertex_count();
     let mut positions = Vec::with_capacity(nv + mesh.edge_count());
     for v in mesh.vertices() {
@@ -18,7 +18,7 @@ pub(crate) fn loop_step(mesh: &HalfedgeMesh, rules: &LoopRules) -> PolygonSoup {
             positions.push(p);
         } else if mesh.is_boundary_vertex(v) {
             let valence = mesh.valence(v);
-            if rules.fixed_corners && valence == 2 {
+            if rules.keep_corners && valence == 2 {
                 positions.push(p);
             } else {
                 let boundary_neighbours: Vec<DVec3> = mesh
@@ -65,7 +65,7 @@ pub(crate) fn loop_step(mesh: &HalfedgeMesh, rules: &LoopRules) -> PolygonSoup {
 }
 
 /// `levels` reference Loop steps.
-pub(crate) fn loop_steps(soup: &PolygonSoup, rules: &LoopRules, levels: usize) -> PolygonSoup {
+pub(crate) fn loop_steps(soup: &PolygonSoup, rules: &LoopOptions, levels: usize) -> PolygonSoup {
     let mut soup = soup.clone();
     for _ in 0..levels {
         soup = loop_step(&HalfedgeMesh::from_soup(&soup).expect("valid mesh"), rules);

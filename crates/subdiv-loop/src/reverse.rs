@@ -24,7 +24,7 @@
 //! Reconstruction computes `F_e = EdgeRule(P)_e + D_e` and recovers each vertex point by
 //! solving the inverse relation for `p'`. The coarse mesh plus the details hold
 //! `|V_c| + |E_c| = |V_f|` vectors: exactly as many as the fine mesh. When the fine mesh
-//! was made by Loop subdivision with the same [`LoopRules`], every detail is zero (up to
+//! was made by Loop subdivision with the same [`LoopOptions`], every detail is zero (up to
 //! rounding), and reconstruction with zero details *is* Loop subdivision.
 //!
 //! This works on any mesh with Loop connectivity, not only on meshes made by Loop
@@ -40,9 +40,9 @@ use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::detect::{Coarsening, FineOrder, detect_table};
 
-/// Weights of Loop's interior vertex rule.
+/// VertexWeights of Loop's interior vertex rule.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
-pub enum Weights {
+pub enum VertexWeights {
     /// Loop's original weights, `β_n = (5/8 − (3/8 + cos(2π/n)/4)²) / n` (the choice of
     /// OpenSubdiv, CGAL, OpenMesh and most libraries).
     #[default]
@@ -51,19 +51,19 @@ pub enum Weights {
     Warren,
 }
 
-impl Weights {
+impl VertexWeights {
     /// The neighbour weight `β_n` of an interior vertex of valence `n`.
     ///
     /// ```
-    /// use subdiv_loop::reverse::Weights;
-    /// assert_eq!(Weights::Loop.beta(6), 1.0 / 16.0);
-    /// assert_eq!(Weights::Warren.beta(6), 1.0 / 16.0);
-    /// assert_eq!(Weights::Warren.beta(3), 3.0 / 16.0);
+    /// use subdiv_loop::reverse::VertexWeights;
+    /// assert_eq!(VertexWeights::Loop.beta(6), 1.0 / 16.0);
+    /// assert_eq!(VertexWeights::Warren.beta(6), 1.0 / 16.0);
+    /// assert_eq!(VertexWeights::Warren.beta(3), 3.0 / 16.0);
     /// ```
     pub fn beta(self, valence: usize) -> f64 {
         let n = valence as f64;
         match self {
-            Weights::Loop => {
+            VertexWeights::Loop => {
                 // cos(2π/6) is not exactly 1/2 in floating point; keep the regular case exact.
                 if valence == 6 {
                     return 1.0 / 16.0;
@@ -71,7 +71,7 @@ impl Weights {
                 let c = 3.0 / 8.0 + 0.25 * (2.0 * std::f64::consts::PI / n).cos();
                 (5.0 / 8.0 - c * c) / n
             }
-            Weights::Warren => {
+            VertexWeights::Warren => {
                 if valence == 3 {
                     3.0 / 16.0
                 } else {
@@ -85,25 +85,25 @@ impl Weights {
 /// The rules a mesh was (or will be) refined with; the reversal must use the same rules
 /// as the forward subdivision that made the mesh for the details to vanish.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
-pub struct LoopRules {
+pub struct LoopOptions {
     /// Interior vertex weights.
-    pub weights: Weights,
+    pub weights: VertexWeights,
     /// Keep boundary corners (boundary vertices of valence 2, i.e. with one face) fixed:
     /// `p' = p` instead of the boundary vertex rule.
-    pub fixed_corners: bool,
+    pub keep_corners: bool,
 }
 
 /// `(μ, η)` of the exact inverse of the interior vertex rule at valence `l`:
 /// `p = μ p' + η Σ e'_j`.
 ///
 /// ```
-/// use subdiv_loop::reverse::{Weights, inverse_weights};
-/// let (mu, eta) = inverse_weights(Weights::Loop, 6);
+/// use subdiv_loop::reverse::{VertexWeights, inverse_weights};
+/// let (mu, eta) = inverse_weights(VertexWeights::Loop, 6);
 /// assert!((mu - 2.5).abs() < 1e-15 && (eta + 0.25).abs() < 1e-15);
-/// let (mu, eta) = inverse_weights(Weights::Loop, 3);
+/// let (mu, eta) = inverse_weights(VertexWeights::Loop, 3);
 /// assert!((mu - 10.0).abs() < 1e-12 && (eta + 3.0).abs() < 1e-12);
 /// ```
-pub fn inverse_weights(weights: Weights, valence: usize) -> (f64, f64) {
+pub fn inverse_weights(weights: VertexWeights, valence: usize) -> (f64, f64) {
     let beta = weights.beta(valence);
     let alpha = 1.0 - valence as f64 * beta;
     let denominator = 8.0 * alpha - 3.0;
@@ -127,7 +127,7 @@ pub struct ReversedLevel {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct ReverseOptions {
     /// The rules of the forward subdivision.
-    pub rules: LoopRules,
+    pub rules: LoopOptions,
     /// A vertex known to be a vertex point (see
     /// [`DetectOptions::seed_vertex`](crate::detect::DetectOptions::seed_vertex)).
     pub seed_vertex: Option<u32>,
@@ -140,12 +140,12 @@ pub struct ReverseOptions {
 /// ```
 /// use glam::DVec3;
 /// use mesh_topo::{HalfedgeMesh, shapes};
-/// use subdiv_loop::reverse::{LoopRules, ReverseOptions, reconstruct, reverse};
+/// use subdiv_loop::reverse::{LoopOptions, ReverseOptions, reconstruct, reverse};
 ///
 /// // Refine an octahedron with zero details (= one Loop step), then reverse it.
 /// let coarse = HalfedgeMesh::from_soup(&shapes::octahedron())?;
 /// let zeros = vec![DVec3::ZERO; coarse.edge_count()];
-/// let fine = reconstruct(&coarse, &zeros, None, &LoopRules::default())?;
+/// let fine = reconstruct(&coarse, &zeros, None, &LoopOptions::default())?;
 /// assert_eq!(fine.vertex_count(), 6 + 12);
 ///
 /// let level = reverse(&fine, &ReverseOptions::default())?;
@@ -184,7 +184,7 @@ pub fn reconstruct(
     coarse: &HalfedgeMesh,
     details: &[DVec3],
     order: Option<&FineOrder>,
-    rules: &LoopRules,
+    rules: &LoopOptions,
 ) -> Result<HalfedgeMesh, LoopError> {
     let table = CornerTable::from_mesh(coarse)?;
     check_level(&table, details, order, 1)?;
@@ -243,7 +243,7 @@ fn inverse_vertex_rule(
     vertex_point: DVec3,
     edge_sum: DVec3,
     boundary: impl Fn([u32; 2]) -> [DVec3; 2],
-    rules: &LoopRules,
+    rules: &LoopOptions,
 ) -> DVec3 {
     match star {
         VertexStar::Isolated => vertex_point,
@@ -252,7 +252,7 @@ fn inverse_vertex_rule(
             mu * vertex_point + eta * edge_sum
         }
         VertexStar::Boundary { valence, boundary_edges } => {
-            if rules.fixed_corners && valence == 2 {
+            if rules.keep_corners && valence == 2 {
                 vertex_point
             } else {
                 let [before, after] = boundary(boundary_edges);
@@ -292,7 +292,7 @@ fn map_indices<T: Send>(n: usize, f: impl Fn(u32) -> T + Sync + Send) -> Vec<T> 
 pub(crate) fn reverse_positions(
     coarsening: &Coarsening,
     fine: &[DVec3],
-    rules: &LoopRules,
+    rules: &LoopOptions,
 ) -> (Vec<DVec3>, Vec<DVec3>) {
     let coarse = &coarsening.coarse;
     let edge_position = |e: u32| fine[coarsening.edge_point[e as usize] as usize];
@@ -312,7 +312,7 @@ pub(crate) fn refine_level(
     positions: &[DVec3],
     details: &[DVec3],
     order: Option<&FineOrder>,
-    rules: &LoopRules,
+    rules: &LoopOptions,
 ) -> (CornerTable, Vec<DVec3>) {
     let nv = coarse.vertex_count();
     let edge_points = map_indices(coarse.edge_count(), |e| edge_rule(coarse, positions, e) + details[e as usize]);
@@ -328,7 +328,7 @@ pub(crate) fn refine_level(
                 (p - eta * sum) / mu
             }
             VertexStar::Boundary { valence, boundary_edges: [a, b] } => {
-                if rules.fixed_corners && valence == 2 {
+                if rules.keep_corners && valence == 2 {
                     p
                 } else {
                     0.5 * p + 0.25 * (edge_points[a as usize] + edge_points[b as usize])
@@ -365,12 +365,12 @@ mod tests {
         HalfedgeMesh::from_soup(soup).expect("valid test mesh")
     }
 
-    fn all_rules() -> [LoopRules; 4] {
+    fn all_rules() -> [LoopOptions; 4] {
         [
-            LoopRules { weights: Weights::Loop, fixed_corners: false },
-            LoopRules { weights: Weights::Warren, fixed_corners: false },
-            LoopRules { weights: Weights::Loop, fixed_corners: true },
-            LoopRules { weights: Weights::Warren, fixed_corners: true },
+            LoopOptions { weights: VertexWeights::Loop, keep_corners: false },
+            LoopOptions { weights: VertexWeights::Warren, keep_corners: false },
+            LoopOptions { weights: VertexWeights::Loop, keep_corners: true },
+            LoopOptions { weights: VertexWeights::Warren, keep_corners: true },
         ]
     }
 
@@ -410,9 +410,9 @@ mod tests {
             (100, 0.765009, 1.602529, -0.006025),
         ];
         for (l, alpha, mu, eta) in table {
-            let beta = Weights::Loop.beta(l);
+            let beta = VertexWeights::Loop.beta(l);
             assert!((1.0 - l as f64 * beta - alpha).abs() < 1e-6, "alpha at valence {l}");
-            let (m, e) = inverse_weights(Weights::Loop, l);
+            let (m, e) = inverse_weights(VertexWeights::Loop, l);
             assert!((m - mu).abs() < 1e-6, "mu at valence {l}: {m} vs {mu}");
             assert!((e - eta).abs() < 1e-6, "eta at valence {l}: {e} vs {eta}");
             // The seed paper's closed forms give the same numbers.
@@ -425,7 +425,7 @@ mod tests {
     #[test]
     fn inverse_weights_are_affine_and_invert_the_one_ring() {
         let mut rng = crate::reference::Rng::new(7);
-        for weights in [Weights::Loop, Weights::Warren] {
+        for weights in [VertexWeights::Loop, VertexWeights::Warren] {
             for l in 3..=30 {
                 let (mu, eta) = inverse_weights(weights, l);
                 assert!((mu + l as f64 * eta - 1.0).abs() < 1e-13, "{weights:?} valence {l}");
@@ -491,18 +491,20 @@ mod tests {
 
     #[test]
     fn wrong_weights_leave_nonzero_details_but_still_reconstruct() {
-        let soup = loop_step(&mesh(&bipyramid(7)), &LoopRules { weights: Weights::Warren, fixed_corners: false });
+        let soup =
+            loop_step(&mesh(&bipyramid(7)), &LoopOptions { weights: VertexWeights::Warren, keep_corners: false });
         let fine = mesh(&soup);
         let level = reverse(&fine, &ReverseOptions::default()).unwrap();
         assert!(level.details.iter().any(|d| d.length() > 1e-3));
-        let rebuilt = reconstruct(&level.coarse, &level.details, level.order.as_ref(), &LoopRules::default()).unwrap();
+        let rebuilt =
+            reconstruct(&level.coarse, &level.details, level.order.as_ref(), &LoopOptions::default()).unwrap();
         assert!(relative_distance(&rebuilt.to_soup(), &soup) < TOLERANCE);
     }
 
     #[test]
     fn bad_input_is_an_error() {
         let coarse = mesh(&shapes::octahedron());
-        let rules = LoopRules::default();
+        let rules = LoopOptions::default();
         let short = vec![DVec3::ZERO; coarse.edge_count() - 1];
         assert!(matches!(reconstruct(&coarse, &short, None, &rules), Err(LoopError::InvalidDetails { level: 1, .. })));
         let mut nan = vec![DVec3::ZERO; coarse.edge_count()];
@@ -568,7 +570,7 @@ mod tests {
         /// details mapped by A.
         #[test]
         fn reverse_commutes_with_affine_maps(soup in mesh_topo::testing::arb_triangle_mesh(), seed in any::<u64>()) {
-            let rules = LoopRules::default();
+            let rules = LoopOptions::default();
             let fine = perturb(&loop_step(&mesh(&soup), &rules), 0.3, seed);
             let map = glam::DMat3::from_cols(DVec3::new(1.0, 0.2, -0.3), DVec3::new(0.1, 0.9, 0.4), DVec3::new(-0.2, 0.3, 1.1));
             let shift = DVec3::new(3.0, -2.0, 0.5);
