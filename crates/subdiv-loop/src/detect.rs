@@ -19,14 +19,15 @@
 //!    neighbour of `m` straight across from `v` (opposite in `m`'s 6-ring inside, the
 //!    other boundary neighbour on the boundary). Each vertex is labelled once, so this
 //!    is linear; the labeling from a seed is forced, hence unique.
-//! 3. **Validation.** Every face must have one vertex point (a corner face) or none (an
-//!    inner face); the three faces across an inner face's edges must be corner faces;
-//!    every face must belong to exactly one such group of four; the three vertex points
-//!    of a group must be distinct; each edge point must lie on the same coarse edge in
-//!    both coarse faces that share it and on the boundary in both halves or in neither;
-//!    two edge points around a vertex point must not lead to the same vertex point. A
-//!    mesh passing these checks is exactly the Loop refinement of the coarse mesh found,
-//!    up to numbering.
+//! 3. **Validation.** Every edge point has exactly two vertex-point neighbours, on its
+//!    line (its coarse edge); two edge points around a vertex point must not lead to the
+//!    same vertex point (a doubled coarse edge); every face must have one vertex point
+//!    (a corner face) or none (an inner face); the three faces across an inner face's
+//!    edges must be corner faces, so that every face belongs to exactly one group of
+//!    four; the three vertex points of a group must be distinct, and each edge point of
+//!    the group must lie on the line between the two vertex points of its coarse edge.
+//!    A mesh passing these checks is exactly the Loop refinement of the coarse mesh
+//!    found, up to numbering (a property test rebuilds the input from the result).
 //!
 //! Any failure is a [`LoopError::NotLoopConnectivity`] naming the fine vertex or face
 //! where the structure breaks.

@@ -28,7 +28,21 @@
 //! rounding), and reconstruction with zero details *is* Loop subdivision.
 //!
 //! This works on any mesh with Loop connectivity, not only on meshes made by Loop
-//! subdivision: [`reconstruct`]`(`[`reverse`]`(M)) = M` up to rounding.
+//! subdivision: [`reconstruct`]`(`[`reverse`]`(M)) = M` up to rounding (measured:
+//! below 1e-15 of the bounding-box diagonal on perturbed, renumbered meshes).
+//!
+//! # Decisions where the specification leaves room
+//! - The seed paper's `μ, η` are the exact inverse (above), so there is one reversal,
+//!   not an "exact" and a "published" one. Noise is amplified by `|μ| + l|η|` (19 at
+//!   valence 3, 4 at valence 6): a reversed mesh of noisy data can "puff out", but the
+//!   details restore it exactly.
+//! - Isolated vertices are vertex points of isolated coarse vertices and are copied, so
+//!   that reversal loses nothing and `reverse(subdivide(C)) = C` holds for every `C`.
+//! - An interior vertex of valence 2 (two triangles glued along all edges) is legal in a
+//!   manifold mesh and uses the same formulas (`8α − 3 = 1/8` there, still invertible).
+//! - The reversal must use the rules of the forward step ([`LoopOptions`]): with other
+//!   weights the coarse mesh differs and the details are not zero, but reconstruction
+//!   with the same options is still exact.
 
 use glam::DVec3;
 use rayon::prelude::*;
