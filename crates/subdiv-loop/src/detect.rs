@@ -238,7 +238,8 @@ impl LoopConnectivity {
 ///
 /// # Errors
 /// [`LoopError::NotTriangle`] for a face that is not a triangle,
-/// [`LoopError::SeedOutOfRange`] for a seed that does not exist, and
+/// [`LoopError::SeedOutOfRange`] for a seed that does not exist, [`LoopError::NoFaces`]
+/// for a mesh without faces, and
 /// [`LoopError::NotLoopConnectivity`] naming the fine vertex or face where the Loop
 /// structure breaks.
 pub fn detect(fine: &HalfedgeMesh, options: &DetectOptions) -> Result<LoopConnectivity, LoopError> {
@@ -266,6 +267,10 @@ pub(crate) fn detect_table(fine: &CornerTable, seed_vertex: Option<u32>) -> Resu
         && seed as usize >= nv
     {
         return Err(LoopError::SeedOutOfRange { vertex: seed, vertex_count: nv });
+    }
+    if fine.face_count() == 0 {
+        // Only isolated vertices: "reversing" would change nothing, forever.
+        return Err(LoopError::NoFaces);
     }
     let mut labeler = Labeler::new(fine);
     // Valence class of every vertex, in one pass over the corners.

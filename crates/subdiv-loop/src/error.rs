@@ -28,6 +28,9 @@ pub enum LoopError {
         /// What is wrong there.
         reason: String,
     },
+    /// Reverse subdivision needs at least one face.
+    #[error("the mesh has no faces: there is no Loop subdivision to reverse")]
+    NoFaces,
     /// A user-given seed vertex does not exist.
     #[error("seed vertex {vertex} does not exist (the mesh has {vertex_count} vertices)")]
     SeedOutOfRange {
