@@ -27,8 +27,8 @@ pub(crate) struct CornerMesh {
     pub corner_vertex: Vec<u32>,
     /// Corner of the opposite half-edge, [`NONE`] on the boundary.
     pub corner_twin: Vec<u32>,
-    /// Face of each corner.
-    pub corner_face: Vec<u32>,
+    /// The next corner in the same face.
+    pub corner_next: Vec<u32>,
     /// Number of vertices.
     pub vertex_count: usize,
     /// Smallest corner of each vertex ([`NONE`] if isolated); `None` means the identity
@@ -52,15 +52,7 @@ impl CornerMesh {
     /// The corner after `c` in its face.
     #[inline]
     pub fn next(&self, c: u32) -> u32 {
-        let f = self.corner_face[c as usize] as usize;
-        if c + 1 == self.offsets[f + 1] { self.offsets[f] } else { c + 1 }
-    }
-
-    /// The corner before `c` in its face.
-    #[inline]
-    pub fn prev(&self, c: u32) -> u32 {
-        let f = self.corner_face[c as usize] as usize;
-        if c == self.offsets[f] { self.offsets[f + 1] - 1 } else { c - 1 }
+        self.corner_next[c as usize]
     }
 
     /// Smallest corner of vertex `v`, or [`NONE`].
@@ -72,25 +64,17 @@ impl CornerMesh {
         }
     }
 
-    /// Corner range of face `f`.
-    #[inline]
-    pub fn face_corners(&self, f: usize) -> std::ops::Range<usize> {
-        self.offsets[f] as usize..self.offsets[f + 1] as usize
-    }
-
     /// The corner arrays of a half-edge mesh (linear time).
     pub fn from_halfedge(mesh: &HalfedgeMesh) -> Self {
         let soup_faces = mesh.face_count();
         let mut offsets = Vec::with_capacity(soup_faces + 1);
         offsets.push(0u32);
         let mut corner_vertex = Vec::with_capacity(mesh.halfedge_count());
-        let mut corner_face = Vec::with_capacity(mesh.halfedge_count());
         let mut halfedge_corner = vec![NONE; mesh.halfedge_count()];
         for f in mesh.faces() {
             for h in mesh.face_halfedges(f) {
                 halfedge_corner[h.index()] = corner_vertex.len() as u32;
                 corner_vertex.push(mesh.origin(h).raw());
-                corner_face.push(f.raw());
             }
             offsets.push(corner_vertex.len() as u32);
         }
@@ -107,23 +91,13 @@ impl CornerMesh {
             }
         }
         Self {
+            corner_next: next_of_corners(&offsets),
             offsets,
             corner_vertex,
             corner_twin,
-            corner_face,
             vertex_count: mesh.vertex_count(),
             vertex_corner: Some(vertex_corner),
         }
-    }
-
-    /// Face of every corner from the offsets.
-    pub fn faces_of_corners(offsets: &[u32]) -> Vec<u32> {
-        let corners = offsets.last().copied().unwrap_or(0) as usize;
-        let mut corner_face = vec![0u32; corners];
-        for (f, w) in offsets.windows(2).enumerate() {
-            corner_face[w[0] as usize..w[1] as usize].fill(f as u32);
-        }
-        corner_face
     }
 
     /// Walks clockwise around the vertex of corner `start` (`c -> next(twin(c))`),
@@ -138,7 +112,7 @@ impl CornerMesh {
             if t == NONE {
                 return None;
             }
-            c = self.next(t);
+            c = self.corner_next[t as usize];
             if c == start {
                 return Some(count);
             }
@@ -147,6 +121,29 @@ impl CornerMesh {
             debug_assert!(count <= self.corner_count(), "internal: vertex cycle does not close");
         }
     }
+}
+
+/// The next corner of every corner, from the face offsets.
+pub(crate) fn next_of_corners(offsets: &[u32]) -> Vec<u32> {
+    let corners = offsets.last().copied().unwrap_or(0) as usize;
+    let mut next = Vec::with_capacity(corners);
+    for w in offsets.windows(2) {
+        if w[1] > w[0] {
+            next.extend(w[0] + 1..w[1]);
+            next.push(w[0]);
+        }
+    }
+    next
+}
+
+/// The face of every corner, from the face offsets.
+pub(crate) fn faces_of_corners(offsets: &[u32]) -> Vec<u32> {
+    let corners = offsets.last().copied().unwrap_or(0) as usize;
+    let mut face = Vec::with_capacity(corners);
+    for (f, w) in offsets.windows(2).enumerate() {
+        face.extend(std::iter::repeat_n(f as u32, (w[1] - w[0]) as usize));
+    }
+    face
 }
 
 /// Which element of the coarse mesh a fine face comes from.
@@ -192,23 +189,27 @@ pub(crate) struct DooTopology {
     pub indices: Vec<u32>,
     /// Number of F_F faces (= coarse faces); they come first.
     pub ff_count: usize,
-    /// Coarse edge of each F_E quad (they follow the F_F faces).
-    pub edge_parent: Vec<u32>,
-    /// Coarse vertex of each F_V face (they come last).
-    pub vertex_parent: Vec<u32>,
-    /// Fine corner twins, if asked for.
-    pub twins: Option<Vec<u32>>,
+    /// Number of F_E quads; they follow.
+    pub fe_count: usize,
+    /// Number of F_V faces; they come last.
+    pub fv_count: usize,
+    /// Coarse edge of each F_E quad; `None` = the identity (no boundary edge).
+    pub edge_parent: Option<Vec<u32>>,
+    /// Coarse vertex of each F_V face; `None` = the identity (every vertex interior).
+    pub vertex_parent: Option<Vec<u32>>,
+    /// Fine corner twins and next corners, if asked for.
+    pub adjacency: Option<(Vec<u32>, Vec<u32>)>,
 }
 
 impl DooTopology {
-    /// The fine connectivity as a corner mesh (needs the twins).
+    /// The fine connectivity as a corner mesh (needs the adjacency).
     pub fn into_corner_mesh(self, vertex_count: usize) -> CornerMesh {
-        let corner_face = CornerMesh::faces_of_corners(&self.offsets);
+        let (corner_twin, corner_next) = self.adjacency.expect("internal: adjacency was requested");
         CornerMesh {
-            corner_twin: self.twins.expect("internal: twins were requested"),
             offsets: self.offsets,
             corner_vertex: self.indices,
-            corner_face,
+            corner_twin,
+            corner_next,
             vertex_count,
             vertex_corner: None,
         }
@@ -216,13 +217,15 @@ impl DooTopology {
 
     /// Origin of fine face `f`.
     pub fn origin(&self, f: usize) -> FaceOrigin {
-        let fe = self.ff_count + self.edge_parent.len();
+        let fe_end = self.ff_count + self.fe_count;
         if f < self.ff_count {
             FaceOrigin::Face(f as u32)
-        } else if f < fe {
-            FaceOrigin::Edge(self.edge_parent[f - self.ff_count])
+        } else if f < fe_end {
+            let q = f - self.ff_count;
+            FaceOrigin::Edge(self.edge_parent.as_ref().map_or(q as u32, |p| p[q]))
         } else {
-            FaceOrigin::Vertex(self.vertex_parent[f - fe])
+            let k = f - fe_end;
+            FaceOrigin::Vertex(self.vertex_parent.as_ref().map_or(k as u32, |p| p[k]))
         }
     }
 }
@@ -234,123 +237,124 @@ fn check_size(what: &'static str, count: usize) -> Result<(), DooError> {
     Ok(())
 }
 
-/// One Doo-Sabin step on the connectivity (see the crate docs for the order of the
-/// fine faces). With `with_twins`, also the fine corner twins, for a further step.
+/// One Doo-Sabin step on the connectivity (see [`crate::forward`] for the order of the
+/// fine faces). With `with_adjacency`, also the fine corner twins and next corners, for a
+/// further step. Every array is written once, front to back, except the twins of the
+/// quads' two side edges, which the F_V pass fills in.
 ///
 /// # Errors
 /// [`DooError::ValenceTwoVertex`] for an interior vertex with two edges;
 /// [`DooError::TooLarge`] if the fine mesh would not fit `u32` indices.
-pub(crate) fn doo_topology(coarse: &CornerMesh, with_twins: bool) -> Result<DooTopology, DooError> {
+pub(crate) fn doo_topology(coarse: &CornerMesh, with_adjacency: bool) -> Result<DooTopology, DooError> {
     let corners = coarse.corner_count();
     let faces = coarse.face_count();
     check_size("fine vertices", corners)?;
+    let twin = &coarse.corner_twin;
+    let next = &coarse.corner_next;
+    let interior_edges = (0..corners as u32).filter(|&c| twin[c as usize] != NONE && c < twin[c as usize]).count();
+    let quad_base = corners as u32;
+    let fv_base = corners + 4 * interior_edges;
+    // Fine corners: at most one F_V corner per coarse corner.
+    check_size("fine corners", fv_base + corners)?;
 
-    // Coarse edges: each edge is named by its first corner (the one with the smaller index,
-    // or the only one on the boundary), in increasing order: mesh-topo's edge numbering.
-    // `quad_of_first[c]` = index of the F_E quad of interior edge with first corner c.
-    let mut quad_of_first = vec![NONE; corners];
-    let mut edge_parent = Vec::with_capacity(corners / 2);
-    let mut edge_rank = 0u32;
-    for (c, &t) in coarse.corner_twin.iter().enumerate() {
-        let c = c as u32;
-        if t == NONE || c < t {
-            if t != NONE {
-                quad_of_first[c as usize] = edge_parent.len() as u32;
-                edge_parent.push(edge_rank);
-            }
-            edge_rank += 1;
-        }
-    }
-    let quads = edge_parent.len();
-
-    // F_V faces: one per interior vertex, corners counter-clockwise from its first
-    // corner. The clockwise walk gives them in reverse after the first one.
-    let mut vertex_parent = Vec::new();
-    let mut fv_offsets: Vec<u32> = Vec::new();
-    let mut fv_indices: Vec<u32> = Vec::with_capacity(corners);
-    let mut scratch = Vec::new();
-    for v in 0..coarse.vertex_count {
-        let start = coarse.first_corner(v);
-        if start == NONE {
-            continue;
-        }
-        scratch.clear();
-        if let Some(valence) = coarse.walk_clockwise(start, |c| scratch.push(c)) {
-            if valence == 2 {
-                return Err(DooError::ValenceTwoVertex { vertex: v });
-            }
-            vertex_parent.push(v as u32);
-            fv_indices.push(start);
-            fv_indices.extend(scratch.iter().rev());
-            fv_offsets.push(fv_indices.len() as u32);
-        }
-    }
-
-    let fine_corners = corners + 4 * quads + fv_indices.len();
-    check_size("fine corners", fine_corners)?;
-    check_size("fine faces", faces + quads + vertex_parent.len())?;
-
-    let mut offsets = Vec::with_capacity(faces + quads + vertex_parent.len() + 1);
+    let mut offsets = Vec::with_capacity(faces + interior_edges + coarse.vertex_count + 1);
     offsets.extend_from_slice(&coarse.offsets);
     if offsets.is_empty() {
         offsets.push(0);
     }
-    let quad_base = corners as u32;
-    offsets.extend((1..=quads as u32).map(|q| quad_base + 4 * q));
-    let fv_base = quad_base + 4 * quads as u32;
-    offsets.extend(fv_offsets.iter().map(|&o| fv_base + o));
+    let mut indices = Vec::with_capacity(fv_base + corners);
+    indices.extend(0..quad_base);
+    let (mut twins, mut nexts) = if with_adjacency {
+        let mut twins = Vec::with_capacity(fv_base + corners);
+        twins.resize(corners, NONE);
+        let mut nexts = Vec::with_capacity(fv_base + corners);
+        nexts.extend_from_slice(next);
+        (twins, nexts)
+    } else {
+        (Vec::new(), Vec::new())
+    };
 
-    let mut indices = Vec::with_capacity(fine_corners);
-    indices.extend(0..corners as u32);
-    for (c, &q) in quad_of_first.iter().enumerate() {
-        if q != NONE {
-            let c = c as u32;
-            let t = coarse.corner_twin[c as usize];
-            indices.extend_from_slice(&[c, coarse.next(t), t, coarse.next(c)]);
+    // F_E quads (c, next(t), t, next(c)) in coarse edge order. Coarse edges are named by
+    // their first corner (the smaller one; the only one on the boundary): mesh-topo's
+    // edge numbering.
+    let mut edge_parent: Option<Vec<u32>> = None;
+    let mut edge_rank = 0u32;
+    for (c, &t) in twin.iter().enumerate() {
+        let c = c as u32;
+        if t == NONE {
+            if edge_parent.is_none() {
+                edge_parent = Some((0..(offsets.len() - 1 - faces) as u32).collect());
+            }
+            edge_rank += 1;
+            continue;
+        }
+        if c > t {
+            continue;
+        }
+        let b = *offsets.last().expect("internal: offsets start with 0");
+        indices.extend_from_slice(&[c, next[t as usize], t, next[c as usize]]);
+        offsets.push(b + 4);
+        if let Some(parents) = &mut edge_parent {
+            parents.push(edge_rank);
+        }
+        edge_rank += 1;
+        if with_adjacency {
+            twins.extend_from_slice(&[NONE, t, NONE, c]);
+            nexts.extend_from_slice(&[b + 1, b + 2, b + 3, b]);
+            twins[c as usize] = b + 3;
+            twins[t as usize] = b + 1;
         }
     }
-    indices.extend_from_slice(&fv_indices);
+    debug_assert_eq!(indices.len(), fv_base);
 
-    let twins = with_twins.then(|| {
-        let mut twins = vec![NONE; fine_corners];
-        // F_V corner (fine corner index) of each coarse corner, NONE at boundary vertices.
-        let mut fv_slot = vec![NONE; corners];
-        for (k, &c) in fv_indices.iter().enumerate() {
-            fv_slot[c as usize] = fv_base + k as u32;
+    // F_V faces: one per interior vertex, its corners counter-clockwise from its first
+    // corner. The clockwise walk gives them in reverse after the first one.
+    let mut vertex_parent: Option<Vec<u32>> = None;
+    for v in 0..coarse.vertex_count {
+        let start = coarse.first_corner(v);
+        let begin = indices.len();
+        let closed = if start == NONE {
+            None
+        } else {
+            indices.push(start);
+            coarse.walk_clockwise(start, |c| indices.push(c))
+        };
+        let Some(valence) = closed else {
+            indices.truncate(begin);
+            if vertex_parent.is_none() {
+                vertex_parent = Some((0..(offsets.len() - 1 - faces - interior_edges) as u32).collect());
+            }
+            continue;
+        };
+        if valence == 2 {
+            return Err(DooError::ValenceTwoVertex { vertex: v });
         }
-        let quad_of = |c: u32, t: u32| quad_of_first[c.min(t) as usize];
-        // F_F corners: the edge c -> next(c) is shared with the quad of the coarse edge.
-        for c in 0..corners as u32 {
-            let t = coarse.corner_twin[c as usize];
-            if t != NONE {
-                let base = quad_base + 4 * quad_of(c, t);
-                twins[c as usize] = if c < t { base + 3 } else { base + 1 };
+        indices[begin + 1..].reverse();
+        offsets.push(indices.len() as u32);
+        if let Some(parents) = &mut vertex_parent {
+            parents.push(v as u32);
+        }
+        if with_adjacency {
+            // The edge c_i -> c_{i+1} of the F_V face lies on the quad of the coarse edge
+            // {twin(c_{i+1}), c_{i+1}}; that quad's corner next to c_{i+1} is recorded
+            // in the F_F twin of c_{i+1}: b + 3 if c_{i+1} is the edge's first corner (the
+            // shared quad edge then leaves b), b + 1 otherwise (it leaves b + 2).
+            let end = indices.len();
+            for k in begin..end {
+                let following = indices[if k + 1 == end { begin } else { k + 1 }];
+                let relative = twins[following as usize] - quad_base;
+                let quad_corner = quad_base + (relative & !3) + if relative & 3 == 1 { 2 } else { 0 };
+                twins.push(quad_corner);
+                twins[quad_corner as usize] = k as u32;
+                nexts.push(if k + 1 == end { begin as u32 } else { k as u32 + 1 });
             }
         }
-        // F_E quads (c, next(t), t, next(c)).
-        for (c, &q) in quad_of_first.iter().enumerate() {
-            if q != NONE {
-                let c = c as u32;
-                let t = coarse.corner_twin[c as usize];
-                let base = (quad_base + 4 * q) as usize;
-                twins[base] = fv_slot[coarse.next(t) as usize];
-                twins[base + 1] = t;
-                twins[base + 2] = fv_slot[coarse.next(c) as usize];
-                twins[base + 3] = c;
-            }
-        }
-        // F_V corners: the edge c_i -> c_{i+1} is shared with the quad of the coarse edge
-        // {prev(c_i), c_{i+1}}, where c_{i+1} = twin(prev(c_i)).
-        for (k, &ci) in fv_indices.iter().enumerate() {
-            let before = coarse.prev(ci);
-            let after = coarse.corner_twin[before as usize];
-            let base = quad_base + 4 * quad_of(before, after);
-            twins[fv_base as usize + k] = if before < after { base + 2 } else { base };
-        }
-        twins
-    });
-
-    Ok(DooTopology { offsets, indices, ff_count: faces, edge_parent, vertex_parent, twins })
+    }
+    let fe_count = interior_edges;
+    let fv_count = offsets.len() - 1 - faces - fe_count;
+    check_size("fine faces", offsets.len() - 1)?;
+    let adjacency = with_adjacency.then_some((twins, nexts));
+    Ok(DooTopology { offsets, indices, ff_count: faces, fe_count, fv_count, edge_parent, vertex_parent, adjacency })
 }
 
 /// Splits `out` into pieces following whole faces, about `pieces` of them, so that

@@ -129,7 +129,7 @@ impl DooMesh {
 
     /// Numbers of F_F, F_E and F_V faces (the three consecutive blocks of faces).
     pub fn kind_counts(&self) -> [usize; 3] {
-        [self.topology.ff_count, self.topology.edge_parent.len(), self.topology.vertex_parent.len()]
+        [self.topology.ff_count, self.topology.fe_count, self.topology.fv_count]
     }
 
     /// The mesh as a polygon soup (copies).
