@@ -29,7 +29,7 @@ use serde::{Deserialize, Serialize};
 use crate::DooError;
 use crate::corner::{CornerMesh, NONE, doo_topology};
 use crate::forward::check_finite;
-use crate::reverse::{FineOrder, ReverseOptions, SeedChoice, reconstruct_level, reverse_corner_mesh};
+use crate::reverse::{FineOrder, ReverseOptions, SeedChoice, Session, reconstruct_level};
 use crate::rule::FaceRule;
 
 /// Magic number of a Doo-Sabin `.mres` pyramid.
@@ -147,45 +147,140 @@ pub const MAX_LEVELS: u32 = 32;
 /// for any further level (the error says which level failed).
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
     check_finite(mesh.positions())?;
-    let target = match options.depth {
-        Depth::Levels(n) => n,
-        Depth::Max => MAX_LEVELS,
-    };
-    let mut corners = CornerMesh::from_halfedge(mesh);
-    let mut positions = mesh.positions().to_vec();
-    let mut levels = Vec::new();
-    let mut choices = Vec::new();
+    if options.depth == Depth::Levels(0) {
+        return Err(DooError::InvalidParameter { name: "levels", value: 0.0, reason: "decompose at least one level" });
+    }
+    let corners = CornerMesh::from_halfedge(mesh);
+    let mut steps = Vec::new();
     let mut stopped = None;
-    for level in 0..target {
-        let reverse_options =
-            ReverseOptions { rule: options.rule, seeds: if level == 0 { options.seeds.clone() } else { Vec::new() } };
-        match reverse_corner_mesh(&corners, &positions, &reverse_options) {
-            Ok(reversal) => {
-                let (coarse, coarse_positions, details, order, level_choices) = reversal.into_parts();
-                levels.push(PyramidLevel { details, order });
-                choices.push(level_choices);
-                corners = coarse;
-                positions = coarse_positions;
+    match options.depth {
+        Depth::Levels(n) => {
+            steps = descend(&corners, mesh.positions(), options, 0, n)?;
+        }
+        Depth::Max => {
+            let mut current = (corners, mesh.positions().to_vec());
+            for level in 0..MAX_LEVELS {
+                let step = match greedy_step(&current.0, &current.1, options, level) {
+                    Ok(step) => step,
+                    Err(error) if level > 0 => {
+                        stopped = Some(format!("level {} is not a Doo-Sabin refinement: {error}", level + 1));
+                        break;
+                    }
+                    Err(error) => return Err(error),
+                };
+                current = (step.coarse.clone(), step.coarse_positions.clone());
+                steps.push(step);
             }
-            Err(error) if level > 0 && options.depth == Depth::Max => {
-                stopped = Some(format!("level {} is not a Doo-Sabin refinement: {error}", level + 1));
-                break;
+            if stopped.is_none() {
+                stopped = Some(format!("reached the limit of {MAX_LEVELS} levels"));
             }
-            Err(DooError::NotDooConnectivity { face, reason }) if level > 0 => {
-                return Err(DooError::NotDooConnectivity {
-                    face,
-                    reason: format!("{reason} (in the mesh after {level} reversal(s))"),
-                });
-            }
-            Err(error) => return Err(error),
         }
     }
-    if stopped.is_none() && options.depth == Depth::Max {
-        stopped = Some(format!("reached the limit of {MAX_LEVELS} levels"));
-    }
-    levels.reverse();
-    let base = PolygonSoup { positions, offsets: corners.offsets, indices: corners.corner_vertex };
+    let last = steps.last().expect("internal: at least one level");
+    let base = PolygonSoup {
+        positions: last.coarse_positions.clone(),
+        offsets: last.coarse.offsets.clone(),
+        indices: last.coarse.corner_vertex.clone(),
+    };
+    let choices = steps.iter().map(|s| s.choices.clone()).collect();
+    let levels = steps.into_iter().rev().map(|s| PyramidLevel { details: s.details, order: s.order }).collect();
     Ok(Decomposition { pyramid: DooPyramid { rule: options.rule, base, levels }, choices, stopped })
+}
+
+/// One reversal of a decomposition.
+struct Step {
+    coarse: CornerMesh,
+    coarse_positions: Vec<DVec3>,
+    details: Vec<DVec3>,
+    order: FineOrder,
+    choices: Vec<SeedChoice>,
+}
+
+impl Step {
+    fn from_reversal(reversal: crate::DooReversal) -> Self {
+        let (coarse, coarse_positions, details, order, choices) = reversal.into_parts();
+        Self { coarse, coarse_positions, details, order, choices }
+    }
+}
+
+fn reverse_options(options: &DecomposeOptions, level: u32) -> ReverseOptions {
+    ReverseOptions { rule: options.rule, seeds: if level == 0 { options.seeds.clone() } else { Vec::new() } }
+}
+
+fn with_level(error: DooError, level: u32) -> DooError {
+    match error {
+        DooError::NotDooConnectivity { face, reason } if level > 0 => {
+            DooError::NotDooConnectivity { face, reason: format!("{reason} (in the mesh after {level} reversal(s))") }
+        }
+        other => other,
+    }
+}
+
+/// Exactly `target - level` more levels: depth-first over the readings of each level,
+/// best first, backtracking when a reading's coarse mesh cannot be reversed far enough.
+fn descend(
+    fine: &CornerMesh,
+    positions: &[DVec3],
+    options: &DecomposeOptions,
+    level: u32,
+    target: u32,
+) -> Result<Vec<Step>, DooError> {
+    if level == target {
+        return Ok(Vec::new());
+    }
+    let mut session =
+        Session::new(fine, positions, &reverse_options(options, level)).map_err(|e| with_level(e, level))?;
+    let mut first_error = None;
+    for picks in session.alternatives() {
+        let step = match session.build(picks) {
+            Ok(reversal) => Step::from_reversal(reversal),
+            Err(error) => {
+                first_error.get_or_insert(with_level(error, level));
+                continue;
+            }
+        };
+        match descend(&step.coarse, &step.coarse_positions, options, level + 1, target) {
+            Ok(rest) => {
+                let mut steps = vec![step];
+                steps.extend(rest);
+                return Ok(steps);
+            }
+            Err(error) => {
+                first_error.get_or_insert(error);
+            }
+        }
+    }
+    Err(first_error.expect("internal: there is always a first reading"))
+}
+
+/// One level of [`Depth::Max`]: the best reading whose coarse mesh can itself be reversed
+/// (one level of look-ahead), else the best reading.
+fn greedy_step(
+    fine: &CornerMesh,
+    positions: &[DVec3],
+    options: &DecomposeOptions,
+    level: u32,
+) -> Result<Step, DooError> {
+    let mut session =
+        Session::new(fine, positions, &reverse_options(options, level)).map_err(|e| with_level(e, level))?;
+    let mut fallback = None;
+    let mut first_error = None;
+    for picks in session.alternatives() {
+        match session.build(picks) {
+            Ok(reversal) => {
+                let step = Step::from_reversal(reversal);
+                let auto = ReverseOptions::auto(options.rule);
+                if Session::new(&step.coarse, &step.coarse_positions, &auto).is_ok() {
+                    return Ok(step);
+                }
+                fallback.get_or_insert(step);
+            }
+            Err(error) => {
+                first_error.get_or_insert(with_level(error, level));
+            }
+        }
+    }
+    fallback.ok_or_else(|| first_error.expect("internal: there is always a first reading"))
 }
 
 impl DooPyramid {

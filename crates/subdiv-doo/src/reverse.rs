@@ -277,96 +277,143 @@ pub(crate) fn reverse_corner_mesh(
     positions: &[DVec3],
     options: &ReverseOptions,
 ) -> Result<DooReversal, DooError> {
-    options.rule.validate()?;
-    let maps = FaceMaps::new(options.rule);
-    let face_count = fine.face_count();
-    for &s in &options.seeds {
-        if s >= face_count {
-            return Err(DooError::SeedOutOfRange { face: s, face_count });
-        }
-    }
-    let mut search = Search::new(fine, positions, &maps);
-    if let Some(v) = (0..fine.vertex_count).find(|&v| fine.first_corner(v) == NONE) {
-        return Err(DooError::IsolatedVertex { vertex: v });
-    }
+    let mut session = Session::new(fine, positions, options)?;
+    let best = vec![0; session.readings.len()];
+    session.build(best)
+}
 
-    // Components of the face graph, numbered by their lowest face.
-    let (component_of_face, component_count) = search.face_components();
-    let mut given = vec![NONE; component_count];
-    for &s in &options.seeds {
-        let k = component_of_face[s] as usize;
-        if given[k] != NONE {
-            return Err(DooError::DuplicateSeed { first: given[k] as usize, second: s });
-        }
-        given[k] = s as u32;
-    }
-    let mut lowest_face = vec![NONE; component_count];
-    for (f, &k) in component_of_face.iter().enumerate().rev() {
-        lowest_face[k as usize] = f as u32;
-    }
+/// The valid readings of a fine mesh, ranked per component, from which reversals are
+/// built on demand (the best one, or alternatives when a multi-level decomposition
+/// needs another reading to go on).
+pub(crate) struct Session<'a> {
+    search: Search<'a>,
+    rule: FaceRule,
+    component_of_face: Vec<u32>,
+    given: Vec<u32>,
+    /// Per component: (seed face, detail energy), best first.
+    readings: Vec<Vec<(usize, f64)>>,
+    choices: Vec<SeedChoice>,
+}
 
-    // Per component: the readings to use, best first (a given seed: just that one).
-    let mut readings: Vec<Vec<(usize, f64)>> = Vec::with_capacity(component_count);
-    let mut choices = Vec::with_capacity(component_count);
-    for k in 0..component_count {
-        if given[k] != NONE {
-            let seed = given[k] as usize;
-            readings.push(vec![(seed, f64::NAN)]);
-            choices.push(SeedChoice {
-                component: k,
-                seed_face: seed,
-                given: true,
-                trials: Vec::new(),
-                detail_energy: f64::NAN,
-                reason: "seed face given".into(),
-            });
-        } else {
-            let (choice, ranked) = search.choose(k, lowest_face[k] as usize)?;
-            readings.push(ranked);
-            choices.push(choice);
-        }
-    }
-
-    // Build the result; if the full check rejects a component's automatic choice, fall
-    // back to its next-best reading.
-    let mut pick = vec![0usize; component_count];
-    loop {
-        search.role.fill(UNKNOWN);
-        search.queue.clear();
-        for k in 0..component_count {
-            search.classify(readings[k][pick[k]].0)?;
-        }
-        match search.finish(options.rule, &component_of_face, component_count) {
-            Ok((mut reversal, energies)) => {
-                for (k, choice) in choices.iter_mut().enumerate() {
-                    let (seed, _) = readings[k][pick[k]];
-                    choice.detail_energy = energies[k];
-                    if pick[k] > 0 {
-                        choice.reason = format!(
-                            "face {seed} as F_F: the better readings failed the full check ({})",
-                            std::mem::take(&mut choice.reason)
-                        );
-                    }
-                    choice.seed_face = seed;
-                }
-                reversal.choices = choices;
-                return Ok(reversal);
+impl<'a> Session<'a> {
+    /// Finds and ranks the readings of every component.
+    pub(crate) fn new(
+        fine: &'a CornerMesh,
+        positions: &'a [DVec3],
+        options: &ReverseOptions,
+    ) -> Result<Self, DooError> {
+        options.rule.validate()?;
+        let face_count = fine.face_count();
+        for &s in &options.seeds {
+            if s >= face_count {
+                return Err(DooError::SeedOutOfRange { face: s, face_count });
             }
-            Err(error) => {
-                let face = match &error {
-                    DooError::NotDooConnectivity { face, .. } => *face,
-                    _ => return Err(error),
-                };
-                let k = component_of_face[face] as usize;
-                if given[k] != NONE || pick[k] + 1 >= readings[k].len() {
-                    return Err(error);
-                }
-                choices[k].trials.push(SeedTrial {
-                    seed_face: readings[k][pick[k]].0,
-                    class: "full check".into(),
-                    outcome: Err(error.to_string()),
+        }
+        if let Some(v) = (0..fine.vertex_count).find(|&v| fine.first_corner(v) == NONE) {
+            return Err(DooError::IsolatedVertex { vertex: v });
+        }
+        let mut search = Search::new(fine, positions, FaceMaps::new(options.rule));
+
+        // Components of the face graph, numbered by their lowest face.
+        let (component_of_face, component_count) = search.face_components();
+        let mut given = vec![NONE; component_count];
+        for &s in &options.seeds {
+            let k = component_of_face[s] as usize;
+            if given[k] != NONE {
+                return Err(DooError::DuplicateSeed { first: given[k] as usize, second: s });
+            }
+            given[k] = s as u32;
+        }
+        let mut lowest_face = vec![NONE; component_count];
+        for (f, &k) in component_of_face.iter().enumerate().rev() {
+            lowest_face[k as usize] = f as u32;
+        }
+
+        // Per component: the readings to use, best first (a given seed: just that one).
+        let mut readings: Vec<Vec<(usize, f64)>> = Vec::with_capacity(component_count);
+        let mut choices = Vec::with_capacity(component_count);
+        for k in 0..component_count {
+            if given[k] != NONE {
+                let seed = given[k] as usize;
+                readings.push(vec![(seed, f64::NAN)]);
+                choices.push(SeedChoice {
+                    component: k,
+                    seed_face: seed,
+                    given: true,
+                    trials: Vec::new(),
+                    detail_energy: f64::NAN,
+                    reason: "seed face given".into(),
                 });
-                pick[k] += 1;
+            } else {
+                let (choice, ranked) = search.choose(k, lowest_face[k] as usize)?;
+                readings.push(ranked);
+                choices.push(choice);
+            }
+        }
+        Ok(Self { search, rule: options.rule, component_of_face, given, readings, choices })
+    }
+
+    /// Alternative choices of readings, best first: all components at their best, then
+    /// each component in turn at each of its other readings.
+    pub(crate) fn alternatives(&self) -> Vec<Vec<usize>> {
+        let best = vec![0; self.readings.len()];
+        let mut out = vec![best.clone()];
+        for (k, ranked) in self.readings.iter().enumerate() {
+            for j in 1..ranked.len() {
+                let mut picks = best.clone();
+                picks[k] = j;
+                out.push(picks);
+            }
+        }
+        out
+    }
+
+    /// Builds the reversal for the given readings; if the full check rejects a
+    /// component's automatic choice, falls back to its next reading.
+    pub(crate) fn build(&mut self, mut pick: Vec<usize>) -> Result<DooReversal, DooError> {
+        let component_count = self.readings.len();
+        let mut choices = self.choices.clone();
+        let search = &mut self.search;
+        loop {
+            search.role.fill(UNKNOWN);
+            search.queue.clear();
+            for (ranked, &p) in self.readings.iter().zip(&pick) {
+                search.classify(ranked[p].0)?;
+            }
+            match search.finish(self.rule, &self.component_of_face, component_count) {
+                Ok((mut reversal, energies)) => {
+                    for (k, choice) in choices.iter_mut().enumerate() {
+                        let (seed, _) = self.readings[k][pick[k]];
+                        choice.detail_energy = energies[k];
+                        if seed != choice.seed_face && !choice.given {
+                            choice.reason = format!(
+                                "face {seed} as F_F, reading number {} by detail norm (the better ones were rejected \
+                                 by the full check or could not be reversed further); {}",
+                                pick[k] + 1,
+                                std::mem::take(&mut choice.reason)
+                            );
+                        }
+                        choice.seed_face = seed;
+                    }
+                    reversal.choices = choices;
+                    return Ok(reversal);
+                }
+                Err(error) => {
+                    let face = match &error {
+                        DooError::NotDooConnectivity { face, .. } => *face,
+                        _ => return Err(error),
+                    };
+                    let k = self.component_of_face[face] as usize;
+                    if self.given[k] != NONE || pick[k] + 1 >= self.readings[k].len() {
+                        return Err(error);
+                    }
+                    choices[k].trials.push(SeedTrial {
+                        seed_face: self.readings[k][pick[k]].0,
+                        class: "full check".into(),
+                        outcome: Err(error.to_string()),
+                    });
+                    pick[k] += 1;
+                }
             }
         }
     }
@@ -380,7 +427,7 @@ const FE: u8 = 2;
 struct Search<'a> {
     fine: &'a CornerMesh,
     positions: &'a [DVec3],
-    maps: &'a FaceMaps,
+    maps: FaceMaps,
     corner_face: Vec<u32>,
     /// Role of each face in the current interpretation.
     role: Vec<u8>,
@@ -393,7 +440,7 @@ struct Search<'a> {
 }
 
 impl<'a> Search<'a> {
-    fn new(fine: &'a CornerMesh, positions: &'a [DVec3], maps: &'a FaceMaps) -> Self {
+    fn new(fine: &'a CornerMesh, positions: &'a [DVec3], maps: FaceMaps) -> Self {
         Self {
             fine,
             positions,
@@ -604,7 +651,7 @@ impl<'a> Search<'a> {
                 hi = hi.max(self.positions[v]);
             }
         }
-        let candidates = expand_faces(offsets, self.maps, |c| self.positions[vertex_of(c) as usize]);
+        let candidates = expand_faces(offsets, &self.maps, |c| self.positions[vertex_of(c) as usize]);
         let mut groups = UnionFind::new(fine_corner.len());
         for (c, &fc) in fine_corner.iter().enumerate() {
             let f = self.corner_face[fc as usize] as usize;
@@ -795,8 +842,7 @@ impl<'a> Search<'a> {
         // after the twin is at the same coarse vertex).
         let mut groups = UnionFind::new(coarse_corners);
         let mut candidate_edges = 0;
-        for c in 0..coarse_corners {
-            let t = twins[c];
+        for (c, &t) in twins.iter().enumerate() {
             if t != NONE {
                 groups.union(c as u32, coarse_next[t as usize]);
                 candidate_edges += 1;
@@ -840,7 +886,7 @@ impl<'a> Search<'a> {
         check_coarse_manifold(&coarse, &ff_faces)?;
 
         // Candidates, means and details.
-        let candidates = expand_faces(&coarse.offsets, self.maps, |c| self.positions[vertex_of[c] as usize]);
+        let candidates = expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize]);
         let by_vertex = corners_by_vertex(&coarse);
         let (coarse_positions, details) = means_and_details(&by_vertex, &candidates);
         debug_assert_eq!(coarse_positions.len() + details.len(), fine.vertex_count);
@@ -924,12 +970,12 @@ fn means_and_details(by_vertex: &CornersByVertex, candidates: &[DVec3]) -> (Vec<
 /// two edges join the same two vertices.
 fn check_coarse_manifold(coarse: &CornerMesh, ff_faces: &[u32]) -> Result<(), DooError> {
     let mut stamp = vec![NONE; coarse.vertex_count];
-    for f in 0..coarse.face_count() {
+    for (f, &ff) in ff_faces.iter().enumerate() {
         for c in coarse.offsets[f]..coarse.offsets[f + 1] {
             let v = coarse.corner_vertex[c as usize] as usize;
             if stamp[v] == f as u32 {
                 return Err(DooError::NotDooConnectivity {
-                    face: ff_faces[f] as usize,
+                    face: ff as usize,
                     reason: "as an F_F face it would visit one coarse vertex twice".into(),
                 });
             }
@@ -1099,15 +1145,15 @@ fn match_fine_faces(
     }
     // F_V faces: around each interior coarse vertex.
     let mut cycle = Vec::new();
-    for v in 0..coarse.vertex_count {
-        if vertex_face[v] == NONE {
+    for (v, &face) in vertex_face.iter().enumerate() {
+        if face == NONE {
             continue;
         }
         vertex_cycle(coarse, v, &mut cycle);
         for x in cycle.iter_mut() {
             *x = vertex_of[*x as usize];
         }
-        claim(vertex_face[v] as usize, &cycle, "F_V face")?;
+        claim(face as usize, &cycle, "F_V face")?;
     }
     if let Some(g) = matched.iter().position(|&m| !m) {
         return Err(broken(g, "it is neither an F_F face, nor an F_E quad, nor an F_V face of this reading".into()));
