@@ -143,6 +143,8 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Loop
         Levels::Count(n) => n,
         Levels::Max => usize::MAX,
     };
+    // Every reversal divides the face count by 4 (a mesh without faces is an error), so
+    // `Levels::Max` ends after at most log4(faces) + 1 rounds.
     while levels.len() < wanted {
         let seed = if levels.is_empty() { options.seed_vertex } else { None };
         let coarsening = match detect_table(&table, seed) {
@@ -463,6 +465,17 @@ mod tests {
         ));
         let zero = DecomposeOptions { levels: Levels::Count(0), ..max_levels(rules) };
         assert_eq!(decompose(&mesh(&fine), &zero).unwrap().base, fine);
+    }
+
+    /// Fuzz finding: a mesh with vertices but no faces was "reversed" into itself again
+    /// and again by `Levels::Max` until memory ran out.
+    #[test]
+    fn fuzz_regression_mesh_without_faces_is_an_error() {
+        let soup = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X], Vec::<[u32; 3]>::new());
+        let faceless = mesh(&soup);
+        assert_eq!(decompose(&faceless, &max_levels(LoopOptions::default())), Err(LoopError::NoFaces));
+        let two = DecomposeOptions { levels: Levels::Count(2), ..max_levels(LoopOptions::default()) };
+        assert_eq!(decompose(&faceless, &two), Err(LoopError::NoFaces));
     }
 
     #[test]
