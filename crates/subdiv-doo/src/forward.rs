@@ -26,7 +26,7 @@
 //! As in the reverse-Doo paper and in CGAL: boundary edges get no F_E quad and boundary
 //! vertices no F_V face, so an open mesh shrinks a little at every level and its limit
 //! surface does not reach the coarse boundary. The fine boundary consists of F_F edges
-//! only, which is what makes the step exactly reversible ([`crate::reverse`]).
+//! only, which is what makes the step exactly reversible ([`crate::reverse`](mod@crate::reverse)).
 //!
 //! # Isolated vertices
 //! A vertex that no face uses has no corner, so it has no image in the fine mesh: it is

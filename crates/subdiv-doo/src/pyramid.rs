@@ -2,7 +2,7 @@
 //! level, compression by keeping only the largest details, and `.mres` files.
 //!
 //! A [`DooPyramid`] holds the coarsest (*base*) mesh and, for each finer level, the
-//! detail vectors of [`crate::reverse`] and the numbering of that level relative to the
+//! detail vectors of [`crate::reverse`](mod@crate::reverse) and the numbering of that level relative to the
 //! Doo-Sabin connectivity of the level below ([`FineOrder`], empty when it is the
 //! canonical one). That is all reconstruction needs: connectivity is Doo-Sabin
 //! connectivity, and positions come from coarse vertices plus details. The base mesh
@@ -78,7 +78,7 @@ impl DecomposeOptions {
 /// Details and numbering of one level of a pyramid.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct PyramidLevel {
-    /// Detail vectors (see [`crate::reverse`]).
+    /// Detail vectors (see [`crate::reverse`](mod@crate::reverse)).
     pub details: Vec<DVec3>,
     /// Numbering of this level relative to the canonical Doo-Sabin order.
     pub order: FineOrder,
@@ -143,7 +143,7 @@ pub const MAX_LEVELS: u32 = 32;
 /// ```
 ///
 /// # Errors
-/// The errors of [`crate::reverse`] for the first level; for [`Depth::Levels`], also
+/// The errors of [`crate::reverse`](mod@crate::reverse) for the first level; for [`Depth::Levels`], also
 /// for any further level (the error says which level failed).
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
     check_finite(mesh.positions())?;
