@@ -218,3 +218,20 @@ fn demo_without_arguments_writes_multires_out() {
     ok(&["demo", "--out", other.to_str().unwrap()]);
     assert!(other.join("bunny.obj").exists());
 }
+
+#[test]
+fn closed_stdout_is_not_a_panic() {
+    // `multires info ... | head -1`: whether the write happens before or after the pipe
+    // closes, the command ends quietly.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_multires"))
+        .args(["info", "tests/data/bunny00.off", "--json"])
+        .current_dir(root())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success());
+    assert!(out.stderr.is_empty(), "{}", String::from_utf8_lossy(&out.stderr));
+}

@@ -1,7 +1,8 @@
 //! Mesh files for every command: reading (with a note for what the file held that is
 //! not kept), building, writing. Errors name the file and, for content errors, the line.
 
-use std::path::Path;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 
 use mesh_topo::io::{self, IoError, ReadReport, WriteOptions};
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
@@ -51,4 +52,16 @@ pub fn write_soup(path: &Path, soup: &PolygonSoup, options: &WriteOptions) -> Cl
 /// Writes a mesh; the format follows the extension (PLY in binary little-endian).
 pub fn write_mesh(path: &Path, mesh: &HalfedgeMesh) -> CliResult {
     io::write_mesh(path, mesh, &WriteOptions::default()).map_err(|e| io_error(path, e))
+}
+
+/// Prints to stdout. A closed pipe (`multires info big.off | head`) ends the output
+/// quietly instead of panicking like `println!`.
+pub fn print_out(text: &str) -> CliResult {
+    let mut stdout = std::io::stdout().lock();
+    match stdout.write_all(text.as_bytes()).and_then(|()| stdout.flush()) {
+        Err(error) if error.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(CliError::Io { path: PathBuf::from("<stdout>"), source: error })
+        }
+        _ => Ok(()),
+    }
 }

@@ -11,7 +11,7 @@ use mesh_topo::io::{self, Format, PlyEncoding, ReadReport, WriteOptions};
 use mesh_topo::{DVec3, HalfedgeMesh, PolygonSoup};
 use serde_json::{Value, json};
 
-use super::common::{build_mesh, io_error, note_dropped, read_soup, write_mesh, write_soup};
+use super::common::{build_mesh, io_error, note_dropped, print_out, read_soup, write_mesh, write_soup};
 use super::{CliError, CliResult, input_error};
 
 /// Options of `info`.
@@ -254,8 +254,12 @@ pub fn mesh_info_text(info: &Value) -> String {
     line("faces", number("faces"));
     line("face sizes", histogram_text(&info["face_sizes"]));
     line("valences", histogram_text(&info["valences"]));
-    let loops = if info["boundary_loops"].is_null() { "undefined".to_string() } else { number("boundary_loops") };
-    line("boundary", format!("{loops} loops, {} edges", number("boundary_edges")));
+    let boundary = if info["boundary_loops"].is_null() {
+        format!("{} edges (loops undefined: not manifold)", number("boundary_edges"))
+    } else {
+        format!("{} loops, {} edges", number("boundary_loops"), number("boundary_edges"))
+    };
+    line("boundary", boundary);
     line("components", number("components"));
     line("euler", number("euler"));
     let genus = if info["genus"].is_null() { "undefined (not manifold)".to_string() } else { number("genus") };
@@ -309,11 +313,10 @@ pub fn info(args: &InfoArgs) -> CliResult {
     let (soup, report) = read_soup(&args.mesh)?;
     let info = mesh_info(&args.mesh.display().to_string(), &soup, &report);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&info).expect("internal: JSON of plain values"));
+        print_out(&(serde_json::to_string_pretty(&info).expect("internal: JSON of plain values") + "\n"))
     } else {
-        print!("{}", mesh_info_text(&info));
+        print_out(&mesh_info_text(&info))
     }
-    Ok(())
 }
 
 // ---------------------------------------------------------------------------------------
@@ -395,29 +398,41 @@ pub fn compare(args: &CompareArgs) -> CliResult {
     let (a_name, b_name) = (args.a.display().to_string(), args.b.display().to_string());
     let result = compare_meshes(&a_name, &a, &b_name, &b)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&result).expect("internal: JSON of plain values"));
-        return Ok(());
+        return print_out(&(serde_json::to_string_pretty(&result).expect("internal: JSON of plain values") + "\n"));
     }
     let relative = |key: &str| match result[key].as_f64() {
         Some(r) => format!("{r:.3e} of A's bounding-box diagonal"),
         None => "n/a (A's bounding box is a point)".to_string(),
     };
-    println!("A             {a_name}: {} vertices, {} faces", a.vertex_count(), a.face_count());
-    println!("B             {b_name}: {} vertices, {} faces", b.vertex_count(), b.face_count());
-    println!("A diagonal    {}", result["bbox_diagonal_a"]);
-    println!("max distance  {:.6e} ({})", result["max_dist"].as_f64().unwrap_or(f64::NAN), relative("rel_max"));
-    println!("mean distance {:.6e} ({})", result["mean_dist"].as_f64().unwrap_or(f64::NAN), relative("rel_mean"));
-    println!(
+    let mut text = String::new();
+    let _ = writeln!(text, "A             {a_name}: {} vertices, {} faces", a.vertex_count(), a.face_count());
+    let _ = writeln!(text, "B             {b_name}: {} vertices, {} faces", b.vertex_count(), b.face_count());
+    let _ = writeln!(text, "A diagonal    {}", result["bbox_diagonal_a"]);
+    let _ = writeln!(
+        text,
+        "max distance  {:.6e} ({})",
+        result["max_dist"].as_f64().unwrap_or(f64::NAN),
+        relative("rel_max")
+    );
+    let _ = writeln!(
+        text,
+        "mean distance {:.6e} ({})",
+        result["mean_dist"].as_f64().unwrap_or(f64::NAN),
+        relative("rel_mean")
+    );
+    let _ = writeln!(
+        text,
         "A -> B        max {:.6e}, mean {:.6e}",
         result["a_to_b"]["max"].as_f64().unwrap_or(f64::NAN),
         result["a_to_b"]["mean"].as_f64().unwrap_or(f64::NAN)
     );
-    println!(
+    let _ = writeln!(
+        text,
         "B -> A        max {:.6e}, mean {:.6e}",
         result["b_to_a"]["max"].as_f64().unwrap_or(f64::NAN),
         result["b_to_a"]["mean"].as_f64().unwrap_or(f64::NAN)
     );
-    Ok(())
+    print_out(&text)
 }
 
 // ---------------------------------------------------------------------------------------
@@ -435,8 +450,12 @@ pub fn convert(args: &ConvertArgs) -> CliResult {
         PlyEncodingArg::BinaryBe => PlyEncoding::BinaryBigEndian,
     };
     write_soup(&args.out, &soup, &WriteOptions { ply_encoding })?;
-    println!("wrote {} ({format}): {} vertices, {} faces", args.out.display(), soup.vertex_count(), soup.face_count());
-    Ok(())
+    print_out(&format!(
+        "wrote {} ({format}): {} vertices, {} faces\n",
+        args.out.display(),
+        soup.vertex_count(),
+        soup.face_count()
+    ))
 }
 
 // ---------------------------------------------------------------------------------------
@@ -476,14 +495,13 @@ const DEMO_STEPS: &[(&str, DemoStep)] = &[("the input mesh", demo_input_mesh)];
 fn demo_input_mesh(context: &mut DemoContext) -> CliResult {
     let file = format!("{}.obj", context.name);
     let info = mesh_info(&format!("{file} (embedded)"), &context.mesh.to_soup(), &context.report);
-    print!("{}", mesh_info_text(&info));
+    print_out(&mesh_info_text(&info))?;
     let path = context.out.join(&file);
     write_mesh(&path, &context.mesh)?;
     let info_path = context.out.join(format!("{}-info.json", context.name));
     let json = serde_json::to_string_pretty(&info).expect("internal: JSON of plain values");
     std::fs::write(&info_path, json + "\n").map_err(|source| CliError::Io { path: info_path.clone(), source })?;
-    println!("wrote {} and {}", path.display(), info_path.display());
-    Ok(())
+    print_out(&format!("wrote {} and {}\n", path.display(), info_path.display()))
 }
 
 /// `multires demo` and `multires` without arguments.
@@ -494,7 +512,7 @@ pub fn demo(args: &DemoArgs) -> CliResult {
     let mesh = build_mesh(Path::new("embedded mesh"), &soup)?;
     let mut context = DemoContext { out: args.out.clone(), name: DEMO_MESH_NAME, mesh, report };
     for (i, (title, step)) in DEMO_STEPS.iter().enumerate() {
-        println!("== {}. {title}", i + 1);
+        print_out(&format!("== {}. {title}\n", i + 1))?;
         step(&mut context)?;
     }
     Ok(())

@@ -74,12 +74,14 @@ pub fn read_off<'a>(bytes: &'a [u8]) -> Result<(PolygonSoup, ReadReport), IoErro
         }
         None
     };
-    // Line count, for "file ends early" errors.
-    let last_line = bytes.iter().filter(|&&b| b == b'\n').count() + usize::from(!bytes.ends_with(b"\n"));
-    let end = Location::Line(last_line.max(1));
+    // The last line, for "file ends early" errors (counted only then).
+    let end = || {
+        let lines = memchr::memchr_iter(b'\n', bytes).count() + usize::from(!bytes.ends_with(b"\n"));
+        Location::Line(lines.max(1))
+    };
 
     let Some((header_line, mut header)) = next_content() else {
-        return Err(IoError::InvalidHeader { at: end, reason: "empty file, expected the `OFF` keyword".into() });
+        return Err(IoError::InvalidHeader { at: end(), reason: "empty file, expected the `OFF` keyword".into() });
     };
     let keyword = header.next().unwrap_or_default();
     let at = Location::Line(header_line);
@@ -98,7 +100,7 @@ pub fn read_off<'a>(bytes: &'a [u8]) -> Result<(PolygonSoup, ReadReport), IoErro
     let mut take_line = |rest: &mut Vec<&'a [u8]>, what: &str| -> Result<(), IoError> {
         if rest.is_empty() {
             let (line, words) =
-                next_content().ok_or_else(|| IoError::Truncated { at: end, expected: what.to_string() })?;
+                next_content().ok_or_else(|| IoError::Truncated { at: end(), expected: what.to_string() })?;
             counts_line = line;
             *rest = words.collect();
         }
@@ -149,7 +151,7 @@ pub fn read_off<'a>(bytes: &'a [u8]) -> Result<(PolygonSoup, ReadReport), IoErro
 
     for vertex in 0..vertex_count {
         let (line, mut words) = next_content().ok_or_else(|| IoError::Truncated {
-            at: end,
+            at: end(),
             expected: format!("{vertex_count} vertices, found {vertex}"),
         })?;
         let mut p = [0.0; 3];
@@ -180,7 +182,7 @@ pub fn read_off<'a>(bytes: &'a [u8]) -> Result<(PolygonSoup, ReadReport), IoErro
 
     for face in 0..face_count {
         let (line, mut words) = next_content()
-            .ok_or_else(|| IoError::Truncated { at: end, expected: format!("{face_count} faces, found {face}") })?;
+            .ok_or_else(|| IoError::Truncated { at: end(), expected: format!("{face_count} faces, found {face}") })?;
         let size_token = words.next().unwrap_or_default();
         let size = parse_i64(size_token)
             .filter(|&n| n >= 0)

@@ -35,7 +35,7 @@ impl<'a> Iterator for Lines<'a> {
             return None;
         }
         let rest = &self.bytes[self.pos..];
-        let (line, advance) = match rest.iter().position(|&b| b == b'\n') {
+        let (line, advance) = match memchr::memchr(b'\n', rest) {
             Some(end) => (&rest[..end], end + 1),
             None => (rest, rest.len()),
         };
@@ -48,7 +48,7 @@ impl<'a> Iterator for Lines<'a> {
 /// The part of a line before a `#` comment.
 #[inline]
 pub(crate) fn strip_comment(line: &[u8]) -> &[u8] {
-    match line.iter().position(|&b| b == b'#') {
+    match memchr::memchr(b'#', line) {
         Some(hash) => &line[..hash],
         None => line,
     }
