@@ -373,7 +373,7 @@ pub fn quaternary_subdivide(mesh: &HalfedgeMesh, levels: u32, options: &LoopOpti
 }
 
 /// Runs `levels` ternary steps (building the half-edge mesh of each intermediate level).
-fn ternary_levels<T: Attribute>(
+pub(crate) fn ternary_levels<T: Attribute>(
     mesh: &HalfedgeMesh,
     values: &[T],
     levels: u32,
