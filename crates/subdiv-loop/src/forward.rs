@@ -78,7 +78,7 @@ use kernel::Rules;
 use topology::{BASE_MASK, MAX_FACES, Topology};
 
 /// The vertex weights of interior vertices.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
 pub enum VertexWeights {
     /// Loop's original `beta_n = (5/8 - (3/8 + cos(2 pi / n) / 4)^2) / n`.
     #[default]
@@ -94,7 +94,7 @@ pub enum VertexWeights {
 /// let options = LoopOptions { weights: VertexWeights::Warren, ..LoopOptions::default() };
 /// assert!(!options.keep_corners);
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
 pub struct LoopOptions {
     /// Interior vertex weights (default: Loop's original).
     pub weights: VertexWeights,
