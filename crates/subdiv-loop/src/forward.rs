@@ -145,6 +145,16 @@ impl LoopMesh {
         soup
     }
 
+    /// The mesh as a polygon soup, moving the positions.
+    pub fn into_soup(self) -> PolygonSoup {
+        let mut soup = PolygonSoup::with_capacity(0, self.triangles.len(), 3 * self.triangles.len());
+        for t in &self.triangles {
+            soup.push_face(t);
+        }
+        soup.positions = self.positions;
+        soup
+    }
+
     /// Builds the half-edge mesh (validating it; linear time plus a sort per vertex).
     /// Its edge numbering is the one the next step uses.
     ///
