@@ -12,38 +12,10 @@ use std::fmt::Write as _;
 use glam::DVec3;
 use multires::loop_subdiv::forward::{LoopOptions, subdivide_soup};
 use multires::mesh::PolygonSoup;
+use multires::mesh::io::read_soup;
 
-/// Minimal OBJ/OFF reader (vertices and faces) for the meshes in `tests/data/`.
 fn read(name: &str) -> PolygonSoup {
-    let text = std::fs::read_to_string(common::data(name)).unwrap();
-    let mut positions = Vec::new();
-    let mut faces: Vec<Vec<u32>> = Vec::new();
-    if name.ends_with(".off") {
-        let mut tokens = text.lines().filter(|l| !l.trim_start().starts_with('#')).flat_map(str::split_whitespace);
-        assert_eq!(tokens.next(), Some("OFF"));
-        let mut number = || tokens.next().unwrap().parse::<f64>().unwrap();
-        let (nv, nf, _) = (number() as usize, number() as usize, number());
-        for _ in 0..nv {
-            positions.push(DVec3::new(number(), number(), number()));
-        }
-        for _ in 0..nf {
-            let n = number() as usize;
-            faces.push((0..n).map(|_| number() as u32).collect());
-        }
-    } else {
-        for line in text.lines() {
-            let mut parts = line.split_whitespace();
-            match parts.next() {
-                Some("v") => {
-                    let c: Vec<f64> = parts.take(3).map(|t| t.parse().unwrap()).collect();
-                    positions.push(DVec3::new(c[0], c[1], c[2]));
-                }
-                Some("f") => faces.push(parts.map(|t| t.parse::<u32>().unwrap() - 1).collect()),
-                _ => {}
-            }
-        }
-    }
-    PolygonSoup::from_faces(positions, faces)
+    read_soup(common::data(name)).unwrap().0
 }
 
 /// The order-independent digest of a subdivided mesh (same text as the generator).

@@ -78,7 +78,7 @@ use kernel::Rules;
 use topology::{BASE_MASK, MAX_FACES, Topology};
 
 /// The vertex weights of interior vertices.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
 pub enum VertexWeights {
     /// Loop's original `beta_n = (5/8 - (3/8 + cos(2 pi / n) / 4)^2) / n`.
     #[default]
@@ -94,7 +94,7 @@ pub enum VertexWeights {
 /// let options = LoopOptions { weights: VertexWeights::Warren, ..LoopOptions::default() };
 /// assert!(!options.keep_corners);
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
 pub struct LoopOptions {
     /// Interior vertex weights (default: Loop's original).
     pub weights: VertexWeights,
@@ -142,6 +142,16 @@ impl LoopMesh {
         for t in &self.triangles {
             soup.push_face(t);
         }
+        soup
+    }
+
+    /// The mesh as a polygon soup, moving the positions.
+    pub fn into_soup(self) -> PolygonSoup {
+        let mut soup = PolygonSoup::with_capacity(0, self.triangles.len(), 3 * self.triangles.len());
+        for t in &self.triangles {
+            soup.push_face(t);
+        }
+        soup.positions = self.positions;
         soup
     }
 

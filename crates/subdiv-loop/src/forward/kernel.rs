@@ -30,6 +30,10 @@ pub(crate) struct Rules {
 
 /// Loop's vertex weight `beta_n = (5/8 - (3/8 + cos(2 pi / n) / 4)^2) / n`.
 pub(crate) fn loop_beta(n: usize) -> f64 {
+    if n == 6 {
+        // cos(pi / 3) is not exactly 1/2 in floating point: keep the regular rule exact.
+        return 1.0 / 16.0;
+    }
     let c = 0.375 + 0.25 * (2.0 * std::f64::consts::PI / n as f64).cos();
     (0.625 - c * c) / n as f64
 }

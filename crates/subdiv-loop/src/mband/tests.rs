@@ -1,0 +1,375 @@
+//! Tests of the M-band masks and of ternary and quaternary Loop.
+
+use glam::DVec3;
+use mesh_topo::shapes::{self, CellKind};
+use mesh_topo::testing::{arb_triangle_mesh, scramble};
+use mesh_topo::{HalfedgeMesh, PolygonSoup};
+use proptest::prelude::*;
+
+use super::*;
+
+/// `(point, numerator)` pairs of a stencil, sorted, for table comparisons.
+fn table(masks: &BoxSplineMasks, s: u32, t: u32) -> Vec<((i32, i32), u64)> {
+    let mut entries: Vec<_> = masks.stencil(s, t).iter().map(|w| (w.point, w.numerator)).collect();
+    entries.sort_unstable();
+    entries
+}
+
+fn expected(entries: &[((i32, i32), u64)]) -> Vec<((i32, i32), u64)> {
+    let mut entries = entries.to_vec();
+    entries.sort_unstable();
+    entries
+}
+
+#[test]
+fn stencil_tables_of_the_specification_are_reproduced_exactly() {
+    let loop_masks = box_spline_masks(2).unwrap();
+    assert_eq!(
+        table(&loop_masks, 0, 0),
+        expected(&[((0, 0), 10), ((1, 0), 1), ((-1, 0), 1), ((0, 1), 1), ((0, -1), 1), ((1, 1), 1), ((-1, -1), 1)])
+    );
+    assert_eq!(table(&loop_masks, 1, 0), expected(&[((0, 0), 6), ((1, 0), 6), ((0, -1), 2), ((1, 1), 2)]));
+
+    // Ternary, over 81: vertex 5/9 and 2/27; 1/3-point; triangle centre.
+    let ternary = box_spline_masks(3).unwrap();
+    assert_eq!(
+        table(&ternary, 0, 0),
+        expected(&[((0, 0), 45), ((1, 0), 6), ((-1, 0), 6), ((0, 1), 6), ((0, -1), 6), ((1, 1), 6), ((-1, -1), 6)])
+    );
+    assert_eq!(
+        table(&ternary, 1, 0),
+        expected(&[((0, 0), 36), ((1, 0), 20), ((0, -1), 10), ((1, 1), 10), ((-1, -1), 2), ((0, 1), 2), ((-1, 0), 1)])
+    );
+    assert_eq!(
+        table(&ternary, 2, 1),
+        expected(&[((0, 0), 24), ((1, 0), 24), ((1, 1), 24), ((0, -1), 3), ((0, 1), 3), ((2, 1), 3)])
+    );
+
+    // Quaternary, over 256.
+    let quaternary = box_spline_masks(4).unwrap();
+    assert_eq!(
+        table(&quaternary, 0, 0),
+        expected(&[
+            ((0, 0), 136),
+            ((1, 0), 20),
+            ((-1, 0), 20),
+            ((0, 1), 20),
+            ((0, -1), 20),
+            ((1, 1), 20),
+            ((-1, -1), 20)
+        ])
+    );
+    assert_eq!(
+        table(&quaternary, 1, 0),
+        expected(&[
+            ((0, 0), 120),
+            ((1, 0), 50),
+            ((0, -1), 30),
+            ((1, 1), 30),
+            ((-1, -1), 10),
+            ((0, 1), 10),
+            ((-1, 0), 6)
+        ])
+    );
+    assert_eq!(
+        table(&quaternary, 2, 0),
+        expected(&[
+            ((0, 0), 87),
+            ((1, 0), 87),
+            ((0, -1), 34),
+            ((1, 1), 34),
+            ((-1, -1), 3),
+            ((0, 1), 3),
+            ((1, -1), 3),
+            ((2, 1), 3),
+            ((-1, 0), 1),
+            ((2, 0), 1),
+        ])
+    );
+    assert_eq!(
+        table(&quaternary, 2, 1),
+        expected(&[
+            ((0, 0), 96),
+            ((1, 0), 62),
+            ((1, 1), 62),
+            ((0, -1), 14),
+            ((0, 1), 14),
+            ((2, 1), 4),
+            ((-1, -1), 2),
+            ((-1, 0), 2)
+        ])
+    );
+    assert_eq!(
+        table(&quaternary, 3, 1),
+        expected(&[
+            ((1, 0), 96),
+            ((0, 0), 62),
+            ((1, 1), 62),
+            ((0, -1), 14),
+            ((2, 1), 14),
+            ((0, 1), 4),
+            ((1, -1), 2),
+            ((2, 0), 2)
+        ])
+    );
+    // The seed's reference values: alpha = 5/9, beta(1) = 15/32, beta(2) = 87/256.
+    assert_eq!(45 * 9, 5 * 81);
+    assert_eq!(120 * 32, 15 * 256);
+}
+
+#[test]
+fn every_coset_sums_to_one_and_stencils_stay_in_the_first_ring() {
+    for m in 2..=9u32 {
+        let masks = box_spline_masks(m).unwrap();
+        let mut total = 0;
+        for t in 0..m {
+            for s in 0..m {
+                let stencil = masks.stencil(s, t);
+                assert_eq!(stencil.iter().map(|w| w.numerator).sum::<u64>(), masks.denominator(), "M = {m}");
+                total += stencil.len();
+                // Only the triangle's vertices and its first ring (12 points, seed 002
+                // Theorem 2): every point is within one lattice step of the cell.
+                assert!(stencil.iter().all(|w| (-1..=2).contains(&w.point.0) && (-1..=2).contains(&w.point.1)));
+            }
+        }
+        assert!(total > 0);
+        assert_eq!(
+            (0..masks.symbol_size())
+                .flat_map(|j| (0..masks.symbol_size()).map(move |i| (i, j)))
+                .map(|(i, j)| masks.symbol_coefficient(i, j))
+                .sum::<u64>(),
+            (m as u64).pow(6)
+        );
+    }
+    assert!(box_spline_masks(1).is_err());
+    assert!(box_spline_masks(65).is_err());
+}
+
+/// `P(z) * Q(z^k)` for square coefficient arrays.
+fn compose(p: &BoxSplineMasks, q: &BoxSplineMasks, k: usize) -> Vec<Vec<u64>> {
+    let size = p.symbol_size() + k * (q.symbol_size() - 1);
+    let mut out = vec![vec![0u64; size]; size];
+    for pj in 0..p.symbol_size() {
+        for pi in 0..p.symbol_size() {
+            for qj in 0..q.symbol_size() {
+                for qi in 0..q.symbol_size() {
+                    out[pj + k * qj][pi + k * qi] += p.symbol_coefficient(pi, pj) * q.symbol_coefficient(qi, qj);
+                }
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn symbols_compose() {
+    // a_{M1 M2}(z) = a_{M1}(z) a_{M2}(z^{M1}) (seed 002, Theorem 3), numerators exactly.
+    for (m1, m2) in [(2, 2), (3, 3), (2, 3), (3, 2), (2, 4)] {
+        let (p, q, r) =
+            (box_spline_masks(m1).unwrap(), box_spline_masks(m2).unwrap(), box_spline_masks(m1 * m2).unwrap());
+        let product = compose(&p, &q, m1 as usize);
+        assert_eq!(product.len(), r.symbol_size());
+        for (j, row) in product.iter().enumerate() {
+            for (i, &c) in row.iter().enumerate() {
+                assert_eq!(c, r.symbol_coefficient(i, j), "M = {m1} x {m2} at ({i}, {j})");
+            }
+        }
+    }
+}
+
+/// A periodic three-direction lattice: vertex (i, j) is `i + w j`.
+fn lattice_torus(w: usize, h: usize, seed: u64) -> (HalfedgeMesh, Vec<(i64, i64)>) {
+    let index = |i: usize, j: usize| ((i % w) + w * (j % h)) as u32;
+    let mut faces = Vec::new();
+    for j in 0..h {
+        for i in 0..w {
+            faces.push([index(i, j), index(i + 1, j), index(i + 1, j + 1)]);
+            faces.push([index(i, j), index(i + 1, j + 1), index(i, j + 1)]);
+        }
+    }
+    let mut state = seed;
+    let mut random = move || {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let positions = (0..w * h).map(|_| DVec3::new(random(), random(), random())).collect();
+    let coords = (0..w * h).map(|k| ((k % w) as i64, (k / w) as i64)).collect();
+    (HalfedgeMesh::from_soup(&PolygonSoup::from_faces(positions, faces)).unwrap(), coords)
+}
+
+/// The lattice step from `a` to `b` on a periodic lattice (one of the six directions).
+fn step(a: (i64, i64), b: (i64, i64), size: (i64, i64)) -> (i64, i64) {
+    let wrap = |d: i64, n: i64| {
+        let d = d.rem_euclid(n);
+        if d > n / 2 { d - n } else { d }
+    };
+    (wrap(b.0 - a.0, size.0), wrap(b.1 - a.1, size.1))
+}
+
+/// Lattice coordinates of the vertices after one Loop step (in half units).
+fn loop_coords(mesh: &HalfedgeMesh, coords: &[(i64, i64)], size: (i64, i64)) -> Vec<(i64, i64)> {
+    let mut out: Vec<(i64, i64)> = coords.iter().map(|&(i, j)| (2 * i, 2 * j)).collect();
+    for e in mesh.edges() {
+        let [a, b] = mesh.edge_vertices(e);
+        let (a, b) = (coords[a.index()], coords[b.index()]);
+        let d = step(a, b, size);
+        out.push((2 * a.0 + d.0, 2 * a.1 + d.1));
+    }
+    out
+}
+
+/// Lattice coordinates after one ternary step (in third units).
+fn ternary_coords(mesh: &HalfedgeMesh, coords: &[(i64, i64)], size: (i64, i64)) -> Vec<(i64, i64)> {
+    let mut out: Vec<(i64, i64)> = coords.iter().map(|&(i, j)| (3 * i, 3 * j)).collect();
+    for e in mesh.edges() {
+        let [a, b] = mesh.edge_vertices(e);
+        let (a, b) = (coords[a.index()], coords[b.index()]);
+        let d = step(a, b, size);
+        out.push((3 * a.0 + d.0, 3 * a.1 + d.1));
+        out.push((3 * a.0 + 2 * d.0, 3 * a.1 + 2 * d.1));
+    }
+    for f in mesh.faces() {
+        let c: Vec<(i64, i64)> = mesh.face_vertices(f).map(|v| coords[v.index()]).collect();
+        let (d1, d2) = (step(c[0], c[1], size), step(c[0], c[2], size));
+        out.push((3 * c[0].0 + d1.0 + d2.0, 3 * c[0].1 + d1.1 + d2.1));
+    }
+    out
+}
+
+fn assert_matches_lattice(fine: &[DVec3], coords: &[(i64, i64)], lattice: &[DVec3], size: (i64, i64)) {
+    assert_eq!(fine.len(), lattice.len());
+    for (k, (p, c)) in fine.iter().zip(coords).enumerate() {
+        let index = (c.0.rem_euclid(size.0) + size.0 * c.1.rem_euclid(size.1)) as usize;
+        assert!((*p - lattice[index]).length() < 1e-14, "fine vertex {k} at {c:?}");
+    }
+}
+
+#[test]
+fn regular_meshes_reproduce_the_box_spline_for_m_2_3_4() {
+    let (w, h) = (7usize, 6usize);
+    let (mesh, coords) = lattice_torus(w, h, 42);
+    let size = (w as i64, h as i64);
+    // Loop = M = 2.
+    let fine = subdivide(&mesh, 1, &LoopOptions::default()).unwrap();
+    let lattice = subdivide_lattice(mesh.positions(), w, h, &box_spline_masks(2).unwrap()).unwrap();
+    assert_matches_lattice(&fine.positions, &loop_coords(&mesh, &coords, size), &lattice, (2 * size.0, 2 * size.1));
+    // Ternary = M = 3 (the extraordinary rules reduce to the regular ones at n = 6).
+    let fine = ternary_subdivide(&mesh, 1, &TernaryOptions::default()).unwrap();
+    let lattice = subdivide_lattice(mesh.positions(), w, h, &box_spline_masks(3).unwrap()).unwrap();
+    assert_matches_lattice(&fine.positions, &ternary_coords(&mesh, &coords, size), &lattice, (3 * size.0, 3 * size.1));
+    // Quaternary = Loop o Loop = M = 4.
+    let fine = quaternary_subdivide(&mesh, 1, &LoopOptions::default()).unwrap();
+    let half = subdivide(&mesh, 1, &LoopOptions::default()).unwrap().to_halfedge_mesh().unwrap();
+    let half_coords = loop_coords(&mesh, &coords, size);
+    let quarter_coords = loop_coords(&half, &half_coords, (2 * size.0, 2 * size.1));
+    let lattice = subdivide_lattice(mesh.positions(), w, h, &box_spline_masks(4).unwrap()).unwrap();
+    assert_matches_lattice(&fine.positions, &quarter_coords, &lattice, (4 * size.0, 4 * size.1));
+}
+
+#[test]
+fn every_arity_refines_the_same_box_spline() {
+    // The limit at a lattice point is c/2 + (sum of the six neighbours)/12 (the values
+    // of N(2,2,2) at the lattice points); one M-adic step must keep the limit of every
+    // coarse lattice point, whatever M.
+    let (w, h) = (6usize, 5usize);
+    let (mesh, _) = lattice_torus(w, h, 7);
+    let values: Vec<f64> = mesh.positions().iter().map(|p| p.x + 2.0 * p.y * p.z).collect();
+    let limit = |values: &[f64], w: usize, h: usize, i: usize, j: usize| {
+        let at = |di: i64, dj: i64| {
+            values[((i as i64 + di).rem_euclid(w as i64) + w as i64 * (j as i64 + dj).rem_euclid(h as i64)) as usize]
+        };
+        at(0, 0) / 2.0 + (at(1, 0) + at(-1, 0) + at(0, 1) + at(0, -1) + at(1, 1) + at(-1, -1)) / 12.0
+    };
+    for m in 2..=6usize {
+        let fine = subdivide_lattice(&values, w, h, &box_spline_masks(m as u32).unwrap()).unwrap();
+        for j in 0..h {
+            for i in 0..w {
+                let coarse = limit(&values, w, h, i, j);
+                let refined = limit(&fine, m * w, m * h, m * i, m * j);
+                assert!((coarse - refined).abs() < 1e-13, "M = {m} at ({i}, {j})");
+            }
+        }
+    }
+}
+
+#[test]
+fn ternary_weights_at_valence_six_are_the_regular_ones() {
+    let gamma = ternary_edge_weights(6, 1.0 / 3.0);
+    for (g, expected) in gamma.iter().zip([20.0, 10.0, 2.0, 1.0, 2.0, 10.0]) {
+        assert!((g * 81.0 - expected).abs() < 1e-13);
+    }
+    for n in 3..=20 {
+        // Affine: 4/9 + sum gamma = 1, and positive at lambda = 1/3.
+        let gamma = ternary_edge_weights(n, 1.0 / 3.0);
+        assert!((4.0 / 9.0 + gamma.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+        assert!(gamma.iter().all(|&g| g > 0.0), "n = {n}: {gamma:?}");
+    }
+}
+
+#[test]
+fn counts_for_ternary_and_quaternary() {
+    for soup in
+        [shapes::icosahedron(), shapes::grid(3, 2, CellKind::Triangles), shapes::torus(4, 3, CellKind::Triangles)]
+    {
+        let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+        let (v, e, f) = (mesh.vertex_count(), mesh.edge_count(), mesh.face_count());
+        for (m, fine) in [
+            (3, ternary_subdivide(&mesh, 1, &TernaryOptions::default()).unwrap()),
+            (4, quaternary_subdivide(&mesh, 1, &LoopOptions::default()).unwrap()),
+        ] {
+            assert_eq!(fine.vertex_count(), v + (m - 1) * e + f * (m - 1) * (m - 2) / 2);
+            assert_eq!(fine.face_count(), m * m * f);
+            let fine_mesh = fine.to_halfedge_mesh().unwrap();
+            assert_eq!(fine_mesh.euler_characteristic(), mesh.euler_characteristic());
+        }
+        let two = ternary_subdivide(&mesh, 2, &TernaryOptions::default()).unwrap();
+        assert_eq!(two.face_count(), 81 * f);
+    }
+}
+
+#[test]
+fn ternary_matrix_applies_the_same_stencils() {
+    let mesh = HalfedgeMesh::from_soup(&scramble(shapes::grid(3, 3, CellKind::Triangles), 4, 0.2)).unwrap();
+    let options = TernaryOptions::default();
+    let s = ternary_matrix(&mesh, 2, &options).unwrap();
+    let fine = ternary_subdivide(&mesh, 2, &options).unwrap();
+    let applied = s.apply(mesh.positions()).unwrap();
+    for (a, b) in applied.iter().zip(&fine.positions) {
+        assert!((*a - *b).length() < 1e-14);
+    }
+    assert!(s.row_sums().iter().all(|r| (r - 1.0).abs() < 1e-14));
+}
+
+#[test]
+fn bad_parameters_are_rejected() {
+    let mesh = HalfedgeMesh::from_soup(&shapes::icosahedron()).unwrap();
+    for lambda in [0.1, 0.6, f64::NAN] {
+        assert!(matches!(
+            ternary_subdivide(&mesh, 1, &TernaryOptions { lambda }),
+            Err(LoopError::InvalidParameter { name: "lambda", .. })
+        ));
+    }
+    let quads = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
+    assert!(matches!(ternary_subdivide(&quads, 1, &TernaryOptions::default()), Err(LoopError::NotTriangle { .. })));
+    assert!(subdivide_lattice(&[1.0f64; 9], 3, 3, &box_spline_masks(2).unwrap()).is_err());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
+
+    #[test]
+    fn ternary_is_affine_invariant(soup in arb_triangle_mesh(), shift in prop::array::uniform3(-3.0..3.0f64), scale in 0.2..5.0f64) {
+        let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+        let moved: Vec<DVec3> = mesh.positions().iter().map(|&p| scale * DVec3::new(p.y, p.z, p.x) + DVec3::from(shift)).collect();
+        let mut moved_mesh = mesh.clone();
+        moved_mesh.replace_positions(moved).unwrap();
+        let options = TernaryOptions::default();
+        let (a, b) = (ternary_subdivide(&mesh, 1, &options).unwrap(), ternary_subdivide(&moved_mesh, 1, &options).unwrap());
+        prop_assert_eq!(&a.triangles, &b.triangles);
+        for (p, q) in a.positions.iter().zip(&b.positions) {
+            let expected = scale * DVec3::new(p.y, p.z, p.x) + DVec3::from(shift);
+            prop_assert!((expected - *q).length() < 1e-12 * (1.0 + expected.length()));
+        }
+        prop_assert!(a.to_halfedge_mesh().is_ok());
+    }
+}

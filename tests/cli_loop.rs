@@ -1,0 +1,122 @@
+//! `multires subdivide` with the Loop schemes and `multires analyze` for them.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use multires::loop_subdiv::forward::{LoopOptions, subdivide};
+use multires::mesh::HalfedgeMesh;
+use multires::mesh::io::{WriteOptions, read_soup, write_soup};
+use multires::mesh::shapes::{self, CellKind};
+use serde_json::Value;
+
+fn multires(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_multires")).args(args).output().expect("run multires")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = multires(args);
+    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn fails(args: &[&str]) -> String {
+    let out = multires(args);
+    assert!(!out.status.success(), "{args:?} should fail");
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(stderr.lines().count(), 1, "one line: {stderr}");
+    stderr
+}
+
+fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn subdivide_writes_every_loop_scheme() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = common::data("bunny.obj");
+    let (v, e, f) = (1839, 5511, 3674);
+    for (scheme, levels, counts) in [
+        ("loop", "2", (29394, 58784)),
+        ("loop-warren", "1", (v + e, 4 * f)),
+        ("ternary-loop", "1", (v + 2 * e + f, 9 * f)),
+        ("quaternary-loop", "1", (v + 3 * e + 3 * f, 16 * f)),
+    ] {
+        let out = dir.path().join(format!("{scheme}.off"));
+        ok(&["subdivide", path(&input), path(&out), "--scheme", scheme, "--levels", levels]);
+        let (soup, _) = read_soup(&out).unwrap();
+        assert_eq!((soup.vertex_count(), soup.face_count()), counts, "{scheme}");
+    }
+    // The file holds exactly the library's output (OFF keeps shortest round-trip decimals).
+    let (soup, _) = read_soup(dir.path().join("loop.off")).unwrap();
+    let (coarse, _) = read_soup(&input).unwrap();
+    let expected = subdivide(&HalfedgeMesh::from_soup(&coarse).unwrap(), 2, &LoopOptions::default()).unwrap();
+    assert_eq!(soup.positions, expected.positions);
+    assert_eq!(soup, expected.into_soup());
+}
+
+#[test]
+fn keep_corners_changes_only_the_corners() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("grid.off");
+    let grid = shapes::grid(2, 1, CellKind::Triangles);
+    write_soup(&input, &grid, &WriteOptions::default()).unwrap();
+    let (plain, kept) = (dir.path().join("plain.obj"), dir.path().join("kept.obj"));
+    ok(&["subdivide", path(&input), path(&plain), "--scheme", "loop"]);
+    ok(&["subdivide", path(&input), path(&kept), "--scheme", "loop", "--keep-corners"]);
+    let (a, b) = (read_soup(&plain).unwrap().0, read_soup(&kept).unwrap().0);
+    let mesh = HalfedgeMesh::from_soup(&grid).unwrap();
+    let corners: Vec<usize> = mesh.vertices().filter(|&v| mesh.valence(v) == 2).map(|v| v.index()).collect();
+    assert!(!corners.is_empty());
+    for i in 0..a.positions.len() {
+        if corners.contains(&i) {
+            assert_eq!(b.positions[i], grid.positions[i]);
+            assert_ne!(a.positions[i], grid.positions[i]);
+        } else {
+            assert_eq!(a.positions[i], b.positions[i]);
+        }
+    }
+}
+
+#[test]
+fn subdivide_errors_name_the_problem() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.obj");
+    let quads = common::data("cube_quad.off");
+    let message = fails(&["subdivide", path(&quads), path(&out), "--scheme", "loop"]);
+    assert!(message.contains("face 0 has 4 corners"), "{message}");
+    let missing = dir.path().join("missing.obj");
+    let message = fails(&["subdivide", path(&missing), path(&out), "--scheme", "ternary-loop"]);
+    assert!(message.contains("missing.obj"), "{message}");
+}
+
+#[test]
+fn analyze_reports_the_spectrum_as_json() {
+    for (scheme, n, lambda) in [
+        ("loop", 5, 0.375 + 0.25 * (std::f64::consts::TAU / 5.0).cos()),
+        ("loop-warren", 9, 0.375 + 0.25 * (std::f64::consts::TAU / 9.0).cos()),
+        ("ternary-loop", 4, 1.0 / 3.0),
+        ("quaternary-loop", 3, 1.0 / 16.0),
+    ] {
+        let out = ok(&["analyze", "--scheme", scheme, "--valence", &n.to_string(), "--json"]);
+        let json: Value = serde_json::from_str(&out).unwrap();
+        assert!((json["subdominant"].as_f64().unwrap() - lambda).abs() < 1e-12, "{scheme}");
+        assert_eq!(json["c1"], Value::Bool(true));
+        let eigenvalues: Vec<f64> =
+            json["eigenvalues"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        assert_eq!(eigenvalues.len(), 3 * n + 1);
+        assert!(eigenvalues.windows(2).all(|w| w[0].abs() >= w[1].abs() - 1e-12));
+        assert!((eigenvalues[0] - 1.0).abs() < 1e-12);
+    }
+    let text = ok(&["analyze", "--scheme", "loop", "--valence", "7"]);
+    assert!(text.contains("C1: yes"), "{text}");
+}
+
+#[test]
+fn analyze_rejects_bad_arguments() {
+    assert!(fails(&["analyze", "--scheme", "loop"]).contains("--valence"));
+    assert!(fails(&["analyze", "--scheme", "ternary-loop", "--valence", "2"]).contains("valence"));
+    assert!(fails(&["analyze", "--scheme", "loop", "--valence", "5", "--tension", "0.1"]).contains("curve"));
+}
