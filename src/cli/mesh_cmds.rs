@@ -72,6 +72,9 @@ pub struct RenderArgs {
     /// Overlay the wireframe.
     #[arg(long)]
     pub wireframe: bool,
+    /// Flat shading (one normal per face) instead of smooth shading.
+    #[arg(long)]
+    pub flat: bool,
     /// View direction as azimuth,elevation in degrees.
     #[arg(long, default_value = "30,20", allow_hyphen_values = true)]
     pub view: String,
@@ -440,8 +443,8 @@ pub fn convert(args: &ConvertArgs) -> CliResult {
 // render
 
 /// `multires render`.
-pub fn render(_args: &RenderArgs) -> CliResult {
-    Err(CliError::Unavailable("render"))
+pub fn render(args: &RenderArgs) -> CliResult {
+    super::render::run(args)
 }
 
 // ---------------------------------------------------------------------------------------

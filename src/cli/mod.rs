@@ -15,6 +15,7 @@ mod doo_cmds;
 mod ifs_cmds;
 mod loop_cmds;
 mod mesh_cmds;
+pub mod render;
 mod spline_cmds;
 
 /// Errors of the command-line tool: one line for the user, no backtrace.
