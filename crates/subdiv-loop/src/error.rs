@@ -39,16 +39,6 @@ pub enum LoopError {
         /// Number of vertices of the mesh.
         vertex_count: usize,
     },
-    /// A parameter is outside its valid range.
-    #[error("invalid parameter {name} = {value}: {expected}")]
-    InvalidParameter {
-        /// The parameter.
-        name: &'static str,
-        /// The value given, printed.
-        value: String,
-        /// What is allowed.
-        expected: &'static str,
-    },
     /// Details or orders do not fit the mesh they are applied to (or a pyramid is
     /// corrupted): `level` counts refinement steps from the coarse mesh (1 = the first).
     #[error("level {level}: {reason}")]
@@ -69,4 +59,39 @@ pub enum LoopError {
     /// A pyramid file could not be encoded or decoded.
     #[error("Loop pyramid: {0}")]
     Binary(String),
+    /// A per-vertex attribute array does not have one value per vertex.
+    #[error("attribute has {found} values but the mesh has {expected} vertices")]
+    AttributeCount {
+        /// Number of vertices (values needed).
+        expected: usize,
+        /// Number of values given.
+        found: usize,
+    },
+    /// A parameter is out of its range.
+    #[error("invalid {name}: {reason}")]
+    InvalidParameter {
+        /// The parameter.
+        name: &'static str,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The scheme has no rule for boundaries.
+    #[error("{scheme} needs a closed mesh; edge ({from}, {to}) is on a boundary")]
+    BoundaryNotSupported {
+        /// The scheme.
+        scheme: &'static str,
+        /// One end of a boundary edge.
+        from: u32,
+        /// The other end.
+        to: u32,
+    },
+    /// Two triangles glued along all three edges (a closed "pillow" whose vertices
+    /// have interior valence 2): one Loop step would make the mesh non-manifold.
+    #[error("interior vertex {vertex} has valence 2 (face {face} shares all its edges with one other face)")]
+    InteriorValenceTwo {
+        /// A vertex of valence 2.
+        vertex: u32,
+        /// A face of the pillow.
+        face: usize,
+    },
 }

@@ -228,8 +228,7 @@ impl LoopPyramid {
         if level > self.levels.len() {
             return Err(LoopError::InvalidParameter {
                 name: "level",
-                value: level.to_string(),
-                expected: "at most the number of levels of the pyramid",
+                reason: format!("{level}: the pyramid has {} levels", self.levels.len()),
             });
         }
         let mut table = CornerTable::from_soup(&self.base)?;
@@ -254,8 +253,7 @@ impl LoopPyramid {
         if !(0.0..=1.0).contains(&fraction) {
             return Err(LoopError::InvalidParameter {
                 name: "fraction",
-                value: fraction.to_string(),
-                expected: "a number between 0 and 1",
+                reason: format!("{fraction}: expected a number between 0 and 1"),
             });
         }
         let total = self.detail_count();
