@@ -6,8 +6,8 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 use glam::DVec3;
+use multires::loop_subdiv::forward::LoopOptions;
 use multires::loop_subdiv::pyramid::{LoopPyramid, bounding_box_diagonal};
-use multires::loop_subdiv::reverse::LoopOptions;
 use multires::mesh::io::{self, WriteOptions};
 use multires::mesh::{PolygonSoup, shapes};
 

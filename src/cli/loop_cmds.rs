@@ -4,8 +4,8 @@ use std::path::Path;
 
 use mesh_topo::io::WriteOptions;
 use subdiv_loop::LoopError;
+use subdiv_loop::forward::LoopOptions;
 use subdiv_loop::pyramid::{self, DecomposeOptions, Levels, LoopPyramid};
-use subdiv_loop::reverse::LoopOptions;
 
 use super::common::{read_mesh, write_soup};
 use super::{

@@ -9,8 +9,8 @@ use std::hint::black_box;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
+use subdiv_loop::forward::LoopOptions;
 use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, decompose};
-use subdiv_loop::reverse::LoopOptions;
 
 /// Minimal OBJ reader for the benchmark fixture (`v` and triangular `f` lines only).
 fn read_obj(text: &str) -> PolygonSoup {

@@ -12,8 +12,8 @@
 
 use glam::DVec3;
 use mesh_topo::HalfedgeMesh;
+use subdiv_loop::forward::LoopOptions;
 use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, bounding_box_diagonal, decompose};
-use subdiv_loop::reverse::LoopOptions;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args()

@@ -98,7 +98,8 @@ impl CornerTable {
     /// The table of a validated half-edge mesh.
     ///
     /// # Errors
-    /// [`LoopError::NotTriangle`] naming the first face that is not a triangle.
+    /// [`LoopError::NotTriangle`] naming the first face that is not a triangle,
+    /// [`LoopError::InteriorValenceTwo`] for two triangles glued along all their edges.
     pub(crate) fn from_mesh(mesh: &HalfedgeMesh) -> Result<Self, LoopError> {
         let next_halfedge = mesh.raw_halfedge_next();
         let targets = mesh.raw_halfedge_targets();
@@ -121,7 +122,18 @@ impl CornerTable {
                 halfedge_of_corner[(c as usize) + k] = h;
             }
         }
-        let twin = halfedge_of_corner.iter().map(|&h| corner_of_halfedge[(h ^ 1) as usize]).collect();
+        let twin: Vec<u32> = halfedge_of_corner.iter().map(|&h| corner_of_halfedge[(h ^ 1) as usize]).collect();
+        for (face, t) in twin.chunks_exact(3).enumerate() {
+            let other = |k: usize| if t[k] == NONE { NONE - k as u32 } else { t[k] / 3 };
+            if other(0) == other(1) || other(1) == other(2) || other(2) == other(0) {
+                // Two triangles sharing two edges share all three (a closed "pillow"):
+                // Loop refinement would glue their children non-manifoldly.
+                return Err(LoopError::InteriorValenceTwo {
+                    vertex: corner_vertex_of(&halfedge_of_corner, targets, face),
+                    face,
+                });
+            }
+        }
         let table = Self::from_parts(mesh.vertex_count(), corner_vertex, twin);
         debug_assert_eq!(table.edge_count(), mesh.edge_count(), "internal: edge numbering differs from mesh-topo");
         Ok(table)
@@ -312,6 +324,11 @@ impl CornerTable {
     }
 }
 
+/// The first corner's vertex of `face` (for error messages).
+fn corner_vertex_of(halfedge_of_corner: &[u32], targets: &[u32], face: usize) -> u32 {
+    targets[(halfedge_of_corner[3 * face] ^ 1) as usize]
+}
+
 /// Counter-clockwise iterator over the corners of a vertex (see
 /// [`CornerTable::outgoing`]).
 pub(crate) struct Outgoing<'a> {
@@ -393,6 +410,12 @@ mod tests {
             assert_eq!(fine.edge_count(), 2 * table.edge_count() + 3 * table.face_count());
             check_against_mesh_topo(&fine.refine());
         }
+    }
+
+    #[test]
+    fn pillows_are_rejected() {
+        let pillow = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2], [0, 2, 1]]);
+        assert!(matches!(CornerTable::from_soup(&pillow), Err(LoopError::InteriorValenceTwo { face: 0, .. })));
     }
 
     #[test]

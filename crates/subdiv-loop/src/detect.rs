@@ -696,10 +696,10 @@ impl<'a> Labeler<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::forward::LoopOptions;
     use crate::reference::{
         bipyramid, cylinder, flip_edge, loop_step, open_fan, perturb, random_diagonal_grid, scramble, swap_vertices,
     };
-    use crate::reverse::LoopOptions;
     use glam::DVec3;
     use mesh_topo::PolygonSoup;
     use mesh_topo::shapes::{self, CellKind};

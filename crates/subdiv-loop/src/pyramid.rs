@@ -34,7 +34,8 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
 use crate::LoopError;
 use crate::corner_table::CornerTable;
 use crate::detect::{FineOrder, detect_table};
-use crate::reverse::{LoopOptions, check_finite, check_level, refine_level, reverse_positions};
+use crate::forward::LoopOptions;
+use crate::reverse::{check_finite, check_level, refine_level, reverse_positions};
 
 /// Magic number of a Loop pyramid file.
 pub const PYRAMID_MAGIC: [u8; 8] = *b"MRSLOOP\0";
@@ -111,7 +112,7 @@ pub struct RateDistortion {
 /// ```
 /// use mesh_topo::{HalfedgeMesh, shapes};
 /// use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, decompose};
-/// use subdiv_loop::reverse::LoopOptions;
+/// use subdiv_loop::forward::LoopOptions;
 ///
 /// // An icosahedron refined twice (zero details = Loop subdivision).
 /// let ico = HalfedgeMesh::from_soup(&shapes::icosahedron())?;
@@ -284,7 +285,7 @@ impl LoopPyramid {
     /// ```
     /// use mesh_topo::shapes;
     /// use subdiv_loop::pyramid::LoopPyramid;
-    /// use subdiv_loop::reverse::LoopOptions;
+    /// use subdiv_loop::forward::LoopOptions;
     ///
     /// let mut pyramid = LoopPyramid::smooth(shapes::octahedron(), LoopOptions::default(), 2)?;
     /// pyramid.levels[1].details[5] = glam::DVec3::new(0.0, 0.0, 0.1); // one bump
@@ -339,7 +340,7 @@ impl LoopPyramid {
     /// ```
     /// use mesh_topo::shapes;
     /// use subdiv_loop::pyramid::LoopPyramid;
-    /// use subdiv_loop::reverse::LoopOptions;
+    /// use subdiv_loop::forward::LoopOptions;
     ///
     /// let pyramid = LoopPyramid::smooth(shapes::tetrahedron(), LoopOptions::default(), 1)?;
     /// let bytes = pyramid.to_bytes()?;
@@ -392,8 +393,9 @@ pub fn bounding_box_diagonal(points: &[DVec3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::forward::VertexWeights;
     use crate::reference::{cylinder, loop_steps, open_fan, perturb, relative_distance, scramble};
-    use crate::reverse::{ReverseOptions, VertexWeights, reverse};
+    use crate::reverse::{ReverseOptions, reverse};
     use mesh_topo::shapes::{self, CellKind};
     use proptest::prelude::*;
 

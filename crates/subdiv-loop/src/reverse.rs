@@ -53,72 +53,30 @@ use mesh_topo::HalfedgeMesh;
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::detect::{Coarsening, FineOrder, detect_table};
+use crate::forward::kernel::{loop_beta, warren_beta};
+use crate::forward::{LoopOptions, VertexWeights};
 
-/// VertexWeights of Loop's interior vertex rule.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
-pub enum VertexWeights {
-    /// Loop's original weights, `β_n = (5/8 − (3/8 + cos(2π/n)/4)²) / n` (the choice of
-    /// OpenSubdiv, CGAL, OpenMesh and most libraries).
-    #[default]
-    Loop,
-    /// Warren's simplification, `β_3 = 3/16`, `β_n = 3/(8n)` for `n > 3` (libigl).
-    Warren,
-}
-
-impl VertexWeights {
-    /// The neighbour weight `β_n` of an interior vertex of valence `n`.
-    ///
-    /// ```
-    /// use subdiv_loop::reverse::VertexWeights;
-    /// assert_eq!(VertexWeights::Loop.beta(6), 1.0 / 16.0);
-    /// assert_eq!(VertexWeights::Warren.beta(6), 1.0 / 16.0);
-    /// assert_eq!(VertexWeights::Warren.beta(3), 3.0 / 16.0);
-    /// ```
-    pub fn beta(self, valence: usize) -> f64 {
-        let n = valence as f64;
-        match self {
-            VertexWeights::Loop => {
-                // cos(2π/6) is not exactly 1/2 in floating point; keep the regular case exact.
-                if valence == 6 {
-                    return 1.0 / 16.0;
-                }
-                let c = 3.0 / 8.0 + 0.25 * (2.0 * std::f64::consts::PI / n).cos();
-                (5.0 / 8.0 - c * c) / n
-            }
-            VertexWeights::Warren => {
-                if valence == 3 {
-                    3.0 / 16.0
-                } else {
-                    3.0 / (8.0 * n)
-                }
-            }
-        }
+/// `β_n` of the forward step's interior vertex rule (the very same numbers).
+fn beta(weights: VertexWeights, valence: usize) -> f64 {
+    match weights {
+        VertexWeights::Loop => loop_beta(valence),
+        VertexWeights::Warren => warren_beta(valence),
     }
-}
-
-/// The rules a mesh was (or will be) refined with; the reversal must use the same rules
-/// as the forward subdivision that made the mesh for the details to vanish.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
-pub struct LoopOptions {
-    /// Interior vertex weights.
-    pub weights: VertexWeights,
-    /// Keep boundary corners (boundary vertices of valence 2, i.e. with one face) fixed:
-    /// `p' = p` instead of the boundary vertex rule.
-    pub keep_corners: bool,
 }
 
 /// `(μ, η)` of the exact inverse of the interior vertex rule at valence `l`:
 /// `p = μ p' + η Σ e'_j`.
 ///
 /// ```
-/// use subdiv_loop::reverse::{VertexWeights, inverse_weights};
+/// use subdiv_loop::forward::VertexWeights;
+/// use subdiv_loop::reverse::inverse_weights;
 /// let (mu, eta) = inverse_weights(VertexWeights::Loop, 6);
 /// assert!((mu - 2.5).abs() < 1e-15 && (eta + 0.25).abs() < 1e-15);
 /// let (mu, eta) = inverse_weights(VertexWeights::Loop, 3);
 /// assert!((mu - 10.0).abs() < 1e-12 && (eta + 3.0).abs() < 1e-12);
 /// ```
 pub fn inverse_weights(weights: VertexWeights, valence: usize) -> (f64, f64) {
-    let beta = weights.beta(valence);
+    let beta = beta(weights, valence);
     let alpha = 1.0 - valence as f64 * beta;
     let denominator = 8.0 * alpha - 3.0;
     (5.0 / denominator, -8.0 * beta / denominator)
@@ -154,7 +112,8 @@ pub struct ReverseOptions {
 /// ```
 /// use glam::DVec3;
 /// use mesh_topo::{HalfedgeMesh, shapes};
-/// use subdiv_loop::reverse::{LoopOptions, ReverseOptions, reconstruct, reverse};
+/// use subdiv_loop::forward::LoopOptions;
+/// use subdiv_loop::reverse::{ReverseOptions, reconstruct, reverse};
 ///
 /// // Refine an octahedron with zero details (= one Loop step), then reverse it.
 /// let coarse = HalfedgeMesh::from_soup(&shapes::octahedron())?;
@@ -424,7 +383,7 @@ mod tests {
             (100, 0.765009, 1.602529, -0.006025),
         ];
         for (l, alpha, mu, eta) in table {
-            let beta = VertexWeights::Loop.beta(l);
+            let beta = super::beta(VertexWeights::Loop, l);
             assert!((1.0 - l as f64 * beta - alpha).abs() < 1e-6, "alpha at valence {l}");
             let (m, e) = inverse_weights(VertexWeights::Loop, l);
             assert!((m - mu).abs() < 1e-6, "mu at valence {l}: {m} vs {mu}");
@@ -446,7 +405,7 @@ mod tests {
                 // Forward rules on a random closed 1-ring, then the inverse.
                 let p = rng.vector();
                 let q: Vec<DVec3> = (0..l).map(|_| rng.vector()).collect();
-                let beta = weights.beta(l);
+                let beta = super::beta(weights, l);
                 let vertex_point = (1.0 - l as f64 * beta) * p + beta * q.iter().sum::<DVec3>();
                 let edge_sum: DVec3 =
                     (0..l).map(|j| 0.375 * (p + q[j]) + 0.125 * (q[(j + l - 1) % l] + q[(j + 1) % l])).sum();
@@ -501,6 +460,47 @@ mod tests {
                 assert!(error < TOLERANCE, "{name} {rules:?}: {error}");
             }
         }
+    }
+
+    /// The fast forward subdivision (`forward::subdivide`) numbers its output canonically:
+    /// reversing it gives the coarse mesh back, numbering included, with zero details,
+    /// and reconstruction with zero details equals it.
+    #[test]
+    fn reverse_of_the_fast_forward_is_exact() {
+        for (name, soup) in test_shapes() {
+            for rules in all_rules() {
+                let coarse = mesh(&soup);
+                let fine = crate::forward::subdivide(&coarse, 1, &rules).unwrap().to_soup();
+                let level = reverse(&mesh(&fine), &ReverseOptions { rules, seed_vertex: None })
+                    .unwrap_or_else(|e| panic!("{name} {rules:?}: {e}"));
+                assert!(level.order.is_none(), "{name}: the forward order is canonical");
+                assert!(relative_distance(&level.coarse.to_soup(), &soup) < TOLERANCE, "{name} {rules:?}");
+                let diagonal = crate::pyramid::bounding_box_diagonal(&soup.positions);
+                assert!(level.details.iter().all(|d| d.length() < TOLERANCE * diagonal), "{name} {rules:?}");
+                let zeros = vec![DVec3::ZERO; coarse.edge_count()];
+                let rebuilt = reconstruct(&coarse, &zeros, None, &rules).unwrap();
+                assert!(relative_distance(&rebuilt.to_soup(), &fine) < TOLERANCE, "{name} {rules:?}");
+            }
+        }
+        // Three levels at once, decomposed back to the base.
+        let rules = LoopOptions::default();
+        let base = mesh(&bipyramid(7));
+        let fine = mesh(&crate::forward::subdivide(&base, 3, &rules).unwrap().to_soup());
+        let options =
+            crate::pyramid::DecomposeOptions { rules, levels: crate::pyramid::Levels::Max, seed_vertex: None };
+        let pyramid = crate::pyramid::decompose(&fine, &options).unwrap();
+        assert_eq!(pyramid.level_count(), 3);
+        assert!(relative_distance(&pyramid.base, &base.to_soup()) < TOLERANCE);
+        assert!(pyramid.levels.iter().all(|l| l.order.is_none()));
+    }
+
+    #[test]
+    fn pillows_are_rejected_by_reverse_and_reconstruct() {
+        let pillow = mesh(&PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2], [0, 2, 1]]));
+        let zeros = vec![DVec3::ZERO; 3];
+        let rules = LoopOptions::default();
+        assert!(matches!(reconstruct(&pillow, &zeros, None, &rules), Err(LoopError::InteriorValenceTwo { .. })));
+        assert!(matches!(reverse(&pillow, &ReverseOptions::default()), Err(LoopError::InteriorValenceTwo { .. })));
     }
 
     #[test]
@@ -578,6 +578,24 @@ mod tests {
                 prop_assert!(d.length() < TOLERANCE * diagonal);
             }
             prop_assert!(level.order.is_none());
+        }
+
+        /// The same on the fast forward's output, two levels.
+        #[test]
+        fn decompose_inverts_the_fast_forward(soup in mesh_topo::testing::arb_triangle_mesh(), rule in 0usize..4) {
+            let rules = all_rules()[rule];
+            let fine = crate::forward::subdivide(&mesh(&soup), 2, &rules).unwrap().to_soup();
+            let options = crate::pyramid::DecomposeOptions {
+                rules,
+                levels: crate::pyramid::Levels::Count(2),
+                seed_vertex: None,
+            };
+            let pyramid = crate::pyramid::decompose(&mesh(&fine), &options).unwrap();
+            prop_assert!(relative_distance(&pyramid.base, &soup) < TOLERANCE);
+            let diagonal = crate::pyramid::bounding_box_diagonal(&soup.positions);
+            for d in pyramid.levels.iter().flat_map(|l| &l.details) {
+                prop_assert!(d.length() < TOLERANCE * diagonal);
+            }
         }
 
         /// Affine invariance: reversing A·M + t gives A·reverse(M) + t and the same
