@@ -15,6 +15,7 @@ use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 
 use crate::LoopError;
+use crate::forward::topology::{BASE_BITS, INVALID as TOPOLOGY_INVALID, Topology};
 
 /// "No element": a boundary twin, an isolated vertex's corner.
 pub(crate) const NONE: u32 = u32::MAX;
@@ -312,6 +313,48 @@ impl CornerTable {
         Self::from_parts(self.vertex_count, corner_vertex, twin)
     }
 
+    /// The same connectivity as the forward module's compact topology (half-edge
+    /// `4f + k` for corner `3f + k`, same edge numbering, same boundary starts).
+    pub(crate) fn to_topology(&self) -> Topology {
+        let faces = self.face_count();
+        let encode = |c: u32| if c == NONE { TOPOLOGY_INVALID } else { 4 * (c / 3) + c % 3 };
+        let mut triangles = Vec::with_capacity(faces);
+        let mut links = Vec::with_capacity(faces);
+        let mut edges_before = 0u32;
+        for f in 0..faces {
+            let c = 3 * f;
+            triangles.push([self.corner_vertex[c], self.corner_vertex[c + 1], self.corner_vertex[c + 2]]);
+            let mut mask = 0u32;
+            for k in 0..3 {
+                if self.edge_corner[self.corner_edge[c + k] as usize] == (c + k) as u32 {
+                    mask |= 1 << k;
+                }
+            }
+            links.push([
+                encode(self.twin[c]),
+                encode(self.twin[c + 1]),
+                encode(self.twin[c + 2]),
+                edges_before | (mask << BASE_BITS),
+            ]);
+            edges_before += mask.count_ones();
+        }
+        Topology {
+            triangles,
+            links,
+            vertex_halfedge: self.vertex_corner.iter().map(|&c| encode(c)).collect(),
+            vertex_count: self.vertex_count,
+            edge_count: self.edge_count(),
+        }
+    }
+
+    /// The table of a complete forward topology (links present).
+    pub(crate) fn from_topology(topology: &Topology) -> Self {
+        let decode = |h: u32| if h == TOPOLOGY_INVALID { NONE } else { 3 * (h >> 2) + (h & 3) };
+        let corner_vertex = topology.triangles.iter().flatten().copied().collect();
+        let twin = topology.links.iter().flat_map(|l| [decode(l[0]), decode(l[1]), decode(l[2])]).collect();
+        Self::from_parts(topology.vertex_count, corner_vertex, twin)
+    }
+
     /// The faces as a polygon soup with the given positions.
     pub(crate) fn to_soup(&self, positions: Vec<DVec3>) -> PolygonSoup {
         debug_assert_eq!(positions.len(), self.vertex_count);
@@ -409,6 +452,23 @@ mod tests {
             assert_eq!(fine.face_count(), 4 * table.face_count());
             assert_eq!(fine.edge_count(), 2 * table.edge_count() + 3 * table.face_count());
             check_against_mesh_topo(&fine.refine());
+        }
+    }
+
+    #[test]
+    fn topology_conversions_agree_with_the_forward_module() {
+        for soup in
+            [shapes::icosahedron(), shapes::grid(3, 2, CellKind::Triangles), shapes::torus(4, 3, CellKind::Triangles)]
+        {
+            let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+            let table = CornerTable::from_mesh(&mesh).unwrap();
+            let forward = Topology::from_mesh(&mesh).unwrap();
+            let converted = table.to_topology();
+            assert_eq!(converted.triangles, forward.triangles);
+            assert_eq!(converted.links, forward.links);
+            assert_eq!(converted.vertex_halfedge, forward.vertex_halfedge);
+            assert_eq!((converted.vertex_count, converted.edge_count), (forward.vertex_count, forward.edge_count));
+            assert_eq!(CornerTable::from_topology(&forward), table);
         }
     }
 

@@ -35,7 +35,7 @@ use crate::LoopError;
 use crate::corner_table::CornerTable;
 use crate::detect::{FineOrder, detect_table};
 use crate::forward::LoopOptions;
-use crate::reverse::{check_finite, check_level, refine_level, reverse_positions};
+use crate::reverse::{check_level, reconstruct_levels, reverse_positions};
 
 /// Magic number of a Loop pyramid file.
 pub const PYRAMID_MAGIC: [u8; 8] = *b"MRSLOOP\0";
@@ -232,17 +232,9 @@ impl LoopPyramid {
                 reason: format!("{level}: the pyramid has {} levels", self.levels.len()),
             });
         }
-        let mut table = CornerTable::from_soup(&self.base)?;
-        let mut positions = self.base.positions.clone();
-        for (i, step) in self.levels[..level].iter().enumerate() {
-            check_level(&table, &step.details, step.order.as_ref(), i + 1)?;
-            let (fine, fine_positions) =
-                refine_level(&table, &positions, &step.details, step.order.as_ref(), &self.rules);
-            check_finite(&fine_positions, i + 1)?;
-            table = fine;
-            positions = fine_positions;
-        }
-        Ok(table.to_soup(positions))
+        let base = HalfedgeMesh::from_soup(&self.base)?;
+        let steps = self.levels[..level].iter().map(|l| (&l.details[..], l.order.as_ref()));
+        reconstruct_levels(&base, steps, &self.rules)
     }
 
     /// A copy keeping only the largest `fraction` of the details (see the
@@ -443,6 +435,22 @@ mod tests {
             assert_eq!(pyramid.base.vertex_count(), coarse.vertex_count());
             assert_eq!(pyramid.base.face_count(), coarse.face_count());
         }
+    }
+
+    /// A renumbered middle level followed by canonical refinements: the reconstruction
+    /// switches between the renumbering path and the fast canonical path.
+    #[test]
+    fn renumbered_and_canonical_levels_mix() {
+        let rules = LoopOptions::default();
+        let middle = scramble(&perturb(&loop_steps(&open_fan(5), &rules, 1), 0.05, 1), 2);
+        let fine = perturb(&loop_steps(&middle, &rules, 2), 0.05, 3);
+        let pyramid = decompose(&mesh(&fine), &max_levels(rules)).unwrap();
+        assert_eq!(pyramid.level_count(), 3);
+        let orders: Vec<bool> = pyramid.levels.iter().map(|l| l.order.is_some()).collect();
+        assert_eq!(orders, [true, false, false]);
+        assert!(relative_distance(&pyramid.reconstruct(3).unwrap(), &fine) < 1e-12);
+        // Level 1 has the renumbered middle mesh's connectivity.
+        assert_eq!(pyramid.reconstruct(1).unwrap().indices, middle.indices);
     }
 
     #[test]

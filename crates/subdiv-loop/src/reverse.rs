@@ -48,12 +48,13 @@ use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use mesh_topo::HalfedgeMesh;
+use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::detect::{Coarsening, FineOrder, detect_table};
-use crate::forward::kernel::{loop_beta, warren_beta};
+use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
+use crate::forward::topology::{BASE_MASK, INVALID as TOPOLOGY_INVALID, MAX_FACES, NEXT, Topology, is_first};
 use crate::forward::{LoopOptions, VertexWeights};
 
 /// `β_n` of the forward step's interior vertex rule (the very same numbers).
@@ -159,11 +160,109 @@ pub fn reconstruct(
     order: Option<&FineOrder>,
     rules: &LoopOptions,
 ) -> Result<HalfedgeMesh, LoopError> {
-    let table = CornerTable::from_mesh(coarse)?;
-    check_level(&table, details, order, 1)?;
-    let (fine_table, fine_positions) = refine_level(&table, coarse.positions(), details, order, rules);
-    check_finite(&fine_positions, 1)?;
-    Ok(HalfedgeMesh::from_soup(&fine_table.to_soup(fine_positions)).expect("internal: a refined mesh is valid"))
+    let soup = reconstruct_levels(coarse, std::iter::once((details, order)), rules)?;
+    Ok(HalfedgeMesh::from_soup(&soup).expect("internal: a refined mesh is valid"))
+}
+
+/// Rebuilds the mesh after several refinement steps (each: details and order) from a
+/// coarse mesh.
+///
+/// A canonical step is one Loop step by the forward module's kernel (index-arithmetic
+/// refinement) plus the details: `D_e` added to edge point `e`, and to each vertex
+/// point the change the inverse relation implies, `8β/5 Σ_j D_{e_j}` inside (since
+/// `η/μ = −8β/5`), `(D_− + D_+)/4` on the boundary, nothing at a fixed corner. A step
+/// with an order goes through the corner table and is renumbered.
+pub(crate) fn reconstruct_levels<'a>(
+    coarse: &HalfedgeMesh,
+    levels: impl ExactSizeIterator<Item = (&'a [DVec3], Option<&'a FineOrder>)>,
+    rules: &LoopOptions,
+) -> Result<PolygonSoup, LoopError> {
+    crate::pyramid::check_input_positions(coarse.positions())?;
+    let mut topology = Topology::from_mesh(coarse)?;
+    let mut positions = coarse.positions().to_vec();
+    let kernel_rules = Rules::new(rules);
+    let count = levels.len();
+    for (i, (details, order)) in levels.enumerate() {
+        let level = i + 1;
+        check_details(topology.vertex_count, topology.edge_count, topology.face_count(), details, order, level)?;
+        if topology.face_count() as u64 > MAX_FACES || topology.edge_count > BASE_MASK as usize {
+            return Err(LoopError::Mesh(MeshError::TooLarge {
+                what: "faces",
+                count: topology.face_count(),
+                max: MAX_FACES as usize,
+            }));
+        }
+        match order {
+            None => {
+                let corrections = vertex_corrections(&topology, details, rules);
+                let step = kernel::step(&topology, &positions, &kernel_rules, level < count);
+                let nv = topology.vertex_count;
+                let mut fine = step.values;
+                let (vertex_points, edge_points) = fine.split_at_mut(nv);
+                vertex_points.par_iter_mut().zip(corrections.par_iter()).for_each(|(p, c)| *p += *c);
+                edge_points.par_iter_mut().zip(details.par_iter()).for_each(|(p, d)| *p += *d);
+                positions = fine;
+                topology = step.topology;
+            }
+            Some(order) => {
+                let table = CornerTable::from_topology(&topology);
+                let (fine_table, fine_positions) = refine_level(&table, &positions, details, Some(order), rules);
+                topology = fine_table.to_topology();
+                positions = fine_positions;
+            }
+        }
+    }
+    check_finite(&positions, count)?;
+    let faces = topology.triangles.len() as u32;
+    Ok(PolygonSoup {
+        positions,
+        offsets: (0..=faces).map(|f| 3 * f).collect(),
+        indices: topology.triangles.into_iter().flatten().collect(),
+    })
+}
+
+/// What the details add to each vertex point (see [`reconstruct_levels`]), by one
+/// pass over the edges of the coarse topology.
+fn vertex_corrections(topology: &Topology, details: &[DVec3], rules: &LoopOptions) -> Vec<DVec3> {
+    const BOUNDARY: u32 = 1 << 31;
+    let nv = topology.vertex_count;
+    let mut all = vec![DVec3::ZERO; nv];
+    let mut boundary = vec![DVec3::ZERO; nv];
+    let mut valence = vec![0u32; nv];
+    let mut e = 0usize;
+    for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
+        for k in 0..3 {
+            let twin = link[k];
+            if !is_first((4 * f + k) as u32, twin) {
+                continue;
+            }
+            let d = details[e];
+            e += 1;
+            for v in [corners[k], corners[NEXT[k]]] {
+                let v = v as usize;
+                all[v] += d;
+                valence[v] += 1;
+                if twin == TOPOLOGY_INVALID {
+                    boundary[v] += d;
+                    valence[v] |= BOUNDARY;
+                }
+            }
+        }
+    }
+    debug_assert_eq!(e, details.len());
+    (0..nv)
+        .into_par_iter()
+        .map(|v| {
+            let n = (valence[v] & !BOUNDARY) as usize;
+            if valence[v] & BOUNDARY != 0 {
+                if rules.keep_corners && n == 2 { DVec3::ZERO } else { 0.25 * boundary[v] }
+            } else if n == 0 {
+                DVec3::ZERO
+            } else {
+                (1.6 * beta(rules.weights, n)) * all[v]
+            }
+        })
+        .collect()
 }
 
 /// Checks that `details` and `order` fit the coarse table (level numbers errors).
@@ -173,19 +272,29 @@ pub(crate) fn check_level(
     order: Option<&FineOrder>,
     level: usize,
 ) -> Result<(), LoopError> {
-    if details.len() != table.edge_count() {
+    check_details(table.vertex_count(), table.edge_count(), table.face_count(), details, order, level)
+}
+
+/// Checks details and order against the counts of the coarse mesh.
+fn check_details(
+    vertices: usize,
+    edges: usize,
+    faces: usize,
+    details: &[DVec3],
+    order: Option<&FineOrder>,
+    level: usize,
+) -> Result<(), LoopError> {
+    if details.len() != edges {
         return Err(LoopError::InvalidDetails {
             level,
-            reason: format!("{} details for a mesh with {} edges", details.len(), table.edge_count()),
+            reason: format!("{} details for a mesh with {edges} edges", details.len()),
         });
     }
     if let Some(i) = details.iter().position(|d| !d.is_finite()) {
         return Err(LoopError::InvalidDetails { level, reason: format!("detail {i} is not finite") });
     }
     if let Some(order) = order {
-        order
-            .check(table.vertex_count() + table.edge_count(), 4 * table.face_count())
-            .map_err(|reason| LoopError::InvalidDetails { level, reason })?;
+        order.check(vertices + edges, 4 * faces).map_err(|reason| LoopError::InvalidDetails { level, reason })?;
     }
     Ok(())
 }
