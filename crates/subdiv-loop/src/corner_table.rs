@@ -135,8 +135,26 @@ impl CornerTable {
                 });
             }
         }
-        let table = Self::from_parts(mesh.vertex_count(), corner_vertex, twin);
-        debug_assert_eq!(table.edge_count(), mesh.edge_count(), "internal: edge numbering differs from mesh-topo");
+        // The mesh numbers edges the same way (half-edges 2e, 2e + 1; 2e has a face).
+        let corner_edge = halfedge_of_corner.iter().map(|&h| h >> 1).collect();
+        let edge_corner = (0..mesh.edge_count()).map(|e| corner_of_halfedge[2 * e]).collect();
+        let vertex_corner = mesh
+            .vertices()
+            .map(|v| match mesh.vertex_halfedge(v) {
+                None => NONE,
+                // A boundary vertex starts at the face half-edge along the boundary: the
+                // twin of the boundary half-edge that arrives at it.
+                Some(h) if mesh.is_boundary_halfedge(h) => corner_of_halfedge[mesh.prev(h).twin().index()],
+                Some(h) => corner_of_halfedge[h.index()],
+            })
+            .collect();
+        let table =
+            Self { vertex_count: mesh.vertex_count(), corner_vertex, twin, corner_edge, edge_corner, vertex_corner };
+        debug_assert_eq!(
+            table,
+            Self::from_parts(table.vertex_count, table.corner_vertex.clone(), table.twin.clone()),
+            "internal: corner table differs from its construction from parts"
+        );
         Ok(table)
     }
 

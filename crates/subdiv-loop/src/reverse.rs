@@ -318,32 +318,6 @@ fn edge_point_star(coarse: &CornerTable, v: u32, edge_position: impl Fn(u32) -> 
     (star, sum)
 }
 
-/// Coarse position of a vertex from its vertex point `p'` and the edge points of its star.
-#[inline]
-fn inverse_vertex_rule(
-    star: VertexStar,
-    vertex_point: DVec3,
-    edge_sum: DVec3,
-    boundary: impl Fn([u32; 2]) -> [DVec3; 2],
-    rules: &LoopOptions,
-) -> DVec3 {
-    match star {
-        VertexStar::Isolated => vertex_point,
-        VertexStar::Interior { valence } => {
-            let (mu, eta) = inverse_weights(rules.weights, valence);
-            mu * vertex_point + eta * edge_sum
-        }
-        VertexStar::Boundary { valence, boundary_edges } => {
-            if rules.keep_corners && valence == 2 {
-                vertex_point
-            } else {
-                let [before, after] = boundary(boundary_edges);
-                2.0 * vertex_point - 0.5 * (before + after)
-            }
-        }
-    }
-}
-
 /// Loop's edge rule on the coarse positions.
 #[inline]
 fn edge_rule(coarse: &CornerTable, positions: &[DVec3], e: u32) -> DVec3 {
@@ -376,15 +350,69 @@ pub(crate) fn reverse_positions(
     fine: &[DVec3],
     rules: &LoopOptions,
 ) -> (Vec<DVec3>, Vec<DVec3>) {
+    const BOUNDARY: u32 = 1 << 31;
     let coarse = &coarsening.coarse;
+    let nv = coarse.vertex_count();
     let edge_position = |e: u32| fine[coarsening.edge_point[e as usize] as usize];
-    let positions = map_indices(coarse.vertex_count(), |v| {
-        let (star, sum) = edge_point_star(coarse, v, edge_position);
+    // The edge points around every coarse vertex, summed in one pass over the edges
+    // (all of them, and the boundary ones apart), with the valence and boundary flag.
+    let mut sum = vec![DVec3::ZERO; nv];
+    let mut boundary_sum = vec![DVec3::ZERO; nv];
+    let mut valence = vec![0u32; nv];
+    for e in 0..coarse.edge_count() as u32 {
+        let c = coarse.edge_corner(e);
+        let on_boundary = coarse.twin(c) == NONE;
+        let point = edge_position(e);
+        for v in [coarse.vertex(c), coarse.vertex(next(c))] {
+            let v = v as usize;
+            sum[v] += point;
+            valence[v] += 1;
+            if on_boundary {
+                boundary_sum[v] += point;
+                valence[v] |= BOUNDARY;
+            }
+        }
+    }
+    let weights = InverseWeights::new(rules.weights);
+    let positions = map_indices(nv, |v| {
         let vertex_point = fine[coarsening.vertex_point[v as usize] as usize];
-        inverse_vertex_rule(star, vertex_point, sum, |[a, b]| [edge_position(a), edge_position(b)], rules)
+        let (n, flags) = (valence[v as usize] & !BOUNDARY, valence[v as usize] & BOUNDARY);
+        if flags != 0 {
+            if rules.keep_corners && n == 2 {
+                vertex_point
+            } else {
+                2.0 * vertex_point - 0.5 * boundary_sum[v as usize]
+            }
+        } else if n == 0 {
+            vertex_point
+        } else {
+            let (mu, eta) = weights.get(n as usize);
+            mu * vertex_point + eta * sum[v as usize]
+        }
     });
     let details = map_indices(coarse.edge_count(), |e| edge_position(e) - edge_rule(coarse, &positions, e));
     (positions, details)
+}
+
+/// [`inverse_weights`] tabulated for the usual valences (no cosine per vertex).
+struct InverseWeights {
+    weights: VertexWeights,
+    table: [(f64, f64); 32],
+}
+
+impl InverseWeights {
+    fn new(weights: VertexWeights) -> Self {
+        let mut table = [(1.0, 0.0); 32];
+        for (n, entry) in table.iter_mut().enumerate().skip(1) {
+            *entry = inverse_weights(weights, n);
+        }
+        Self { weights, table }
+    }
+
+    #[inline]
+    fn get(&self, valence: usize) -> (f64, f64) {
+        if valence < self.table.len() { self.table[valence] } else { inverse_weights(self.weights, valence) }
+    }
 }
 
 /// One reconstruction step on corner tables: the fine table (in the given order) and
