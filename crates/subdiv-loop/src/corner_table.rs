@@ -13,6 +13,7 @@
 
 use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
+use rayon::prelude::*;
 
 use crate::LoopError;
 use crate::forward::topology::{BASE_BITS, INVALID as TOPOLOGY_INVALID, Topology};
@@ -104,48 +105,67 @@ impl CornerTable {
     pub(crate) fn from_mesh(mesh: &HalfedgeMesh) -> Result<Self, LoopError> {
         let next_halfedge = mesh.raw_halfedge_next();
         let targets = mesh.raw_halfedge_targets();
+        let halfedge_faces = mesh.raw_halfedge_faces();
         let faces = mesh.face_count();
-        let mut corner_of_halfedge = vec![NONE; mesh.halfedge_count()];
-        let mut corner_vertex = vec![0u32; 3 * faces];
-        let mut halfedge_of_corner = vec![0u32; 3 * faces];
-        for f in mesh.faces() {
-            let h0 = mesh.face_halfedge(f).raw();
+        let face_halfedges = |f: u32| {
+            let h0 = mesh.face_halfedge(mesh.face(f as usize).expect("internal: face in range")).raw();
             let h1 = next_halfedge[h0 as usize];
-            let h2 = next_halfedge[h1 as usize];
-            if next_halfedge[h2 as usize] != h0 {
-                return Err(LoopError::NotTriangle { face: f.index(), corners: mesh.face_degree(f) });
-            }
-            let c = 3 * f.raw();
-            // Corner k holds the origin of half-edge k, i.e. the target of half-edge k - 1.
-            for (k, (h, before)) in [(h0, h2), (h1, h0), (h2, h1)].into_iter().enumerate() {
-                corner_of_halfedge[h as usize] = c + k as u32;
-                corner_vertex[(c as usize) + k] = targets[before as usize];
-                halfedge_of_corner[(c as usize) + k] = h;
-            }
+            [h0, h1, next_halfedge[h1 as usize]]
+        };
+        if let Some(f) = (0..faces as u32).into_par_iter().find_first(|&f| {
+            let [h0, _, h2] = face_halfedges(f);
+            next_halfedge[h2 as usize] != h0
+        }) {
+            let face = mesh.face(f as usize).expect("internal: face in range");
+            return Err(LoopError::NotTriangle { face: f as usize, corners: mesh.face_degree(face) });
         }
-        let twin: Vec<u32> = halfedge_of_corner.iter().map(|&h| corner_of_halfedge[(h ^ 1) as usize]).collect();
-        for (face, t) in twin.chunks_exact(3).enumerate() {
+        // Everything per face by gathers only, so faces are independent (parallel).
+        let mut corner_vertex = vec![0u32; 3 * faces];
+        let mut twin = vec![0u32; 3 * faces];
+        let mut corner_edge = vec![0u32; 3 * faces];
+        corner_vertex
+            .par_chunks_mut(3)
+            .zip(twin.par_chunks_mut(3))
+            .zip(corner_edge.par_chunks_mut(3))
+            .enumerate()
+            .for_each(|(f, ((vertices, twins), edges))| {
+                let h = face_halfedges(f as u32);
+                for k in 0..3 {
+                    // Corner k holds the origin of half-edge k: the target of half-edge k - 1.
+                    vertices[k] = targets[h[(k + 2) % 3] as usize];
+                    edges[k] = h[k] >> 1;
+                    let opposite = h[k] ^ 1;
+                    let g = halfedge_faces[opposite as usize];
+                    twins[k] = if g == NONE {
+                        NONE
+                    } else {
+                        let hg = face_halfedges(g);
+                        3 * g + hg.iter().position(|&x| x == opposite).expect("internal: twin in its face") as u32
+                    };
+                }
+            });
+        let corner_of = |h: u32| {
+            let g = halfedge_faces[h as usize];
+            3 * g + face_halfedges(g).iter().position(|&x| x == h).expect("internal: half-edge in its face") as u32
+        };
+        if let Some(face) = twin.par_chunks(3).position_first(|t| {
             let other = |k: usize| if t[k] == NONE { NONE - k as u32 } else { t[k] / 3 };
-            if other(0) == other(1) || other(1) == other(2) || other(2) == other(0) {
-                // Two triangles sharing two edges share all three (a closed "pillow"):
-                // Loop refinement would glue their children non-manifoldly.
-                return Err(LoopError::InteriorValenceTwo {
-                    vertex: corner_vertex_of(&halfedge_of_corner, targets, face),
-                    face,
-                });
-            }
+            other(0) == other(1) || other(1) == other(2) || other(2) == other(0)
+        }) {
+            // Two triangles sharing two edges share all three (a closed "pillow"):
+            // Loop refinement would glue their children non-manifoldly.
+            return Err(LoopError::InteriorValenceTwo { vertex: corner_vertex[3 * face], face });
         }
         // The mesh numbers edges the same way (half-edges 2e, 2e + 1; 2e has a face).
-        let corner_edge = halfedge_of_corner.iter().map(|&h| h >> 1).collect();
-        let edge_corner = (0..mesh.edge_count()).map(|e| corner_of_halfedge[2 * e]).collect();
-        let vertex_corner = mesh
-            .vertices()
-            .map(|v| match mesh.vertex_halfedge(v) {
+        let edge_corner = (0..mesh.edge_count() as u32).into_par_iter().map(|e| corner_of(2 * e)).collect();
+        let vertex_corner = (0..mesh.vertex_count())
+            .into_par_iter()
+            .map(|v| match mesh.vertex_halfedge(mesh.vertex(v).expect("internal: vertex in range")) {
                 None => NONE,
                 // A boundary vertex starts at the face half-edge along the boundary: the
                 // twin of the boundary half-edge that arrives at it.
-                Some(h) if mesh.is_boundary_halfedge(h) => corner_of_halfedge[mesh.prev(h).twin().index()],
-                Some(h) => corner_of_halfedge[h.index()],
+                Some(h) if mesh.is_boundary_halfedge(h) => corner_of(mesh.prev(h).twin().raw()),
+                Some(h) => corner_of(h.raw()),
             })
             .collect();
         let table =
@@ -383,11 +403,6 @@ impl CornerTable {
             indices: self.corner_vertex.clone(),
         }
     }
-}
-
-/// The first corner's vertex of `face` (for error messages).
-fn corner_vertex_of(halfedge_of_corner: &[u32], targets: &[u32], face: usize) -> u32 {
-    targets[(halfedge_of_corner[3 * face] ^ 1) as usize]
 }
 
 /// Counter-clockwise iterator over the corners of a vertex (see

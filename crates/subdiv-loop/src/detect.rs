@@ -46,6 +46,7 @@
 
 use std::fmt;
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use mesh_topo::HalfedgeMesh;
@@ -294,55 +295,62 @@ fn detect_canonical(fine: &CornerTable, seed_vertex: Option<u32>) -> Option<Coar
     }
     let groups = faces / 4;
     let inner = |g: usize| 3 * (4 * g as u32 + 3);
-    let first_odd = (0..groups).flat_map(|g| (0..3).map(move |k| inner(g) + k)).map(|c| fine.vertex(c)).min()?;
+    let first_odd = (0..groups)
+        .into_par_iter()
+        .map(|g| fine.vertex(inner(g)).min(fine.vertex(inner(g) + 1)).min(fine.vertex(inner(g) + 2)))
+        .min()?;
     if seed_vertex.is_some_and(|s| s >= first_odd) {
         return None;
     }
-    let mut corner_vertex = Vec::with_capacity(3 * groups);
-    let mut twin = Vec::with_capacity(3 * groups);
-    for g in 0..groups {
+    // Per group (in parallel): the coarse corners and their twins, or a mismatch.
+    let mut corner_vertex = vec![0u32; 3 * groups];
+    let mut twin = vec![0u32; 3 * groups];
+    let canonical = corner_vertex.par_chunks_mut(3).zip(twin.par_chunks_mut(3)).enumerate().all(|(g, (xs, ts))| {
         let m = [fine.vertex(inner(g)), fine.vertex(inner(g) + 1), fine.vertex(inner(g) + 2)];
         for k in 0..3 {
             let child = 3 * (4 * g as u32 + k as u32);
             let x = fine.vertex(child);
             if x >= first_odd || fine.vertex(child + 1) != m[k] || fine.vertex(child + 2) != m[(k + 2) % 3] {
-                return None;
+                return false;
             }
-            corner_vertex.push(x);
-            // x_k -> m_k is twinned with m -> x_k, corner 2 of child j of another group:
-            // the second half of that group's coarse half-edge j - 1.
+            xs[k] = x;
+            // x_k -> m_k is twinned with m -> x_k, corner 2 of child j of another
+            // group: the second half of that group's coarse half-edge j - 1.
             let t = fine.twin(child);
-            twin.push(if t == NONE {
+            ts[k] = if t == NONE {
                 NONE
             } else {
                 let (face, corner) = (t / 3, t % 3);
                 if face % 4 == 3 || corner != 2 {
-                    return None;
+                    return false;
                 }
                 3 * (face / 4) + (face % 4 + 2) % 3
-            });
+            };
         }
+        true
+    });
+    if !canonical {
+        return None;
     }
-    for (c, &t) in twin.iter().enumerate() {
+    let consistent = twin.par_iter().enumerate().all(|(c, &t)| {
         let c = c as u32;
-        if t != NONE
-            && (twin[t as usize] != c
-                || corner_vertex[t as usize] != corner_vertex[next(c) as usize]
-                || corner_vertex[next(t) as usize] != corner_vertex[c as usize])
-        {
-            return None;
-        }
+        t == NONE
+            || (twin[t as usize] == c
+                && corner_vertex[t as usize] == corner_vertex[next(c) as usize]
+                && corner_vertex[next(t) as usize] == corner_vertex[c as usize])
+    });
+    if !consistent {
+        return None;
     }
     let coarse = CornerTable::from_parts(first_odd as usize, corner_vertex, twin);
     if first_odd as usize + coarse.edge_count() != fine.vertex_count() {
         return None;
     }
-    for g in 0..groups as u32 {
-        for k in 0..3 {
-            if fine.vertex(inner(g as usize) + k) != first_odd + coarse.corner_edge(3 * g + k) {
-                return None;
-            }
-        }
+    let numbered = (0..3 * groups as u32)
+        .into_par_iter()
+        .all(|c| fine.vertex(inner(c as usize / 3) + c % 3) == first_odd + coarse.corner_edge(c));
+    if !numbered {
+        return None;
     }
     let nv = fine.vertex_count() as u32;
     Some(Coarsening {
