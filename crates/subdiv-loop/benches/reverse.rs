@@ -2,15 +2,17 @@
 //! bunny (`tests/data/bunny.obj`, slightly perturbed with a fixed seed) refined 1 to 4
 //! times. Each size `L` is timed for `decompose` down to the bunny (`L` levels), the
 //! full `reconstruct` back up, and Loop subdivision of the bunny to the same level
-//! (`forward`), so the ratios can be read off directly. Throughput is in fine vertices.
+//! (`forward_mesh` from a built mesh, like `decompose`; `forward_soup` from a soup it
+//! validates first, like `reconstruct`), so the ratios can be read off directly.
+//! Throughput is in fine vertices.
 
 use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
+use subdiv_loop::forward::{LoopOptions, subdivide, subdivide_soup};
 use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, decompose};
-use subdiv_loop::reverse::LoopOptions;
 
 /// Minimal OBJ reader for the benchmark fixture (`v` and triangular `f` lines only).
 fn read_obj(text: &str) -> PolygonSoup {
@@ -80,14 +82,23 @@ fn benches(c: &mut Criterion) {
     }
     group.finish();
 
-    // Loop subdivision of the bunny to the same level (here: reconstruction with zero
-    // details, the same code path as `reconstruct`).
-    let mut group = c.benchmark_group("forward");
+    // Loop subdivision of the bunny to the same level, by the forward module: from a
+    // built half-edge mesh (what `decompose` starts from) and from a soup, validated
+    // first (what `reconstruct` starts from: the base mesh of a pyramid).
+    let mut group = c.benchmark_group("forward_mesh");
+    let bunny_mesh = HalfedgeMesh::from_soup(&base).expect("valid");
     for (level, fine) in &fixtures {
-        let zero = LoopPyramid::smooth(base.clone(), rules, *level).expect("valid");
         group.throughput(Throughput::Elements(fine.vertex_count() as u64));
-        group.bench_with_input(BenchmarkId::from_parameter(level), &zero, |b, zero| {
-            b.iter(|| black_box(zero).reconstruct(*level).expect("valid"))
+        group.bench_with_input(BenchmarkId::from_parameter(level), &bunny_mesh, |b, bunny| {
+            b.iter(|| subdivide(black_box(bunny), *level as u32, &rules).expect("valid"))
+        });
+    }
+    group.finish();
+    let mut group = c.benchmark_group("forward_soup");
+    for (level, fine) in &fixtures {
+        group.throughput(Throughput::Elements(fine.vertex_count() as u64));
+        group.bench_with_input(BenchmarkId::from_parameter(level), &base, |b, bunny| {
+            b.iter(|| subdivide_soup(black_box(bunny), *level as u32, &rules).expect("valid"))
         });
     }
     group.finish();

@@ -13,8 +13,10 @@
 
 use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
+use rayon::prelude::*;
 
 use crate::LoopError;
+use crate::forward::topology::{BASE_BITS, INVALID as TOPOLOGY_INVALID, Topology};
 
 /// "No element": a boundary twin, an isolated vertex's corner.
 pub(crate) const NONE: u32 = u32::MAX;
@@ -98,32 +100,81 @@ impl CornerTable {
     /// The table of a validated half-edge mesh.
     ///
     /// # Errors
-    /// [`LoopError::NotTriangle`] naming the first face that is not a triangle.
+    /// [`LoopError::NotTriangle`] naming the first face that is not a triangle,
+    /// [`LoopError::InteriorValenceTwo`] for two triangles glued along all their edges.
     pub(crate) fn from_mesh(mesh: &HalfedgeMesh) -> Result<Self, LoopError> {
         let next_halfedge = mesh.raw_halfedge_next();
         let targets = mesh.raw_halfedge_targets();
+        let halfedge_faces = mesh.raw_halfedge_faces();
         let faces = mesh.face_count();
-        let mut corner_of_halfedge = vec![NONE; mesh.halfedge_count()];
-        let mut corner_vertex = vec![0u32; 3 * faces];
-        let mut halfedge_of_corner = vec![0u32; 3 * faces];
-        for f in mesh.faces() {
-            let h0 = mesh.face_halfedge(f).raw();
+        let face_halfedges = |f: u32| {
+            let h0 = mesh.face_halfedge(mesh.face(f as usize).expect("internal: face in range")).raw();
             let h1 = next_halfedge[h0 as usize];
-            let h2 = next_halfedge[h1 as usize];
-            if next_halfedge[h2 as usize] != h0 {
-                return Err(LoopError::NotTriangle { face: f.index(), corners: mesh.face_degree(f) });
-            }
-            let c = 3 * f.raw();
-            // Corner k holds the origin of half-edge k, i.e. the target of half-edge k - 1.
-            for (k, (h, before)) in [(h0, h2), (h1, h0), (h2, h1)].into_iter().enumerate() {
-                corner_of_halfedge[h as usize] = c + k as u32;
-                corner_vertex[(c as usize) + k] = targets[before as usize];
-                halfedge_of_corner[(c as usize) + k] = h;
-            }
+            [h0, h1, next_halfedge[h1 as usize]]
+        };
+        if let Some(f) = (0..faces as u32).into_par_iter().find_first(|&f| {
+            let [h0, _, h2] = face_halfedges(f);
+            next_halfedge[h2 as usize] != h0
+        }) {
+            let face = mesh.face(f as usize).expect("internal: face in range");
+            return Err(LoopError::NotTriangle { face: f as usize, corners: mesh.face_degree(face) });
         }
-        let twin = halfedge_of_corner.iter().map(|&h| corner_of_halfedge[(h ^ 1) as usize]).collect();
-        let table = Self::from_parts(mesh.vertex_count(), corner_vertex, twin);
-        debug_assert_eq!(table.edge_count(), mesh.edge_count(), "internal: edge numbering differs from mesh-topo");
+        // Everything per face by gathers only, so faces are independent (parallel).
+        let mut corner_vertex = vec![0u32; 3 * faces];
+        let mut twin = vec![0u32; 3 * faces];
+        let mut corner_edge = vec![0u32; 3 * faces];
+        corner_vertex
+            .par_chunks_mut(3)
+            .zip(twin.par_chunks_mut(3))
+            .zip(corner_edge.par_chunks_mut(3))
+            .enumerate()
+            .for_each(|(f, ((vertices, twins), edges))| {
+                let h = face_halfedges(f as u32);
+                for k in 0..3 {
+                    // Corner k holds the origin of half-edge k: the target of half-edge k - 1.
+                    vertices[k] = targets[h[(k + 2) % 3] as usize];
+                    edges[k] = h[k] >> 1;
+                    let opposite = h[k] ^ 1;
+                    let g = halfedge_faces[opposite as usize];
+                    twins[k] = if g == NONE {
+                        NONE
+                    } else {
+                        let hg = face_halfedges(g);
+                        3 * g + hg.iter().position(|&x| x == opposite).expect("internal: twin in its face") as u32
+                    };
+                }
+            });
+        let corner_of = |h: u32| {
+            let g = halfedge_faces[h as usize];
+            3 * g + face_halfedges(g).iter().position(|&x| x == h).expect("internal: half-edge in its face") as u32
+        };
+        if let Some(face) = twin.par_chunks(3).position_first(|t| {
+            let other = |k: usize| if t[k] == NONE { NONE - k as u32 } else { t[k] / 3 };
+            other(0) == other(1) || other(1) == other(2) || other(2) == other(0)
+        }) {
+            // Two triangles sharing two edges share all three (a closed "pillow"):
+            // Loop refinement would glue their children non-manifoldly.
+            return Err(LoopError::InteriorValenceTwo { vertex: corner_vertex[3 * face], face });
+        }
+        // The mesh numbers edges the same way (half-edges 2e, 2e + 1; 2e has a face).
+        let edge_corner = (0..mesh.edge_count() as u32).into_par_iter().map(|e| corner_of(2 * e)).collect();
+        let vertex_corner = (0..mesh.vertex_count())
+            .into_par_iter()
+            .map(|v| match mesh.vertex_halfedge(mesh.vertex(v).expect("internal: vertex in range")) {
+                None => NONE,
+                // A boundary vertex starts at the face half-edge along the boundary: the
+                // twin of the boundary half-edge that arrives at it.
+                Some(h) if mesh.is_boundary_halfedge(h) => corner_of(mesh.prev(h).twin().raw()),
+                Some(h) => corner_of(h.raw()),
+            })
+            .collect();
+        let table =
+            Self { vertex_count: mesh.vertex_count(), corner_vertex, twin, corner_edge, edge_corner, vertex_corner };
+        debug_assert_eq!(
+            table,
+            Self::from_parts(table.vertex_count, table.corner_vertex.clone(), table.twin.clone()),
+            "internal: corner table differs from its construction from parts"
+        );
         Ok(table)
     }
 
@@ -300,6 +351,48 @@ impl CornerTable {
         Self::from_parts(self.vertex_count, corner_vertex, twin)
     }
 
+    /// The same connectivity as the forward module's compact topology (half-edge
+    /// `4f + k` for corner `3f + k`, same edge numbering, same boundary starts).
+    pub(crate) fn to_topology(&self) -> Topology {
+        let faces = self.face_count();
+        let encode = |c: u32| if c == NONE { TOPOLOGY_INVALID } else { 4 * (c / 3) + c % 3 };
+        let mut triangles = Vec::with_capacity(faces);
+        let mut links = Vec::with_capacity(faces);
+        let mut edges_before = 0u32;
+        for f in 0..faces {
+            let c = 3 * f;
+            triangles.push([self.corner_vertex[c], self.corner_vertex[c + 1], self.corner_vertex[c + 2]]);
+            let mut mask = 0u32;
+            for k in 0..3 {
+                if self.edge_corner[self.corner_edge[c + k] as usize] == (c + k) as u32 {
+                    mask |= 1 << k;
+                }
+            }
+            links.push([
+                encode(self.twin[c]),
+                encode(self.twin[c + 1]),
+                encode(self.twin[c + 2]),
+                edges_before | (mask << BASE_BITS),
+            ]);
+            edges_before += mask.count_ones();
+        }
+        Topology {
+            triangles,
+            links,
+            vertex_halfedge: self.vertex_corner.iter().map(|&c| encode(c)).collect(),
+            vertex_count: self.vertex_count,
+            edge_count: self.edge_count(),
+        }
+    }
+
+    /// The table of a complete forward topology (links present).
+    pub(crate) fn from_topology(topology: &Topology) -> Self {
+        let decode = |h: u32| if h == TOPOLOGY_INVALID { NONE } else { 3 * (h >> 2) + (h & 3) };
+        let corner_vertex = topology.triangles.iter().flatten().copied().collect();
+        let twin = topology.links.iter().flat_map(|l| [decode(l[0]), decode(l[1]), decode(l[2])]).collect();
+        Self::from_parts(topology.vertex_count, corner_vertex, twin)
+    }
+
     /// The faces as a polygon soup with the given positions.
     pub(crate) fn to_soup(&self, positions: Vec<DVec3>) -> PolygonSoup {
         debug_assert_eq!(positions.len(), self.vertex_count);
@@ -393,6 +486,29 @@ mod tests {
             assert_eq!(fine.edge_count(), 2 * table.edge_count() + 3 * table.face_count());
             check_against_mesh_topo(&fine.refine());
         }
+    }
+
+    #[test]
+    fn topology_conversions_agree_with_the_forward_module() {
+        for soup in
+            [shapes::icosahedron(), shapes::grid(3, 2, CellKind::Triangles), shapes::torus(4, 3, CellKind::Triangles)]
+        {
+            let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+            let table = CornerTable::from_mesh(&mesh).unwrap();
+            let forward = Topology::from_mesh(&mesh).unwrap();
+            let converted = table.to_topology();
+            assert_eq!(converted.triangles, forward.triangles);
+            assert_eq!(converted.links, forward.links);
+            assert_eq!(converted.vertex_halfedge, forward.vertex_halfedge);
+            assert_eq!((converted.vertex_count, converted.edge_count), (forward.vertex_count, forward.edge_count));
+            assert_eq!(CornerTable::from_topology(&forward), table);
+        }
+    }
+
+    #[test]
+    fn pillows_are_rejected() {
+        let pillow = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2], [0, 2, 1]]);
+        assert!(matches!(CornerTable::from_soup(&pillow), Err(LoopError::InteriorValenceTwo { face: 0, .. })));
     }
 
     #[test]

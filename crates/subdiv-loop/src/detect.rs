@@ -46,6 +46,7 @@
 
 use std::fmt;
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use mesh_topo::HalfedgeMesh;
@@ -272,6 +273,97 @@ pub(crate) fn detect_table(fine: &CornerTable, seed_vertex: Option<u32>) -> Resu
         // Only isolated vertices: "reversing" would change nothing, forever.
         return Err(LoopError::NoFaces);
     }
+    if let Some(coarsening) = detect_canonical(fine, seed_vertex) {
+        return Ok(coarsening);
+    }
+    detect_general(fine, seed_vertex)
+}
+
+/// The fast path: a fine mesh in the canonical order (as made by Loop subdivision or
+/// by reconstruction). Faces `4g .. 4g + 4` must be `(x_k, m_k, m_{k-1})` and
+/// `(m_0, m_1, m_2)` with every `x < V` and `m_k = V + e_k`, where `V` is the smallest
+/// inner-face vertex and `e_k` the edge of `x_k x_{k+1}` in the coarse mesh `(x_0, x_1,
+/// x_2)`, and the vertex count must be `V + E`: then the fine faces are exactly the
+/// canonical refinement of the coarse mesh, which is what [`detect_general`] finds on
+/// such a mesh (each component's lowest vertex is a vertex point, so no other labeling
+/// is preferred). Returns `None` as soon as anything differs; linear, one pass over the
+/// faces, no propagation.
+fn detect_canonical(fine: &CornerTable, seed_vertex: Option<u32>) -> Option<Coarsening> {
+    let faces = fine.face_count();
+    if !faces.is_multiple_of(4) {
+        return None;
+    }
+    let groups = faces / 4;
+    let inner = |g: usize| 3 * (4 * g as u32 + 3);
+    let first_odd = (0..groups)
+        .into_par_iter()
+        .map(|g| fine.vertex(inner(g)).min(fine.vertex(inner(g) + 1)).min(fine.vertex(inner(g) + 2)))
+        .min()?;
+    if seed_vertex.is_some_and(|s| s >= first_odd) {
+        return None;
+    }
+    // Per group (in parallel): the coarse corners and their twins, or a mismatch.
+    let mut corner_vertex = vec![0u32; 3 * groups];
+    let mut twin = vec![0u32; 3 * groups];
+    let canonical = corner_vertex.par_chunks_mut(3).zip(twin.par_chunks_mut(3)).enumerate().all(|(g, (xs, ts))| {
+        let m = [fine.vertex(inner(g)), fine.vertex(inner(g) + 1), fine.vertex(inner(g) + 2)];
+        for k in 0..3 {
+            let child = 3 * (4 * g as u32 + k as u32);
+            let x = fine.vertex(child);
+            if x >= first_odd || fine.vertex(child + 1) != m[k] || fine.vertex(child + 2) != m[(k + 2) % 3] {
+                return false;
+            }
+            xs[k] = x;
+            // x_k -> m_k is twinned with m -> x_k, corner 2 of child j of another
+            // group: the second half of that group's coarse half-edge j - 1.
+            let t = fine.twin(child);
+            ts[k] = if t == NONE {
+                NONE
+            } else {
+                let (face, corner) = (t / 3, t % 3);
+                if face % 4 == 3 || corner != 2 {
+                    return false;
+                }
+                3 * (face / 4) + (face % 4 + 2) % 3
+            };
+        }
+        true
+    });
+    if !canonical {
+        return None;
+    }
+    let consistent = twin.par_iter().enumerate().all(|(c, &t)| {
+        let c = c as u32;
+        t == NONE
+            || (twin[t as usize] == c
+                && corner_vertex[t as usize] == corner_vertex[next(c) as usize]
+                && corner_vertex[next(t) as usize] == corner_vertex[c as usize])
+    });
+    if !consistent {
+        return None;
+    }
+    let coarse = CornerTable::from_parts(first_odd as usize, corner_vertex, twin);
+    if first_odd as usize + coarse.edge_count() != fine.vertex_count() {
+        return None;
+    }
+    let numbered = (0..3 * groups as u32)
+        .into_par_iter()
+        .all(|c| fine.vertex(inner(c as usize / 3) + c % 3) == first_odd + coarse.corner_edge(c));
+    if !numbered {
+        return None;
+    }
+    let nv = fine.vertex_count() as u32;
+    Some(Coarsening {
+        coarse,
+        vertex_point: (0..first_odd).collect(),
+        edge_point: (first_odd..nv).collect(),
+        face_of_canonical: (0..faces as u32).map(|k| 3 * k).collect(),
+    })
+}
+
+/// The general detection: propagation from seeds and validation (see the module docs).
+fn detect_general(fine: &CornerTable, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
+    let nv = fine.vertex_count();
     let mut labeler = Labeler::new(fine);
     // Valence class of every vertex, in one pass over the corners.
     let mut outgoing = vec![0u8; nv];
@@ -696,10 +788,11 @@ impl<'a> Labeler<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::corner_table::CornerTable;
+    use crate::forward::LoopOptions;
     use crate::reference::{
         bipyramid, cylinder, flip_edge, loop_step, open_fan, perturb, random_diagonal_grid, scramble, swap_vertices,
     };
-    use crate::reverse::LoopOptions;
     use glam::DVec3;
     use mesh_topo::PolygonSoup;
     use mesh_topo::shapes::{self, CellKind};
@@ -766,6 +859,34 @@ mod tests {
                 assert_eq!(scrambled.face(face)[j as usize], expected);
             }
         }
+    }
+
+    /// The canonical fast path finds exactly what the general detection finds, and
+    /// declines renumbered meshes.
+    #[test]
+    fn canonical_fast_path_agrees_with_the_general_detection() {
+        let mut with_isolated = shapes::octahedron();
+        with_isolated.positions.push(DVec3::splat(3.0));
+        for soup in [
+            shapes::tetrahedron(),
+            shapes::icosahedron(),
+            shapes::grid(4, 3, CellKind::Triangles),
+            shapes::torus(4, 4, CellKind::Triangles),
+            bipyramid(11),
+            open_fan(2),
+            cylinder(5, 2),
+            with_isolated,
+        ] {
+            let fine = CornerTable::from_soup(&refined(&soup)).unwrap();
+            let fast = detect_canonical(&fine, None).expect("canonical");
+            assert_eq!(fast, detect_general(&fine, None).unwrap());
+            let scrambled = CornerTable::from_soup(&scramble(&refined(&soup), 8)).unwrap();
+            assert!(detect_canonical(&scrambled, None).is_none());
+            // A refinement of a refinement in canonical order, seen one level up.
+            let twice = CornerTable::from_soup(&refined(&refined(&soup))).unwrap();
+            assert_eq!(detect_canonical(&twice, None), Some(detect_general(&twice, None).unwrap()));
+        }
+        assert!(detect_canonical(&CornerTable::from_soup(&shapes::icosahedron()).unwrap(), None).is_none());
     }
 
     #[test]
@@ -895,7 +1016,12 @@ mod tests {
             flips in 0usize..3,
             seed in any::<u64>(),
         ) {
-            let mut soup = if refine { scramble(&refined(&soup), seed) } else { soup };
+            // Refined meshes in canonical order (the fast path) or renumbered.
+            let mut soup = match (refine, seed % 2) {
+                (true, 0) => scramble(&refined(&soup), seed),
+                (true, _) => refined(&soup),
+                (false, _) => soup,
+            };
             let mut rng = crate::reference::Rng::new(seed);
             for _ in 0..flips {
                 let m = mesh(&soup);

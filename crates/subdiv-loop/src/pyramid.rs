@@ -34,7 +34,8 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
 use crate::LoopError;
 use crate::corner_table::CornerTable;
 use crate::detect::{FineOrder, detect_table};
-use crate::reverse::{LoopOptions, check_finite, check_level, refine_level, reverse_positions};
+use crate::forward::LoopOptions;
+use crate::reverse::{check_level, reconstruct_levels, reverse_positions};
 
 /// Magic number of a Loop pyramid file.
 pub const PYRAMID_MAGIC: [u8; 8] = *b"MRSLOOP\0";
@@ -111,7 +112,7 @@ pub struct RateDistortion {
 /// ```
 /// use mesh_topo::{HalfedgeMesh, shapes};
 /// use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, decompose};
-/// use subdiv_loop::reverse::LoopOptions;
+/// use subdiv_loop::forward::LoopOptions;
 ///
 /// // An icosahedron refined twice (zero details = Loop subdivision).
 /// let ico = HalfedgeMesh::from_soup(&shapes::icosahedron())?;
@@ -231,17 +232,9 @@ impl LoopPyramid {
                 reason: format!("{level}: the pyramid has {} levels", self.levels.len()),
             });
         }
-        let mut table = CornerTable::from_soup(&self.base)?;
-        let mut positions = self.base.positions.clone();
-        for (i, step) in self.levels[..level].iter().enumerate() {
-            check_level(&table, &step.details, step.order.as_ref(), i + 1)?;
-            let (fine, fine_positions) =
-                refine_level(&table, &positions, &step.details, step.order.as_ref(), &self.rules);
-            check_finite(&fine_positions, i + 1)?;
-            table = fine;
-            positions = fine_positions;
-        }
-        Ok(table.to_soup(positions))
+        let base = HalfedgeMesh::from_soup(&self.base)?;
+        let steps = self.levels[..level].iter().map(|l| (&l.details[..], l.order.as_ref()));
+        reconstruct_levels(&base, steps, &self.rules)
     }
 
     /// A copy keeping only the largest `fraction` of the details (see the
@@ -284,7 +277,7 @@ impl LoopPyramid {
     /// ```
     /// use mesh_topo::shapes;
     /// use subdiv_loop::pyramid::LoopPyramid;
-    /// use subdiv_loop::reverse::LoopOptions;
+    /// use subdiv_loop::forward::LoopOptions;
     ///
     /// let mut pyramid = LoopPyramid::smooth(shapes::octahedron(), LoopOptions::default(), 2)?;
     /// pyramid.levels[1].details[5] = glam::DVec3::new(0.0, 0.0, 0.1); // one bump
@@ -339,7 +332,7 @@ impl LoopPyramid {
     /// ```
     /// use mesh_topo::shapes;
     /// use subdiv_loop::pyramid::LoopPyramid;
-    /// use subdiv_loop::reverse::LoopOptions;
+    /// use subdiv_loop::forward::LoopOptions;
     ///
     /// let pyramid = LoopPyramid::smooth(shapes::tetrahedron(), LoopOptions::default(), 1)?;
     /// let bytes = pyramid.to_bytes()?;
@@ -392,8 +385,9 @@ pub fn bounding_box_diagonal(points: &[DVec3]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::forward::VertexWeights;
     use crate::reference::{cylinder, loop_steps, open_fan, perturb, relative_distance, scramble};
-    use crate::reverse::{ReverseOptions, VertexWeights, reverse};
+    use crate::reverse::{ReverseOptions, reverse};
     use mesh_topo::shapes::{self, CellKind};
     use proptest::prelude::*;
 
@@ -441,6 +435,22 @@ mod tests {
             assert_eq!(pyramid.base.vertex_count(), coarse.vertex_count());
             assert_eq!(pyramid.base.face_count(), coarse.face_count());
         }
+    }
+
+    /// A renumbered middle level followed by canonical refinements: the reconstruction
+    /// switches between the renumbering path and the fast canonical path.
+    #[test]
+    fn renumbered_and_canonical_levels_mix() {
+        let rules = LoopOptions::default();
+        let middle = scramble(&perturb(&loop_steps(&open_fan(5), &rules, 1), 0.05, 1), 2);
+        let fine = perturb(&loop_steps(&middle, &rules, 2), 0.05, 3);
+        let pyramid = decompose(&mesh(&fine), &max_levels(rules)).unwrap();
+        assert_eq!(pyramid.level_count(), 3);
+        let orders: Vec<bool> = pyramid.levels.iter().map(|l| l.order.is_some()).collect();
+        assert_eq!(orders, [true, false, false]);
+        assert!(relative_distance(&pyramid.reconstruct(3).unwrap(), &fine) < 1e-12);
+        // Level 1 has the renumbered middle mesh's connectivity.
+        assert_eq!(pyramid.reconstruct(1).unwrap().indices, middle.indices);
     }
 
     #[test]

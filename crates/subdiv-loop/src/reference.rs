@@ -4,7 +4,7 @@
 use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 
-use crate::reverse::LoopOptions;
+use crate::forward::{LoopOptions, VertexWeights};
 
 /// One Loop step of a triangle mesh, canonical output order: vertex `v` stays `v`, edge
 /// `e` becomes vertex `V + e`, face `f = (a, b, c)` becomes faces `4f..4f+4` =
@@ -31,7 +31,14 @@ pub(crate) fn loop_step(mesh: &HalfedgeMesh, rules: &LoopOptions) -> PolygonSoup
             }
         } else {
             let n = mesh.valence(v);
-            let beta = rules.weights.beta(n);
+            let beta = match rules.weights {
+                VertexWeights::Loop => {
+                    let c = 3.0 / 8.0 + 0.25 * (std::f64::consts::TAU / n as f64).cos();
+                    (5.0 / 8.0 - c * c) / n as f64
+                }
+                VertexWeights::Warren if n == 3 => 3.0 / 16.0,
+                VertexWeights::Warren => 3.0 / (8.0 * n as f64),
+            };
             let alpha = 1.0 - n as f64 * beta;
             let sum: DVec3 = mesh.vertex_neighbors(v).map(|w| mesh.position(w)).sum();
             positions.push(alpha * p + beta * sum);

@@ -48,77 +48,36 @@ use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use mesh_topo::HalfedgeMesh;
+use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::detect::{Coarsening, FineOrder, detect_table};
+use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
+use crate::forward::topology::{BASE_MASK, INVALID as TOPOLOGY_INVALID, MAX_FACES, NEXT, Topology, is_first};
+use crate::forward::{LoopOptions, VertexWeights};
 
-/// VertexWeights of Loop's interior vertex rule.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
-pub enum VertexWeights {
-    /// Loop's original weights, `β_n = (5/8 − (3/8 + cos(2π/n)/4)²) / n` (the choice of
-    /// OpenSubdiv, CGAL, OpenMesh and most libraries).
-    #[default]
-    Loop,
-    /// Warren's simplification, `β_3 = 3/16`, `β_n = 3/(8n)` for `n > 3` (libigl).
-    Warren,
-}
-
-impl VertexWeights {
-    /// The neighbour weight `β_n` of an interior vertex of valence `n`.
-    ///
-    /// ```
-    /// use subdiv_loop::reverse::VertexWeights;
-    /// assert_eq!(VertexWeights::Loop.beta(6), 1.0 / 16.0);
-    /// assert_eq!(VertexWeights::Warren.beta(6), 1.0 / 16.0);
-    /// assert_eq!(VertexWeights::Warren.beta(3), 3.0 / 16.0);
-    /// ```
-    pub fn beta(self, valence: usize) -> f64 {
-        let n = valence as f64;
-        match self {
-            VertexWeights::Loop => {
-                // cos(2π/6) is not exactly 1/2 in floating point; keep the regular case exact.
-                if valence == 6 {
-                    return 1.0 / 16.0;
-                }
-                let c = 3.0 / 8.0 + 0.25 * (2.0 * std::f64::consts::PI / n).cos();
-                (5.0 / 8.0 - c * c) / n
-            }
-            VertexWeights::Warren => {
-                if valence == 3 {
-                    3.0 / 16.0
-                } else {
-                    3.0 / (8.0 * n)
-                }
-            }
-        }
+/// `β_n` of the forward step's interior vertex rule (the very same numbers).
+fn beta(weights: VertexWeights, valence: usize) -> f64 {
+    match weights {
+        VertexWeights::Loop => loop_beta(valence),
+        VertexWeights::Warren => warren_beta(valence),
     }
-}
-
-/// The rules a mesh was (or will be) refined with; the reversal must use the same rules
-/// as the forward subdivision that made the mesh for the details to vanish.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
-pub struct LoopOptions {
-    /// Interior vertex weights.
-    pub weights: VertexWeights,
-    /// Keep boundary corners (boundary vertices of valence 2, i.e. with one face) fixed:
-    /// `p' = p` instead of the boundary vertex rule.
-    pub keep_corners: bool,
 }
 
 /// `(μ, η)` of the exact inverse of the interior vertex rule at valence `l`:
 /// `p = μ p' + η Σ e'_j`.
 ///
 /// ```
-/// use subdiv_loop::reverse::{VertexWeights, inverse_weights};
+/// use subdiv_loop::forward::VertexWeights;
+/// use subdiv_loop::reverse::inverse_weights;
 /// let (mu, eta) = inverse_weights(VertexWeights::Loop, 6);
 /// assert!((mu - 2.5).abs() < 1e-15 && (eta + 0.25).abs() < 1e-15);
 /// let (mu, eta) = inverse_weights(VertexWeights::Loop, 3);
 /// assert!((mu - 10.0).abs() < 1e-12 && (eta + 3.0).abs() < 1e-12);
 /// ```
 pub fn inverse_weights(weights: VertexWeights, valence: usize) -> (f64, f64) {
-    let beta = weights.beta(valence);
+    let beta = beta(weights, valence);
     let alpha = 1.0 - valence as f64 * beta;
     let denominator = 8.0 * alpha - 3.0;
     (5.0 / denominator, -8.0 * beta / denominator)
@@ -154,7 +113,8 @@ pub struct ReverseOptions {
 /// ```
 /// use glam::DVec3;
 /// use mesh_topo::{HalfedgeMesh, shapes};
-/// use subdiv_loop::reverse::{LoopOptions, ReverseOptions, reconstruct, reverse};
+/// use subdiv_loop::forward::LoopOptions;
+/// use subdiv_loop::reverse::{ReverseOptions, reconstruct, reverse};
 ///
 /// // Refine an octahedron with zero details (= one Loop step), then reverse it.
 /// let coarse = HalfedgeMesh::from_soup(&shapes::octahedron())?;
@@ -200,11 +160,109 @@ pub fn reconstruct(
     order: Option<&FineOrder>,
     rules: &LoopOptions,
 ) -> Result<HalfedgeMesh, LoopError> {
-    let table = CornerTable::from_mesh(coarse)?;
-    check_level(&table, details, order, 1)?;
-    let (fine_table, fine_positions) = refine_level(&table, coarse.positions(), details, order, rules);
-    check_finite(&fine_positions, 1)?;
-    Ok(HalfedgeMesh::from_soup(&fine_table.to_soup(fine_positions)).expect("internal: a refined mesh is valid"))
+    let soup = reconstruct_levels(coarse, std::iter::once((details, order)), rules)?;
+    Ok(HalfedgeMesh::from_soup(&soup).expect("internal: a refined mesh is valid"))
+}
+
+/// Rebuilds the mesh after several refinement steps (each: details and order) from a
+/// coarse mesh.
+///
+/// A canonical step is one Loop step by the forward module's kernel (index-arithmetic
+/// refinement) plus the details: `D_e` added to edge point `e`, and to each vertex
+/// point the change the inverse relation implies, `8β/5 Σ_j D_{e_j}` inside (since
+/// `η/μ = −8β/5`), `(D_− + D_+)/4` on the boundary, nothing at a fixed corner. A step
+/// with an order goes through the corner table and is renumbered.
+pub(crate) fn reconstruct_levels<'a>(
+    coarse: &HalfedgeMesh,
+    levels: impl ExactSizeIterator<Item = (&'a [DVec3], Option<&'a FineOrder>)>,
+    rules: &LoopOptions,
+) -> Result<PolygonSoup, LoopError> {
+    crate::pyramid::check_input_positions(coarse.positions())?;
+    let mut topology = Topology::from_mesh(coarse)?;
+    let mut positions = coarse.positions().to_vec();
+    let kernel_rules = Rules::new(rules);
+    let count = levels.len();
+    for (i, (details, order)) in levels.enumerate() {
+        let level = i + 1;
+        check_details(topology.vertex_count, topology.edge_count, topology.face_count(), details, order, level)?;
+        if topology.face_count() as u64 > MAX_FACES || topology.edge_count > BASE_MASK as usize {
+            return Err(LoopError::Mesh(MeshError::TooLarge {
+                what: "faces",
+                count: topology.face_count(),
+                max: MAX_FACES as usize,
+            }));
+        }
+        match order {
+            None => {
+                let corrections = vertex_corrections(&topology, details, rules);
+                let step = kernel::step(&topology, &positions, &kernel_rules, level < count);
+                let nv = topology.vertex_count;
+                let mut fine = step.values;
+                let (vertex_points, edge_points) = fine.split_at_mut(nv);
+                vertex_points.par_iter_mut().zip(corrections.par_iter()).for_each(|(p, c)| *p += *c);
+                edge_points.par_iter_mut().zip(details.par_iter()).for_each(|(p, d)| *p += *d);
+                positions = fine;
+                topology = step.topology;
+            }
+            Some(order) => {
+                let table = CornerTable::from_topology(&topology);
+                let (fine_table, fine_positions) = refine_level(&table, &positions, details, Some(order), rules);
+                topology = fine_table.to_topology();
+                positions = fine_positions;
+            }
+        }
+    }
+    check_finite(&positions, count)?;
+    let faces = topology.triangles.len() as u32;
+    Ok(PolygonSoup {
+        positions,
+        offsets: (0..=faces).map(|f| 3 * f).collect(),
+        indices: topology.triangles.into_iter().flatten().collect(),
+    })
+}
+
+/// What the details add to each vertex point (see [`reconstruct_levels`]), by one
+/// pass over the edges of the coarse topology.
+fn vertex_corrections(topology: &Topology, details: &[DVec3], rules: &LoopOptions) -> Vec<DVec3> {
+    const BOUNDARY: u32 = 1 << 31;
+    let nv = topology.vertex_count;
+    let mut all = vec![DVec3::ZERO; nv];
+    let mut boundary = vec![DVec3::ZERO; nv];
+    let mut valence = vec![0u32; nv];
+    let mut e = 0usize;
+    for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
+        for k in 0..3 {
+            let twin = link[k];
+            if !is_first((4 * f + k) as u32, twin) {
+                continue;
+            }
+            let d = details[e];
+            e += 1;
+            for v in [corners[k], corners[NEXT[k]]] {
+                let v = v as usize;
+                all[v] += d;
+                valence[v] += 1;
+                if twin == TOPOLOGY_INVALID {
+                    boundary[v] += d;
+                    valence[v] |= BOUNDARY;
+                }
+            }
+        }
+    }
+    debug_assert_eq!(e, details.len());
+    (0..nv)
+        .into_par_iter()
+        .map(|v| {
+            let n = (valence[v] & !BOUNDARY) as usize;
+            if valence[v] & BOUNDARY != 0 {
+                if rules.keep_corners && n == 2 { DVec3::ZERO } else { 0.25 * boundary[v] }
+            } else if n == 0 {
+                DVec3::ZERO
+            } else {
+                (1.6 * beta(rules.weights, n)) * all[v]
+            }
+        })
+        .collect()
 }
 
 /// Checks that `details` and `order` fit the coarse table (level numbers errors).
@@ -214,19 +272,29 @@ pub(crate) fn check_level(
     order: Option<&FineOrder>,
     level: usize,
 ) -> Result<(), LoopError> {
-    if details.len() != table.edge_count() {
+    check_details(table.vertex_count(), table.edge_count(), table.face_count(), details, order, level)
+}
+
+/// Checks details and order against the counts of the coarse mesh.
+fn check_details(
+    vertices: usize,
+    edges: usize,
+    faces: usize,
+    details: &[DVec3],
+    order: Option<&FineOrder>,
+    level: usize,
+) -> Result<(), LoopError> {
+    if details.len() != edges {
         return Err(LoopError::InvalidDetails {
             level,
-            reason: format!("{} details for a mesh with {} edges", details.len(), table.edge_count()),
+            reason: format!("{} details for a mesh with {edges} edges", details.len()),
         });
     }
     if let Some(i) = details.iter().position(|d| !d.is_finite()) {
         return Err(LoopError::InvalidDetails { level, reason: format!("detail {i} is not finite") });
     }
     if let Some(order) = order {
-        order
-            .check(table.vertex_count() + table.edge_count(), 4 * table.face_count())
-            .map_err(|reason| LoopError::InvalidDetails { level, reason })?;
+        order.check(vertices + edges, 4 * faces).map_err(|reason| LoopError::InvalidDetails { level, reason })?;
     }
     Ok(())
 }
@@ -248,32 +316,6 @@ fn edge_point_star(coarse: &CornerTable, v: u32, edge_position: impl Fn(u32) -> 
     let mut sum = DVec3::ZERO;
     let star = coarse.visit_star(v, |e, _| sum += edge_position(e));
     (star, sum)
-}
-
-/// Coarse position of a vertex from its vertex point `p'` and the edge points of its star.
-#[inline]
-fn inverse_vertex_rule(
-    star: VertexStar,
-    vertex_point: DVec3,
-    edge_sum: DVec3,
-    boundary: impl Fn([u32; 2]) -> [DVec3; 2],
-    rules: &LoopOptions,
-) -> DVec3 {
-    match star {
-        VertexStar::Isolated => vertex_point,
-        VertexStar::Interior { valence } => {
-            let (mu, eta) = inverse_weights(rules.weights, valence);
-            mu * vertex_point + eta * edge_sum
-        }
-        VertexStar::Boundary { valence, boundary_edges } => {
-            if rules.keep_corners && valence == 2 {
-                vertex_point
-            } else {
-                let [before, after] = boundary(boundary_edges);
-                2.0 * vertex_point - 0.5 * (before + after)
-            }
-        }
-    }
 }
 
 /// Loop's edge rule on the coarse positions.
@@ -308,15 +350,69 @@ pub(crate) fn reverse_positions(
     fine: &[DVec3],
     rules: &LoopOptions,
 ) -> (Vec<DVec3>, Vec<DVec3>) {
+    const BOUNDARY: u32 = 1 << 31;
     let coarse = &coarsening.coarse;
+    let nv = coarse.vertex_count();
     let edge_position = |e: u32| fine[coarsening.edge_point[e as usize] as usize];
-    let positions = map_indices(coarse.vertex_count(), |v| {
-        let (star, sum) = edge_point_star(coarse, v, edge_position);
+    // The edge points around every coarse vertex, summed in one pass over the edges
+    // (all of them, and the boundary ones apart), with the valence and boundary flag.
+    let mut sum = vec![DVec3::ZERO; nv];
+    let mut boundary_sum = vec![DVec3::ZERO; nv];
+    let mut valence = vec![0u32; nv];
+    for e in 0..coarse.edge_count() as u32 {
+        let c = coarse.edge_corner(e);
+        let on_boundary = coarse.twin(c) == NONE;
+        let point = edge_position(e);
+        for v in [coarse.vertex(c), coarse.vertex(next(c))] {
+            let v = v as usize;
+            sum[v] += point;
+            valence[v] += 1;
+            if on_boundary {
+                boundary_sum[v] += point;
+                valence[v] |= BOUNDARY;
+            }
+        }
+    }
+    let weights = InverseWeights::new(rules.weights);
+    let positions = map_indices(nv, |v| {
         let vertex_point = fine[coarsening.vertex_point[v as usize] as usize];
-        inverse_vertex_rule(star, vertex_point, sum, |[a, b]| [edge_position(a), edge_position(b)], rules)
+        let (n, flags) = (valence[v as usize] & !BOUNDARY, valence[v as usize] & BOUNDARY);
+        if flags != 0 {
+            if rules.keep_corners && n == 2 {
+                vertex_point
+            } else {
+                2.0 * vertex_point - 0.5 * boundary_sum[v as usize]
+            }
+        } else if n == 0 {
+            vertex_point
+        } else {
+            let (mu, eta) = weights.get(n as usize);
+            mu * vertex_point + eta * sum[v as usize]
+        }
     });
     let details = map_indices(coarse.edge_count(), |e| edge_position(e) - edge_rule(coarse, &positions, e));
     (positions, details)
+}
+
+/// [`inverse_weights`] tabulated for the usual valences (no cosine per vertex).
+struct InverseWeights {
+    weights: VertexWeights,
+    table: [(f64, f64); 32],
+}
+
+impl InverseWeights {
+    fn new(weights: VertexWeights) -> Self {
+        let mut table = [(1.0, 0.0); 32];
+        for (n, entry) in table.iter_mut().enumerate().skip(1) {
+            *entry = inverse_weights(weights, n);
+        }
+        Self { weights, table }
+    }
+
+    #[inline]
+    fn get(&self, valence: usize) -> (f64, f64) {
+        if valence < self.table.len() { self.table[valence] } else { inverse_weights(self.weights, valence) }
+    }
 }
 
 /// One reconstruction step on corner tables: the fine table (in the given order) and
@@ -424,7 +520,7 @@ mod tests {
             (100, 0.765009, 1.602529, -0.006025),
         ];
         for (l, alpha, mu, eta) in table {
-            let beta = VertexWeights::Loop.beta(l);
+            let beta = super::beta(VertexWeights::Loop, l);
             assert!((1.0 - l as f64 * beta - alpha).abs() < 1e-6, "alpha at valence {l}");
             let (m, e) = inverse_weights(VertexWeights::Loop, l);
             assert!((m - mu).abs() < 1e-6, "mu at valence {l}: {m} vs {mu}");
@@ -446,7 +542,7 @@ mod tests {
                 // Forward rules on a random closed 1-ring, then the inverse.
                 let p = rng.vector();
                 let q: Vec<DVec3> = (0..l).map(|_| rng.vector()).collect();
-                let beta = weights.beta(l);
+                let beta = super::beta(weights, l);
                 let vertex_point = (1.0 - l as f64 * beta) * p + beta * q.iter().sum::<DVec3>();
                 let edge_sum: DVec3 =
                     (0..l).map(|j| 0.375 * (p + q[j]) + 0.125 * (q[(j + l - 1) % l] + q[(j + 1) % l])).sum();
@@ -501,6 +597,47 @@ mod tests {
                 assert!(error < TOLERANCE, "{name} {rules:?}: {error}");
             }
         }
+    }
+
+    /// The fast forward subdivision (`forward::subdivide`) numbers its output canonically:
+    /// reversing it gives the coarse mesh back, numbering included, with zero details,
+    /// and reconstruction with zero details equals it.
+    #[test]
+    fn reverse_of_the_fast_forward_is_exact() {
+        for (name, soup) in test_shapes() {
+            for rules in all_rules() {
+                let coarse = mesh(&soup);
+                let fine = crate::forward::subdivide(&coarse, 1, &rules).unwrap().to_soup();
+                let level = reverse(&mesh(&fine), &ReverseOptions { rules, seed_vertex: None })
+                    .unwrap_or_else(|e| panic!("{name} {rules:?}: {e}"));
+                assert!(level.order.is_none(), "{name}: the forward order is canonical");
+                assert!(relative_distance(&level.coarse.to_soup(), &soup) < TOLERANCE, "{name} {rules:?}");
+                let diagonal = crate::pyramid::bounding_box_diagonal(&soup.positions);
+                assert!(level.details.iter().all(|d| d.length() < TOLERANCE * diagonal), "{name} {rules:?}");
+                let zeros = vec![DVec3::ZERO; coarse.edge_count()];
+                let rebuilt = reconstruct(&coarse, &zeros, None, &rules).unwrap();
+                assert!(relative_distance(&rebuilt.to_soup(), &fine) < TOLERANCE, "{name} {rules:?}");
+            }
+        }
+        // Three levels at once, decomposed back to the base.
+        let rules = LoopOptions::default();
+        let base = mesh(&bipyramid(7));
+        let fine = mesh(&crate::forward::subdivide(&base, 3, &rules).unwrap().to_soup());
+        let options =
+            crate::pyramid::DecomposeOptions { rules, levels: crate::pyramid::Levels::Max, seed_vertex: None };
+        let pyramid = crate::pyramid::decompose(&fine, &options).unwrap();
+        assert_eq!(pyramid.level_count(), 3);
+        assert!(relative_distance(&pyramid.base, &base.to_soup()) < TOLERANCE);
+        assert!(pyramid.levels.iter().all(|l| l.order.is_none()));
+    }
+
+    #[test]
+    fn pillows_are_rejected_by_reverse_and_reconstruct() {
+        let pillow = mesh(&PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2], [0, 2, 1]]));
+        let zeros = vec![DVec3::ZERO; 3];
+        let rules = LoopOptions::default();
+        assert!(matches!(reconstruct(&pillow, &zeros, None, &rules), Err(LoopError::InteriorValenceTwo { .. })));
+        assert!(matches!(reverse(&pillow, &ReverseOptions::default()), Err(LoopError::InteriorValenceTwo { .. })));
     }
 
     #[test]
@@ -578,6 +715,24 @@ mod tests {
                 prop_assert!(d.length() < TOLERANCE * diagonal);
             }
             prop_assert!(level.order.is_none());
+        }
+
+        /// The same on the fast forward's output, two levels.
+        #[test]
+        fn decompose_inverts_the_fast_forward(soup in mesh_topo::testing::arb_triangle_mesh(), rule in 0usize..4) {
+            let rules = all_rules()[rule];
+            let fine = crate::forward::subdivide(&mesh(&soup), 2, &rules).unwrap().to_soup();
+            let options = crate::pyramid::DecomposeOptions {
+                rules,
+                levels: crate::pyramid::Levels::Count(2),
+                seed_vertex: None,
+            };
+            let pyramid = crate::pyramid::decompose(&mesh(&fine), &options).unwrap();
+            prop_assert!(relative_distance(&pyramid.base, &soup) < TOLERANCE);
+            let diagonal = crate::pyramid::bounding_box_diagonal(&soup.positions);
+            for d in pyramid.levels.iter().flat_map(|l| &l.details) {
+                prop_assert!(d.length() < TOLERANCE * diagonal);
+            }
         }
 
         /// Affine invariance: reversing A·M + t gives A·reverse(M) + t and the same

@@ -15,7 +15,8 @@ use mesh_topo::shapes::{self, CellKind};
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use subdiv_loop::detect::{DetectOptions, detect};
 use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, bounding_box_diagonal, decompose};
-use subdiv_loop::reverse::{LoopOptions, ReverseOptions, VertexWeights, reconstruct, reverse};
+use subdiv_loop::forward::{LoopOptions, VertexWeights};
+use subdiv_loop::reverse::{ReverseOptions, reconstruct, reverse};
 
 fn coordinate(u: &mut Unstructured<'_>) -> arbitrary::Result<f64> {
     Ok(i16::arbitrary(u)? as f64 / 256.0)

@@ -1,0 +1,140 @@
+//! `multires reverse | decompose | reconstruct --scheme loop` run as a process on files:
+//! exact round trips, levels, compression, and one clear error line (with nothing
+//! written) for bad input.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use glam::DVec3;
+use multires::loop_subdiv::forward::LoopOptions;
+use multires::loop_subdiv::pyramid::{LoopPyramid, bounding_box_diagonal};
+use multires::mesh::io::{self, WriteOptions};
+use multires::mesh::{PolygonSoup, shapes};
+
+fn multires(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_multires")).args(args).current_dir(dir).output().expect("run multires")
+}
+
+fn ok(args: &[&str], dir: &Path) -> String {
+    let out = multires(args, dir);
+    assert!(out.status.success(), "{args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Runs a command that must fail with one `multires: ...` line and write no `out` file.
+fn fails(args: &[&str], dir: &Path, out: &str) -> String {
+    let output = multires(args, dir);
+    let stderr = String::from_utf8(output.stderr).unwrap();
+    assert!(!output.status.success(), "{args:?} succeeded");
+    assert_eq!(stderr.lines().count(), 1, "{args:?}: not one line:\n{stderr}");
+    assert!(stderr.starts_with("multires: "), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(!dir.join(out).exists(), "{args:?} wrote {out}");
+    stderr
+}
+
+/// An octahedron refined three times by Loop, every vertex moved at random (fixed seed),
+/// so that every level has details.
+fn loop_mesh() -> PolygonSoup {
+    let mut soup =
+        LoopPyramid::smooth(shapes::octahedron(), LoopOptions::default(), 3).unwrap().reconstruct(3).unwrap();
+    let mut state = 0x1234_5678_9abc_def1u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    for p in &mut soup.positions {
+        *p += 0.02 * DVec3::new(next(), next(), next());
+    }
+    soup
+}
+
+fn read(path: &Path) -> PolygonSoup {
+    io::read_soup(path).unwrap().0
+}
+
+fn relative_error(a: &PolygonSoup, b: &PolygonSoup) -> f64 {
+    assert_eq!(a.indices, b.indices, "faces differ");
+    let diagonal = bounding_box_diagonal(&b.positions);
+    a.positions.iter().zip(&b.positions).map(|(p, q)| p.distance(*q)).fold(0.0, f64::max) / diagonal
+}
+
+#[test]
+fn decompose_then_reconstruct_reproduces_the_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = loop_mesh();
+    io::write_soup(dir.path().join("fine.obj"), &input, &WriteOptions::default()).unwrap();
+    let printed = ok(&["decompose", "fine.obj", "fine.mres", "--scheme", "loop", "--max", "--report"], dir.path());
+    assert!(printed.contains("decomposed 3 Loop level(s)"), "{printed}");
+    assert!(printed.contains("base 6 vertices, 8 faces"), "{printed}");
+    assert!(printed.contains("keep fraction"), "{printed}");
+    ok(&["reconstruct", "fine.mres", "rebuilt.off"], dir.path());
+    let rebuilt = read(&dir.path().join("rebuilt.off"));
+    let error = relative_error(&rebuilt, &input);
+    assert!(error < 1e-12, "{error}");
+    // `compare` agrees.
+    let compare = ok(&["compare", "rebuilt.off", "fine.obj", "--json"], dir.path());
+    let value: serde_json::Value = serde_json::from_str(&compare).unwrap();
+    assert!(value["rel_max"].as_f64().unwrap() < 1e-12, "{compare}");
+
+    // Level 0 is the base mesh, which `reverse --levels 3` also gives.
+    ok(&["reconstruct", "fine.mres", "base.obj", "--level", "0"], dir.path());
+    ok(&["reverse", "fine.obj", "reversed.obj", "--scheme", "loop", "--levels", "3"], dir.path());
+    let (base, reversed) = (read(&dir.path().join("base.obj")), read(&dir.path().join("reversed.obj")));
+    assert_eq!(base.vertex_count(), 6);
+    assert!(relative_error(&base, &reversed) < 1e-12);
+
+    // Compression: fewer details, a bounded error.
+    ok(&["reconstruct", "fine.mres", "approx.obj", "--keep", "0.1"], dir.path());
+    let approx = read(&dir.path().join("approx.obj"));
+    let error = relative_error(&approx, &input);
+    assert!(error > 0.0 && error < 0.05, "{error}");
+}
+
+#[test]
+fn bad_input_gives_one_error_line_and_no_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    io::write_soup(d.join("fine.obj"), &loop_mesh(), &WriteOptions::default()).unwrap();
+    ok(&["decompose", "fine.obj", "fine.mres", "--scheme", "loop", "--levels", "2"], d);
+    let bytes = std::fs::read(d.join("fine.mres")).unwrap();
+
+    // Truncated and corrupted pyramids.
+    std::fs::write(d.join("truncated.mres"), &bytes[..bytes.len() / 2]).unwrap();
+    let line = fails(&["reconstruct", "truncated.mres", "out.obj"], d, "out.obj");
+    assert!(line.contains("truncated.mres"), "{line}");
+    std::fs::write(d.join("short.mres"), &bytes[..5]).unwrap();
+    fails(&["reconstruct", "short.mres", "out.obj"], d, "out.obj");
+    let mut wrong_count = bytes.clone();
+    let last = wrong_count.len() - 1;
+    wrong_count.truncate(last);
+    std::fs::write(d.join("cut.mres"), &wrong_count).unwrap();
+    fails(&["reconstruct", "cut.mres", "out.obj"], d, "out.obj");
+    std::fs::write(d.join("foreign.mres"), b"not a pyramid at all").unwrap();
+    let line = fails(&["reconstruct", "foreign.mres", "out.obj"], d, "out.obj");
+    assert!(line.contains("not a multires pyramid"), "{line}");
+    fails(&["reconstruct", "fine.mres", "out.obj", "--level", "3"], d, "out.obj");
+    fails(&["reconstruct", "fine.mres", "out.obj", "--keep", "1.5"], d, "out.obj");
+
+    // Meshes without Loop connectivity, quads, a mesh with one face removed.
+    let bunny = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bunny.obj");
+    let line = fails(&["decompose", bunny.to_str().unwrap(), "out.mres", "--scheme", "loop"], d, "out.mres");
+    assert!(line.contains("no Loop subdivision connectivity at vertex"), "{line}");
+    let quads = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cube_quad.off");
+    let line = fails(&["reverse", quads.to_str().unwrap(), "out.obj", "--scheme", "loop"], d, "out.obj");
+    assert!(line.contains("face 0 has 4 corners"), "{line}");
+    let mut holed = loop_mesh();
+    let faces: Vec<Vec<u32>> = holed.faces().skip(1).map(<[u32]>::to_vec).collect();
+    holed = PolygonSoup::from_faces(holed.positions, faces);
+    io::write_soup(d.join("holed.obj"), &holed, &WriteOptions::default()).unwrap();
+    fails(&["reverse", "holed.obj", "out.obj", "--scheme", "loop"], d, "out.obj");
+    // Too many levels: the octahedron has no Loop connectivity.
+    fails(&["decompose", "fine.obj", "out.mres", "--scheme", "loop", "--levels", "4"], d, "out.mres");
+    fails(&["reverse", "fine.obj", "out.obj", "--scheme", "loop", "--levels", "0"], d, "out.obj");
+    fails(&["reverse", "fine.obj", "out.obj", "--scheme", "loop", "--seed-face", "3"], d, "out.obj");
+    // NaN coordinates.
+    std::fs::write(d.join("nan.obj"), "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n").unwrap();
+    fails(&["reverse", "nan.obj", "out.obj", "--scheme", "loop"], d, "out.obj");
+}
