@@ -1,0 +1,180 @@
+//! The point types the schemes work on.
+//!
+//! Every algorithm of this crate is generic over [`CurvePoint`], implemented for plain
+//! arrays `[f64; D]` (any `D`), for [`glam::DVec2`] and [`glam::DVec3`], and for `f64`
+//! (scalar data: basis functions, eigenvectors, function values).
+
+use glam::{DVec2, DVec3};
+
+/// A point of `R^DIM` as far as linear subdivision needs it: affine combinations and
+/// coordinate access. All rules of this crate are affine combinations (weights summing to
+/// 1), so results commute with affine maps of the points.
+pub trait CurvePoint: Copy + core::fmt::Debug + PartialEq + Send + Sync + 'static {
+    /// Number of coordinates.
+    const DIM: usize;
+    /// The origin.
+    fn zero() -> Self;
+    /// Coordinate `axis` (`0 <= axis < DIM`).
+    fn coord(&self, axis: usize) -> f64;
+    /// The point whose coordinate `axis` is `f(axis)`.
+    fn from_fn(f: impl FnMut(usize) -> f64) -> Self;
+    /// `self + other`.
+    fn plus(self, other: Self) -> Self;
+    /// `self - other`.
+    fn minus(self, other: Self) -> Self;
+    /// `factor * self`.
+    fn scale(self, factor: f64) -> Self;
+    /// Whether every coordinate is finite.
+    fn is_finite(&self) -> bool {
+        (0..Self::DIM).all(|axis| self.coord(axis).is_finite())
+    }
+    /// The 3-vector of the first three coordinates (missing ones are 0): used by the
+    /// curvature estimate and the SVG projection.
+    fn to_dvec3(&self) -> DVec3 {
+        let c = |axis: usize| if axis < Self::DIM { self.coord(axis) } else { 0.0 };
+        DVec3::new(c(0), c(1), c(2))
+    }
+}
+
+impl CurvePoint for f64 {
+    const DIM: usize = 1;
+    #[inline]
+    fn zero() -> Self {
+        0.0
+    }
+    #[inline]
+    fn coord(&self, _axis: usize) -> f64 {
+        *self
+    }
+    #[inline]
+    fn from_fn(mut f: impl FnMut(usize) -> f64) -> Self {
+        f(0)
+    }
+    #[inline]
+    fn plus(self, other: Self) -> Self {
+        self + other
+    }
+    #[inline]
+    fn minus(self, other: Self) -> Self {
+        self - other
+    }
+    #[inline]
+    fn scale(self, factor: f64) -> Self {
+        self * factor
+    }
+}
+
+impl<const D: usize> CurvePoint for [f64; D] {
+    const DIM: usize = D;
+    #[inline]
+    fn zero() -> Self {
+        [0.0; D]
+    }
+    #[inline]
+    fn coord(&self, axis: usize) -> f64 {
+        self[axis]
+    }
+    #[inline]
+    fn from_fn(f: impl FnMut(usize) -> f64) -> Self {
+        core::array::from_fn(f)
+    }
+    #[inline]
+    fn plus(self, other: Self) -> Self {
+        core::array::from_fn(|k| self[k] + other[k])
+    }
+    #[inline]
+    fn minus(self, other: Self) -> Self {
+        core::array::from_fn(|k| self[k] - other[k])
+    }
+    #[inline]
+    fn scale(self, factor: f64) -> Self {
+        core::array::from_fn(|k| self[k] * factor)
+    }
+}
+
+impl CurvePoint for DVec2 {
+    const DIM: usize = 2;
+    #[inline]
+    fn zero() -> Self {
+        DVec2::ZERO
+    }
+    #[inline]
+    fn coord(&self, axis: usize) -> f64 {
+        self[axis]
+    }
+    #[inline]
+    fn from_fn(mut f: impl FnMut(usize) -> f64) -> Self {
+        DVec2::new(f(0), f(1))
+    }
+    #[inline]
+    fn plus(self, other: Self) -> Self {
+        self + other
+    }
+    #[inline]
+    fn minus(self, other: Self) -> Self {
+        self - other
+    }
+    #[inline]
+    fn scale(self, factor: f64) -> Self {
+        self * factor
+    }
+}
+
+impl CurvePoint for DVec3 {
+    const DIM: usize = 3;
+    #[inline]
+    fn zero() -> Self {
+        DVec3::ZERO
+    }
+    #[inline]
+    fn coord(&self, axis: usize) -> f64 {
+        self[axis]
+    }
+    #[inline]
+    fn from_fn(mut f: impl FnMut(usize) -> f64) -> Self {
+        DVec3::new(f(0), f(1), f(2))
+    }
+    #[inline]
+    fn plus(self, other: Self) -> Self {
+        self + other
+    }
+    #[inline]
+    fn minus(self, other: Self) -> Self {
+        self - other
+    }
+    #[inline]
+    fn scale(self, factor: f64) -> Self {
+        self * factor
+    }
+}
+
+/// Checks that every point is finite.
+///
+/// # Errors
+/// [`CurveError::NonFinite`](crate::CurveError::NonFinite) naming the first bad point and axis.
+pub fn check_finite<P: CurvePoint>(points: &[P]) -> Result<(), crate::CurveError> {
+    for (index, point) in points.iter().enumerate() {
+        for axis in 0..P::DIM {
+            let value = point.coord(axis);
+            if !value.is_finite() {
+                return Err(crate::CurveError::NonFinite { index, axis, value });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Diagonal of the bounding box (0 for empty input): the length scale of tolerances.
+pub(crate) fn bbox_diagonal<P: CurvePoint>(points: &[P]) -> f64 {
+    let mut squared = 0.0;
+    for axis in 0..P::DIM {
+        let (lo, hi) = points
+            .iter()
+            .map(|p| p.coord(axis))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+        if lo <= hi {
+            squared += (hi - lo) * (hi - lo);
+        }
+    }
+    squared.sqrt()
+}
