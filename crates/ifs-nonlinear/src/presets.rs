@@ -47,7 +47,7 @@ pub const PRESETS: &[PresetInfo] = &[
         "quartic-bump",
         &["gaussian", "gauss"],
         "the seed's \"Gauss curve\" IFS F∘T_i∘F^{-1}, F(x,w) = (x,w²): really the quartic (25/4)(1-x²)² \
-         (ALGORITHMS.md §15.3); from the triangle (-1,0),(0,25/4),(1,0)",
+         (ALGORITHMS.md §15.3); drawn from the filled triangle (-1,0),(0,25),(1,0) = F(control triangle)",
     ),
     ("exp-gaussian", &["true-gaussian"], "a true Gaussian y = exp(-x²/2): quadratic Bézier in (x, ln y), F = exp"),
     ("barnsley-fern", &["fern"], "Barnsley's fern (affine, chaos game)"),
@@ -144,7 +144,7 @@ pub fn preset(name: &str) -> Result<Scene> {
         "quartic-bump" => {
             let linear = AffineIfs::from_rule(&bezier_split(2, 0.5)?, &[[-1.0, 0.0], [0.0, 5.0], [1.0, 0.0]])?;
             let mut s = scene(Box::new(NonlinearIfs::new(linear, SquareY)), 6);
-            s.start = Some(triangle_samples([-1.0, 0.0], [0.0, 6.25], [1.0, 0.0], 64));
+            s.start = Some(triangle_samples([-1.0, 0.0], [0.0, 25.0], [1.0, 0.0], 64));
             s
         }
         "exp-gaussian" => {
