@@ -7,6 +7,7 @@
 //! |---|---|---|
 //! | [`mesh`] | `mesh-topo` | half-edge meshes, validation, traversal, mesh files |
 //! | [`loop_subdiv`] | `subdiv-loop` | Loop subdivision, reverse Loop, M-band Loop, analysis |
+//! | [`ifs`] | `ifs-nonlinear` | subdivision as IFS, complex-parameter and nonlinear subdivision, fractal rendering |
 //!
 //! ```
 //! use multires::mesh::{HalfedgeMesh, shapes};
@@ -15,5 +16,6 @@
 //! # Ok::<(), multires::mesh::MeshError>(())
 //! ```
 
+pub use ifs_nonlinear as ifs;
 pub use mesh_topo as mesh;
 pub use subdiv_loop as loop_subdiv;

@@ -63,7 +63,9 @@ pub enum IfsError {
         determinant: f64,
     },
     /// The seed (square) form needs exactly `dim + 1` control points.
-    #[error("the square (homogeneous) IFS form needs {needed} control points in {dim}D, got {got}; use the barycentric form")]
+    #[error(
+        "the square (homogeneous) IFS form needs {needed} control points in {dim}D, got {got}; use the barycentric form"
+    )]
     NotSquare {
         /// Dimension of the points.
         dim: usize,

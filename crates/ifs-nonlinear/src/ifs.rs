@@ -158,10 +158,18 @@ impl AffineIfs {
     /// ```
     pub fn new(dim: usize, mut maps: Vec<AffineMap>) -> Result<Self> {
         if !(2..=3).contains(&dim) {
-            return Err(IfsError::ParameterOutOfRange { name: "dim", value: dim.to_string(), reason: "must be 2 or 3" });
+            return Err(IfsError::ParameterOutOfRange {
+                name: "dim",
+                value: dim.to_string(),
+                reason: "must be 2 or 3",
+            });
         }
         if maps.is_empty() {
-            return Err(IfsError::ParameterOutOfRange { name: "maps", value: "0".into(), reason: "need at least one map" });
+            return Err(IfsError::ParameterOutOfRange {
+                name: "maps",
+                value: "0".into(),
+                reason: "need at least one map",
+            });
         }
         for (i, map) in maps.iter_mut().enumerate() {
             for r in 0..3 {
@@ -587,9 +595,11 @@ mod tests {
         let cubic = bezier_split(3, 0.5).unwrap();
         let err = AffineIfs::from_rule(&cubic, &[[0.0, 0.0], [1.0, 1.0], [2.0, 0.0], [3.0, 1.0]]).unwrap_err();
         assert_eq!(err, IfsError::NotSquare { dim: 2, needed: 3, got: 4 });
-        let in_space = AffineIfs::from_rule(&cubic, &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
+        let in_space =
+            AffineIfs::from_rule(&cubic, &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
         assert!(in_space.is_ok());
-        let coplanar = AffineIfs::from_rule(&cubic, &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]]);
+        let coplanar =
+            AffineIfs::from_rule(&cubic, &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]]);
         assert!(matches!(coplanar, Err(IfsError::SingularControl { .. })));
         let nan = AffineIfs::from_rule(&sierpinski(), &[[0.0, f64::NAN], [1.0, 0.0], [0.0, 1.0]]);
         assert!(matches!(nan, Err(IfsError::NotFinite { .. })));

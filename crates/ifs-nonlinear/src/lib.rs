@@ -94,6 +94,8 @@ pub use matrices::{
 };
 pub use mean::{CircleMean, Mean, MeanMode, subdivide_with_rule, three_point_subdivide, two_point_subdivide};
 pub use nonlinear::{CoordinateTransform, ExpY, FnTransform, NonlinearIfs, Polar, SquareY, triangle_samples};
+/// Complex numbers (control points and parameters of complex-parameter subdivision).
+pub use num_complex::Complex64;
 pub use presets::{PRESETS, Scene, barnsley_fern, canonical_preset, preset};
 pub use render::{
     CHAOS_CHUNK, Canvas, ChaosGame, Density, Image, PointStats, Probabilities, Projection, ToneMap, View,

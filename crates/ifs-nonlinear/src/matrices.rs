@@ -205,12 +205,8 @@ pub(crate) fn contractivity_of<T: ComplexField<RealField = f64>>(maps: &[DMatrix
     }
     let k_maps = maps.len();
     let mut words: Vec<DMatrix<T>> = maps.to_vec();
-    let mut report = ContractivityReport {
-        max_singular_value: 0.0,
-        jsr_lower: 0.0,
-        jsr_upper: f64::INFINITY,
-        word_length: 1,
-    };
+    let mut report =
+        ContractivityReport { max_singular_value: 0.0, jsr_lower: 0.0, jsr_upper: f64::INFINITY, word_length: 1 };
     for length in 1..=MAX_WORD_LENGTH {
         let exponent = 1.0 / f64::from(length);
         let upper = if length == 1 {
@@ -480,7 +476,11 @@ pub fn triangle_patch_split(degree: usize) -> Result<SubdivisionRule<f64>> {
 /// ```
 pub fn sierpinski() -> SubdivisionRule<f64> {
     let matrices = (0..3)
-        .map(|corner| DMatrix::from_fn(3, 3, |r, c| if r == corner { f64::from(c == corner) } else { 0.5 * f64::from(c == corner || c == r) }))
+        .map(|corner| {
+            DMatrix::from_fn(3, 3, |r, c| {
+                if r == corner { f64::from(c == corner) } else { 0.5 * f64::from(c == corner || c == r) }
+            })
+        })
         .collect();
     SubdivisionRule::new(matrices).expect("internal: Sierpinski matrices are affine")
 }
@@ -564,7 +564,8 @@ mod tests {
             [mid(1, 2), mid(0, 2), mid(0, 1)],
         ];
         for (s, sub) in rule.matrices().iter().zip(corners) {
-            let sub_values: Vec<f64> = (0..s.nrows()).map(|r| (0..s.ncols()).map(|c| s[(r, c)] * values[c]).sum()).collect();
+            let sub_values: Vec<f64> =
+                (0..s.nrows()).map(|r| (0..s.ncols()).map(|c| s[(r, c)] * values[c]).sum()).collect();
             for local in [[0.2, 0.3, 0.5], [1.0, 0.0, 0.0], [0.1, 0.8, 0.1]] {
                 let global: [f64; 3] = std::array::from_fn(|k| (0..3).map(|c| local[c] * sub[c][k]).sum());
                 assert!((eval(local, &sub_values) - eval(global, &values)).abs() < 1e-12);

@@ -179,7 +179,13 @@ pub enum MeanMode {
 
 /// One planar weighted average under `mean` and `mode`; `indices` maps weight positions to
 /// input point indices for error messages.
-fn average_points(points: &[[f64; 2]], indices: &[usize], weights: &[f64], mean: Mean, mode: MeanMode) -> Result<[f64; 2]> {
+fn average_points(
+    points: &[[f64; 2]],
+    indices: &[usize],
+    weights: &[f64],
+    mean: Mean,
+    mode: MeanMode,
+) -> Result<[f64; 2]> {
     let mut linear = [0.0; 2];
     for coordinate in 0..2 {
         let through_mean = coordinate == 1 || mode == MeanMode::PerCoordinate;
@@ -377,7 +383,10 @@ impl CircleMean {
 
     fn relative(&self, p: Complex64, index: usize) -> Result<Complex64> {
         if !(p.re.is_finite() && p.im.is_finite()) {
-            return Err(IfsError::NotFinite { what: format!("point {index}"), value: if p.re.is_finite() { p.im } else { p.re } });
+            return Err(IfsError::NotFinite {
+                what: format!("point {index}"),
+                value: if p.re.is_finite() { p.im } else { p.re },
+            });
         }
         let q = p - self.center;
         if q.norm() == 0.0 {
@@ -467,7 +476,8 @@ mod tests {
     #[test]
     fn conjugation_identity() {
         let points = [[0.1, 0.2], [0.3, 0.9], [0.45, 0.4], [0.7, 0.7], [0.9, 0.1]];
-        let means = [Mean::Arithmetic, Mean::Geometric, Mean::Harmonic, Mean::Power(2.0), Mean::Power(-0.5), Mean::Cosine];
+        let means =
+            [Mean::Arithmetic, Mean::Geometric, Mean::Harmonic, Mean::Power(2.0), Mean::Power(-0.5), Mean::Cosine];
         for mean in means {
             for mode in [MeanMode::YOnly, MeanMode::PerCoordinate] {
                 let nonlinear = three_point_subdivide(&points, mean, mode).unwrap();
@@ -558,7 +568,8 @@ mod tests {
     #[test]
     fn rule_based_nonlinear_subdivision_matches_the_named_schemes() {
         let points = [[0.0, 1.0], [1.0, 5.0], [2.0, 2.0]];
-        let pieces = subdivide_with_rule(&bezier_split(2, 0.5).unwrap(), &points, Mean::Geometric, MeanMode::YOnly).unwrap();
+        let pieces =
+            subdivide_with_rule(&bezier_split(2, 0.5).unwrap(), &points, Mean::Geometric, MeanMode::YOnly).unwrap();
         let three = three_point_subdivide(&points, Mean::Geometric, MeanMode::YOnly).unwrap();
         for (a, b) in pieces[0].iter().zip(&three[..3]).chain(pieces[1].iter().zip(&three[2..])) {
             assert!(close(a[0], b[0], 1e-15) && close(a[1], b[1], 1e-14));

@@ -58,9 +58,14 @@ pub const PRESETS: &[PresetInfo] = &[
 /// # Errors
 /// [`IfsError::UnknownPreset`] listing the known names.
 pub fn canonical_preset(name: &str) -> Result<&'static str> {
-    PRESETS.iter().find(|(canonical, aliases, _)| *canonical == name || aliases.contains(&name)).map(|p| p.0).ok_or_else(|| {
-        IfsError::UnknownPreset { name: name.to_string(), known: PRESETS.iter().map(|p| p.0).collect::<Vec<_>>().join(", ") }
-    })
+    PRESETS
+        .iter()
+        .find(|(canonical, aliases, _)| *canonical == name || aliases.contains(&name))
+        .map(|p| p.0)
+        .ok_or_else(|| IfsError::UnknownPreset {
+            name: name.to_string(),
+            known: PRESETS.iter().map(|p| p.0).collect::<Vec<_>>().join(", "),
+        })
 }
 
 /// Builds a preset (names and aliases in [`PRESETS`]).

@@ -293,7 +293,11 @@ fn chaos_start<I: Ifs + ?Sized>(ifs: &I) -> Result<Vec<f64>> {
 
 fn check_game(game: &ChaosGame) -> Result<()> {
     if game.points == 0 {
-        return Err(IfsError::ParameterOutOfRange { name: "points", value: "0".into(), reason: "need at least one point" });
+        return Err(IfsError::ParameterOutOfRange {
+            name: "points",
+            value: "0".into(),
+            reason: "need at least one point",
+        });
     }
     Ok(())
 }
@@ -420,7 +424,11 @@ impl View {
         size = [size[0].max(extent * 1e-3), size[1].max(extent * 1e-3)];
         let grow = 1.0 + 2.0 * margin.max(0.0);
         let (mut w, mut h) = (size[0] * grow, size[1] * grow);
-        if w / h < aspect { w = h * aspect } else { h = w / aspect }
+        if w / h < aspect {
+            w = h * aspect
+        } else {
+            h = w / aspect
+        }
         let centre = [(min[0] + max[0]) / 2.0, (min[1] + max[1]) / 2.0];
         Self::new([centre[0] - w / 2.0, centre[1] - h / 2.0], [centre[0] + w / 2.0, centre[1] + h / 2.0])
     }
@@ -718,7 +726,11 @@ impl PointStats {
         let mut occupancy = vec![vec![false; grid]; grid];
         if grid > 0 {
             let cell = |v: f64, lo: f64, hi: f64| -> usize {
-                if hi > lo { (((v - lo) / (hi - lo)) * grid as f64).floor().clamp(0.0, (grid - 1) as f64) as usize } else { 0 }
+                if hi > lo {
+                    (((v - lo) / (hi - lo)) * grid as f64).floor().clamp(0.0, (grid - 1) as f64) as usize
+                } else {
+                    0
+                }
             };
             for p in points {
                 let (cx, cy) = (cell(p[0], min[0], max[0]), cell(p[1], min[1], max[1]));
@@ -802,7 +814,8 @@ mod tests {
         assert!(matches!(deterministic_points(&ifs, Some(&[1.0]), 1, 1000), Err(IfsError::ParameterOutOfRange { .. })));
         let zero = ChaosGame { points: 0, ..ChaosGame::default() };
         assert!(chaos_points(&ifs, &zero).is_err());
-        let bad = ChaosGame { points: 5, probabilities: Probabilities::Custom(vec![1.0, -1.0, 1.0]), ..ChaosGame::default() };
+        let bad =
+            ChaosGame { points: 5, probabilities: Probabilities::Custom(vec![1.0, -1.0, 1.0]), ..ChaosGame::default() };
         assert!(chaos_points(&ifs, &bad).is_err());
         assert!(Canvas::new(0, 10, View::new([0.0, 0.0], [1.0, 1.0]).unwrap()).is_err());
         assert!(View::new([0.0, 0.0], [0.0, 1.0]).is_err());

@@ -225,7 +225,10 @@ fn non_contractive_parameters_are_typed_errors() {
     }
     let err = ComplexBezierIfs::new(Complex64::new(-0.5, 0.0), &segment).unwrap_err();
     assert!(err.to_string().contains("|1 - z| = 1.5"), "{err}");
-    assert!(matches!(ComplexBezierIfs::new(Complex64::new(0.5, 0.5), &segment[..1]), Err(IfsError::TooFewPoints { .. })));
+    assert!(matches!(
+        ComplexBezierIfs::new(Complex64::new(0.5, 0.5), &segment[..1]),
+        Err(IfsError::TooFewPoints { .. })
+    ));
 }
 
 /// §13: the Lévy C curve's bounding box tends to [-1/2, 3/2] x [-1/4, 1]; within 1e-2
