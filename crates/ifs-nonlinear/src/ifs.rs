@@ -227,7 +227,8 @@ impl AffineIfs {
             .flat_map(|a| control.iter().map(move |b| (0..D).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()))
             .fold(0.0, f64::max);
         let determinant = p_hat.determinant();
-        if !(determinant.abs() > 1e-12 * diameter.powi(D as i32)) {
+        let well_conditioned = determinant.abs() > 1e-12 * diameter.powi(D as i32);
+        if !well_conditioned {
             return Err(IfsError::SingularControl { determinant });
         }
         let inverse = p_hat.clone().try_inverse().ok_or(IfsError::SingularControl { determinant })?;

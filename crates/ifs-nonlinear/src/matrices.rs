@@ -247,7 +247,7 @@ fn norm_bound<T: ComplexField<RealField = f64>>(m: &DMatrix<T>) -> f64 {
 /// [`norm_bound`] if the iteration does not converge.
 fn spectral_norm<T: ComplexField<RealField = f64>>(m: &DMatrix<T>) -> f64 {
     let gram = m.adjoint() * m;
-    to_complex(&gram).and_then(|g| spectral_radius_complex(g)).map_or_else(|| norm_bound(m), f64::sqrt)
+    to_complex(&gram).and_then(spectral_radius_complex).map_or_else(|| norm_bound(m), f64::sqrt)
 }
 
 fn to_complex<T: ComplexField<RealField = f64>>(m: &DMatrix<T>) -> Option<DMatrix<Complex64>> {

@@ -259,7 +259,7 @@ pub fn two_point_subdivide(points: &[[f64; 2]], mean: Mean, mode: MeanMode) -> R
 /// ```
 pub fn three_point_subdivide(points: &[[f64; 2]], mean: Mean, mode: MeanMode) -> Result<Vec<[f64; 2]>> {
     check_input(points, "the three-point scheme", 3)?;
-    if points.len() % 2 == 0 {
+    if points.len().is_multiple_of(2) {
         return Err(IfsError::ParameterOutOfRange {
             name: "points",
             value: points.len().to_string(),
@@ -287,7 +287,9 @@ pub fn three_point_subdivide(points: &[[f64; 2]], mean: Mean, mode: MeanMode) ->
 /// ```
 /// use ifs_nonlinear::{Mean, MeanMode, bezier_split, subdivide_with_rule};
 /// let pieces = subdivide_with_rule(&bezier_split(1, 0.5)?, &[[0.0, 1.0], [2.0, 9.0]], Mean::Geometric, MeanMode::YOnly)?;
-/// assert_eq!(pieces[0], vec![[0.0, 1.0], [1.0, 3.0]]);
+/// // Left half of the segment: the first point and the geometric midpoint (1, sqrt(1 * 9)).
+/// assert_eq!(pieces[0][0], [0.0, 1.0]);
+/// assert!((pieces[0][1][0] - 1.0).abs() < 1e-15 && (pieces[0][1][1] - 3.0).abs() < 1e-14);
 /// # Ok::<(), ifs_nonlinear::IfsError>(())
 /// ```
 pub fn subdivide_with_rule(

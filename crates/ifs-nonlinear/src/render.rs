@@ -346,7 +346,7 @@ pub fn chaos_points<I: Ifs + ?Sized>(ifs: &I, game: &ChaosGame) -> Result<Vec<[f
 /// ```
 /// use ifs_nonlinear::{AffineIfs, Canvas, ChaosGame, View, chaos_density, sierpinski};
 /// let ifs = AffineIfs::from_rule(&sierpinski(), &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])?;
-/// let canvas = Canvas::new(64, 64, View::new([0.0, 0.0], [1.0, 1.0])?)?;
+/// let canvas = Canvas::new(64, 64, View::new([-0.1, -0.1], [1.1, 1.1])?)?;
 /// let density = chaos_density(&ifs, &ChaosGame { points: 10_000, ..ChaosGame::default() }, &canvas)?;
 /// assert_eq!(density.total_points(), 10_000.0); // every point lands inside the view
 /// # Ok::<(), ifs_nonlinear::IfsError>(())
@@ -356,25 +356,43 @@ pub fn chaos_density<I: Ifs + ?Sized>(ifs: &I, game: &ChaosGame, canvas: &Canvas
     let thresholds = thresholds(ifs, &game.probabilities)?;
     let start = chaos_start(ifs)?;
     let chunks = game.points.div_ceil(CHAOS_CHUNK);
-    let pixels = canvas.width as usize * canvas.height as usize;
-    let counts = (0..chunks)
-        .into_par_iter()
-        .try_fold(
-            || vec![0u64; pixels],
-            |mut counts, chunk| {
-                let count = CHAOS_CHUNK.min(game.points - chunk * CHAOS_CHUNK);
-                chaos_chunk(ifs, game, &thresholds, &start, chunk, count, |p| canvas.splat(&mut counts, p))?;
-                Ok::<_, IfsError>(counts)
-            },
-        )
-        .try_reduce(
-            || vec![0u64; pixels],
-            |mut a, b| {
-                a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
-                Ok(a)
-            },
-        )?;
+    let counts = accumulate_in_groups(canvas, chunks, |chunk, counts| {
+        let count = CHAOS_CHUNK.min(game.points - chunk * CHAOS_CHUNK);
+        chaos_chunk(ifs, game, &thresholds, &start, chunk, count, |p| canvas.splat(counts, p))
+    })?;
     Ok(Density { width: canvas.width, height: canvas.height, counts })
+}
+
+/// Runs `work(chunk, counts)` for chunks `0..chunks`, in one contiguous group of chunks per
+/// thread, each group with its own accumulation buffer, then adds the buffers. Integer
+/// sums make the result independent of the grouping (and so of the thread count), and one
+/// buffer per thread (not per chunk) keeps the zeroing and merging cost small.
+fn accumulate_in_groups(
+    canvas: &Canvas,
+    chunks: usize,
+    work: impl Fn(usize, &mut [u64]) -> Result<()> + Sync,
+) -> Result<Vec<u64>> {
+    let pixels = canvas.width as usize * canvas.height as usize;
+    let groups = rayon::current_num_threads().clamp(1, chunks.max(1));
+    let buffers: Vec<Result<Vec<u64>>> = (0..groups)
+        .into_par_iter()
+        .map(|g| {
+            let mut counts = vec![0u64; pixels];
+            for chunk in g * chunks / groups..(g + 1) * chunks / groups {
+                work(chunk, &mut counts)?;
+            }
+            Ok(counts)
+        })
+        .collect();
+    let mut total: Option<Vec<u64>> = None;
+    for buffer in buffers {
+        let buffer = buffer?;
+        match total.as_mut() {
+            None => total = Some(buffer),
+            Some(t) => t.iter_mut().zip(&buffer).for_each(|(x, y)| *x += y),
+        }
+    }
+    Ok(total.unwrap_or_else(|| vec![0; pixels]))
 }
 
 /// A world-space rectangle shown by the image.
@@ -507,20 +525,24 @@ impl Canvas {
     fn splat(&self, counts: &mut [u64], p: [f64; 3]) {
         let q = self.projection.project(p);
         let (w, h) = (self.width as usize, self.height as usize);
-        // Pixel centres at integer + 1/2; y grows downwards in the image.
-        let px = (q[0] - self.view.min[0]) / (self.view.max[0] - self.view.min[0]) * w as f64 - 0.5;
-        let py = (self.view.max[1] - q[1]) / (self.view.max[1] - self.view.min[1]) * h as f64 - 0.5;
-        if !(px > -1.0 && py > -1.0 && px < w as f64 && py < h as f64) {
+        // Position in sixteenths of a pixel, shifted by one pixel so that everything that
+        // can touch the image is positive (truncation = floor; no libm calls).
+        let sx = (q[0] - self.view.min[0]) * (16.0 * w as f64 / (self.view.max[0] - self.view.min[0])) + 8.5;
+        let sy = (self.view.max[1] - q[1]) * (16.0 * h as f64 / (self.view.max[1] - self.view.min[1])) + 8.5;
+        // Pixel centres at integer + 1/2: 16 (u - 1/2) + 16 (one-pixel shift) + 1/2 (rounding) = 16 u + 8.5.
+        if !(sx >= 0.0 && sy >= 0.0 && sx < 16.0 * (w + 1) as f64 && sy < 16.0 * (h + 1) as f64) {
             return;
         }
-        let (fx, fy) = (px.floor(), py.floor());
-        let (ax, ay) = (((px - fx) * 16.0).round() as u64, ((py - fy) * 16.0).round() as u64);
-        let (ix, iy) = (fx as i64, fy as i64);
+        let (qx, qy) = (sx as usize, sy as usize);
+        let (ax, ay) = ((qx & 15) as u64, (qy & 15) as u64);
+        // Top-left pixel of the 2 x 2 footprint, in shifted coordinates (0 = one pixel left of the image).
+        let (ix, iy) = (qx >> 4, qy >> 4);
         let weights = [(16 - ax) * (16 - ay), ax * (16 - ay), (16 - ax) * ay, ax * ay];
         for (corner, weight) in weights.into_iter().enumerate() {
-            let (x, y) = (ix + (corner & 1) as i64, iy + (corner >> 1) as i64);
-            if weight != 0 && x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h {
-                counts[y as usize * w + x as usize] += weight;
+            let (x, y) = (ix + (corner & 1), iy + (corner >> 1));
+            // Shifted coordinates 1..=w are the image columns 0..w.
+            if weight != 0 && x >= 1 && y >= 1 && x <= w && y <= h {
+                counts[(y - 1) * w + (x - 1)] += weight;
             }
         }
     }
@@ -538,23 +560,13 @@ impl Density {
     /// Splats points into a new density image, in parallel (bit-identical for any thread
     /// count: integer accumulation).
     pub fn from_points(points: &[[f64; 3]], canvas: &Canvas) -> Self {
-        let pixels = canvas.width as usize * canvas.height as usize;
-        let counts = points
-            .par_chunks(CHAOS_CHUNK)
-            .fold(
-                || vec![0u64; pixels],
-                |mut counts, chunk| {
-                    chunk.iter().for_each(|p| canvas.splat(&mut counts, *p));
-                    counts
-                },
-            )
-            .reduce(
-                || vec![0u64; pixels],
-                |mut a, b| {
-                    a.iter_mut().zip(&b).for_each(|(x, y)| *x += y);
-                    a
-                },
-            );
+        let chunks = points.len().div_ceil(CHAOS_CHUNK);
+        let counts = accumulate_in_groups(canvas, chunks, |chunk, counts| {
+            let end = ((chunk + 1) * CHAOS_CHUNK).min(points.len());
+            points[chunk * CHAOS_CHUNK..end].iter().for_each(|p| canvas.splat(counts, *p));
+            Ok(())
+        })
+        .expect("internal: splatting points cannot fail");
         Self { width: canvas.width, height: canvas.height, counts }
     }
 

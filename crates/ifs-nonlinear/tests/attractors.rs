@@ -98,6 +98,32 @@ proptest! {
         prop_assert!(distance < 1e-9, "distance {distance:e} for {p:?}");
     }
 
+    /// Affine invariance (§1.2): the attractor of A·P + t is A·(attractor of P) + t, for the
+    /// barycentric cubic-curve IFS and the triangular-patch IFS.
+    #[test]
+    fn attractors_commute_with_affine_maps(
+        coords in proptest::array::uniform8(-1.0f64..1.0),
+        a in proptest::array::uniform4(-2.0f64..2.0),
+        t in proptest::array::uniform2(-3.0f64..3.0),
+    ) {
+        let affine = |p: [f64; 2]| [a[0] * p[0] + a[1] * p[1] + t[0], a[2] * p[0] + a[3] * p[1] + t[1]];
+        let cubic = [[coords[0], coords[1]], [coords[2], coords[3]], [coords[4], coords[5]], [coords[6], coords[7]]];
+        let triangle = [cubic[0], cubic[1], cubic[2]];
+        let cases = [
+            (ifs_nonlinear::bezier_split(3, 0.4).unwrap(), cubic.to_vec()),
+            (ifs_nonlinear::triangle_patch_split(1).unwrap(), triangle.to_vec()),
+        ];
+        for (rule, control) in cases {
+            let moved: Vec<[f64; 2]> = control.iter().map(|p| affine(*p)).collect();
+            let before = deterministic_points(&BarycentricIfs::new(&rule, &control).unwrap(), None, 4, 1 << 16).unwrap();
+            let after = deterministic_points(&BarycentricIfs::new(&rule, &moved).unwrap(), None, 4, 1 << 16).unwrap();
+            for (p, q) in before.iter().zip(&after) {
+                let image = affine([p[0], p[1]]);
+                prop_assert!((image[0] - q[0]).abs() < 1e-12 && (image[1] - q[1]).abs() < 1e-12);
+            }
+        }
+    }
+
     /// Complex subdivision matrices have rows summing to 1 for any z.
     #[test]
     fn complex_rows_sum_to_one(re in -2.0f64..2.0, im in -2.0f64..2.0, degree in 1usize..6) {
