@@ -340,6 +340,57 @@ fn bezier_matrices<T: ComplexField<RealField = f64>>(n: usize, t: T) -> [DMatrix
     [left, right]
 }
 
+/// The two local subdivision matrices of a uniform binary curve scheme given by its mask
+/// (ALGORITHMS.md §1.1, §15.1): `p^{k+1}_i = Σ_j a_{i-2j} p^k_j` with
+/// `a_{mask_offset + k} = mask[k]`. With the mask supported on [lo, hi], one segment of the
+/// limit curve (parameter [0, 1]) depends on the m = hi - lo control points
+/// `p_{1-hi} … p_{-lo}`, and its halves on the same window one level finer:
+/// `S_0[r][c] = a_{r - 2c + hi - 1}`, `S_1[r][c] = a_{r - 2c + hi}`. The IFS of these
+/// matrices has the limit segment as attractor (Chaikin: a quadratic B-spline arc, cubic
+/// B-spline mask: a cubic arc, four-point scheme: an interpolating C1 arc).
+///
+/// # Errors
+/// [`IfsError::ParameterOutOfRange`] for an empty, all-zero or too long (> 64) mask or one
+/// with fewer than two non-zero taps; [`IfsError::NotFinite`]; [`IfsError::BadMatrix`] when
+/// a row of a local matrix does not sum to 1 (the mask does not satisfy `Σ a_{2k} = Σ
+/// a_{2k+1} = 1`).
+///
+/// ```
+/// use ifs_nonlinear::uniform_scheme_split;
+/// // Cubic B-spline: a_{-2..2} = (1, 4, 6, 4, 1)/8; 4 control points per segment.
+/// let rule = uniform_scheme_split(-2, &[0.125, 0.5, 0.75, 0.5, 0.125])?;
+/// assert_eq!(rule.size(), 4);
+/// assert_eq!(rule.matrices()[0].row(1).iter().copied().collect::<Vec<_>>(), vec![0.125, 0.75, 0.125, 0.0]);
+/// # Ok::<(), ifs_nonlinear::IfsError>(())
+/// ```
+pub fn uniform_scheme_split(mask_offset: i32, mask: &[f64]) -> Result<SubdivisionRule<f64>> {
+    for (k, &a) in mask.iter().enumerate() {
+        check_finite(a, || format!("mask entry {k}"))?;
+    }
+    let first = mask.iter().position(|&a| a != 0.0);
+    let last = mask.iter().rposition(|&a| a != 0.0);
+    let (Some(first), Some(last)) = (first, last) else {
+        return Err(IfsError::ParameterOutOfRange { name: "mask", value: format!("{mask:?}"), reason: "all zero" });
+    };
+    if last == first || mask.len() > 64 {
+        return Err(IfsError::ParameterOutOfRange {
+            name: "mask",
+            value: format!("{} taps", mask.len()),
+            reason: "needs 2..=64 taps with at least two non-zero",
+        });
+    }
+    let lo = i64::from(mask_offset) + first as i64;
+    let hi = i64::from(mask_offset) + last as i64;
+    let a = |k: i64| -> f64 {
+        let index = k - i64::from(mask_offset);
+        if (0..mask.len() as i64).contains(&index) { mask[index as usize] } else { 0.0 }
+    };
+    let m = (hi - lo) as usize;
+    // Row r is the fine point 1 - hi + r (+ 1 for the right half), column c the coarse point 1 - hi + c.
+    let half = |right: i64| DMatrix::from_fn(m, m, |r, c| a(r as i64 - 2 * c as i64 + hi - 1 + right));
+    SubdivisionRule::new(vec![half(0), half(1)])
+}
+
 /// The four quadrant matrices of a tensor-product Bézier patch of degrees (n_u, n_v), split
 /// at u = 1/2 and v = 1/2: `S = S_u ⊗ S_v` in the order (u low, v low), (u low, v high),
 /// (u high, v low), (u high, v high). Bilinear: (1, 1), biquadratic: (2, 2), bicubic: (3, 3).
@@ -576,6 +627,46 @@ mod tests {
         let a = blossom_weights(n, &[[0.2, 0.3, 0.5], [0.6, 0.1, 0.3], [0.0, 0.5, 0.5]]);
         let b = blossom_weights(n, &[[0.0, 0.5, 0.5], [0.2, 0.3, 0.5], [0.6, 0.1, 0.3]]);
         assert!(a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-15));
+    }
+
+    /// Uniform schemes: Chaikin's local matrices, and the cubic B-spline IFS draws the
+    /// closed-form cubic B-spline segment (from the fixed point of S_0 = the weights of
+    /// c(0), every level-k point is exactly a curve point).
+    #[test]
+    fn uniform_scheme_local_matrices() {
+        let chaikin = uniform_scheme_split(-2, &[0.25, 0.75, 0.75, 0.25]).unwrap();
+        assert_eq!(chaikin.matrices()[0], nalgebra::dmatrix![0.75, 0.25, 0.0; 0.25, 0.75, 0.0; 0.0, 0.75, 0.25]);
+        assert_eq!(chaikin.matrices()[1], nalgebra::dmatrix![0.25, 0.75, 0.0; 0.0, 0.75, 0.25; 0.0, 0.25, 0.75]);
+        assert!(chaikin.contractivity().is_contractive());
+        let four_point =
+            uniform_scheme_split(-3, &[-1.0 / 16.0, 0.0, 9.0 / 16.0, 1.0, 9.0 / 16.0, 0.0, -1.0 / 16.0]).unwrap();
+        assert_eq!(four_point.size(), 6);
+        let report = four_point.contractivity();
+        assert!(report.is_contractive(), "{report:?}");
+        assert!(uniform_scheme_split(0, &[0.5, 0.25]).is_err()); // not affine
+        assert!(uniform_scheme_split(0, &[0.0, 1.0, 0.0]).is_err());
+
+        let cubic = uniform_scheme_split(-2, &[0.125, 0.5, 0.75, 0.5, 0.125]).unwrap();
+        let p = [[0.0, 0.0], [1.0, 2.0], [3.0, 1.5], [4.0, -1.0]];
+        let curve = |t: f64| -> [f64; 2] {
+            let w = [
+                (1.0 - t).powi(3),
+                3.0 * t.powi(3) - 6.0 * t * t + 4.0,
+                -3.0 * t.powi(3) + 3.0 * t * t + 3.0 * t + 1.0,
+                t.powi(3),
+            ];
+            std::array::from_fn(|k| (0..4).map(|j| w[j] * p[j][k]).sum::<f64>() / 6.0)
+        };
+        let ifs = crate::BarycentricIfs::new(&cubic, &p).unwrap();
+        let levels = 6;
+        let start = [1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0, 0.0];
+        let points = crate::deterministic_points(&ifs, Some(&start), levels, 1 << 16).unwrap();
+        for (word, q) in points.iter().enumerate() {
+            // Word letters v_1 … v_k (v_1 most significant); t = binary fraction of the reversed word.
+            let t: f64 = (0..levels).map(|i| ((word >> i) & 1) as f64 * 0.5f64.powi(i as i32 + 1)).sum();
+            let c = curve(t);
+            assert!((c[0] - q[0]).abs() < 1e-12 && (c[1] - q[1]).abs() < 1e-12, "t = {t}");
+        }
     }
 
     #[test]
