@@ -8,6 +8,7 @@
 //! | [`mesh`] | `mesh-topo` | half-edge meshes, validation, traversal, mesh files |
 //! | [`loop_subdiv`] | `subdiv-loop` | Loop subdivision, reverse Loop, M-band Loop, analysis |
 //! | [`doo`] | `subdiv-doo` | Doo-Sabin subdivision, reverse Doo-Sabin, pyramids, analysis |
+//! | [`ifs`] | `ifs-nonlinear` | subdivision as IFS, complex-parameter and nonlinear subdivision, fractal rendering |
 //!
 //! ```
 //! use multires::mesh::{HalfedgeMesh, shapes};
@@ -16,6 +17,7 @@
 //! # Ok::<(), multires::mesh::MeshError>(())
 //! ```
 
+pub use ifs_nonlinear as ifs;
 pub use mesh_topo as mesh;
 pub use subdiv_doo as doo;
 pub use subdiv_loop as loop_subdiv;

@@ -1,30 +1,39 @@
 //! Iterated function systems: `ifs`.
 
+use std::io::Write;
 use std::path::PathBuf;
 
 use clap::Args;
+use multires::ifs::{
+    self as ifs, AffineIfs, BarycentricIfs, Canvas, ChaosGame, Complex64, ComplexBezierIfs, Density, ExpY, Ifs,
+    NonlinearIfs, Polar, Projection, SquareY, ToneMap, View,
+};
 
-use super::{CliError, CliResult};
+use super::{CliError, CliResult, input_error};
 
 /// Options of `ifs`.
 #[derive(Debug, Args)]
 pub struct IfsArgs {
-    /// Kind: bezier, patch, complex, nonlinear or sierpinski.
-    #[arg(long, default_value = "bezier")]
-    pub kind: String,
-    /// A named example from the literature (e.g. gaussian, complex-spiral).
+    /// Kind: bezier, patch, complex, nonlinear or sierpinski (or use --preset).
     #[arg(long)]
+    pub kind: Option<String>,
+    /// A named example from the literature (quartic-bump alias gaussian, levy, complex-spiral,
+    /// sierpinski-polar, exp-gaussian, bicubic-patch, ...; an unknown name lists them all).
+    #[arg(long, conflicts_with = "kind")]
     pub preset: Option<String>,
-    /// Control points as "x,y x,y ...".
-    #[arg(long)]
+    /// Control points as "x,y x,y ..." (or "x,y,z ..." for patches and curves in space).
+    #[arg(long, allow_hyphen_values = true)]
     pub control: Option<String>,
-    /// Complex parameter as re,im.
+    /// Complex parameter as re,im (kind complex).
     #[arg(long, allow_hyphen_values = true)]
     pub z: Option<String>,
+    /// Coordinate transform F of kind nonlinear: square (F(x,w) = (x,w²)), exp or polar.
+    #[arg(long, default_value = "square")]
+    pub transform: String,
     /// Output PNG.
     #[arg(long)]
     pub out: PathBuf,
-    /// Also write the attractor points, one `x y` per line.
+    /// Also write the attractor points, one `x y` (or `x y z`) per line.
     #[arg(long)]
     pub out_points: Option<PathBuf>,
     /// Image size as WxH.
@@ -35,13 +44,246 @@ pub struct IfsArgs {
     pub levels: Option<u32>,
     /// Chaos game with this many points.
     #[arg(long)]
-    pub points: Option<u64>,
+    pub points: Option<usize>,
     /// Seed of the chaos game.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
 }
 
+/// Most points the deterministic algorithm may produce from the command line.
+const POINT_BUDGET: usize = 1 << 24;
+
+/// What to render: the IFS, its deterministic start set and levels, and the projection.
+struct Job {
+    ifs: Box<dyn Ifs + Send>,
+    start: Option<Vec<f64>>,
+    levels: u32,
+    projection: Projection,
+}
+
 /// `multires ifs`.
-pub fn ifs(_args: &IfsArgs) -> CliResult {
-    Err(CliError::Unavailable("IFS rendering"))
+pub fn ifs(args: &IfsArgs) -> CliResult {
+    let (width, height) = parse_size(&args.size)?;
+    let job = match (&args.preset, &args.kind) {
+        (Some(name), _) => {
+            let scene = ifs::preset(name).map_err(|e| CliError::Input(e.to_string()))?;
+            Job { ifs: scene.ifs, start: scene.start, levels: scene.levels, projection: scene.projection }
+        }
+        (None, Some(kind)) => build_kind(kind, args)?,
+        (None, None) => {
+            return Err(CliError::Input(
+                "give --kind (bezier, patch, complex, nonlinear, sierpinski) or --preset".into(),
+            ));
+        }
+    };
+    let ifs = &job.ifs;
+    let (image, points) = match args.points {
+        Some(n) => {
+            let game = ChaosGame { points: n, seed: args.seed, ..ChaosGame::default() };
+            if args.out_points.is_some() {
+                let points = ifs::chaos_points(ifs, &game).map_err(|e| input_error("chaos game", e))?;
+                let image = ifs::render_points(&points, width, height, job.projection, ToneMap::Log)
+                    .map_err(|e| input_error("render", e))?;
+                (image, Some(points))
+            } else {
+                // Stream into the density image; the view comes from a short run of the same game.
+                let preview = ChaosGame { points: n.min(1 << 15), ..game.clone() };
+                let sample = ifs::chaos_points(ifs, &preview).map_err(|e| input_error("chaos game", e))?;
+                let view =
+                    View::fit(&sample, job.projection, width, height, 0.05).map_err(|e| input_error("render", e))?;
+                let canvas = Canvas::new(width, height, view)
+                    .map_err(|e| input_error("render", e))?
+                    .with_projection(job.projection);
+                let density = ifs::chaos_density(ifs, &game, &canvas).map_err(|e| input_error("chaos game", e))?;
+                (density.to_image(ToneMap::Log, [0, 0, 0, 255], [255, 255, 255, 255]), None)
+            }
+        }
+        None => {
+            let levels = args.levels.unwrap_or(job.levels);
+            let points = ifs::deterministic_points(ifs, job.start.as_deref(), levels, POINT_BUDGET)
+                .map_err(|e| input_error("deterministic algorithm", e))?;
+            let view = View::fit(&points, job.projection, width, height, 0.02).map_err(|e| input_error("render", e))?;
+            let canvas =
+                Canvas::new(width, height, view).map_err(|e| input_error("render", e))?.with_projection(job.projection);
+            let image =
+                Density::from_points(&points, &canvas).to_image(ToneMap::Log, [0, 0, 0, 255], [255, 255, 255, 255]);
+            (image, Some(points))
+        }
+    };
+    image.write_png(&args.out).map_err(|e| CliError::Input(e.to_string()))?;
+    if let (Some(path), Some(points)) = (&args.out_points, &points) {
+        write_points(path, points, ifs.point_dim())?;
+    }
+    let count = points.as_ref().map_or(args.points.unwrap_or(0), Vec::len);
+    println!("{} points -> {}", count, args.out.display());
+    Ok(())
+}
+
+fn build_kind(kind: &str, args: &IfsArgs) -> CliResult<Job> {
+    let job = |ifs: Box<dyn Ifs + Send>, levels: u32| Job { ifs, start: None, levels, projection: Projection::Xy };
+    let orbit = Projection::Orbit { azimuth: 0.6, elevation: 0.45 };
+    let fail = |e: ifs::IfsError| CliError::Input(format!("{kind}: {e}"));
+    match kind {
+        "bezier" => match parse_points(args.control.as_deref().ok_or_else(|| needs("bezier", "--control"))?)? {
+            Points::Planar(p) => {
+                let rule = ifs::bezier_split(p.len().saturating_sub(1).max(1), 0.5).map_err(fail)?;
+                Ok(job(Box::new(BarycentricIfs::new(&rule, &p).map_err(fail)?), 12))
+            }
+            Points::Spatial(p) => {
+                let rule = ifs::bezier_split(p.len().saturating_sub(1).max(1), 0.5).map_err(fail)?;
+                Ok(Job { projection: orbit, ..job(Box::new(BarycentricIfs::new(&rule, &p).map_err(fail)?), 12) })
+            }
+        },
+        "patch" => {
+            let points = parse_points(args.control.as_deref().ok_or_else(|| needs("patch", "--control"))?)?;
+            let count = points.len();
+            let rule = match count {
+                4 => ifs::tensor_patch_split(1, 1),
+                9 => ifs::tensor_patch_split(2, 2),
+                16 => ifs::tensor_patch_split(3, 3),
+                3 | 6 | 10 | 15 => {
+                    ifs::triangle_patch_split([3, 6, 10, 15].iter().position(|&c| c == count).unwrap_or(0) + 1)
+                }
+                _ => {
+                    return Err(CliError::Input(format!(
+                        "patch: {count} control points; give 4, 9 or 16 (bilinear, biquadratic, bicubic tensor patch) \
+                         or 3, 6, 10, 15 (triangular patch of degree 1-4)"
+                    )));
+                }
+            }
+            .map_err(fail)?;
+            match points {
+                Points::Planar(p) => Ok(job(Box::new(BarycentricIfs::new(&rule, &p).map_err(fail)?), 6)),
+                Points::Spatial(p) => {
+                    Ok(Job { projection: orbit, ..job(Box::new(BarycentricIfs::new(&rule, &p).map_err(fail)?), 6) })
+                }
+            }
+        }
+        "complex" => {
+            let z = parse_pair(args.z.as_deref().ok_or_else(|| needs("complex", "--z re,im"))?, "--z")?;
+            let control: Vec<Complex64> = match args.control.as_deref() {
+                None => vec![Complex64::new(0.0, 0.0), Complex64::new(1.0, 0.0)],
+                Some(text) => match parse_points(text)? {
+                    Points::Planar(p) => p.iter().map(|q| Complex64::new(q[0], q[1])).collect(),
+                    Points::Spatial(_) => {
+                        return Err(CliError::Input("complex: control points must be planar (x,y)".into()));
+                    }
+                },
+            };
+            Ok(job(Box::new(ComplexBezierIfs::new(Complex64::new(z[0], z[1]), &control).map_err(fail)?), 14))
+        }
+        "nonlinear" => {
+            let control = planar(args.control.as_deref().unwrap_or("-1,0 0,5 1,0"), "nonlinear")?;
+            let linear = AffineIfs::from_rule(&ifs::bezier_split(2, 0.5).map_err(fail)?, &control).map_err(fail)?;
+            let ifs: Box<dyn Ifs + Send> = match args.transform.as_str() {
+                "square" => Box::new(NonlinearIfs::new(linear, SquareY)),
+                "exp" => Box::new(NonlinearIfs::new(linear, ExpY)),
+                "polar" => Box::new(NonlinearIfs::new(linear, Polar)),
+                other => return Err(CliError::Input(format!("--transform {other}: use square, exp or polar"))),
+            };
+            Ok(job(ifs, 12))
+        }
+        "sierpinski" => {
+            let control = planar(args.control.as_deref().unwrap_or("0,0 1,0 0.5,0.8660254037844386"), "sierpinski")?;
+            Ok(job(Box::new(AffineIfs::from_rule(&ifs::sierpinski(), &control).map_err(fail)?), 8))
+        }
+        other => Err(CliError::Input(format!("--kind {other}: use bezier, patch, complex, nonlinear or sierpinski"))),
+    }
+}
+
+fn needs(kind: &str, option: &str) -> CliError {
+    CliError::Input(format!("--kind {kind} needs {option}"))
+}
+
+enum Points {
+    Planar(Vec<[f64; 2]>),
+    Spatial(Vec<[f64; 3]>),
+}
+
+impl Points {
+    fn len(&self) -> usize {
+        match self {
+            Points::Planar(p) => p.len(),
+            Points::Spatial(p) => p.len(),
+        }
+    }
+}
+
+fn planar(text: &str, kind: &str) -> CliResult<Vec<[f64; 2]>> {
+    match parse_points(text)? {
+        Points::Planar(p) if p.len() == 3 => Ok(p),
+        Points::Planar(p) => Err(CliError::Input(format!("{kind}: needs 3 control points, got {}", p.len()))),
+        Points::Spatial(_) => Err(CliError::Input(format!("{kind}: control points must be planar (x,y)"))),
+    }
+}
+
+/// Parses "x,y x,y ..." or "x,y,z ...": all points of one dimension, finite numbers.
+fn parse_points(text: &str) -> CliResult<Points> {
+    let mut planar = Vec::new();
+    let mut spatial = Vec::new();
+    for (index, token) in text.split_whitespace().enumerate() {
+        let values: Vec<f64> = token
+            .split(',')
+            .map(|v| v.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
+            .collect::<Option<_>>()
+            .ok_or_else(|| {
+                CliError::Input(format!("--control: point {index} `{token}` is not x,y or x,y,z with finite numbers"))
+            })?;
+        match values.as_slice() {
+            [x, y] => planar.push([*x, *y]),
+            [x, y, z] => spatial.push([*x, *y, *z]),
+            _ => {
+                return Err(CliError::Input(format!(
+                    "--control: point {index} `{token}` has {} coordinates",
+                    values.len()
+                )));
+            }
+        }
+        if !planar.is_empty() && !spatial.is_empty() {
+            return Err(CliError::Input(format!("--control: point {index} mixes 2D and 3D points")));
+        }
+    }
+    match (planar.is_empty(), spatial.is_empty()) {
+        (true, true) => Err(CliError::Input("--control: no points".into())),
+        (false, _) => Ok(Points::Planar(planar)),
+        (true, false) => Ok(Points::Spatial(spatial)),
+    }
+}
+
+fn parse_pair(text: &str, option: &str) -> CliResult<[f64; 2]> {
+    let values: Option<Vec<f64>> =
+        text.split(',').map(|v| v.trim().parse::<f64>().ok().filter(|x| x.is_finite())).collect();
+    match values.as_deref() {
+        Some([a, b]) => Ok([*a, *b]),
+        _ => Err(CliError::Input(format!("{option} `{text}`: expected two finite numbers re,im"))),
+    }
+}
+
+fn parse_size(text: &str) -> CliResult<(u32, u32)> {
+    let parsed = text.split_once(['x', 'X']).and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)));
+    match parsed {
+        Some((w, h))
+            if (1..=ifs::render::MAX_IMAGE_SIDE).contains(&w) && (1..=ifs::render::MAX_IMAGE_SIDE).contains(&h) =>
+        {
+            Ok((w, h))
+        }
+        _ => Err(CliError::Input(format!(
+            "--size `{text}`: expected WxH with sides in 1..={}",
+            ifs::render::MAX_IMAGE_SIDE
+        ))),
+    }
+}
+
+fn write_points(path: &PathBuf, points: &[[f64; 3]], dim: usize) -> CliResult {
+    let io = |source| CliError::Io { path: path.clone(), source };
+    let file = std::fs::File::create(path).map_err(io)?;
+    let mut out = std::io::BufWriter::new(file);
+    for p in points {
+        if dim == 3 {
+            writeln!(out, "{} {} {}", p[0], p[1], p[2]).map_err(io)?;
+        } else {
+            writeln!(out, "{} {}", p[0], p[1]).map_err(io)?;
+        }
+    }
+    out.flush().map_err(io)
 }

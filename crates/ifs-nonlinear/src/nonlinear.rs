@@ -1,0 +1,295 @@
+//! Nonlinear IFS `f_i = F ∘ T_i ∘ F^{-1}` (seed 003, ALGORITHMS.md §14, §15.1) with a
+//! locally invertible coordinate transform F.
+//!
+//! The maps are applied literally, one conjugated map at a time (F^{-1}, then the affine
+//! `T_i`, then F), as in the seed; when the state leaves the domain of F^{-1} the renderer
+//! reports [`IfsError::Domain`](crate::IfsError::Domain) with the point index. On the
+//! attractor (the image under F of the linear attractor, when F^{-1} ∘ F is the identity
+//! there) the conjugation telescopes: `f_{w_1} ∘ … ∘ f_{w_k} = F ∘ T_{w_1} ∘ … ∘ T_{w_k} ∘ F^{-1}`.
+
+use crate::error::Result;
+use crate::ifs::{AffineIfs, Ifs};
+
+/// A locally invertible map F of R^3 (2D IFS use the first two coordinates; z passes through).
+pub trait CoordinateTransform: Sync {
+    /// F.
+    fn forward(&self, p: [f64; 3]) -> [f64; 3];
+    /// The local inverse F^{-1}, `None` outside its domain.
+    fn inverse(&self, p: [f64; 3]) -> Option<[f64; 3]>;
+    /// Domain of F^{-1}, for error messages.
+    fn domain(&self) -> &'static str;
+}
+
+/// `F(x, w) = (x, w²)`, `F^{-1}(x, y) = (x, √y)` for y ≥ 0: the power-mean transform of
+/// the seed's "Gauss" IFS (ALGORITHMS.md §14.2, §15.3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SquareY;
+
+impl CoordinateTransform for SquareY {
+    #[inline]
+    fn forward(&self, p: [f64; 3]) -> [f64; 3] {
+        [p[0], p[1] * p[1], p[2]]
+    }
+    #[inline]
+    fn inverse(&self, p: [f64; 3]) -> Option<[f64; 3]> {
+        (p[1] >= 0.0).then(|| [p[0], p[1].sqrt(), p[2]])
+    }
+    fn domain(&self) -> &'static str {
+        "y >= 0 (square root)"
+    }
+}
+
+/// `F(x, u) = (x, e^u)`, `F^{-1}(x, y) = (x, ln y)` for y > 0: the geometric-mean transform
+/// (ALGORITHMS.md §14.1); quadratic Bézier curves in (x, u) become true Gaussians.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct ExpY;
+
+impl CoordinateTransform for ExpY {
+    #[inline]
+    fn forward(&self, p: [f64; 3]) -> [f64; 3] {
+        [p[0], p[1].exp(), p[2]]
+    }
+    #[inline]
+    fn inverse(&self, p: [f64; 3]) -> Option<[f64; 3]> {
+        (p[1] > 0.0).then(|| [p[0], p[1].ln(), p[2]])
+    }
+    fn domain(&self) -> &'static str {
+        "y > 0 (logarithm)"
+    }
+}
+
+/// Polar coordinates: `F(r, θ) = (r cos θ, r sin θ)`, `F^{-1}(x, y) = (|(x, y)|, atan2(y, x))`
+/// with θ ∈ (-π, π], defined away from the origin. Bends straight-line sets into arcs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Polar;
+
+impl CoordinateTransform for Polar {
+    #[inline]
+    fn forward(&self, p: [f64; 3]) -> [f64; 3] {
+        let (s, c) = p[1].sin_cos();
+        [p[0] * c, p[0] * s, p[2]]
+    }
+    #[inline]
+    fn inverse(&self, p: [f64; 3]) -> Option<[f64; 3]> {
+        let r = p[0].hypot(p[1]);
+        (r > 0.0).then(|| [r, p[1].atan2(p[0]), p[2]])
+    }
+    fn domain(&self) -> &'static str {
+        "points other than the origin (polar angle)"
+    }
+}
+
+/// A user-supplied pair (F, F^{-1}) of closures.
+///
+/// ```
+/// use ifs_nonlinear::{CoordinateTransform, FnTransform};
+/// let cube_y = FnTransform::new(|p: [f64; 3]| [p[0], p[1].powi(3), p[2]], |p: [f64; 3]| Some([p[0], p[1].cbrt(), p[2]]));
+/// assert_eq!(cube_y.forward([1.0, 2.0, 0.0]), [1.0, 8.0, 0.0]);
+/// ```
+pub struct FnTransform<F, G> {
+    forward: F,
+    inverse: G,
+}
+
+impl<F, G> FnTransform<F, G>
+where
+    F: Fn([f64; 3]) -> [f64; 3] + Sync,
+    G: Fn([f64; 3]) -> Option<[f64; 3]> + Sync,
+{
+    /// Wraps F and its local inverse.
+    pub fn new(forward: F, inverse: G) -> Self {
+        Self { forward, inverse }
+    }
+}
+
+impl<F, G> CoordinateTransform for FnTransform<F, G>
+where
+    F: Fn([f64; 3]) -> [f64; 3] + Sync,
+    G: Fn([f64; 3]) -> Option<[f64; 3]> + Sync,
+{
+    fn forward(&self, p: [f64; 3]) -> [f64; 3] {
+        (self.forward)(p)
+    }
+    fn inverse(&self, p: [f64; 3]) -> Option<[f64; 3]> {
+        (self.inverse)(p)
+    }
+    fn domain(&self) -> &'static str {
+        "the user transform's domain"
+    }
+}
+
+/// The nonlinear IFS `{F ∘ T_i ∘ F^{-1}}` of an affine IFS `{T_i}` (states are points of
+/// the nonlinear picture).
+///
+/// ```
+/// use ifs_nonlinear::{AffineIfs, NonlinearIfs, SquareY, bezier_split, deterministic_points};
+/// // The seed's "Gauss curve": really the quartic (25/4)(1 - x²)² (ALGORITHMS.md §15.3).
+/// let linear = AffineIfs::from_rule(&bezier_split(2, 0.5)?, &[[-1.0, 0.0], [0.0, 5.0], [1.0, 0.0]])?;
+/// let ifs = NonlinearIfs::new(linear, SquareY);
+/// let points = deterministic_points(&ifs, None, 10, 1 << 20)?;
+/// let residual = points.iter().map(|p| (p[1] - 6.25 * (1.0 - p[0] * p[0]).powi(2)).abs()).fold(0.0, f64::max);
+/// assert!(residual < 1e-4);
+/// # Ok::<(), ifs_nonlinear::IfsError>(())
+/// ```
+pub struct NonlinearIfs<F> {
+    linear: AffineIfs,
+    transform: F,
+    start: Vec<f64>,
+}
+
+impl<F: CoordinateTransform> NonlinearIfs<F> {
+    /// Conjugates `linear` by `transform`. The default start set is F of the linear IFS's
+    /// default start set.
+    pub fn new(linear: AffineIfs, transform: F) -> Self {
+        let d = linear.dim();
+        let start = linear
+            .default_start()
+            .chunks_exact(d)
+            .flat_map(|s| {
+                let p = transform.forward(linear.point(s));
+                p[..d].to_vec()
+            })
+            .collect();
+        Self { linear, transform, start }
+    }
+
+    /// The underlying affine IFS.
+    pub fn linear(&self) -> &AffineIfs {
+        &self.linear
+    }
+
+    /// The transform F.
+    pub fn transform(&self) -> &F {
+        &self.transform
+    }
+
+    /// Maps linear-picture points through F (e.g. a start set given before the transform).
+    ///
+    /// # Errors
+    /// Never at present; kept fallible for transforms with a restricted forward domain.
+    pub fn forward_points(&self, points: &[[f64; 3]]) -> Result<Vec<[f64; 3]>> {
+        Ok(points.iter().map(|p| self.transform.forward(*p)).collect())
+    }
+}
+
+impl<F: CoordinateTransform> Ifs for NonlinearIfs<F> {
+    fn map_count(&self) -> usize {
+        self.linear.map_count()
+    }
+    fn state_len(&self) -> usize {
+        self.linear.dim()
+    }
+    fn point_dim(&self) -> usize {
+        self.linear.dim()
+    }
+    #[inline]
+    fn apply(&self, map: usize, state: &[f64], out: &mut [f64]) -> bool {
+        let d = self.linear.dim();
+        let p = if d == 2 { [state[0], state[1], 0.0] } else { [state[0], state[1], state[2]] };
+        let Some(u) = self.transform.inverse(p) else { return false };
+        let v = self.linear.maps()[map].apply(d, u);
+        let q = self.transform.forward(v);
+        out[..d].copy_from_slice(&q[..d]);
+        q[..d].iter().all(|x| x.is_finite())
+    }
+    #[inline]
+    fn point(&self, state: &[f64]) -> [f64; 3] {
+        self.linear.point(state)
+    }
+    fn default_start(&self) -> Vec<f64> {
+        self.start.clone()
+    }
+    fn determinants(&self) -> Vec<f64> {
+        self.linear.determinants()
+    }
+    fn domain(&self) -> &'static str {
+        self.transform.domain()
+    }
+}
+
+/// Samples of a filled triangle: `n + 1` points per side, all lattice points
+/// `(i a + j b + k c)/n`, i + j + k = n (the deterministic start set "from a triangle").
+///
+/// ```
+/// assert_eq!(ifs_nonlinear::triangle_samples([0.0, 0.0], [1.0, 0.0], [0.0, 1.0], 4).len(), 15 * 2);
+/// ```
+pub fn triangle_samples(a: [f64; 2], b: [f64; 2], c: [f64; 2], n: usize) -> Vec<f64> {
+    let n = n.max(1);
+    let mut out = Vec::with_capacity((n + 1) * (n + 2));
+    for i in (0..=n).rev() {
+        for j in (0..=n - i).rev() {
+            let k = n - i - j;
+            let w = [i as f64 / n as f64, j as f64 / n as f64, k as f64 / n as f64];
+            out.push(w[0] * a[0] + w[1] * b[0] + w[2] * c[0]);
+            out.push(w[0] * a[1] + w[1] * b[1] + w[2] * c[1]);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::error::IfsError;
+    use crate::matrices::{bezier_split, sierpinski};
+    use crate::render::deterministic_points;
+
+    fn quartic() -> NonlinearIfs<SquareY> {
+        let linear =
+            AffineIfs::from_rule(&bezier_split(2, 0.5).unwrap(), &[[-1.0, 0.0], [0.0, 5.0], [1.0, 0.0]]).unwrap();
+        NonlinearIfs::new(linear, SquareY)
+    }
+
+    /// The seed's explicit maps: f_1: x' = x/2 - 1/2, y' = (5x/4 + √y/4 + 5/4)²,
+    /// f_2: x' = x/2 + 1/2, y' = (-5x/4 + √y/4 + 5/4)².
+    #[test]
+    fn quartic_bump_maps_are_the_seed_formulas() {
+        let ifs = quartic();
+        let mut out = [0.0; 2];
+        for (x, y) in [(0.3, 2.0), (-0.7, 0.1), (0.0, 6.25)] {
+            assert!(ifs.apply(0, &[x, y], &mut out));
+            let expected = [x / 2.0 - 0.5, (5.0 * x / 4.0 + y.sqrt() / 4.0 + 1.25).powi(2)];
+            assert!((out[0] - expected[0]).abs() < 1e-14 && (out[1] - expected[1]).abs() < 1e-13);
+            assert!(ifs.apply(1, &[x, y], &mut out));
+            let expected = [x / 2.0 + 0.5, (-5.0 * x / 4.0 + y.sqrt() / 4.0 + 1.25).powi(2)];
+            assert!((out[0] - expected[0]).abs() < 1e-14 && (out[1] - expected[1]).abs() < 1e-13);
+        }
+        assert!(!ifs.apply(0, &[0.0, -1.0], &mut out));
+    }
+
+    /// ALGORITHMS.md §15.3: residual vs (25/4)(1 - x²)² after 14 levels from the triangle
+    /// is about 5e-8.
+    #[test]
+    fn quartic_bump_residual_after_14_levels() {
+        let ifs = quartic();
+        let triangle = ifs.forward_points(&[[-1.0, 0.0, 0.0], [0.0, 5.0, 0.0], [1.0, 0.0, 0.0]]).unwrap();
+        let start: Vec<f64> = triangle.iter().flat_map(|p| [p[0], p[1]]).collect();
+        assert_eq!(start, vec![-1.0, 0.0, 0.0, 25.0, 1.0, 0.0]);
+        let points = deterministic_points(&ifs, Some(&start), 14, 1 << 20).unwrap();
+        let residual = points.iter().map(|p| (p[1] - 6.25 * (1.0 - p[0] * p[0]).powi(2)).abs()).fold(0.0, f64::max);
+        // Spec: 4.7e-8 (measured 4.66e-8).
+        assert!((4.0e-8..5.0e-8).contains(&residual), "residual {residual:e}");
+    }
+
+    #[test]
+    fn nonlinear_sierpinski_is_the_image_of_the_linear_one() {
+        let linear = AffineIfs::from_rule(&sierpinski(), &[[1.0, 0.0], [2.0, 0.0], [1.0, 1.5]]).unwrap();
+        let bent = NonlinearIfs::new(linear.clone(), Polar);
+        let a = deterministic_points(&linear, None, 5, 1 << 16).unwrap();
+        let b = deterministic_points(&bent, None, 5, 1 << 16).unwrap();
+        for (p, q) in a.iter().zip(&b) {
+            let f = Polar.forward(*p);
+            assert!((f[0] - q[0]).abs() < 1e-12 && (f[1] - q[1]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn leaving_the_domain_is_a_typed_error() {
+        // A linear IFS whose maps push y below 0, conjugated by the logarithm.
+        let linear = AffineIfs::from_rule(&sierpinski(), &[[0.0, -1.0], [1.0, 0.5], [0.0, 1.0]]).unwrap();
+        let ifs = NonlinearIfs::new(linear, ExpY);
+        // Start at points with y <= 0 (outside ln's domain).
+        let result = deterministic_points(&ifs, Some(&[0.5, -0.5]), 1, 100);
+        assert!(matches!(result, Err(IfsError::Domain { index: 0, .. })), "{result:?}");
+    }
+}

@@ -1,0 +1,867 @@
+//! Rendering attractors (ALGORITHMS.md §15.2): the deterministic algorithm, the chaos game,
+//! anti-aliased density images and PNG output.
+//!
+//! # Determinism
+//! Both algorithms run in parallel with `rayon` and give **bit-identical results whatever
+//! the thread count**:
+//! * the deterministic algorithm computes each output point by the same sequence of map
+//!   applications (tasks own disjoint, fixed output ranges);
+//! * the chaos game is cut into fixed chunks of [`CHAOS_CHUNK`] points; chunk c draws from
+//!   its own ChaCha8 stream (`seed`, stream c), starts at the fixed point of map 0 and
+//!   discards `burn_in` iterates. The output depends only on (IFS, points, seed, burn-in,
+//!   probabilities), not on the scheduling;
+//! * densities are accumulated in integers: each point splats bilinear weights quantized to
+//!   1/256 that sum to exactly 256, so the summation order cannot change the result.
+
+use std::path::Path;
+
+use rand::{RngCore, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use crate::error::{IfsError, Result};
+use crate::ifs::Ifs;
+
+/// Points per chaos-game chunk (each chunk has its own random stream and burn-in).
+pub const CHAOS_CHUNK: usize = 1 << 14;
+
+/// How the chaos game chooses its maps.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum Probabilities {
+    /// `p_i ∝ |det(linear part of map i)|`, each floored at 1 % of the largest (so that
+    /// singular maps, like the fern's stem, still get visited). The default.
+    #[default]
+    Determinant,
+    /// `p_i = 1/K`.
+    Uniform,
+    /// Given weights (normalized; must be non-negative, finite, not all zero, one per map).
+    Custom(Vec<f64>),
+}
+
+/// Parameters of the random-iteration algorithm (chaos game).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChaosGame {
+    /// Number of points produced.
+    pub points: usize,
+    /// Seed of the random streams.
+    pub seed: u64,
+    /// Iterates discarded at the start of each chunk (`B ≥ ln(tol/diam)/ln(contraction)`;
+    /// 64 gives 1e-19 relative for a contraction of 1/2, 2e-10 for the Lévy curve's 0.707).
+    pub burn_in: u32,
+    /// Map probabilities.
+    pub probabilities: Probabilities,
+}
+
+impl Default for ChaosGame {
+    fn default() -> Self {
+        Self { points: 1 << 20, seed: 0, burn_in: 64, probabilities: Probabilities::Determinant }
+    }
+}
+
+/// Cumulative thresholds in units of 2^-32: map i is chosen when the random u32 falls in
+/// `[thresholds[i-1], thresholds[i])`.
+fn thresholds<I: Ifs + ?Sized>(ifs: &I, probabilities: &Probabilities) -> Result<Vec<u64>> {
+    let k = ifs.map_count();
+    let weights = match probabilities {
+        Probabilities::Uniform => vec![1.0; k],
+        Probabilities::Determinant => {
+            let dets = ifs.determinants();
+            let max = dets.iter().copied().fold(0.0, f64::max);
+            if max > 0.0 && max.is_finite() { dets.iter().map(|d| d.max(0.01 * max)).collect() } else { vec![1.0; k] }
+        }
+        Probabilities::Custom(weights) => {
+            if weights.len() != k {
+                return Err(IfsError::ParameterOutOfRange {
+                    name: "probabilities",
+                    value: format!("{} weights", weights.len()),
+                    reason: "need one weight per map",
+                });
+            }
+            if weights.iter().any(|w| !(w.is_finite() && *w >= 0.0)) || weights.iter().sum::<f64>() <= 0.0 {
+                return Err(IfsError::ParameterOutOfRange {
+                    name: "probabilities",
+                    value: format!("{weights:?}"),
+                    reason: "weights must be finite, non-negative and not all zero",
+                });
+            }
+            weights.clone()
+        }
+    };
+    let total: f64 = weights.iter().sum();
+    let mut acc = 0.0;
+    Ok(weights
+        .iter()
+        .map(|w| {
+            acc += w / total;
+            (acc * 4_294_967_296.0).round().min(4_294_967_296.0) as u64
+        })
+        .collect())
+}
+
+#[inline]
+fn choose(thresholds: &[u64], r: u32) -> usize {
+    let r = u64::from(r);
+    let mut i = 0;
+    while i + 1 < thresholds.len() && r >= thresholds[i] {
+        i += 1;
+    }
+    i
+}
+
+fn domain_error<I: Ifs + ?Sized>(ifs: &I, index: usize, map: usize, state: &[f64]) -> IfsError {
+    IfsError::Domain {
+        index,
+        value: format!("{:?}", ifs.point(state)),
+        what: format!("map {map}"),
+        domain: if ifs.domain().is_empty() { "the maps' domain" } else { ifs.domain() },
+    }
+}
+
+/// Number of points of `levels` deterministic levels from `starts` start states (saturating).
+fn deterministic_count(starts: usize, maps: usize, levels: u32) -> u128 {
+    (0..levels).fold(starts as u128, |n, _| n.saturating_mul(maps as u128))
+}
+
+/// The deterministic algorithm (ALGORITHMS.md §15.2): `A_0` = the start states,
+/// `A_{k+1} = ∪_i f_i(A_k)`; returns the points of `A_levels`, duplicates included.
+///
+/// `start` holds concatenated states (`None`: [`Ifs::default_start`], i.e. the control
+/// points). Output order: start state, then the word `v_1 … v_k` in lexicographic order,
+/// where `v_1` is the map applied first: point = `f_{v_k}(… f_{v_1}(s))`. For the
+/// barycentric form that is row `s` of `S_{v_1} ⋯ S_{v_k} P`.
+///
+/// # Errors
+/// [`IfsError::BudgetExceeded`] when `starts · K^levels > budget`;
+/// [`IfsError::ParameterOutOfRange`] when `start` is empty or not a whole number of states;
+/// [`IfsError::Domain`] when a nonlinear map leaves its domain.
+///
+/// ```
+/// use ifs_nonlinear::{BarycentricIfs, bezier_split, deterministic_points};
+/// let ifs = BarycentricIfs::new(&bezier_split(2, 0.5)?, &[[0.0, 0.0], [1.0, 2.0], [3.0, 0.0]])?;
+/// let points = deterministic_points(&ifs, None, 4, 1 << 20)?;
+/// assert_eq!(points.len(), 3 * 16);
+/// # Ok::<(), ifs_nonlinear::IfsError>(())
+/// ```
+pub fn deterministic_points<I: Ifs + ?Sized>(
+    ifs: &I,
+    start: Option<&[f64]>,
+    levels: u32,
+    budget: usize,
+) -> Result<Vec<[f64; 3]>> {
+    let mut points = Vec::new();
+    deterministic_into(ifs, start, levels, budget, &mut points)?;
+    Ok(points)
+}
+
+/// [`deterministic_points`] writing into a reusable buffer (cleared first); returns the
+/// number of map applications performed.
+///
+/// # Errors
+/// As [`deterministic_points`].
+pub fn deterministic_into<I: Ifs + ?Sized>(
+    ifs: &I,
+    start: Option<&[f64]>,
+    levels: u32,
+    budget: usize,
+    points: &mut Vec<[f64; 3]>,
+) -> Result<u64> {
+    let n = ifs.state_len();
+    let k = ifs.map_count();
+    let default_start;
+    let start = match start {
+        Some(s) => s,
+        None => {
+            default_start = ifs.default_start();
+            &default_start
+        }
+    };
+    if start.is_empty() || start.len() % n != 0 {
+        return Err(IfsError::ParameterOutOfRange {
+            name: "start",
+            value: format!("{} numbers", start.len()),
+            reason: "the start set must be a non-empty list of whole states",
+        });
+    }
+    let starts = start.len() / n;
+    let needed = deterministic_count(starts, k, levels);
+    if needed > budget as u128 {
+        return Err(IfsError::BudgetExceeded { levels, needed, budget });
+    }
+    let total = needed as usize;
+    // Split the words by a prefix of `split` letters so that there are enough tasks.
+    let mut split = 0;
+    while split < levels && starts * k.pow(split) < 256 {
+        split += 1;
+    }
+    let rest = levels - split;
+    let leaves = k.pow(rest);
+    points.clear();
+    points.resize(total, [0.0; 3]);
+    let prefixes = k.pow(split);
+    let results: Vec<Result<u64>> = points
+        .par_chunks_mut(leaves)
+        .enumerate()
+        .map(|(task, out)| {
+            let (start_index, mut prefix) = (task / prefixes, task % prefixes);
+            // Stack of states: depth 0 = start, depth d = after d maps.
+            let depth = levels as usize;
+            let mut stack = vec![0.0; (depth + 1) * n];
+            stack[..n].copy_from_slice(&start[start_index * n..(start_index + 1) * n]);
+            let mut applications = 0u64;
+            // Prefix letters, most significant first = first applied.
+            let mut letters = vec![0usize; depth];
+            for d in (0..split as usize).rev() {
+                letters[d] = prefix % k;
+                prefix /= k;
+            }
+            let first_index = task * leaves;
+            let mut valid_from = 0; // stack[0..=valid_from] is up to date
+            for (leaf, slot) in out.iter_mut().enumerate() {
+                for d in valid_from..depth {
+                    let (done, next) = stack.split_at_mut((d + 1) * n);
+                    if !ifs.apply(letters[d], &done[d * n..], &mut next[..n]) {
+                        return Err(domain_error(ifs, first_index + leaf, letters[d], &done[d * n..(d + 1) * n]));
+                    }
+                    applications += 1;
+                }
+                *slot = ifs.point(&stack[depth * n..]);
+                // Odometer over the last `rest` letters.
+                let mut d = depth;
+                while d > split as usize {
+                    d -= 1;
+                    if letters[d] + 1 < k {
+                        letters[d] += 1;
+                        break;
+                    }
+                    letters[d] = 0;
+                }
+                valid_from = d;
+            }
+            Ok(applications)
+        })
+        .collect();
+    let mut applications = 0;
+    for r in results {
+        applications += r?;
+    }
+    Ok(applications)
+}
+
+/// Runs one chaos-game chunk, calling `sink(index_in_chunk, point)` for each kept point.
+fn chaos_chunk<I: Ifs + ?Sized>(
+    ifs: &I,
+    game: &ChaosGame,
+    thresholds: &[u64],
+    start: &[f64],
+    chunk: usize,
+    count: usize,
+    mut sink: impl FnMut([f64; 3]),
+) -> Result<()> {
+    let n = ifs.state_len();
+    let mut rng = ChaCha8Rng::seed_from_u64(game.seed);
+    rng.set_stream(chunk as u64);
+    let mut a = start.to_vec();
+    let mut b = vec![0.0; n];
+    let first = chunk * CHAOS_CHUNK;
+    for step in 0..(game.burn_in as usize + count) {
+        let map = choose(thresholds, rng.next_u32());
+        if !ifs.apply(map, &a, &mut b) {
+            return Err(domain_error(ifs, first + step.saturating_sub(game.burn_in as usize), map, &a));
+        }
+        std::mem::swap(&mut a, &mut b);
+        if step >= game.burn_in as usize {
+            sink(ifs.point(&a));
+        }
+    }
+    Ok(())
+}
+
+/// Chaos-game start state: the default start's first state moved towards the fixed point
+/// of map 0 (which lies on the attractor).
+fn chaos_start<I: Ifs + ?Sized>(ifs: &I) -> Result<Vec<f64>> {
+    let n = ifs.state_len();
+    let mut a = ifs.default_start()[..n].to_vec();
+    let mut b = vec![0.0; n];
+    for _ in 0..128 {
+        if !ifs.apply(0, &a, &mut b) {
+            return Err(domain_error(ifs, 0, 0, &a));
+        }
+        std::mem::swap(&mut a, &mut b);
+    }
+    Ok(a)
+}
+
+fn check_game(game: &ChaosGame) -> Result<()> {
+    if game.points == 0 {
+        return Err(IfsError::ParameterOutOfRange {
+            name: "points",
+            value: "0".into(),
+            reason: "need at least one point",
+        });
+    }
+    Ok(())
+}
+
+/// The chaos game (random iteration, ALGORITHMS.md §15.2): `game.points` points of the
+/// attractor, in parallel, deterministic for a given seed whatever the thread count (see
+/// the [module docs](self)).
+///
+/// # Errors
+/// [`IfsError::ParameterOutOfRange`] for zero points or bad probabilities;
+/// [`IfsError::Domain`] when a nonlinear map leaves its domain.
+///
+/// ```
+/// use ifs_nonlinear::{AffineIfs, ChaosGame, chaos_points, sierpinski};
+/// let ifs = AffineIfs::from_rule(&sierpinski(), &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])?;
+/// let points = chaos_points(&ifs, &ChaosGame { points: 1000, seed: 7, ..ChaosGame::default() })?;
+/// assert!(points.iter().all(|p| p[0] >= -1e-12 && p[1] >= -1e-12 && p[0] + p[1] <= 1.0 + 1e-12));
+/// # Ok::<(), ifs_nonlinear::IfsError>(())
+/// ```
+pub fn chaos_points<I: Ifs + ?Sized>(ifs: &I, game: &ChaosGame) -> Result<Vec<[f64; 3]>> {
+    check_game(game)?;
+    let thresholds = thresholds(ifs, &game.probabilities)?;
+    let start = chaos_start(ifs)?;
+    let mut points = vec![[0.0; 3]; game.points];
+    points
+        .par_chunks_mut(CHAOS_CHUNK)
+        .enumerate()
+        .map(|(chunk, out)| {
+            let count = out.len();
+            let mut slots = out.iter_mut();
+            chaos_chunk(ifs, game, &thresholds, &start, chunk, count, |p| {
+                *slots.next().expect("internal: chunk sized to its output") = p;
+            })
+        })
+        .collect::<Vec<Result<()>>>()
+        .into_iter()
+        .collect::<Result<()>>()?;
+    Ok(points)
+}
+
+/// The chaos game straight into a density image (no point list is kept).
+///
+/// # Errors
+/// As [`chaos_points`].
+///
+/// ```
+/// use ifs_nonlinear::{AffineIfs, Canvas, ChaosGame, View, chaos_density, sierpinski};
+/// let ifs = AffineIfs::from_rule(&sierpinski(), &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])?;
+/// let canvas = Canvas::new(64, 64, View::new([-0.1, -0.1], [1.1, 1.1])?)?;
+/// let density = chaos_density(&ifs, &ChaosGame { points: 10_000, ..ChaosGame::default() }, &canvas)?;
+/// assert_eq!(density.total_points(), 10_000.0); // every point lands inside the view
+/// # Ok::<(), ifs_nonlinear::IfsError>(())
+/// ```
+pub fn chaos_density<I: Ifs + ?Sized>(ifs: &I, game: &ChaosGame, canvas: &Canvas) -> Result<Density> {
+    check_game(game)?;
+    let thresholds = thresholds(ifs, &game.probabilities)?;
+    let start = chaos_start(ifs)?;
+    let chunks = game.points.div_ceil(CHAOS_CHUNK);
+    let counts = accumulate_in_groups(canvas, chunks, |chunk, counts| {
+        let count = CHAOS_CHUNK.min(game.points - chunk * CHAOS_CHUNK);
+        chaos_chunk(ifs, game, &thresholds, &start, chunk, count, |p| canvas.splat(counts, p))
+    })?;
+    Ok(Density { width: canvas.width, height: canvas.height, counts })
+}
+
+/// Runs `work(chunk, counts)` for chunks `0..chunks`, in one contiguous group of chunks per
+/// thread, each group with its own accumulation buffer, then adds the buffers. Integer
+/// sums make the result independent of the grouping (and so of the thread count), and one
+/// buffer per thread (not per chunk) keeps the zeroing and merging cost small.
+fn accumulate_in_groups(
+    canvas: &Canvas,
+    chunks: usize,
+    work: impl Fn(usize, &mut [u64]) -> Result<()> + Sync,
+) -> Result<Vec<u64>> {
+    let pixels = canvas.width as usize * canvas.height as usize;
+    let groups = rayon::current_num_threads().clamp(1, chunks.max(1));
+    let buffers: Vec<Result<Vec<u64>>> = (0..groups)
+        .into_par_iter()
+        .map(|g| {
+            let mut counts = vec![0u64; pixels];
+            for chunk in g * chunks / groups..(g + 1) * chunks / groups {
+                work(chunk, &mut counts)?;
+            }
+            Ok(counts)
+        })
+        .collect();
+    let mut total: Option<Vec<u64>> = None;
+    for buffer in buffers {
+        let buffer = buffer?;
+        match total.as_mut() {
+            None => total = Some(buffer),
+            Some(t) => t.iter_mut().zip(&buffer).for_each(|(x, y)| *x += y),
+        }
+    }
+    Ok(total.unwrap_or_else(|| vec![0; pixels]))
+}
+
+/// A world-space rectangle shown by the image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct View {
+    /// Lower-left corner (x, y).
+    pub min: [f64; 2],
+    /// Upper-right corner.
+    pub max: [f64; 2],
+}
+
+impl View {
+    /// The rectangle `[min, max]`.
+    ///
+    /// # Errors
+    /// [`IfsError::Render`] for an empty or non-finite rectangle.
+    pub fn new(min: [f64; 2], max: [f64; 2]) -> Result<Self> {
+        if !(min.iter().chain(&max).all(|v| v.is_finite()) && max[0] > min[0] && max[1] > min[1]) {
+            return Err(IfsError::Render(format!("empty or non-finite view {min:?}..{max:?}")));
+        }
+        Ok(Self { min, max })
+    }
+
+    /// The smallest rectangle with the aspect ratio `width:height` that holds the projected
+    /// points with a relative `margin` on each side (degenerate extents are widened).
+    ///
+    /// # Errors
+    /// [`IfsError::Render`] when there is no finite point.
+    pub fn fit(points: &[[f64; 3]], projection: Projection, width: u32, height: u32, margin: f64) -> Result<Self> {
+        let mut min = [f64::INFINITY; 2];
+        let mut max = [f64::NEG_INFINITY; 2];
+        for p in points {
+            let q = projection.project(*p);
+            if q[0].is_finite() && q[1].is_finite() {
+                for k in 0..2 {
+                    min[k] = min[k].min(q[k]);
+                    max[k] = max[k].max(q[k]);
+                }
+            }
+        }
+        if !min[0].is_finite() {
+            return Err(IfsError::Render("no finite point to fit the view to".into()));
+        }
+        let mut size = [max[0] - min[0], max[1] - min[1]];
+        let extent = size[0].max(size[1]).max(1e-9 * (1.0 + min[0].abs().max(min[1].abs())));
+        let aspect = f64::from(width.max(1)) / f64::from(height.max(1));
+        size = [size[0].max(extent * 1e-3), size[1].max(extent * 1e-3)];
+        let grow = 1.0 + 2.0 * margin.max(0.0);
+        let (mut w, mut h) = (size[0] * grow, size[1] * grow);
+        if w / h < aspect {
+            w = h * aspect
+        } else {
+            h = w / aspect
+        }
+        let centre = [(min[0] + max[0]) / 2.0, (min[1] + max[1]) / 2.0];
+        Self::new([centre[0] - w / 2.0, centre[1] - h / 2.0], [centre[0] + w / 2.0, centre[1] + h / 2.0])
+    }
+}
+
+/// How 3D points are drawn (2D points ignore it except through their z = 0).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Projection {
+    /// Drop z.
+    #[default]
+    Xy,
+    /// Orthographic view from the direction given by azimuth (about z) and elevation, in
+    /// radians.
+    Orbit {
+        /// Rotation about the z axis.
+        azimuth: f64,
+        /// Angle above the xy plane.
+        elevation: f64,
+    },
+}
+
+impl Projection {
+    /// Projects a point to the image plane.
+    #[inline]
+    pub fn project(&self, p: [f64; 3]) -> [f64; 2] {
+        match *self {
+            Projection::Xy => [p[0], p[1]],
+            Projection::Orbit { azimuth, elevation } => {
+                let (sa, ca) = azimuth.sin_cos();
+                let (se, ce) = elevation.sin_cos();
+                let x = ca * p[0] + sa * p[1];
+                let depth_axis = -sa * p[0] + ca * p[1];
+                [x, ce * p[2] - se * depth_axis]
+            }
+        }
+    }
+}
+
+/// Image size, view and projection.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Canvas {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// The world rectangle shown.
+    pub view: View,
+    /// 3D → 2D.
+    pub projection: Projection,
+}
+
+/// Largest image side accepted.
+pub const MAX_IMAGE_SIDE: u32 = 16_384;
+
+impl Canvas {
+    /// A canvas of `width × height` pixels showing `view` (projection [`Projection::Xy`]).
+    ///
+    /// # Errors
+    /// [`IfsError::Render`] for a zero side or one above [`MAX_IMAGE_SIDE`].
+    pub fn new(width: u32, height: u32, view: View) -> Result<Self> {
+        if !(1..=MAX_IMAGE_SIDE).contains(&width) || !(1..=MAX_IMAGE_SIDE).contains(&height) {
+            return Err(IfsError::Render(format!("image size {width}x{height} is not in 1..={MAX_IMAGE_SIDE}")));
+        }
+        Ok(Self { width, height, view, projection: Projection::Xy })
+    }
+
+    /// The same canvas with another projection.
+    pub fn with_projection(mut self, projection: Projection) -> Self {
+        self.projection = projection;
+        self
+    }
+
+    /// Adds one point with bilinear weights (16 × 16 sub-pixel positions, weights summing
+    /// to exactly 256) to `counts`. Points outside the view are dropped.
+    #[inline]
+    fn splat(&self, counts: &mut [u64], p: [f64; 3]) {
+        let q = self.projection.project(p);
+        let (w, h) = (self.width as usize, self.height as usize);
+        // Position in sixteenths of a pixel, shifted by one pixel so that everything that
+        // can touch the image is positive (truncation = floor; no libm calls).
+        let sx = (q[0] - self.view.min[0]) * (16.0 * w as f64 / (self.view.max[0] - self.view.min[0])) + 8.5;
+        let sy = (self.view.max[1] - q[1]) * (16.0 * h as f64 / (self.view.max[1] - self.view.min[1])) + 8.5;
+        // Pixel centres at integer + 1/2: 16 (u - 1/2) + 16 (one-pixel shift) + 1/2 (rounding) = 16 u + 8.5.
+        if !(sx >= 0.0 && sy >= 0.0 && sx < 16.0 * (w + 1) as f64 && sy < 16.0 * (h + 1) as f64) {
+            return;
+        }
+        let (qx, qy) = (sx as usize, sy as usize);
+        let (ax, ay) = ((qx & 15) as u64, (qy & 15) as u64);
+        // Top-left pixel of the 2 x 2 footprint, in shifted coordinates (0 = one pixel left of the image).
+        let (ix, iy) = (qx >> 4, qy >> 4);
+        let weights = [(16 - ax) * (16 - ay), ax * (16 - ay), (16 - ax) * ay, ax * ay];
+        for (corner, weight) in weights.into_iter().enumerate() {
+            let (x, y) = (ix + (corner & 1), iy + (corner >> 1));
+            // Shifted coordinates 1..=w are the image columns 0..w.
+            if weight != 0 && x >= 1 && y >= 1 && x <= w && y <= h {
+                counts[(y - 1) * w + (x - 1)] += weight;
+            }
+        }
+    }
+}
+
+/// Accumulated point density (units of 1/256 point per pixel), row-major, top row first.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Density {
+    width: u32,
+    height: u32,
+    counts: Vec<u64>,
+}
+
+impl Density {
+    /// Splats points into a new density image, in parallel (bit-identical for any thread
+    /// count: integer accumulation).
+    pub fn from_points(points: &[[f64; 3]], canvas: &Canvas) -> Self {
+        let chunks = points.len().div_ceil(CHAOS_CHUNK);
+        let counts = accumulate_in_groups(canvas, chunks, |chunk, counts| {
+            let end = ((chunk + 1) * CHAOS_CHUNK).min(points.len());
+            points[chunk * CHAOS_CHUNK..end].iter().for_each(|p| canvas.splat(counts, *p));
+            Ok(())
+        })
+        .expect("internal: splatting points cannot fail");
+        Self { width: canvas.width, height: canvas.height, counts }
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Raw counts in units of 1/256 point.
+    pub fn counts(&self) -> &[u64] {
+        &self.counts
+    }
+
+    /// Sum of all weights, in points (points that landed in the view).
+    pub fn total_points(&self) -> f64 {
+        self.counts.iter().sum::<u64>() as f64 / 256.0
+    }
+
+    /// Tone-maps the density to an RGBA image: intensity `i ∈ [0, 1]` blends `background`
+    /// (i = 0) into `ink` (i = 1).
+    pub fn to_image(&self, tone: ToneMap, ink: [u8; 4], background: [u8; 4]) -> Image {
+        let max = self.counts.iter().copied().max().unwrap_or(0) as f64 / 256.0;
+        let mut rgba = Vec::with_capacity(self.counts.len() * 4);
+        for &c in &self.counts {
+            let d = c as f64 / 256.0;
+            let i = if max <= 0.0 {
+                0.0
+            } else {
+                match tone {
+                    ToneMap::Log => (1.0 + d).ln() / (1.0 + max).ln(),
+                    ToneMap::Gamma(g) => (d / max).powf(1.0 / g.max(1e-3)),
+                    ToneMap::Coverage => (d.min(1.0)).sqrt(),
+                }
+            };
+            for k in 0..4 {
+                let v = f64::from(background[k]) * (1.0 - i) + f64::from(ink[k]) * i;
+                rgba.push(v.round().clamp(0.0, 255.0) as u8);
+            }
+        }
+        Image { width: self.width, height: self.height, rgba }
+    }
+}
+
+/// Density → intensity.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum ToneMap {
+    /// `ln(1 + d) / ln(1 + d_max)`: shows the whole dynamic range (the default).
+    #[default]
+    Log,
+    /// `(d / d_max)^(1/γ)`.
+    Gamma(f64),
+    /// `sqrt(min(d, 1))`: one point per pixel is full ink (good for sparse deterministic sets).
+    Coverage,
+}
+
+/// An 8-bit RGBA image.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Row-major RGBA bytes, top row first.
+    pub rgba: Vec<u8>,
+}
+
+impl Image {
+    /// Encodes the image as PNG.
+    ///
+    /// # Errors
+    /// [`IfsError::Png`] if the encoder fails.
+    ///
+    /// ```
+    /// let image = ifs_nonlinear::Image { width: 2, height: 1, rgba: vec![0, 0, 0, 255, 255, 255, 255, 255] };
+    /// let bytes = image.encode_png()?;
+    /// assert_eq!(&bytes[1..4], b"PNG");
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
+    pub fn encode_png(&self) -> Result<Vec<u8>> {
+        let mut bytes = Vec::new();
+        {
+            let mut encoder = png::Encoder::new(&mut bytes, self.width, self.height);
+            encoder.set_color(png::ColorType::Rgba);
+            encoder.set_depth(png::BitDepth::Eight);
+            let mut writer = encoder.write_header().map_err(|e| IfsError::Png(e.to_string()))?;
+            writer.write_image_data(&self.rgba).map_err(|e| IfsError::Png(e.to_string()))?;
+        }
+        Ok(bytes)
+    }
+
+    /// Writes the image as a PNG file.
+    ///
+    /// # Errors
+    /// [`IfsError::Png`] if encoding or writing fails (the message names the path).
+    pub fn write_png(&self, path: &Path) -> Result<()> {
+        let bytes = self.encode_png()?;
+        std::fs::write(path, bytes).map_err(|e| IfsError::Png(format!("{}: {e}", path.display())))
+    }
+}
+
+/// Renders points to an image in one call: fits the view (2 % margin), splats, tone-maps
+/// (black ink on white).
+///
+/// # Errors
+/// [`IfsError::Render`] for a bad size or no finite point.
+///
+/// ```
+/// use ifs_nonlinear::{AffineIfs, Projection, ToneMap, deterministic_points, render_points, sierpinski};
+/// let ifs = AffineIfs::from_rule(&sierpinski(), &[[0.0, 0.0], [1.0, 0.0], [0.5, 0.9]])?;
+/// let points = deterministic_points(&ifs, None, 6, 1 << 20)?;
+/// let image = render_points(&points, 128, 128, Projection::Xy, ToneMap::Coverage)?;
+/// assert_eq!(image.rgba.len(), 128 * 128 * 4);
+/// # Ok::<(), ifs_nonlinear::IfsError>(())
+/// ```
+pub fn render_points(
+    points: &[[f64; 3]],
+    width: u32,
+    height: u32,
+    projection: Projection,
+    tone: ToneMap,
+) -> Result<Image> {
+    let view = View::fit(points, projection, width, height, 0.02)?;
+    let canvas = Canvas::new(width, height, view)?.with_projection(projection);
+    Ok(Density::from_points(points, &canvas).to_image(tone, [0, 0, 0, 255], [255, 255, 255, 255]))
+}
+
+/// Summary statistics of a point set, for golden tests that compare with a tolerance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointStats {
+    /// Number of points.
+    pub count: usize,
+    /// Bounding box minimum (x, y, z).
+    pub min: [f64; 3],
+    /// Bounding box maximum.
+    pub max: [f64; 3],
+    /// Mean point.
+    pub centroid: [f64; 3],
+    /// Occupancy of a `grid × grid` subdivision of the xy bounding box, row by row from the
+    /// top: one bit per cell (cell occupied by at least one point).
+    pub occupancy: Vec<Vec<bool>>,
+}
+
+impl PointStats {
+    /// Computes the statistics; `grid` cells per side for the occupancy map.
+    ///
+    /// ```
+    /// let stats = ifs_nonlinear::PointStats::of(&[[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]], 2);
+    /// assert_eq!(stats.centroid, [0.5, 0.5, 0.0]);
+    /// assert_eq!(stats.occupied_cells(), 2);
+    /// ```
+    pub fn of(points: &[[f64; 3]], grid: usize) -> Self {
+        let mut min = [f64::INFINITY; 3];
+        let mut max = [f64::NEG_INFINITY; 3];
+        let mut sum = [0.0; 3];
+        for p in points {
+            for k in 0..3 {
+                min[k] = min[k].min(p[k]);
+                max[k] = max[k].max(p[k]);
+                sum[k] += p[k];
+            }
+        }
+        let count = points.len();
+        let centroid = sum.map(|s| s / count.max(1) as f64);
+        let mut occupancy = vec![vec![false; grid]; grid];
+        if grid > 0 {
+            let cell = |v: f64, lo: f64, hi: f64| -> usize {
+                if hi > lo {
+                    (((v - lo) / (hi - lo)) * grid as f64).floor().clamp(0.0, (grid - 1) as f64) as usize
+                } else {
+                    0
+                }
+            };
+            for p in points {
+                let (cx, cy) = (cell(p[0], min[0], max[0]), cell(p[1], min[1], max[1]));
+                occupancy[grid - 1 - cy][cx] = true;
+            }
+        }
+        Self { count, min, max, centroid, occupancy }
+    }
+
+    /// Number of occupied cells.
+    pub fn occupied_cells(&self) -> usize {
+        self.occupancy.iter().flatten().filter(|&&b| b).count()
+    }
+
+    /// A text summary: counts, box and centroid (9 decimals), then the occupancy rows as
+    /// `#`/`.` strings.
+    pub fn to_text(&self) -> String {
+        let f = |v: [f64; 3]| format!("{:.9} {:.9} {:.9}", v[0], v[1], v[2]);
+        let mut s = format!(
+            "points {}\nmin {}\nmax {}\ncentroid {}\noccupied {}\n",
+            self.count,
+            f(self.min),
+            f(self.max),
+            f(self.centroid),
+            self.occupied_cells()
+        );
+        for row in &self.occupancy {
+            s.extend(row.iter().map(|&b| if b { '#' } else { '.' }));
+            s.push('\n');
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ifs::{AffineIfs, AffineMap};
+
+    fn sierpinski() -> AffineIfs {
+        AffineIfs::from_rule(&crate::matrices::sierpinski(), &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap()
+    }
+
+    #[test]
+    fn deterministic_order_is_first_applied_major() {
+        // Two 1D-like maps on the x axis: f0(x) = x/2, f1(x) = x/2 + 1/2; start at 1.
+        let ifs = AffineIfs::new(
+            2,
+            vec![AffineMap::planar(0.5, 0.0, 0.0, 0.5, 0.0, 0.0), AffineMap::planar(0.5, 0.0, 0.0, 0.5, 0.5, 0.0)],
+        )
+        .unwrap();
+        let points = deterministic_points(&ifs, Some(&[1.0, 0.0]), 2, 100).unwrap();
+        // Words (v1 v2): 00 → f0(f0(1)) = 1/4; 01 → f1(f0(1)) = 3/4; 10 → f0(f1(1)) = 1/2; 11 → 1.
+        let xs: Vec<f64> = points.iter().map(|p| p[0]).collect();
+        assert_eq!(xs, vec![0.25, 0.75, 0.5, 1.0]);
+    }
+
+    #[test]
+    fn deterministic_results_do_not_depend_on_the_thread_count() {
+        let ifs = sierpinski();
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+        let a = one.install(|| deterministic_points(&ifs, None, 7, 1 << 20).unwrap());
+        let b = three.install(|| deterministic_points(&ifs, None, 7, 1 << 20).unwrap());
+        assert_eq!(a, b);
+        let game = ChaosGame { points: 3 * CHAOS_CHUNK + 17, seed: 11, ..ChaosGame::default() };
+        let c = one.install(|| chaos_points(&ifs, &game).unwrap());
+        let d = three.install(|| chaos_points(&ifs, &game).unwrap());
+        assert_eq!(c, d);
+        let canvas = Canvas::new(40, 30, View::new([0.0, 0.0], [1.0, 1.0]).unwrap()).unwrap();
+        let e = one.install(|| chaos_density(&ifs, &game, &canvas).unwrap());
+        let f = three.install(|| chaos_density(&ifs, &game, &canvas).unwrap());
+        assert_eq!(e, f);
+        assert_eq!(e, Density::from_points(&c, &canvas));
+    }
+
+    #[test]
+    fn budget_and_parameters_are_checked() {
+        let ifs = sierpinski();
+        assert!(matches!(deterministic_points(&ifs, None, 20, 1000), Err(IfsError::BudgetExceeded { .. })));
+        assert!(matches!(deterministic_points(&ifs, Some(&[1.0]), 1, 1000), Err(IfsError::ParameterOutOfRange { .. })));
+        let zero = ChaosGame { points: 0, ..ChaosGame::default() };
+        assert!(chaos_points(&ifs, &zero).is_err());
+        let bad =
+            ChaosGame { points: 5, probabilities: Probabilities::Custom(vec![1.0, -1.0, 1.0]), ..ChaosGame::default() };
+        assert!(chaos_points(&ifs, &bad).is_err());
+        assert!(Canvas::new(0, 10, View::new([0.0, 0.0], [1.0, 1.0]).unwrap()).is_err());
+        assert!(View::new([0.0, 0.0], [0.0, 1.0]).is_err());
+    }
+
+    #[test]
+    fn probabilities_follow_determinants_with_a_floor() {
+        let fern = AffineIfs::new(
+            2,
+            vec![
+                AffineMap::planar(0.0, 0.0, 0.0, 0.16, 0.0, 0.0),
+                AffineMap::planar(0.85, 0.04, -0.04, 0.85, 0.0, 1.6),
+            ],
+        )
+        .unwrap();
+        let t = thresholds(&fern, &Probabilities::Determinant).unwrap();
+        let dets = [0.01 * 0.7241, 0.7241];
+        let expected = dets[0] / (dets[0] + dets[1]);
+        assert!((t[0] as f64 / 4_294_967_296.0 - expected).abs() < 1e-9);
+        assert_eq!(t[1], 1 << 32);
+        assert_eq!(choose(&t, 0), 0);
+        assert_eq!(choose(&t, u32::MAX), 1);
+    }
+
+    #[test]
+    fn splat_weights_sum_to_one_point() {
+        let canvas = Canvas::new(10, 10, View::new([0.0, 0.0], [1.0, 1.0]).unwrap()).unwrap();
+        let points = [[0.33, 0.71, 0.0], [0.5, 0.5, 0.0], [0.999, 0.001, 0.0]];
+        let density = Density::from_points(&points, &canvas);
+        // The last point's bilinear footprint partly falls outside the image.
+        assert!(density.total_points() <= 3.0 && density.total_points() > 2.0);
+        let inside = Density::from_points(&points[..2], &canvas);
+        assert_eq!(inside.total_points(), 2.0);
+        let png = inside.to_image(ToneMap::Log, [0, 0, 0, 255], [255; 4]).encode_png().unwrap();
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    }
+}

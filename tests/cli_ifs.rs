@@ -1,0 +1,139 @@
+//! `multires ifs` end to end: the binary in a temporary directory.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn run(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_multires")).current_dir(dir).arg("ifs").args(args).output().expect("run multires")
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+fn is_png(path: &Path) -> bool {
+    std::fs::read(path).is_ok_and(|bytes| bytes.starts_with(b"\x89PNG\r\n\x1a\n"))
+}
+
+#[test]
+fn levy_preset_writes_png_and_points() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = run(
+        dir.path(),
+        &["--preset", "levy", "--levels", "8", "--out", "levy.png", "--out-points", "levy.txt", "--size", "120x90"],
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(is_png(&dir.path().join("levy.png")));
+    let text = std::fs::read_to_string(dir.path().join("levy.txt")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 2 * 256); // two start states (control points), 2^8 words
+    for line in &lines {
+        let values: Vec<f64> = line.split(' ').map(|v| v.parse().unwrap()).collect();
+        assert_eq!(values.len(), 2);
+        assert!((-0.51..=1.51).contains(&values[0]) && (-0.26..=1.01).contains(&values[1]), "{line}");
+    }
+}
+
+#[test]
+fn bezier_kind_with_control_points_lies_on_the_curve() {
+    let dir = tempfile::tempdir().unwrap();
+    let args =
+        ["--kind", "bezier", "--control", "0,0 1,2 3,0", "--levels", "10", "--out", "b.png", "--out-points", "b.txt"];
+    let output = run(dir.path(), &args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = std::fs::read_to_string(dir.path().join("b.txt")).unwrap();
+    // B(t) = (2t + t², 4t(1 - t)): invert x for t and compare y.
+    let worst = text
+        .lines()
+        .map(|line| {
+            let v: Vec<f64> = line.split(' ').map(|x| x.parse().unwrap()).collect();
+            let t = -1.0 + (1.0 + v[0]).sqrt();
+            (v[1] - 4.0 * t * (1.0 - t)).abs()
+        })
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-5, "{worst:e}");
+}
+
+#[test]
+fn chaos_game_is_reproducible_for_a_seed() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["a", "b"] {
+        let out = format!("{name}.png");
+        let pts = format!("{name}.txt");
+        let args = [
+            "--preset",
+            "barnsley-fern",
+            "--points",
+            "20000",
+            "--seed",
+            "9",
+            "--out",
+            &out,
+            "--out-points",
+            &pts,
+            "--size",
+            "64x64",
+        ];
+        let output = run(dir.path(), &args);
+        assert!(output.status.success(), "{}", stderr(&output));
+    }
+    let a = std::fs::read(dir.path().join("a.txt")).unwrap();
+    assert_eq!(a, std::fs::read(dir.path().join("b.txt")).unwrap());
+    assert_eq!(String::from_utf8_lossy(&a).lines().count(), 20000);
+    // Without --out-points the density is streamed.
+    let output = run(dir.path(), &["--kind", "sierpinski", "--points", "50000", "--out", "s.png", "--size", "64x64"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(is_png(&dir.path().join("s.png")));
+}
+
+#[test]
+fn every_kind_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [&[&str]; 5] = [
+        &["--kind", "patch", "--control", "0,0,0 0,1,0 1,0,0 1,1,1", "--levels", "4"],
+        &["--kind", "patch", "--control", "0,0 1,0 0,1", "--levels", "4"],
+        &["--kind", "complex", "--z", "0.5,0.3", "--levels", "6"],
+        &["--kind", "nonlinear", "--transform", "exp", "--control", "-2,-2 0,2 2,-2", "--levels", "6"],
+        &["--preset", "gaussian", "--levels", "2"],
+    ];
+    for args in cases {
+        let mut all = args.to_vec();
+        all.extend(["--out", "k.png", "--size", "50x40"]);
+        let output = run(dir.path(), &all);
+        assert!(output.status.success(), "{args:?}: {}", stderr(&output));
+        assert!(is_png(&dir.path().join("k.png")));
+    }
+}
+
+/// Bad arguments: failure status and one clear line naming the problem.
+#[test]
+fn bad_arguments_give_one_clear_error_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&[&str], &str); 9] = [
+        (&["--kind", "complex", "--z", "-0.5,0"], "|1 - z| = 1.5"),
+        (&["--kind", "complex", "--z", "abc"], "--z"),
+        (&["--kind", "sierpinski", "--control", "0,0 1,1 2,2"], "affinely dependent"),
+        (&["--kind", "bezier", "--control", "0,0 1,nan"], "point 1"),
+        (&["--kind", "bezier"], "needs --control"),
+        (&["--kind", "spline"], "--kind spline"),
+        (&["--preset", "nope"], "known: quadratic-bezier"),
+        (&["--preset", "levy", "--size", "0x10"], "--size"),
+        (&["--preset", "levy", "--levels", "40"], "budget"),
+    ];
+    for (args, expected) in cases {
+        let mut all = args.to_vec();
+        all.extend(["--out", "x.png"]);
+        let output = run(dir.path(), &all);
+        assert!(!output.status.success(), "{args:?} should fail");
+        let message = stderr(&output);
+        assert_eq!(message.trim_end().lines().count(), 1, "{args:?}: {message}");
+        assert!(message.contains(expected), "{args:?}: {message}");
+    }
+    // A non-positive value where the geometric mean (F = exp) needs y > 0 is reported
+    // with the point index rather than drawn as NaN.
+    let output = run(
+        dir.path(),
+        &["--kind", "nonlinear", "--transform", "polar", "--control", "-1,0 0,0 1,0", "--out", "x.png"],
+    );
+    assert!(!output.status.success());
+}
