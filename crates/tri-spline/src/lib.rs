@@ -1,0 +1,21 @@
+//! Triangular splines and their fitting to triangle meshes.
+//!
+//! (Crate documentation is completed with the fitting pipeline.)
+
+mod error;
+
+pub mod bezier;
+pub mod bpatch;
+pub mod dms;
+pub mod domain;
+pub mod index;
+pub mod point;
+pub mod simplex;
+
+pub use bezier::TriBezier;
+pub use bpatch::{BPatch, BPatchBasis, KnotSequences};
+pub use dms::{DmsBasis, DmsScratch, DmsSpline, KnotPlacement};
+pub use domain::DomainTriangle;
+pub use error::SplineError;
+pub use point::Point;
+pub use simplex::{SimplexSpline, WChoice};
