@@ -33,6 +33,28 @@ pub struct TriBezier<P = DVec3> {
     control: Vec<P>,
 }
 
+/// Control points up to this count (degree 10) are copied to a stack buffer for
+/// evaluation, larger nets to the heap.
+const STACK_POINTS: usize = 66;
+
+/// Runs `f` on a scratch copy of `control` (on the stack for small nets, sized in tiers
+/// so that small degrees do not pay for initialising a large buffer).
+#[inline]
+pub(crate) fn with_scratch<P: Point, R>(control: &[P], f: impl FnOnce(&mut [P]) -> R) -> R {
+    #[inline(always)]
+    fn on_stack<P: Point, R, const N: usize>(control: &[P], f: impl FnOnce(&mut [P]) -> R) -> R {
+        let mut buf = [P::ZERO; N];
+        buf[..control.len()].copy_from_slice(control);
+        f(&mut buf[..control.len()])
+    }
+    match control.len() {
+        0..=10 => on_stack::<P, R, 10>(control, f),
+        11..=28 => on_stack::<P, R, 28>(control, f),
+        29..=STACK_POINTS => on_stack::<P, R, STACK_POINTS>(control, f),
+        _ => f(&mut control.to_vec()),
+    }
+}
+
 /// One de Casteljau level in place: `buf` holds degree `m + 1` values; afterwards its
 /// first `tri_count(m)` entries hold the degree-`m` values `sum_i w_i b_{β + e_i}`.
 /// (Reads at positions at or after every write position, so one buffer suffices.)
@@ -148,11 +170,12 @@ impl<P: Point> TriBezier<P> {
 
     /// `S` at barycentric coordinates `l` by de Casteljau's algorithm.
     pub fn eval_barycentric(&self, l: [f64; 3]) -> P {
-        let mut buf = self.control.clone();
-        for m in (0..self.degree).rev() {
-            casteljau_level(&mut buf, m, l);
-        }
-        buf[0]
+        with_scratch(&self.control, |buf| {
+            for m in (0..self.degree).rev() {
+                casteljau_level(buf, m, l);
+            }
+            buf[0]
+        })
     }
 
     /// `S(u)` as the direct Bernstein sum (for checking; de Casteljau is preferred).
@@ -160,10 +183,8 @@ impl<P: Point> TriBezier<P> {
         let l = self.domain.barycentric(u);
         let mut sum = P::ZERO;
         for (beta, &b) in multi_indices(self.degree).zip(&self.control) {
-            let weight = multinomial(beta)
-                * l[0].powi(beta[0] as i32)
-                * l[1].powi(beta[1] as i32)
-                * l[2].powi(beta[2] as i32);
+            let weight =
+                multinomial(beta) * l[0].powi(beta[0] as i32) * l[1].powi(beta[1] as i32) * l[2].powi(beta[2] as i32);
             sum = sum + b * weight;
         }
         sum
@@ -189,11 +210,12 @@ impl<P: Point> TriBezier<P> {
         if args.len() != self.degree {
             return Err(SplineError::Count { what: "blossom arguments", expected: self.degree, got: args.len() });
         }
-        let mut buf = self.control.clone();
-        for (level, m) in (0..self.degree).rev().enumerate() {
-            casteljau_level(&mut buf, m, self.domain.barycentric(args[level]));
-        }
-        Ok(buf[0])
+        Ok(with_scratch(&self.control, |buf| {
+            for (level, m) in (0..self.degree).rev().enumerate() {
+                casteljau_level(buf, m, self.domain.barycentric(args[level]));
+            }
+            buf[0]
+        }))
     }
 
     /// The directional derivative `D_d S(u) = n F(u, …, u, d)` (with `d` a vector).
@@ -201,13 +223,14 @@ impl<P: Point> TriBezier<P> {
         if self.degree == 0 {
             return P::ZERO;
         }
-        let mut buf = self.control.clone();
-        casteljau_level(&mut buf, self.degree - 1, self.domain.direction(d));
         let l = self.domain.barycentric(u);
-        for m in (0..self.degree - 1).rev() {
-            casteljau_level(&mut buf, m, l);
-        }
-        buf[0] * self.degree as f64
+        with_scratch(&self.control, |buf| {
+            casteljau_level(buf, self.degree - 1, self.domain.direction(d));
+            for m in (0..self.degree - 1).rev() {
+                casteljau_level(buf, m, l);
+            }
+            buf[0] * self.degree as f64
+        })
     }
 
     /// `S(u)` and its partial derivatives with respect to the two domain coordinates, in
@@ -217,16 +240,17 @@ impl<P: Point> TriBezier<P> {
             return (self.control[0], [P::ZERO; 2]);
         }
         let l = self.domain.barycentric(u);
-        let mut buf = self.control.clone();
-        for m in (1..self.degree).rev() {
-            casteljau_level(&mut buf, m, l);
-        }
-        // Three points of the linear patch left after n - 1 levels.
-        let n = self.degree as f64;
-        let value = combine3(buf[0], buf[1], buf[2], l);
-        let du = combine3(buf[0], buf[1], buf[2], self.domain.direction(DVec2::X)) * n;
-        let dv = combine3(buf[0], buf[1], buf[2], self.domain.direction(DVec2::Y)) * n;
-        (value, [du, dv])
+        with_scratch(&self.control, |buf| {
+            for m in (1..self.degree).rev() {
+                casteljau_level(buf, m, l);
+            }
+            // Three points of the linear patch left after n - 1 levels.
+            let n = self.degree as f64;
+            let value = combine3(buf[0], buf[1], buf[2], l);
+            let du = combine3(buf[0], buf[1], buf[2], self.domain.direction(DVec2::X)) * n;
+            let dv = combine3(buf[0], buf[1], buf[2], self.domain.direction(DVec2::Y)) * n;
+            (value, [du, dv])
+        })
     }
 
     /// The same surface as a patch of degree `n + 1` (degree elevation:
@@ -334,7 +358,10 @@ mod tests {
             bernstein_basis(n, l, &mut basis);
             assert!((basis.iter().sum::<f64>() - 1.0).abs() < 1e-14);
             for (beta, b) in multi_indices(n).zip(&basis) {
-                let direct = multinomial(beta) * l[0].powi(beta[0] as i32) * l[1].powi(beta[1] as i32) * l[2].powi(beta[2] as i32);
+                let direct = multinomial(beta)
+                    * l[0].powi(beta[0] as i32)
+                    * l[1].powi(beta[1] as i32)
+                    * l[2].powi(beta[2] as i32);
                 assert!((direct - b).abs() < 1e-14, "{n} {beta:?}");
             }
         }
@@ -375,10 +402,7 @@ mod tests {
     fn bad_input_is_rejected() {
         let d = DomainTriangle::reference();
         assert!(matches!(TriBezier::new(2, d, vec![0.0; 5]), Err(SplineError::Count { expected: 6, .. })));
-        assert!(matches!(
-            TriBezier::new(1, d, vec![0.0, f64::NAN, 1.0]),
-            Err(SplineError::NonFinite { index: 1, .. })
-        ));
+        assert!(matches!(TriBezier::new(1, d, vec![0.0, f64::NAN, 1.0]), Err(SplineError::NonFinite { index: 1, .. })));
         assert!(TriBezier::new(1000, d, vec![0.0]).is_err());
         assert!(TriBezier::new(1, d, vec![0.0; 3]).unwrap().blossom(&[]).is_err());
     }

@@ -25,6 +25,7 @@ use glam::{DVec2, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::SplineError;
+use crate::bezier::with_scratch;
 use crate::domain::{BaryMap, DomainTriangle, orient};
 use crate::index::{multi_indices, tet_count, tri_count, tri_index};
 use crate::point::{Point, combine3};
@@ -85,7 +86,8 @@ fn knot_maps(degree: usize, knots: &KnotSequences) -> Result<Vec<BaryMap>, Splin
     for d in 0..degree {
         for [i, j, k] in multi_indices(d) {
             let [a, b, c] = knots.triangle(i, j, k);
-            let map = BaryMap::new(a, b, c).ok_or(SplineError::DegenerateKnotTriangle { i, j, k, points: [a, b, c] })?;
+            let map =
+                BaryMap::new(a, b, c).ok_or(SplineError::DegenerateKnotTriangle { i, j, k, points: [a, b, c] })?;
             if orient(a, b, c).signum() != reference {
                 return Err(SplineError::KnotTriangleOrientation { i, j, k });
             }
@@ -186,11 +188,12 @@ impl<P: Point> BPatch<P> {
 
     /// `P(u)` by the de Boor-like recursion.
     pub fn eval(&self, u: DVec2) -> P {
-        let mut buf = self.control.clone();
-        for m in (0..self.degree).rev() {
-            self.level(&mut buf, m, |map| map.coords(u));
-        }
-        buf[0]
+        with_scratch(&self.control, |buf| {
+            for m in (0..self.degree).rev() {
+                self.level(buf, m, |map| map.coords(u));
+            }
+            buf[0]
+        })
     }
 
     /// The blossom `F(u_1, …, u_n)` of the patch's polynomial.
@@ -201,35 +204,38 @@ impl<P: Point> BPatch<P> {
         if args.len() != self.degree {
             return Err(SplineError::Count { what: "blossom arguments", expected: self.degree, got: args.len() });
         }
-        let mut buf = self.control.clone();
-        for (level, m) in (0..self.degree).rev().enumerate() {
-            self.level(&mut buf, m, |map| map.coords(args[level]));
-        }
-        Ok(buf[0])
+        Ok(with_scratch(&self.control, |buf| {
+            for (level, m) in (0..self.degree).rev().enumerate() {
+                self.level(buf, m, |map| map.coords(args[level]));
+            }
+            buf[0]
+        }))
     }
 
     /// The directional derivative `D_d P(u) = n F(u^{n-1}, d)`.
     pub fn derivative(&self, u: DVec2, d: DVec2) -> P {
-        let mut buf = self.control.clone();
-        for m in (1..self.degree).rev() {
-            self.level(&mut buf, m, |map| map.coords(u));
-        }
-        self.level(&mut buf, 0, |map| map.direction(d));
-        buf[0] * self.degree as f64
+        with_scratch(&self.control, |buf| {
+            for m in (1..self.degree).rev() {
+                self.level(buf, m, |map| map.coords(u));
+            }
+            self.level(buf, 0, |map| map.direction(d));
+            buf[0] * self.degree as f64
+        })
     }
 
     /// `P(u)` and its partial derivatives along the two domain axes in one pass.
     pub fn eval_with_gradient(&self, u: DVec2) -> (P, [P; 2]) {
-        let mut buf = self.control.clone();
-        for m in (1..self.degree).rev() {
-            self.level(&mut buf, m, |map| map.coords(u));
-        }
-        let base = self.map(0, 0, 0);
-        let n = self.degree as f64;
-        let value = combine3(buf[0], buf[1], buf[2], base.coords(u));
-        let du = combine3(buf[0], buf[1], buf[2], base.direction(DVec2::X)) * n;
-        let dv = combine3(buf[0], buf[1], buf[2], base.direction(DVec2::Y)) * n;
-        (value, [du, dv])
+        with_scratch(&self.control, |buf| {
+            for m in (1..self.degree).rev() {
+                self.level(buf, m, |map| map.coords(u));
+            }
+            let base = self.map(0, 0, 0);
+            let n = self.degree as f64;
+            let value = combine3(buf[0], buf[1], buf[2], base.coords(u));
+            let du = combine3(buf[0], buf[1], buf[2], base.direction(DVec2::X)) * n;
+            let dv = combine3(buf[0], buf[1], buf[2], base.direction(DVec2::Y)) * n;
+            (value, [du, dv])
+        })
     }
 
     /// The B-patch basis functions at `u` (the weights of the control points in `P(u)`),
@@ -351,7 +357,9 @@ mod tests {
     fn perturbed_knots(n: usize, spread: f64, rng: &mut Lcg) -> KnotSequences {
         let d = DomainTriangle::reference();
         let [t0, t1, t2] = d.corners();
-        let mut seq = |corner: DVec2| (0..n).map(|i| if i == 0 { corner } else { corner + rng.vec2() * (2.0 * spread) }).collect();
+        let mut seq = |corner: DVec2| {
+            (0..n).map(|i| if i == 0 { corner } else { corner + rng.vec2() * (2.0 * spread) }).collect()
+        };
         KnotSequences { r: seq(t0), s: seq(t1), t: seq(t2) }
     }
 
@@ -420,10 +428,10 @@ mod tests {
             assert!((values.iter().sum::<f64>() - 1.0).abs() < 1e-13);
             assert!(values.iter().all(|&v| v >= 0.0));
             // The weight of control point i is the patch with the i-th unit control point.
-            for i in 0..tri_count(n) {
+            for (i, value) in values.iter().enumerate() {
                 let unit = (0..tri_count(n)).map(|k| if k == i { 1.0 } else { 0.0 }).collect();
                 let patch = basis.with_control(unit).unwrap();
-                assert!((patch.eval(u) - values[i]).abs() < 1e-14);
+                assert!((patch.eval(u) - value).abs() < 1e-14);
             }
         }
     }
@@ -458,7 +466,10 @@ mod tests {
             Err(SplineError::DegenerateKnotTriangle { i: 0, j: 2, k: 0, .. })
         ));
         knots.s[2] = DVec2::new(-1.0, 0.5); // (r_0, s_2, t_0) clockwise
-        assert!(matches!(BPatchBasis::new(3, knots.clone()), Err(SplineError::KnotTriangleOrientation { i: 0, j: 2, k: 0 })));
+        assert!(matches!(
+            BPatchBasis::new(3, knots.clone()),
+            Err(SplineError::KnotTriangleOrientation { i: 0, j: 2, k: 0 })
+        ));
         knots.s[2] = DVec2::new(f64::NAN, 0.5);
         assert!(matches!(BPatchBasis::new(3, knots), Err(SplineError::NonFinite { index: 2, .. })));
         let short = KnotSequences { r: vec![DVec2::ZERO], s: vec![DVec2::X], t: vec![] };

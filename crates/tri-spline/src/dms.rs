@@ -264,7 +264,10 @@ impl DmsBasis {
                 for b in a + 1..3 * k {
                     for c in b + 1..3 * k {
                         if is_degenerate(knots[a], knots[b], knots[c]) {
-                            return Err(SplineError::CollinearKnots { triangle: t, knots: [name(a), name(b), name(c)] });
+                            return Err(SplineError::CollinearKnots {
+                                triangle: t,
+                                knots: [name(a), name(b), name(c)],
+                            });
                         }
                     }
                 }
@@ -307,7 +310,14 @@ impl DmsBasis {
         let mut last = None;
         let mut radius = placement.radius;
         for attempt in 0..12u64 {
-            let extra = generate_knots(degree, &vertices, &triangles, radius, placement.seed.wrapping_add(attempt), placement.boundary_outward)?;
+            let extra = generate_knots(
+                degree,
+                &vertices,
+                &triangles,
+                radius,
+                placement.seed.wrapping_add(attempt),
+                placement.boundary_outward,
+            )?;
             match Self::new(degree, vertices.clone(), triangles.clone(), extra) {
                 Ok(basis) => return Ok(basis),
                 Err(e @ (SplineError::DmsKnotOrientation { .. } | SplineError::CollinearKnots { .. })) => {
@@ -391,7 +401,7 @@ impl DmsBasis {
             if u.x < lo.x || u.y < lo.y || u.x > hi.x || u.y > hi.y {
                 continue;
             }
-            scratch.memo.clear();
+            scratch.memo.reset(3 * k);
             let mut rec = SimplexRecurrence {
                 knots: &self.tri_knots[t * 3 * k..(t + 1) * 3 * k],
                 u,
@@ -420,7 +430,7 @@ impl DmsBasis {
             if u.x < lo.x || u.y < lo.y || u.x > hi.x || u.y > hi.y {
                 continue;
             }
-            scratch.memo.clear();
+            scratch.memo.reset(3 * k);
             let mut rec = SimplexRecurrence {
                 knots: &self.tri_knots[t * 3 * k..(t + 1) * 3 * k],
                 u,
@@ -447,6 +457,7 @@ impl DmsBasis {
         let nb = self.masks.len();
         let t = index / nb;
         let mut memo = Memo::default();
+        memo.reset(3 * k);
         let mut rec = SimplexRecurrence {
             knots: &self.tri_knots[t * 3 * k..(t + 1) * 3 * k],
             u,
@@ -508,7 +519,7 @@ fn generate_knots(
             loop {
                 offset = DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
                 let len = offset.length();
-                if len <= 1.0 && len >= 0.25 {
+                if (0.25..=1.0).contains(&len) {
                     break;
                 }
             }
@@ -662,7 +673,8 @@ mod tests {
         let b = basis(2, 3);
         for i in 2..=6 {
             for j in 2..=6 {
-                for u in [DVec2::new(i as f64 * 0.5, j as f64 * 0.5), DVec2::new(i as f64 * 0.5 + 0.25, j as f64 * 0.5)] {
+                for u in [DVec2::new(i as f64 * 0.5, j as f64 * 0.5), DVec2::new(i as f64 * 0.5 + 0.25, j as f64 * 0.5)]
+                {
                     let sum: f64 = b.eval_basis(u).iter().map(|v| v.1).sum();
                     assert!((sum - 1.0).abs() < 1e-12, "{u}: {sum}");
                 }
@@ -747,7 +759,10 @@ mod tests {
         ));
         let mut out_of_range = t.clone();
         out_of_range[0][2] = 99;
-        assert!(matches!(DmsBasis::new(n, v.clone(), out_of_range, good.clone()), Err(SplineError::VertexIndex { vertex: 99, .. })));
+        assert!(matches!(
+            DmsBasis::new(n, v.clone(), out_of_range, good.clone()),
+            Err(SplineError::VertexIndex { vertex: 99, .. })
+        ));
         assert!(matches!(DmsBasis::new(n, v.clone(), t.clone(), good[1..].to_vec()), Err(SplineError::Count { .. })));
         assert!(matches!(DmsBasis::new(0, v.clone(), t.clone(), vec![]), Err(SplineError::Degree { .. })));
         assert!(matches!(DmsBasis::new(7, v, t, vec![]), Err(SplineError::Degree { .. })));

@@ -138,7 +138,7 @@ impl DomainTriangle {
 /// `(-√3, 1)/|.|` (ALGORITHMS.md §11.1).
 const HALF_OPEN_DIRECTIONS: [DVec2; 2] = [
     DVec2::new(0.577_350_269_189_625_8, 0.816_496_580_927_726), // (1, √2)/√3
-    DVec2::new(-0.866_025_403_784_438_6, 0.5),                 // (-√3, 1)/2
+    DVec2::new(-0.866_025_403_784_438_6, 0.5),                  // (-√3, 1)/2
 ];
 
 /// Whether `u` lies in the half-open triangle `[a, b, c)`: inside, or on an edge or

@@ -168,9 +168,7 @@ pub enum SplineError {
         vertex: usize,
     },
     /// A face maps to a degenerate or flipped triangle in the parameter domain.
-    #[error(
-        "face {face} maps to a degenerate or flipped parameter triangle (signed area {area:e}); {hint}"
-    )]
+    #[error("face {face} maps to a degenerate or flipped parameter triangle (signed area {area:e}); {hint}")]
     DegenerateParameterTriangle {
         /// The face.
         face: usize,

@@ -8,9 +8,12 @@ pub mod bezier;
 pub mod bpatch;
 pub mod dms;
 pub mod domain;
+pub mod fit;
 pub mod index;
+pub mod linalg;
 pub mod point;
 pub mod simplex;
+pub mod surface;
 
 pub use bezier::TriBezier;
 pub use bpatch::{BPatch, BPatchBasis, KnotSequences};
@@ -19,3 +22,4 @@ pub use domain::DomainTriangle;
 pub use error::SplineError;
 pub use point::Point;
 pub use simplex::{SimplexSpline, WChoice};
+pub use surface::{FittedSurface, SurfaceBasis, SurfaceKind};

@@ -82,10 +82,63 @@ impl Hasher for MaskHasher {
     }
 }
 
-/// Memo table of `M(u | subset)` for one query point.
-pub(crate) type Memo = HashMap<u64, f64, BuildHasherDefault<MaskHasher>>;
+/// Knot sets up to this size memoise in a dense table indexed by the subset mask
+/// (2^15 entries); larger ones in a hash map.
+const DENSE_MEMO_BITS: usize = 15;
 
-/// The recurrence over subsets of `knots`, for one query point `u`.
+/// Memo table of `M(u | subset)` for one query point and one knot set.
+///
+/// The dense table is invalidated in O(1) by bumping a generation stamp, so reusing it
+/// across query points costs nothing.
+#[derive(Debug, Default, Clone)]
+pub(crate) struct Memo {
+    dense: Vec<(u32, f64)>,
+    stamp: u32,
+    use_dense: bool,
+    hash: HashMap<u64, f64, BuildHasherDefault<MaskHasher>>,
+}
+
+impl Memo {
+    /// Forgets all values; prepares for subsets of a knot set of `knot_count` knots.
+    pub fn reset(&mut self, knot_count: usize) {
+        self.use_dense = knot_count <= DENSE_MEMO_BITS;
+        if self.use_dense {
+            let size = 1usize << knot_count;
+            if self.dense.len() < size {
+                self.dense.resize(size, (0, 0.0));
+            }
+            self.stamp = self.stamp.wrapping_add(1);
+            if self.stamp == 0 {
+                self.dense.iter_mut().for_each(|e| e.0 = 0);
+                self.stamp = 1;
+            }
+        } else {
+            self.hash.clear();
+        }
+    }
+
+    #[inline]
+    fn get(&self, mask: u64) -> Option<f64> {
+        if self.use_dense {
+            let (stamp, value) = self.dense[mask as usize];
+            (stamp == self.stamp).then_some(value)
+        } else {
+            self.hash.get(&mask).copied()
+        }
+    }
+
+    #[inline]
+    fn insert(&mut self, mask: u64, value: f64) {
+        if self.use_dense {
+            self.dense[mask as usize] = (self.stamp, value);
+        } else {
+            self.hash.insert(mask, value);
+        }
+    }
+}
+
+/// The recurrence over subsets of `knots`, for one query point `u`. The caller resets
+/// the memo for the knot set first.
 pub(crate) struct SimplexRecurrence<'a> {
     pub knots: &'a [DVec2],
     pub u: DVec2,
@@ -96,8 +149,21 @@ pub(crate) struct SimplexRecurrence<'a> {
 }
 
 /// Indices of the set bits of `mask`, ascending.
+#[inline]
 fn bits(mask: u64) -> impl DoubleEndedIterator<Item = usize> + Clone {
     (0..64).filter(move |&i| mask >> i & 1 == 1)
+}
+
+/// Indices of the set bits of `mask`, ascending, without scanning all 64 positions.
+#[inline]
+fn set_bits(mut mask: u64) -> impl Iterator<Item = usize> + Clone {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let i = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            i
+        })
+    })
 }
 
 impl SimplexRecurrence<'_> {
@@ -115,37 +181,40 @@ impl SimplexRecurrence<'_> {
         };
         match self.choice {
             WChoice::Widest => {
-                let all: Vec<usize> = bits(mask).collect();
-                let farthest_from_point = |p: DVec2, skip: &[usize]| {
-                    let mut best: Option<(usize, f64)> = None;
-                    for &i in &all {
+                // Greedy largest-area triple, ties to the lowest index.
+                let farthest_from_point = |p: DVec2| {
+                    let mut best = (usize::MAX, -1.0);
+                    for i in set_bits(mask) {
                         let d = (knots[i] - p).length_squared();
-                        if !skip.contains(&i) && best.is_none_or(|(_, b)| d > b) {
-                            best = Some((i, d));
+                        if d > best.1 {
+                            best = (i, d);
                         }
                     }
-                    best.map(|(i, _)| i)
+                    best.0
                 };
                 let farthest_from_line = |a: usize, b: usize| {
-                    let mut best: Option<(usize, f64)> = None;
-                    for &i in &all {
+                    let mut best = (usize::MAX, -1.0);
+                    for i in set_bits(mask) {
                         let d = orient(knots[a], knots[b], knots[i]).abs();
-                        if i != a && i != b && best.is_none_or(|(_, m)| d > m) {
-                            best = Some((i, d));
+                        if i != a && i != b && d > best.1 {
+                            best = (i, d);
                         }
                     }
-                    best.map(|(i, _)| i)
+                    best.0
                 };
-                let a = *all.first()?;
-                let b = farthest_from_point(knots[a], &[a])?;
-                let c = farthest_from_line(a, b)?;
-                let a = farthest_from_line(b, c)?;
-                if independent(a, b, c) { Some([a, b, c]) } else { search(&mut all.into_iter()) }
+                if mask.count_ones() < 3 {
+                    return None;
+                }
+                let a = mask.trailing_zeros() as usize;
+                let b = farthest_from_point(knots[a]);
+                let c = farthest_from_line(a, b);
+                let a = farthest_from_line(b, c);
+                if independent(a, b, c) { Some([a, b, c]) } else { search(&mut set_bits(mask)) }
             }
-            WChoice::First => search(&mut bits(mask)),
+            WChoice::First => search(&mut set_bits(mask)),
             WChoice::Last => search(&mut bits(mask).rev()),
             WChoice::Spread => {
-                let all: Vec<usize> = bits(mask).collect();
+                let all: Vec<usize> = set_bits(mask).collect();
                 let (a, b, c) = (all[0], all[all.len() / 2], all[all.len() - 1]);
                 if independent(a, b, c) { Some([a, b, c]) } else { search(&mut all.into_iter()) }
             }
@@ -154,7 +223,7 @@ impl SimplexRecurrence<'_> {
 
     /// `M(u | knots[mask])`.
     pub fn value(&mut self, mask: u64) -> f64 {
-        if let Some(&v) = self.memo.get(&mask) {
+        if let Some(v) = self.memo.get(mask) {
             return v;
         }
         let v = self.compute(mask);
@@ -167,7 +236,7 @@ impl SimplexRecurrence<'_> {
         // Outside the bounding box of the knots (strictly) the spline vanishes; on its
         // boundary the half-open rule of the base case decides.
         let (mut lo, mut hi) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
-        for i in bits(mask) {
+        for i in set_bits(mask) {
             lo = lo.min(self.knots[i]);
             hi = hi.max(self.knots[i]);
         }
@@ -175,8 +244,9 @@ impl SimplexRecurrence<'_> {
             return 0.0;
         }
         if mask.count_ones() == 3 {
-            let mut it = bits(mask);
-            let (a, b, c) = (self.knots[it.next().unwrap()], self.knots[it.next().unwrap()], self.knots[it.next().unwrap()]);
+            let mut it = set_bits(mask);
+            let (a, b, c) =
+                (self.knots[it.next().unwrap()], self.knots[it.next().unwrap()], self.knots[it.next().unwrap()]);
             if is_degenerate(a, b, c) {
                 self.degenerate.get_or_insert(mask);
                 return 0.0;
@@ -248,7 +318,11 @@ impl SimplexSpline {
             return Err(SplineError::TooFewKnots { got: knots.len() });
         }
         if knots.len() > MAX_SIMPLEX_KNOTS {
-            return Err(SplineError::Count { what: "simplex spline knots", expected: MAX_SIMPLEX_KNOTS, got: knots.len() });
+            return Err(SplineError::Count {
+                what: "simplex spline knots",
+                expected: MAX_SIMPLEX_KNOTS,
+                got: knots.len(),
+            });
         }
         if let Some(index) = knots.iter().position(|k| !k.is_finite()) {
             return Err(SplineError::NonFinite { what: "knot", index });
@@ -296,6 +370,7 @@ impl SimplexSpline {
     /// As [`eval`](Self::eval).
     pub fn eval_with(&self, u: DVec2, choice: WChoice) -> Result<f64, SplineError> {
         let mut memo = Memo::default();
+        memo.reset(self.knots.len());
         let mut rec = SimplexRecurrence { knots: &self.knots, u, choice, memo: &mut memo, degenerate: None };
         let v = rec.value(self.full_mask());
         match rec.degenerate {
@@ -310,7 +385,9 @@ impl SimplexSpline {
     /// As [`eval`](Self::eval).
     pub fn derivative(&self, u: DVec2, y: DVec2) -> Result<f64, SplineError> {
         let mut memo = Memo::default();
-        let mut rec = SimplexRecurrence { knots: &self.knots, u, choice: WChoice::Widest, memo: &mut memo, degenerate: None };
+        memo.reset(self.knots.len());
+        let mut rec =
+            SimplexRecurrence { knots: &self.knots, u, choice: WChoice::Widest, memo: &mut memo, degenerate: None };
         let v = rec.derivative(self.full_mask(), y);
         match rec.degenerate {
             Some(mask) => Err(SplineError::DegenerateSimplex { knots: bits(mask).collect() }),
