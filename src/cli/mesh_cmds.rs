@@ -1,10 +1,18 @@
 //! Commands on plain meshes: `info`, `compare`, `convert`, `render`, and the demo.
 
-use std::path::PathBuf;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
 
-use clap::Args;
+use clap::{Args, ValueEnum};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use mesh_topo::graph::UnionFind;
+use mesh_topo::io::{self, Format, PlyEncoding, ReadReport, WriteOptions};
+use mesh_topo::{DVec3, HalfedgeMesh, PolygonSoup};
+use serde_json::{Value, json};
 
-use super::{CliError, CliResult};
+use super::common::{build_mesh, io_error, note_dropped, read_soup, write_mesh, write_soup};
+use super::{CliError, CliResult, input_error};
 
 /// Options of `info`.
 #[derive(Debug, Args)]
@@ -28,6 +36,17 @@ pub struct CompareArgs {
     pub json: bool,
 }
 
+/// PLY encodings for `convert`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PlyEncodingArg {
+    /// Text.
+    Ascii,
+    /// Binary, little-endian.
+    BinaryLe,
+    /// Binary, big-endian.
+    BinaryBe,
+}
+
 /// Options of `convert`.
 #[derive(Debug, Args)]
 pub struct ConvertArgs {
@@ -35,6 +54,9 @@ pub struct ConvertArgs {
     pub input: PathBuf,
     /// Output mesh; the format follows the extension.
     pub out: PathBuf,
+    /// Encoding of PLY output.
+    #[arg(long, value_enum, default_value = "binary-le")]
+    pub ply_encoding: PlyEncodingArg,
 }
 
 /// Options of `render`.
@@ -50,6 +72,9 @@ pub struct RenderArgs {
     /// Overlay the wireframe.
     #[arg(long)]
     pub wireframe: bool,
+    /// Flat shading (one normal per face) instead of smooth shading.
+    #[arg(long)]
+    pub flat: bool,
     /// View direction as azimuth,elevation in degrees.
     #[arg(long, default_value = "30,20", allow_hyphen_values = true)]
     pub view: String,
@@ -59,34 +84,418 @@ pub struct RenderArgs {
 }
 
 /// Options of `demo`.
-#[derive(Debug, Args, Default)]
+#[derive(Debug, Args)]
 pub struct DemoArgs {
     /// Output directory.
     #[arg(long, default_value = "multires-out")]
     pub out: PathBuf,
 }
 
+impl Default for DemoArgs {
+    fn default() -> Self {
+        Self { out: PathBuf::from("multires-out") }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// info
+
+/// Largest number of unreferenced vertex ids listed (the count is always complete).
+const LISTED_UNREFERENCED: usize = 100;
+/// Largest number of components detailed in the text output (JSON lists all).
+const LISTED_COMPONENTS: usize = 10;
+
+/// Everything `info` reports, as one JSON object (the text output renders the same).
+///
+/// For a soup that does not build into a half-edge mesh, the counts come from the soup
+/// (edges are the distinct unordered vertex pairs of consecutive corners), `manifold` is
+/// false with the builder's error, and `boundary_loops` and `genus` are null: they are
+/// not defined without a manifold surface.
+pub fn mesh_info(file: &str, soup: &PolygonSoup, report: &ReadReport) -> Value {
+    let dropped: Vec<Value> = report
+        .dropped
+        .iter()
+        .map(|d| json!({ "what": d.what, "count": d.count, "first": d.first.to_string() }))
+        .collect();
+    let face_sizes = histogram(soup.faces().map(<[u32]>::len));
+    let mut info = match HalfedgeMesh::from_soup(soup) {
+        Ok(mesh) => {
+            let stats = mesh.topology_stats();
+            json!({
+                "vertices": stats.vertices,
+                "edges": stats.edges,
+                "faces": stats.faces,
+                "face_sizes": stats.face_sizes,
+                "valences": stats.valences,
+                "boundary_edges": stats.boundary_edges,
+                "boundary_loops": stats.boundary_loops,
+                "components": stats.components,
+                "euler": stats.euler,
+                "genus": stats.genus,
+                "manifold": true,
+                "manifold_error": null,
+                "unreferenced_vertices": stats.isolated_vertices.len(),
+                "unreferenced_vertex_ids": &stats.isolated_vertices[..stats.isolated_vertices.len().min(LISTED_UNREFERENCED)],
+                "per_component": stats.per_component,
+            })
+        }
+        Err(error) => {
+            let soup_stats = SoupStats::of(soup);
+            json!({
+                "vertices": soup.vertex_count(),
+                "edges": soup_stats.edges,
+                "faces": soup.face_count(),
+                "face_sizes": face_sizes,
+                "valences": soup_stats.valences,
+                "boundary_edges": soup_stats.boundary_edges,
+                "boundary_loops": null,
+                "components": soup_stats.components,
+                "euler": soup.vertex_count() as i64 - soup_stats.edges as i64 + soup.face_count() as i64,
+                "genus": null,
+                "manifold": false,
+                "manifold_error": error.to_string(),
+                "unreferenced_vertices": soup_stats.unreferenced.len(),
+                "unreferenced_vertex_ids": &soup_stats.unreferenced[..soup_stats.unreferenced.len().min(LISTED_UNREFERENCED)],
+                "per_component": [],
+            })
+        }
+    };
+    info["file"] = json!(file);
+    info["format"] = json!(report.format.to_string());
+    info["ply_encoding"] = json!(report.ply_encoding.map(PlyEncoding::header_name));
+    info["dropped"] = json!(dropped);
+    info
+}
+
+fn histogram(values: impl Iterator<Item = usize>) -> BTreeMap<usize, usize> {
+    let mut counts = BTreeMap::new();
+    for value in values {
+        *counts.entry(value).or_insert(0) += 1;
+    }
+    counts
+}
+
+/// Counts of a soup that is not a manifold mesh.
+struct SoupStats {
+    edges: usize,
+    boundary_edges: usize,
+    components: usize,
+    valences: BTreeMap<usize, usize>,
+    unreferenced: Vec<u32>,
+}
+
+impl SoupStats {
+    fn of(soup: &PolygonSoup) -> Self {
+        let n = soup.vertex_count();
+        // Every side of every face as an unordered pair; sorted, runs are edges.
+        let mut sides: Vec<(u32, u32)> = Vec::with_capacity(soup.indices.len());
+        for face in soup.faces() {
+            for (k, &a) in face.iter().enumerate() {
+                let b = face[(k + 1) % face.len()];
+                if a != b {
+                    sides.push((a.min(b), a.max(b)));
+                }
+            }
+        }
+        sides.sort_unstable();
+        let mut valence = vec![0usize; n];
+        let mut used = vec![false; n];
+        let mut sets = UnionFind::new(n);
+        let (mut edges, mut boundary_edges) = (0, 0);
+        for run in sides.chunk_by(|x, y| x == y) {
+            let (a, b) = run[0];
+            edges += 1;
+            boundary_edges += usize::from(run.len() == 1);
+            valence[a as usize] += 1;
+            valence[b as usize] += 1;
+            sets.union(a, b);
+        }
+        for &v in &soup.indices {
+            used[v as usize] = true;
+        }
+        let mut roots: Vec<u32> = (0..n as u32).filter(|&v| used[v as usize]).map(|v| sets.find(v)).collect();
+        roots.sort_unstable();
+        roots.dedup();
+        Self {
+            edges,
+            boundary_edges,
+            components: roots.len(),
+            valences: histogram((0..n).filter(|&v| used[v]).map(|v| valence[v])),
+            unreferenced: (0..n as u32).filter(|&v| !used[v as usize]).collect(),
+        }
+    }
+}
+
+fn histogram_text(value: &Value) -> String {
+    let Some(map) = value.as_object() else { return "-".into() };
+    if map.is_empty() {
+        return "none".into();
+    }
+    // JSON object keys are strings; order them numerically.
+    let mut pairs: Vec<(u64, &Value)> = map.iter().filter_map(|(k, v)| Some((k.parse().ok()?, v))).collect();
+    pairs.sort_by_key(|&(k, _)| k);
+    pairs.iter().map(|(k, v)| format!("{k}: {v}")).collect::<Vec<_>>().join(", ")
+}
+
+/// The text rendering of [`mesh_info`].
+pub fn mesh_info_text(info: &Value) -> String {
+    let mut text = String::new();
+    let mut line = |label: &str, value: String| {
+        let _ = writeln!(text, "{label:<14}{value}");
+    };
+    let number = |key: &str| info[key].to_string();
+    let format = match info["ply_encoding"].as_str() {
+        Some(encoding) => format!("{}, {encoding}", info["format"].as_str().unwrap_or("?")),
+        None => info["format"].as_str().unwrap_or("?").to_string(),
+    };
+    line("file", format!("{} ({format})", info["file"].as_str().unwrap_or("?")));
+    line("vertices", number("vertices"));
+    line("edges", number("edges"));
+    line("faces", number("faces"));
+    line("face sizes", histogram_text(&info["face_sizes"]));
+    line("valences", histogram_text(&info["valences"]));
+    let loops = if info["boundary_loops"].is_null() { "undefined".to_string() } else { number("boundary_loops") };
+    line("boundary", format!("{loops} loops, {} edges", number("boundary_edges")));
+    line("components", number("components"));
+    line("euler", number("euler"));
+    let genus = if info["genus"].is_null() { "undefined (not manifold)".to_string() } else { number("genus") };
+    line("genus", genus);
+    let manifold = match info["manifold_error"].as_str() {
+        None => "yes".to_string(),
+        Some(error) => format!("no: {error}"),
+    };
+    line("manifold", manifold);
+    let unreferenced = info["unreferenced_vertices"].as_u64().unwrap_or(0);
+    let ids = info["unreferenced_vertex_ids"].as_array().map(Vec::len).unwrap_or(0);
+    let listed = match unreferenced {
+        0 => "0".to_string(),
+        n if n as usize > ids => format!("{n} (first {ids}: {})", info["unreferenced_vertex_ids"]),
+        n => format!("{n} {}", info["unreferenced_vertex_ids"]),
+    };
+    line("unreferenced", listed);
+    let dropped = info["dropped"].as_array().cloned().unwrap_or_default();
+    if dropped.is_empty() {
+        line("not kept", "nothing".into());
+    }
+    for (i, d) in dropped.iter().enumerate() {
+        let what = format!(
+            "{} x {} (first at {})",
+            d["count"],
+            d["what"].as_str().unwrap_or("?"),
+            d["first"].as_str().unwrap_or("?")
+        );
+        line(if i == 0 { "not kept" } else { "" }, what);
+    }
+    let components = info["per_component"].as_array().cloned().unwrap_or_default();
+    if components.len() > 1 {
+        for (i, c) in components.iter().take(LISTED_COMPONENTS).enumerate() {
+            line(
+                if i == 0 { "per component" } else { "" },
+                format!(
+                    "#{i}: {} vertices, {} edges, {} faces, {} boundary loops, euler {}, genus {}",
+                    c["vertices"], c["edges"], c["faces"], c["boundary_loops"], c["euler"], c["genus"]
+                ),
+            );
+        }
+        if components.len() > LISTED_COMPONENTS {
+            line("", format!("... {} more (see --json)", components.len() - LISTED_COMPONENTS));
+        }
+    }
+    text
+}
+
 /// `multires info`.
-pub fn info(_args: &InfoArgs) -> CliResult {
-    Err(CliError::Unavailable("info"))
+pub fn info(args: &InfoArgs) -> CliResult {
+    let (soup, report) = read_soup(&args.mesh)?;
+    let info = mesh_info(&args.mesh.display().to_string(), &soup, &report);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&info).expect("internal: JSON of plain values"));
+    } else {
+        print!("{}", mesh_info_text(&info));
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------
+// compare
+
+/// Coordinates beyond this magnitude would overflow squared distances.
+const MAX_COMPARE_COORDINATE: f64 = 1e150;
+
+/// Nearest-vertex distances from every point of `from` to the set `to`, in `from` order.
+fn nearest_distances(from: &[DVec3], to: &[DVec3]) -> CliResult<Vec<f64>> {
+    let points: Vec<[f64; 3]> = to.iter().map(|p| p.to_array()).collect();
+    let tree: ImmutableKdTree<f64, 3> = ImmutableKdTree::new_from_slice(&points)
+        .map_err(|e| input_error("cannot build the spatial index", format!("{e:?}")))?;
+    let queries: Vec<[f64; 3]> = from.iter().map(|p| p.to_array()).collect();
+    // Batch results are indexed like the queries, whatever the thread count.
+    let nearest = tree.query_batch(&queries).nearest_one::<SquaredEuclidean<f64>>().execute();
+    Ok(nearest.iter().map(|n| n.distance.sqrt()).collect())
+}
+
+/// Max and mean of distances (summed in index order: deterministic).
+fn max_and_sum(distances: &[f64]) -> (f64, f64) {
+    distances.iter().fold((0.0f64, 0.0f64), |(max, sum), &d| (max.max(d), sum + d))
+}
+
+fn bbox_diagonal(points: &[DVec3]) -> f64 {
+    let (lo, hi) = points
+        .iter()
+        .fold((DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    (hi - lo).length()
+}
+
+/// The comparison of two meshes' vertex sets, as `compare --json` prints it: for each
+/// vertex of one mesh the distance to the nearest vertex of the other (a k-d tree,
+/// `kiddo`), both ways; `max_dist` is the larger one-sided maximum (Hausdorff distance
+/// of the vertex sets), `mean_dist` the average of the two one-sided means; `rel_*`
+/// divide by the diagonal of A's bounding box (null when that box is a point).
+pub fn compare_meshes(a_name: &str, a: &PolygonSoup, b_name: &str, b: &PolygonSoup) -> CliResult<Value> {
+    for (name, soup) in [(a_name, a), (b_name, b)] {
+        if soup.positions.is_empty() {
+            return Err(CliError::Input(format!("{name}: the mesh has no vertices to compare")));
+        }
+        if let Some(i) = soup.positions.iter().position(|p| p.abs().max_element() > MAX_COMPARE_COORDINATE) {
+            return Err(CliError::Input(format!(
+                "{name}: vertex {i} has a coordinate beyond {MAX_COMPARE_COORDINATE:e}; distances would overflow"
+            )));
+        }
+    }
+    let a_to_b = nearest_distances(&a.positions, &b.positions)?;
+    let b_to_a = nearest_distances(&b.positions, &a.positions)?;
+    let (max_ab, sum_ab) = max_and_sum(&a_to_b);
+    let (max_ba, sum_ba) = max_and_sum(&b_to_a);
+    let (mean_ab, mean_ba) = (sum_ab / a_to_b.len() as f64, sum_ba / b_to_a.len() as f64);
+    // Symmetric: the larger of the two one-sided maxima (the Hausdorff distance between
+    // the vertex sets), the average of the two one-sided means (so neither mesh's
+    // vertex count weighs more).
+    let max_dist = max_ab.max(max_ba);
+    let mean_dist = 0.5 * (mean_ab + mean_ba);
+    let diagonal = bbox_diagonal(&a.positions);
+    let relative = |d: f64| if diagonal > 0.0 { json!(d / diagonal) } else { Value::Null };
+    Ok(json!({
+        "a": { "file": a_name, "vertices": a.vertex_count(), "faces": a.face_count() },
+        "b": { "file": b_name, "vertices": b.vertex_count(), "faces": b.face_count() },
+        "bbox_diagonal_a": diagonal,
+        "max_dist": max_dist,
+        "mean_dist": mean_dist,
+        "rel_max": relative(max_dist),
+        "rel_mean": relative(mean_dist),
+        "a_to_b": { "max": max_ab, "mean": mean_ab },
+        "b_to_a": { "max": max_ba, "mean": mean_ba },
+    }))
 }
 
 /// `multires compare`.
-pub fn compare(_args: &CompareArgs) -> CliResult {
-    Err(CliError::Unavailable("compare"))
+pub fn compare(args: &CompareArgs) -> CliResult {
+    let (a, a_report) = read_soup(&args.a)?;
+    let (b, b_report) = read_soup(&args.b)?;
+    note_dropped(&args.a, &a_report);
+    note_dropped(&args.b, &b_report);
+    let (a_name, b_name) = (args.a.display().to_string(), args.b.display().to_string());
+    let result = compare_meshes(&a_name, &a, &b_name, &b)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&result).expect("internal: JSON of plain values"));
+        return Ok(());
+    }
+    let relative = |key: &str| match result[key].as_f64() {
+        Some(r) => format!("{r:.3e} of A's bounding-box diagonal"),
+        None => "n/a (A's bounding box is a point)".to_string(),
+    };
+    println!("A             {a_name}: {} vertices, {} faces", a.vertex_count(), a.face_count());
+    println!("B             {b_name}: {} vertices, {} faces", b.vertex_count(), b.face_count());
+    println!("A diagonal    {}", result["bbox_diagonal_a"]);
+    println!("max distance  {:.6e} ({})", result["max_dist"].as_f64().unwrap_or(f64::NAN), relative("rel_max"));
+    println!("mean distance {:.6e} ({})", result["mean_dist"].as_f64().unwrap_or(f64::NAN), relative("rel_mean"));
+    println!(
+        "A -> B        max {:.6e}, mean {:.6e}",
+        result["a_to_b"]["max"].as_f64().unwrap_or(f64::NAN),
+        result["a_to_b"]["mean"].as_f64().unwrap_or(f64::NAN)
+    );
+    println!(
+        "B -> A        max {:.6e}, mean {:.6e}",
+        result["b_to_a"]["max"].as_f64().unwrap_or(f64::NAN),
+        result["b_to_a"]["mean"].as_f64().unwrap_or(f64::NAN)
+    );
+    Ok(())
 }
+
+// ---------------------------------------------------------------------------------------
+// convert
 
 /// `multires convert`.
-pub fn convert(_args: &ConvertArgs) -> CliResult {
-    Err(CliError::Unavailable("convert"))
+pub fn convert(args: &ConvertArgs) -> CliResult {
+    // Check the output name before reading a possibly large input.
+    let format = Format::from_path(&args.out).map_err(|e| io_error(&args.out, e))?;
+    let (soup, report) = read_soup(&args.input)?;
+    note_dropped(&args.input, &report);
+    let ply_encoding = match args.ply_encoding {
+        PlyEncodingArg::Ascii => PlyEncoding::Ascii,
+        PlyEncodingArg::BinaryLe => PlyEncoding::BinaryLittleEndian,
+        PlyEncodingArg::BinaryBe => PlyEncoding::BinaryBigEndian,
+    };
+    write_soup(&args.out, &soup, &WriteOptions { ply_encoding })?;
+    println!("wrote {} ({format}): {} vertices, {} faces", args.out.display(), soup.vertex_count(), soup.face_count());
+    Ok(())
 }
 
+// ---------------------------------------------------------------------------------------
+// render
+
 /// `multires render`.
-pub fn render(_args: &RenderArgs) -> CliResult {
-    Err(CliError::Unavailable("render"))
+pub fn render(args: &RenderArgs) -> CliResult {
+    super::render::run(args)
+}
+
+// ---------------------------------------------------------------------------------------
+// demo
+
+/// The mesh embedded in the binary for the demo: the Stanford bunny (1839 vertices,
+/// 3674 triangles; origin in `tests/data/README.md`).
+const DEMO_MESH_NAME: &str = "bunny";
+const DEMO_MESH_OBJ: &str = include_str!("../../tests/data/bunny.obj");
+
+/// State passed from one demo step to the next.
+pub struct DemoContext {
+    /// Output directory.
+    pub out: PathBuf,
+    /// Short name of the input mesh, used in file names.
+    pub name: &'static str,
+    /// The input mesh.
+    pub mesh: HalfedgeMesh,
+    /// What reading the input mesh did not keep.
+    pub report: ReadReport,
+}
+
+/// One step of the demo: prints what it does and writes its files into `context.out`.
+pub type DemoStep = fn(&mut DemoContext) -> CliResult;
+
+/// The demo, in order. Each issue adds its steps (subdivision, reversal, fitting...).
+const DEMO_STEPS: &[(&str, DemoStep)] = &[("the input mesh", demo_input_mesh)];
+
+fn demo_input_mesh(context: &mut DemoContext) -> CliResult {
+    let file = format!("{}.obj", context.name);
+    let info = mesh_info(&format!("{file} (embedded)"), &context.mesh.to_soup(), &context.report);
+    print!("{}", mesh_info_text(&info));
+    let path = context.out.join(&file);
+    write_mesh(&path, &context.mesh)?;
+    let info_path = context.out.join(format!("{}-info.json", context.name));
+    let json = serde_json::to_string_pretty(&info).expect("internal: JSON of plain values");
+    std::fs::write(&info_path, json + "\n").map_err(|source| CliError::Io { path: info_path.clone(), source })?;
+    println!("wrote {} and {}", path.display(), info_path.display());
+    Ok(())
 }
 
 /// `multires demo` and `multires` without arguments.
-pub fn demo(_args: &DemoArgs) -> CliResult {
-    Err(CliError::Unavailable("the demo"))
+pub fn demo(args: &DemoArgs) -> CliResult {
+    std::fs::create_dir_all(&args.out).map_err(|source| CliError::Io { path: args.out.clone(), source })?;
+    let (soup, report) =
+        io::read_bytes(DEMO_MESH_OBJ.as_bytes(), Format::Obj).map_err(|e| input_error("embedded mesh", e))?;
+    let mesh = build_mesh(Path::new("embedded mesh"), &soup)?;
+    let mut context = DemoContext { out: args.out.clone(), name: DEMO_MESH_NAME, mesh, report };
+    for (i, (title, step)) in DEMO_STEPS.iter().enumerate() {
+        println!("== {}. {title}", i + 1);
+        step(&mut context)?;
+    }
+    Ok(())
 }

@@ -3,22 +3,23 @@
 //! Each member crate's commands live in their own file (`mesh_cmds`, `loop_cmds`,
 //! `doo_cmds`, `curve_cmds`, `spline_cmds`, `ifs_cmds`); commands that span several
 //! crates (`subdivide`, `reverse`, `decompose`, `reconstruct`, `analyze`) are dispatched
-//! here by scheme.
+//! here by scheme. Every command reads and writes meshes through `common`.
 
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+mod common;
 mod curve_cmds;
 mod doo_cmds;
 mod ifs_cmds;
 mod loop_cmds;
 mod mesh_cmds;
+pub mod render;
 mod spline_cmds;
 
 /// Errors of the command-line tool: one line for the user, no backtrace.
 #[derive(Debug, thiserror::Error)]
-#[allow(dead_code)] // `Input` is used as the commands land.
 pub enum CliError {
     /// A file could not be read or written.
     #[error("{path}: {source}")]
@@ -40,7 +41,6 @@ pub enum CliError {
 pub type CliResult<T = ()> = Result<T, CliError>;
 
 /// Turns any displayable error into a user-facing input error, prefixed with context.
-#[allow(dead_code)] // Used as the commands land.
 pub fn input_error(context: impl std::fmt::Display, error: impl std::fmt::Display) -> CliError {
     CliError::Input(format!("{context}: {error}"))
 }

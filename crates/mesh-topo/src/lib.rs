@@ -38,6 +38,11 @@
 //!   vertex has exactly one fan, closed (interior vertex) or open (boundary vertex).
 //! - **valence**: number of edges at a vertex.
 //!
+//! # Mesh files
+//! [`io`] reads and writes OBJ, OFF and PLY (ascii and binary) losslessly: a file is
+//! read into a [`PolygonSoup`] plus a report of everything not kept, and built into a
+//! mesh separately, so a non-manifold file can still be inspected.
+//!
 //! # Errors
 //! Building reports bad input as a [`MeshError`] naming the face, vertex or edge at fault;
 //! [`HalfedgeMesh::validate`] reports broken internal invariants (bugs) as
@@ -51,6 +56,7 @@ mod topology;
 
 pub mod binary;
 pub mod graph;
+pub mod io;
 pub mod shapes;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;

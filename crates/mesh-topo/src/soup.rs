@@ -11,7 +11,10 @@ use serde::{Deserialize, Serialize};
 /// checks it. Face `f` is `indices[offsets[f] .. offsets[f + 1]]`.
 ///
 /// [`HalfedgeMesh::from_soup`]: crate::HalfedgeMesh::from_soup
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+///
+/// Two soups are equal when they have the same positions and the same faces; a soup
+/// without faces may store its offsets as `[]` or `[0]`.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct PolygonSoup {
     /// Vertex positions.
     pub positions: Vec<DVec3>,
@@ -20,6 +23,16 @@ pub struct PolygonSoup {
     pub offsets: Vec<u32>,
     /// Concatenated vertex indices of all faces.
     pub indices: Vec<u32>,
+}
+
+impl PartialEq for PolygonSoup {
+    fn eq(&self, other: &Self) -> bool {
+        let offsets_equal = self.offsets == other.offsets
+            || (self.offsets.len() <= 1
+                && other.offsets.len() <= 1
+                && self.offsets.first().copied().unwrap_or(0) == other.offsets.first().copied().unwrap_or(0));
+        offsets_equal && self.positions == other.positions && self.indices == other.indices
+    }
 }
 
 impl PolygonSoup {

@@ -1,0 +1,201 @@
+//! Byte-level helpers shared by the text readers: lines, tokens, numbers.
+
+use super::{IoError, Location};
+
+/// Lines of a byte buffer with 1-based numbers. A final line without `\n` counts; the
+/// `\n` is not part of the line (a `\r` before it is, and is whitespace to the tokenizer).
+pub(crate) struct Lines<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+    line: usize,
+}
+
+impl<'a> Lines<'a> {
+    pub(crate) fn new(bytes: &'a [u8]) -> Self {
+        Self { bytes, pos: 0, line: 0 }
+    }
+
+    /// Number of the last line returned (0 before the first), i.e. the line count so far.
+    pub(crate) fn line(&self) -> usize {
+        self.line
+    }
+
+    /// Byte offset of the start of the next line.
+    pub(crate) fn offset(&self) -> usize {
+        self.pos
+    }
+}
+
+impl<'a> Iterator for Lines<'a> {
+    type Item = (usize, &'a [u8]);
+
+    #[inline]
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.pos >= self.bytes.len() {
+            return None;
+        }
+        let rest = &self.bytes[self.pos..];
+        let (line, advance) = match rest.iter().position(|&b| b == b'\n') {
+            Some(end) => (&rest[..end], end + 1),
+            None => (rest, rest.len()),
+        };
+        self.pos += advance;
+        self.line += 1;
+        Some((self.line, line))
+    }
+}
+
+/// The part of a line before a `#` comment.
+#[inline]
+pub(crate) fn strip_comment(line: &[u8]) -> &[u8] {
+    match line.iter().position(|&b| b == b'#') {
+        Some(hash) => &line[..hash],
+        None => line,
+    }
+}
+
+#[inline]
+pub(crate) fn is_space(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | b'\r' | b'\n' | 0x0b | 0x0c)
+}
+
+/// Whitespace-separated tokens of a line.
+#[inline]
+pub(crate) fn tokens(line: &[u8]) -> Tokens<'_> {
+    Tokens { rest: line }
+}
+
+/// Iterator over whitespace-separated tokens.
+#[derive(Clone)]
+pub(crate) struct Tokens<'a> {
+    rest: &'a [u8],
+}
+
+impl<'a> Iterator for Tokens<'a> {
+    type Item = &'a [u8];
+
+    #[inline]
+    fn next(&mut self) -> Option<&'a [u8]> {
+        let start = self.rest.iter().position(|&b| !is_space(b))?;
+        let rest = &self.rest[start..];
+        let end = rest.iter().position(|&b| is_space(b)).unwrap_or(rest.len());
+        self.rest = &rest[end..];
+        Some(&rest[..end])
+    }
+}
+
+/// Trailing whitespace removed.
+#[inline]
+pub(crate) fn trim_end(line: &[u8]) -> &[u8] {
+    let end = line.iter().rposition(|&b| !is_space(b)).map_or(0, |i| i + 1);
+    &line[..end]
+}
+
+/// A decimal floating-point number (Rust's grammar: `1`, `-1.5`, `.5`, `1e-3`, `inf`,
+/// `NaN`...). Non-finite values parse; callers reject them where they matter.
+#[inline]
+pub(crate) fn parse_f64(token: &[u8]) -> Option<f64> {
+    std::str::from_utf8(token).ok()?.parse().ok()
+}
+
+/// A decimal integer with an optional sign, without overflow.
+#[inline]
+pub(crate) fn parse_i64(token: &[u8]) -> Option<i64> {
+    let (negative, digits) = match token.first()? {
+        b'-' => (true, &token[1..]),
+        b'+' => (false, &token[1..]),
+        _ => (false, token),
+    };
+    if digits.is_empty() {
+        return None;
+    }
+    let mut value: i64 = 0;
+    for &b in digits {
+        let digit = b.wrapping_sub(b'0');
+        if digit > 9 {
+            return None;
+        }
+        // Accumulate negatively so that i64::MIN parses.
+        value = value.checked_mul(10)?.checked_sub(digit as i64)?;
+    }
+    if negative { Some(value) } else { value.checked_neg() }
+}
+
+/// A token for an error message: invalid UTF-8 replaced, long tokens shortened.
+pub(crate) fn show_token(token: &[u8]) -> String {
+    const MAX: usize = 40;
+    let text = String::from_utf8_lossy(token);
+    if text.chars().count() > MAX {
+        let mut short: String = text.chars().take(MAX).collect();
+        short.push('…');
+        short
+    } else {
+        text.into_owned()
+    }
+}
+
+pub(crate) fn invalid_number(line: usize, token: &[u8], expected: &'static str) -> IoError {
+    IoError::InvalidNumber { at: Location::Line(line), token: show_token(token), expected }
+}
+
+/// Parses a coordinate token: a finite-or-not number (finiteness is checked per vertex).
+#[inline]
+pub(crate) fn coordinate(line: usize, token: &[u8]) -> Result<f64, IoError> {
+    parse_f64(token).ok_or_else(|| invalid_number(line, token, "a number"))
+}
+
+/// Fails with [`IoError::NonFiniteCoordinate`] if a coordinate is NaN or infinite.
+#[inline]
+pub(crate) fn check_finite(at: Location, vertex: usize, p: [f64; 3]) -> Result<(), IoError> {
+    match p.iter().find(|x| !x.is_finite()) {
+        Some(&value) => Err(IoError::NonFiniteCoordinate { at, vertex, value }),
+        None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lines_number_from_one_and_keep_a_final_unterminated_line() {
+        let lines: Vec<(usize, &[u8])> = Lines::new(b"a\r\nb\n\nc").collect();
+        assert_eq!(lines, vec![(1, &b"a\r"[..]), (2, b"b"), (3, b""), (4, b"c")]);
+        assert_eq!(Lines::new(b"").count(), 0);
+        assert_eq!(Lines::new(b"x\n").count(), 1);
+    }
+
+    #[test]
+    fn tokens_split_on_any_ascii_whitespace() {
+        let t: Vec<&[u8]> = tokens(b" \tv  1.5\r").collect();
+        assert_eq!(t, vec![&b"v"[..], b"1.5"]);
+        assert_eq!(tokens(b"   ").count(), 0);
+    }
+
+    #[test]
+    fn integers_parse_exactly_and_reject_overflow() {
+        assert_eq!(parse_i64(b"-9223372036854775808"), Some(i64::MIN));
+        assert_eq!(parse_i64(b"9223372036854775807"), Some(i64::MAX));
+        assert_eq!(parse_i64(b"9223372036854775808"), None);
+        assert_eq!(parse_i64(b"+12"), Some(12));
+        for bad in [&b""[..], b"-", b"1.0", b"1e3", b"x", b"--1"] {
+            assert_eq!(parse_i64(bad), None, "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn floats_follow_rust_grammar() {
+        assert_eq!(parse_f64(b"-1.5e-3"), Some(-1.5e-3));
+        assert_eq!(parse_f64(b".5"), Some(0.5));
+        assert!(parse_f64(b"nan").unwrap().is_nan());
+        assert_eq!(parse_f64(b"1,5"), None);
+        assert_eq!(parse_f64(b"\xff"), None);
+    }
+
+    #[test]
+    fn long_tokens_are_shortened_in_messages() {
+        let long = vec![b'x'; 100];
+        assert_eq!(show_token(&long).chars().count(), 41);
+        assert_eq!(show_token(b"ab\xffc"), "ab\u{fffd}c");
+    }
+}

@@ -1,0 +1,54 @@
+//! Mesh files for every command: reading (with a note for what the file held that is
+//! not kept), building, writing. Errors name the file and, for content errors, the line.
+
+use std::path::Path;
+
+use mesh_topo::io::{self, IoError, ReadReport, WriteOptions};
+use mesh_topo::{HalfedgeMesh, PolygonSoup};
+
+use super::{CliError, CliResult};
+
+/// A library I/O error as a one-line CLI error naming the file.
+pub fn io_error(path: &Path, error: IoError) -> CliError {
+    match error {
+        IoError::File { path, source } => CliError::Io { path, source },
+        other => CliError::Input(format!("{}: {other}", path.display())),
+    }
+}
+
+/// Reads a mesh file as a polygon soup (format from the extension), with the reader's
+/// report of what it did not keep.
+pub fn read_soup(path: &Path) -> CliResult<(PolygonSoup, ReadReport)> {
+    io::read_soup(path).map_err(|e| io_error(path, e))
+}
+
+/// Prints one note per attribute the file held that the mesh does not keep.
+pub fn note_dropped(path: &Path, report: &ReadReport) {
+    for dropped in &report.dropped {
+        eprintln!("multires: note: {}: not kept: {dropped}", path.display());
+    }
+}
+
+/// Builds the half-edge mesh of a soup read from `path`.
+pub fn build_mesh(path: &Path, soup: &PolygonSoup) -> CliResult<HalfedgeMesh> {
+    HalfedgeMesh::from_soup(soup)
+        .map_err(|e| CliError::Input(format!("{}: not a manifold, consistently oriented mesh: {e}", path.display())))
+}
+
+/// Reads a mesh file and builds its half-edge mesh; notes dropped attributes on stderr.
+#[allow(dead_code)] // The entry point of the subdivision commands, which land in their own issues.
+pub fn read_mesh(path: &Path) -> CliResult<HalfedgeMesh> {
+    let (soup, report) = read_soup(path)?;
+    note_dropped(path, &report);
+    build_mesh(path, &soup)
+}
+
+/// Writes a soup; the format follows the extension (PLY as `options` say).
+pub fn write_soup(path: &Path, soup: &PolygonSoup, options: &WriteOptions) -> CliResult {
+    io::write_soup(path, soup, options).map_err(|e| io_error(path, e))
+}
+
+/// Writes a mesh; the format follows the extension (PLY in binary little-endian).
+pub fn write_mesh(path: &Path, mesh: &HalfedgeMesh) -> CliResult {
+    io::write_mesh(path, mesh, &WriteOptions::default()).map_err(|e| io_error(path, e))
+}
