@@ -11,6 +11,7 @@ pub mod domain;
 pub mod fit;
 pub mod index;
 pub mod linalg;
+pub mod param;
 pub mod point;
 pub mod simplex;
 pub mod surface;
