@@ -7,6 +7,7 @@ mod error;
 pub mod bezier;
 pub mod bpatch;
 pub mod dms;
+pub mod dms_net;
 pub mod domain;
 pub mod fit;
 pub mod index;
