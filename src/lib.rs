@@ -7,6 +7,7 @@
 //! |---|---|---|
 //! | [`mesh`] | `mesh-topo` | half-edge meshes, validation, traversal, mesh files |
 //! | [`loop_subdiv`] | `subdiv-loop` | Loop subdivision, reverse Loop, M-band Loop, analysis |
+//! | [`doo`] | `subdiv-doo` | Doo-Sabin subdivision, reverse Doo-Sabin, pyramids, analysis |
 //!
 //! ```
 //! use multires::mesh::{HalfedgeMesh, shapes};
@@ -16,4 +17,5 @@
 //! ```
 
 pub use mesh_topo as mesh;
+pub use subdiv_doo as doo;
 pub use subdiv_loop as loop_subdiv;

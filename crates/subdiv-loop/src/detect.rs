@@ -1,1 +1,924 @@
-//! See the crate documentation.
+//! Recognising Loop (1-to-4) subdivision connectivity in a plain triangle mesh.
+//!
+//! One Loop step turns every coarse vertex into a *vertex point* (an **even** fine
+//! vertex) and every coarse edge into an *edge point* (an **odd** fine vertex), and every
+//! coarse triangle `(a, b, c)` into three *corner faces* `(a, ab, ca)`, `(b, bc, ab)`,
+//! `(c, ca, bc)` and one *inner face* `(ab, bc, ca)`. [`detect`] recovers all of this from
+//! the fine mesh alone (ALGORITHMS.md §7.4, after Taubin 2001, "Detecting and
+//! reconstructing subdivision connectivity"):
+//!
+//! 1. **Seed.** Every edge point has valence 6 (inside) or 4 (on the boundary), so a
+//!    vertex of any other valence must be a vertex point: the lowest-numbered such vertex
+//!    of each connected component is the seed. A component where every valence is
+//!    regular (a torus, say) admits several labelings; then the lowest-numbered vertex
+//!    and, failing that, each of its neighbours is tried in turn (one of them is a vertex
+//!    point of any valid labeling, so this finds one if any exists). A seed given by the
+//!    caller ([`DetectOptions::seed_vertex`]) replaces the search in its component.
+//! 2. **Propagation** (breadth-first). The neighbours of a vertex point are edge points;
+//!    from vertex point `v` through edge point `m`, the next vertex point is the
+//!    neighbour of `m` straight across from `v` (opposite in `m`'s 6-ring inside, the
+//!    other boundary neighbour on the boundary). Each vertex is labelled once, so this
+//!    is linear; the labeling from a seed is forced, hence unique.
+//! 3. **Validation.** Every edge point has exactly two vertex-point neighbours, on its
+//!    line (its coarse edge); two edge points around a vertex point must not lead to the
+//!    same vertex point (a doubled coarse edge); every face must have one vertex point
+//!    (a corner face) or none (an inner face); the three faces across an inner face's
+//!    edges must be corner faces, so that every face belongs to exactly one group of
+//!    four; the three vertex points of a group must be distinct, and each edge point of
+//!    the group must lie on the line between the two vertex points of its coarse edge.
+//!    A mesh passing these checks is exactly the Loop refinement of the coarse mesh
+//!    found, up to numbering (a property test rebuilds the input from the result).
+//!
+//! Any failure is a [`LoopError::NotLoopConnectivity`] naming the fine vertex or face
+//! where the structure breaks.
+//!
+//! # Numbering
+//! Coarse vertex `i` is the `i`-th vertex point in fine order (isolated fine vertices are
+//! vertex points of isolated coarse vertices, so that reversal loses nothing). Coarse
+//! faces are numbered in the order their first fine face appears, and each starts at the
+//! corner whose corner face comes first. Coarse edges are numbered as `mesh_topo` numbers
+//! the edges of the coarse mesh. With this choice a fine mesh in the *canonical order*
+//! (vertex points first, in coarse order, then one edge point per coarse edge in edge
+//! order; coarse face `f = (a, b, c)` refined into faces `4f .. 4f + 4` =
+//! `(a, ab, ca)`, `(b, bc, ab)`, `(c, ca, bc)`, `(ab, bc, ca)`, ALGORITHMS.md §6.1) is
+//! recognised with the identity [`FineOrder`], so a pyramid of such a mesh stores no
+//! connectivity at all. Any other numbering is recorded as a [`FineOrder`].
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+
+use mesh_topo::HalfedgeMesh;
+
+use crate::LoopError;
+use crate::corner_table::{CornerTable, NONE, next, prev};
+
+/// A fine-mesh element named by an error.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum FineElement {
+    /// A vertex, by index.
+    Vertex(u32),
+    /// A face, by index.
+    Face(u32),
+}
+
+impl fmt::Display for FineElement {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            FineElement::Vertex(v) => write!(f, "vertex {v}"),
+            FineElement::Face(face) => write!(f, "face {face}"),
+        }
+    }
+}
+
+/// Options of [`detect`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct DetectOptions {
+    /// A vertex known to be a vertex point (even). Its component is labelled from it,
+    /// without search; the other components are searched as usual. Needed only to pick
+    /// one of several valid labelings of a mesh whose valences are all regular.
+    pub seed_vertex: Option<u32>,
+}
+
+/// How a fine mesh is numbered relative to the canonical refinement of its coarse mesh
+/// (see the [module docs](self)).
+///
+/// Canonical fine vertex `i` (coarse vertex `i` for `i < V`, else the edge point of
+/// coarse edge `i - V`) is fine vertex `vertex_of_canonical[i]`. Canonical fine face `K`
+/// is fine face `face_of_canonical[K] / 3`, whose corner `j` is corner
+/// `(j + face_of_canonical[K] % 3) % 3` of the canonical face.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FineOrder {
+    /// Fine vertex of each canonical fine vertex (a permutation).
+    pub vertex_of_canonical: Vec<u32>,
+    /// `3 * face + rotation` of each canonical fine face (faces form a permutation).
+    pub face_of_canonical: Vec<u32>,
+}
+
+impl FineOrder {
+    /// Checks that this is an order for a fine mesh with `vertices` vertices and `faces`
+    /// faces: two permutations, rotations below 3.
+    ///
+    /// # Errors
+    /// A sentence saying what is wrong.
+    pub fn check(&self, vertices: usize, faces: usize) -> Result<(), String> {
+        if self.vertex_of_canonical.len() != vertices {
+            return Err(format!("vertex order has {} entries for {vertices} vertices", self.vertex_of_canonical.len()));
+        }
+        if self.face_of_canonical.len() != faces {
+            return Err(format!("face order has {} entries for {faces} faces", self.face_of_canonical.len()));
+        }
+        let mut seen = vec![false; vertices];
+        for (i, &v) in self.vertex_of_canonical.iter().enumerate() {
+            if v as usize >= vertices || std::mem::replace(&mut seen[v as usize], true) {
+                return Err(format!("vertex order entry {i} ({v}) is out of range or repeated"));
+            }
+        }
+        let mut seen = vec![false; faces];
+        for (k, &code) in self.face_of_canonical.iter().enumerate() {
+            let face = (code / 3) as usize;
+            if face >= faces || std::mem::replace(&mut seen[face], true) {
+                return Err(format!("face order entry {k} (face {face}) is out of range or repeated"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The Loop structure of a fine mesh: which fine vertices are vertex points and edge
+/// points, and the coarse mesh they came from. Made by [`detect`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LoopConnectivity {
+    pub(crate) coarsening: Coarsening,
+}
+
+/// The coarse connectivity plus the map from coarse elements to fine ones.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Coarsening {
+    pub(crate) coarse: CornerTable,
+    /// Fine vertex of each coarse vertex.
+    pub(crate) vertex_point: Vec<u32>,
+    /// Fine vertex of each coarse edge.
+    pub(crate) edge_point: Vec<u32>,
+    /// See [`FineOrder::face_of_canonical`].
+    pub(crate) face_of_canonical: Vec<u32>,
+}
+
+impl Coarsening {
+    /// True if the fine mesh is in canonical order.
+    pub(crate) fn is_canonical(&self) -> bool {
+        let nv = self.vertex_point.len() as u32;
+        self.vertex_point.iter().enumerate().all(|(i, &v)| v == i as u32)
+            && self.edge_point.iter().enumerate().all(|(e, &v)| v == nv + e as u32)
+            && self.face_of_canonical.iter().enumerate().all(|(k, &code)| code == 3 * k as u32)
+    }
+
+    /// The fine order, `None` when canonical.
+    pub(crate) fn fine_order(&self) -> Option<FineOrder> {
+        (!self.is_canonical()).then(|| FineOrder {
+            vertex_of_canonical: self.vertex_point.iter().chain(&self.edge_point).copied().collect(),
+            face_of_canonical: self.face_of_canonical.clone(),
+        })
+    }
+}
+
+impl LoopConnectivity {
+    /// Number of coarse vertices (= vertex points).
+    pub fn coarse_vertex_count(&self) -> usize {
+        self.coarsening.coarse.vertex_count()
+    }
+
+    /// Number of coarse edges (= edge points).
+    pub fn coarse_edge_count(&self) -> usize {
+        self.coarsening.coarse.edge_count()
+    }
+
+    /// Number of coarse faces (a quarter of the fine faces).
+    pub fn coarse_face_count(&self) -> usize {
+        self.coarsening.coarse.face_count()
+    }
+
+    /// The fine vertex (vertex point) of each coarse vertex, in increasing order.
+    pub fn vertex_points(&self) -> &[u32] {
+        &self.coarsening.vertex_point
+    }
+
+    /// The fine vertex (edge point) of each coarse edge, coarse edges numbered as
+    /// `mesh_topo` numbers the edges of the coarse mesh.
+    pub fn edge_points(&self) -> &[u32] {
+        &self.coarsening.edge_point
+    }
+
+    /// The coarse faces as coarse vertex indices, counter-clockwise like the fine faces.
+    pub fn coarse_faces(&self) -> Vec<[u32; 3]> {
+        let t = &self.coarsening.coarse;
+        (0..t.face_count() as u32).map(|f| [t.vertex(3 * f), t.vertex(3 * f + 1), t.vertex(3 * f + 2)]).collect()
+    }
+
+    /// The two coarse vertices of coarse edge `e`, or `None` if it does not exist.
+    pub fn coarse_edge(&self, e: usize) -> Option<[u32; 2]> {
+        let t = &self.coarsening.coarse;
+        (e < t.edge_count()).then(|| {
+            let c = t.edge_corner(e as u32);
+            [t.vertex(c), t.vertex(next(c))]
+        })
+    }
+
+    /// How the fine mesh is numbered relative to the canonical refinement of the coarse
+    /// mesh; `None` if it is the canonical order itself.
+    pub fn fine_order(&self) -> Option<FineOrder> {
+        self.coarsening.fine_order()
+    }
+}
+
+/// Finds the Loop structure of a triangle mesh: its vertex points, edge points and
+/// coarse faces (see the [module docs](self) for the method and the numbering).
+///
+/// Linear in the mesh size (at most seven propagation attempts in a component whose
+/// valences are all regular, one otherwise).
+///
+/// ```
+/// use glam::DVec3;
+/// use mesh_topo::HalfedgeMesh;
+/// use subdiv_loop::detect::{DetectOptions, detect};
+///
+/// // One triangle split 1-to-4: vertex points 0, 1, 2, edge points 3 (01), 4 (12), 5 (20).
+/// let positions = vec![
+///     DVec3::ZERO, DVec3::X, DVec3::Y,
+///     DVec3::new(0.5, 0.0, 0.0), DVec3::new(0.5, 0.5, 0.0), DVec3::new(0.0, 0.5, 0.0),
+/// ];
+/// let fine = HalfedgeMesh::from_faces(positions, [[0u32, 3, 5], [1, 4, 3], [2, 5, 4], [3, 4, 5]])?;
+/// let structure = detect(&fine, &DetectOptions::default())?;
+/// assert_eq!(structure.vertex_points(), &[0, 1, 2]);
+/// assert_eq!(structure.edge_points(), &[3, 4, 5]);
+/// assert_eq!(structure.coarse_faces(), vec![[0, 1, 2]]);
+/// assert!(structure.fine_order().is_none()); // canonical order
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// [`LoopError::NotTriangle`] for a face that is not a triangle,
+/// [`LoopError::SeedOutOfRange`] for a seed that does not exist, [`LoopError::NoFaces`]
+/// for a mesh without faces, and
+/// [`LoopError::NotLoopConnectivity`] naming the fine vertex or face where the Loop
+/// structure breaks.
+pub fn detect(fine: &HalfedgeMesh, options: &DetectOptions) -> Result<LoopConnectivity, LoopError> {
+    let table = CornerTable::from_mesh(fine)?;
+    Ok(LoopConnectivity { coarsening: detect_table(&table, options.seed_vertex)? })
+}
+
+const UNKNOWN: u8 = 0;
+const EVEN: u8 = 1;
+const ODD: u8 = 2;
+
+fn broken(at: FineElement, reason: String) -> LoopError {
+    LoopError::NotLoopConnectivity { at, reason }
+}
+
+/// [`detect`] on a corner table.
+///
+/// Components with an irregular vertex (the common case) are labelled by one
+/// propagation from their lowest irregular vertex and their faces validated in one pass
+/// in face order; only components whose valences are all regular go through the
+/// candidate search, each attempt validating the component's own faces.
+pub(crate) fn detect_table(fine: &CornerTable, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
+    let nv = fine.vertex_count();
+    if let Some(seed) = seed_vertex
+        && seed as usize >= nv
+    {
+        return Err(LoopError::SeedOutOfRange { vertex: seed, vertex_count: nv });
+    }
+    if fine.face_count() == 0 {
+        // Only isolated vertices: "reversing" would change nothing, forever.
+        return Err(LoopError::NoFaces);
+    }
+    let mut labeler = Labeler::new(fine);
+    // Valence class of every vertex, in one pass over the corners.
+    let mut outgoing = vec![0u8; nv];
+    let mut boundary = vec![false; nv];
+    for c in 0..fine.corner_count() as u32 {
+        let v = fine.vertex(c) as usize;
+        outgoing[v] = outgoing[v].saturating_add(1);
+        boundary[v] |= fine.twin(c) == NONE;
+    }
+    // Outgoing corners: the valence inside, one fewer on the boundary.
+    let irregular = |v: usize| outgoing[v] != if boundary[v] { 3 } else { 6 };
+
+    if let Some(seed) = seed_vertex
+        && !fine.is_isolated(seed)
+    {
+        labeler.propagate(seed)?;
+    }
+    for v in 0..nv as u32 {
+        if fine.is_isolated(v) {
+            labeler.label[v as usize] = EVEN;
+        } else if labeler.label[v as usize] == UNKNOWN && irregular(v as usize) {
+            labeler.propagate(v)?;
+        }
+    }
+    // What is left: vertices not reached (an error) or components of regular valences.
+    let mut component = Vec::new();
+    let mut component_faces = Vec::new();
+    for v in 0..nv as u32 {
+        if labeler.label[v as usize] != UNKNOWN || labeler.component_of[v as usize] != NONE {
+            continue;
+        }
+        labeler.collect_component(v, &mut component, &mut component_faces);
+        if component.iter().any(|&u| labeler.label[u as usize] != UNKNOWN || irregular(u as usize)) {
+            return Err(broken(
+                FineElement::Vertex(v),
+                "not reached from the vertex points of its component through the vertex-point / edge-point pattern"
+                    .into(),
+            ));
+        }
+        // `v` (the lowest index) or one of its neighbours is a vertex point of any valid
+        // labeling.
+        let candidates: Vec<u32> = std::iter::once(v).chain(fine.outgoing(v).map(|c| fine.vertex(next(c)))).collect();
+        let mut first_error = None;
+        for &seed in &candidates {
+            match labeler.label_component(seed, &component, &component_faces) {
+                Ok(()) => {
+                    first_error = None;
+                    break;
+                }
+                Err(error) => {
+                    first_error.get_or_insert(error);
+                }
+            }
+        }
+        if let Some(error) = first_error {
+            return Err(error);
+        }
+    }
+    let ungrouped: Vec<u32> =
+        (0..fine.face_count() as u32).filter(|&f| labeler.group_of_face[f as usize] == NONE).collect();
+    labeler.group_faces(&ungrouped)?;
+    Ok(labeler.assemble())
+}
+
+/// The coarse triangle of an inner face `(ab, bc, ca)`: vertex points `y = (a, b, c)`,
+/// the edge point `m[k]` of each coarse half-edge `y[k] -> y[k+1]`, and `corner[k]`, the
+/// fine corner at `y[k]` in its corner face (whose half-edge is `y[k] -> m[k]`).
+#[derive(Debug, Clone, Copy)]
+struct Group {
+    y: [u32; 3],
+    m: [u32; 3],
+    corner: [u32; 3],
+}
+
+/// Labelling state shared by the attempts on all components.
+struct Labeler<'a> {
+    fine: &'a CornerTable,
+    label: Vec<u8>,
+    /// Lowest vertex of each vertex's component (NONE until collected).
+    component_of: Vec<u32>,
+    /// The two vertex points of each edge point (its coarse edge).
+    line: Vec<[u32; 2]>,
+    /// Group (index into `groups`) of each face.
+    group_of_face: Vec<u32>,
+    groups: Vec<Group>,
+    /// Per vertex point during propagation: the last vertex point that reached it (for
+    /// the double-edge check).
+    stamp: Vec<u32>,
+    queue: std::collections::VecDeque<u32>,
+}
+
+impl<'a> Labeler<'a> {
+    fn new(fine: &'a CornerTable) -> Self {
+        let nv = fine.vertex_count();
+        Self {
+            fine,
+            label: vec![UNKNOWN; nv],
+            component_of: vec![NONE; nv],
+            line: vec![[NONE; 2]; nv],
+            group_of_face: vec![NONE; fine.face_count()],
+            groups: Vec::with_capacity(fine.face_count() / 4),
+            stamp: vec![NONE; nv],
+            queue: std::collections::VecDeque::new(),
+        }
+    }
+
+    /// Collects the vertices (breadth-first) and faces of the component of `start`.
+    fn collect_component(&mut self, start: u32, vertices: &mut Vec<u32>, faces: &mut Vec<u32>) {
+        let fine = self.fine;
+        vertices.clear();
+        faces.clear();
+        self.component_of[start as usize] = start;
+        vertices.push(start);
+        let mut i = 0;
+        while i < vertices.len() {
+            let v = vertices[i];
+            i += 1;
+            for c in fine.outgoing(v) {
+                if c.is_multiple_of(3) {
+                    faces.push(c / 3);
+                }
+                // Both ends of the face's other corners: covers the last neighbour of an
+                // open fan, which is not the target of a corner of v.
+                for w in [fine.vertex(next(c)), fine.vertex(prev(c))] {
+                    if self.component_of[w as usize] == NONE {
+                        self.component_of[w as usize] = start;
+                        vertices.push(w);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Labels one component from `seed` and validates its faces.
+    fn label_component(&mut self, seed: u32, vertices: &[u32], faces: &[u32]) -> Result<(), LoopError> {
+        for &v in vertices {
+            self.label[v as usize] = UNKNOWN;
+            self.stamp[v as usize] = NONE;
+        }
+        self.propagate(seed)?;
+        if let Some(&v) = vertices.iter().find(|&&v| self.label[v as usize] == UNKNOWN) {
+            return Err(broken(
+                FineElement::Vertex(v),
+                format!("not reached from vertex point {seed} through the vertex-point / edge-point pattern"),
+            ));
+        }
+        let first_group = self.groups.len();
+        let result = self.group_faces(faces);
+        if result.is_err() {
+            self.groups.truncate(first_group);
+        }
+        result
+    }
+
+    /// Breadth-first propagation of vertex points through edge points.
+    fn propagate(&mut self, seed: u32) -> Result<(), LoopError> {
+        let fine = self.fine;
+        self.queue.clear();
+        self.label[seed as usize] = EVEN;
+        self.queue.push_back(seed);
+        while let Some(v) = self.queue.pop_front() {
+            for c in fine.outgoing(v) {
+                let m = fine.vertex(next(c));
+                let w = match self.label[m as usize] {
+                    UNKNOWN => {
+                        let w = self.across(m, v)?;
+                        self.label[m as usize] = ODD;
+                        self.line[m as usize] = [v, w];
+                        w
+                    }
+                    ODD => match self.line[m as usize] {
+                        [a, b] if a == v => b,
+                        [a, b] if b == v => a,
+                        [a, b] => {
+                            return Err(broken(
+                                FineElement::Vertex(m),
+                                format!(
+                                    "edge point between vertex points {a} and {b} is also next to vertex point {v}"
+                                ),
+                            ));
+                        }
+                    },
+                    _ => {
+                        return Err(broken(
+                            FineElement::Vertex(m),
+                            format!(
+                                "it and its neighbour {v} would both be vertex points (the neighbours of a vertex point are edge points)"
+                            ),
+                        ));
+                    }
+                };
+                match self.label[w as usize] {
+                    ODD => {
+                        return Err(broken(
+                            FineElement::Vertex(w),
+                            format!(
+                                "it is an edge point, but also the vertex point across edge point {m} from vertex point {v}"
+                            ),
+                        ));
+                    }
+                    UNKNOWN => {
+                        self.label[w as usize] = EVEN;
+                        self.queue.push_back(w);
+                    }
+                    _ => {}
+                }
+                if std::mem::replace(&mut self.stamp[w as usize], v) == v {
+                    return Err(broken(
+                        FineElement::Vertex(v),
+                        format!("two of its edge points lead to the same vertex point {w} (a doubled coarse edge)"),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The neighbour of edge point `m` straight across from vertex point `v`.
+    fn across(&self, m: u32, v: u32) -> Result<u32, LoopError> {
+        let fine = self.fine;
+        // The ring of m, counter-clockwise; the last neighbour of an open fan is not the
+        // target of a corner. Stop early on a high valence.
+        let boundary = fine.is_boundary_vertex(m);
+        let mut ring = [NONE; 8];
+        let mut count = 0usize;
+        let mut last = NONE;
+        for c in fine.outgoing(m).take(7) {
+            ring[count] = fine.vertex(next(c));
+            count += 1;
+            last = c;
+        }
+        if boundary && count < 7 {
+            ring[count] = fine.vertex(prev(last));
+            count += 1;
+        }
+        let expected = if boundary { 4 } else { 6 };
+        if count != expected {
+            let valence = if count >= 7 { fine.outgoing(m).count() + usize::from(boundary) } else { count };
+            return Err(broken(
+                FineElement::Vertex(m),
+                format!(
+                    "as a neighbour of vertex point {v} it must be an edge point, but it has valence {valence} ({}); an edge point has valence 6 inside and 4 on the boundary",
+                    if boundary { "on the boundary" } else { "inside" }
+                ),
+            ));
+        }
+        if boundary {
+            // ring[0] and ring[3] are the boundary neighbours.
+            if ring[0] == v {
+                return Ok(ring[3]);
+            }
+            if ring[3] == v {
+                return Ok(ring[0]);
+            }
+            return Err(broken(
+                FineElement::Vertex(m),
+                format!("boundary edge point whose neighbour {v}, a vertex point, is not on the boundary"),
+            ));
+        }
+        let i = ring[..6].iter().position(|&w| w == v).expect("internal: v is a neighbour of m");
+        Ok(ring[(i + 3) % 6])
+    }
+
+    /// Checks the face pattern and groups every corner face with its inner face; checks
+    /// that each edge point of a group lies on the coarse edge of the group.
+    fn group_faces(&mut self, faces: &[u32]) -> Result<(), LoopError> {
+        let fine = self.fine;
+        for &f in faces {
+            self.group_of_face[f as usize] = NONE;
+        }
+        for &f in faces {
+            let corners = [3 * f, 3 * f + 1, 3 * f + 2];
+            let evens = corners.iter().filter(|&&c| self.label[fine.vertex(c) as usize] == EVEN).count();
+            match evens {
+                0 => {}
+                1 => continue,
+                _ => {
+                    return Err(broken(
+                        FineElement::Face(f),
+                        format!(
+                            "has {evens} vertex points; a face has one (corner face) or none (inner face) in a Loop mesh"
+                        ),
+                    ));
+                }
+            }
+            // An inner face (ab, bc, ca): across ab -> bc lies b's corner face, across
+            // bc -> ca c's, across ca -> ab a's.
+            let mut y = [NONE; 3];
+            let mut corner = [NONE; 3];
+            let group = self.groups.len() as u32;
+            for j in 0..3u32 {
+                let t = fine.twin(3 * f + j);
+                let (a, b) = (fine.vertex(3 * f + j), fine.vertex(next(3 * f + j)));
+                if t == NONE {
+                    return Err(broken(
+                        FineElement::Face(f),
+                        format!("inner face (all edge points) with boundary edge ({a}, {b})"),
+                    ));
+                }
+                let even = prev(t);
+                if self.label[fine.vertex(even) as usize] != EVEN {
+                    return Err(broken(
+                        FineElement::Face(f),
+                        format!(
+                            "inner face (all edge points) whose neighbour across edge ({a}, {b}) is face {}, not a corner face",
+                            t / 3
+                        ),
+                    ));
+                }
+                let k = (j as usize + 1) % 3;
+                y[k] = fine.vertex(even);
+                corner[k] = even;
+                debug_assert_eq!(self.group_of_face[(t / 3) as usize], NONE);
+                self.group_of_face[(t / 3) as usize] = group;
+            }
+            self.group_of_face[f as usize] = group;
+            let m = [fine.vertex(3 * f), fine.vertex(3 * f + 1), fine.vertex(3 * f + 2)];
+            let [a, b, c] = y;
+            if a == b || b == c || c == a {
+                return Err(broken(
+                    FineElement::Face(f),
+                    format!("inner face spans the coarse triangle ({a}, {b}, {c}) with a repeated vertex"),
+                ));
+            }
+            for k in 0..3 {
+                let (from, to) = (y[k], y[(k + 1) % 3]);
+                let line = self.line[m[k] as usize];
+                if line != [from, to] && line != [to, from] {
+                    return Err(broken(
+                        FineElement::Vertex(m[k]),
+                        format!(
+                            "edge point between vertex points {} and {} is used by the coarse triangle ({a}, {b}, {c}) as the edge point of ({from}, {to})",
+                            line[0], line[1]
+                        ),
+                    ));
+                }
+            }
+            self.groups.push(Group { y, m, corner });
+        }
+        if let Some(&f) = faces.iter().find(|&&f| self.group_of_face[f as usize] == NONE) {
+            return Err(broken(
+                FineElement::Face(f),
+                "corner face with no inner face across its edge-point edge".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Numbers the coarse mesh (all components labelled and validated).
+    fn assemble(&self) -> Coarsening {
+        let fine = self.fine;
+        let nv = fine.vertex_count();
+        let mut coarse_of_fine = vec![NONE; nv];
+        let mut vertex_point = Vec::with_capacity(nv / 4 + 1);
+        for (v, (&label, coarse)) in self.label.iter().zip(&mut coarse_of_fine).enumerate() {
+            if label == EVEN {
+                *coarse = vertex_point.len() as u32;
+                vertex_point.push(v as u32);
+            }
+        }
+        let faces = fine.face_count();
+        let coarse_faces = self.groups.len();
+        debug_assert_eq!(4 * coarse_faces, faces);
+        let mut coarse_of_group = vec![NONE; coarse_faces];
+        let mut canonical_of_face = vec![NONE; faces];
+        let mut face_of_canonical = vec![NONE; faces];
+        let mut corner_vertex = Vec::with_capacity(3 * coarse_faces);
+        let mut corner_edge_point = Vec::with_capacity(3 * coarse_faces);
+        // Fine corner at the vertex point of each coarse corner (first half of its half-edge).
+        let mut first_half = Vec::with_capacity(3 * coarse_faces);
+        for f in 0..faces as u32 {
+            let g = self.group_of_face[f as usize] as usize;
+            if coarse_of_group[g] != NONE {
+                continue;
+            }
+            let coarse = (corner_vertex.len() / 3) as u32;
+            coarse_of_group[g] = coarse;
+            let group = &self.groups[g];
+            // Start at the corner whose corner face comes first.
+            let r = (0..3).min_by_key(|&k| group.corner[k]).expect("internal: three corners");
+            for s in 0..3 {
+                let k = (r + s) % 3;
+                let even = group.corner[k];
+                corner_vertex.push(coarse_of_fine[group.y[k] as usize]);
+                corner_edge_point.push(group.m[k]);
+                first_half.push(even);
+                let canonical = 4 * coarse + s as u32;
+                canonical_of_face[(even / 3) as usize] = canonical;
+                // Canonical corner 0 is the vertex point: actual corner j -> rotation (3 - j) % 3.
+                face_of_canonical[canonical as usize] = 3 * (even / 3) + (3 - even % 3) % 3;
+            }
+            // The inner face is the one across the corner faces' edge-point edges.
+            let inner = fine.twin(next(group.corner[0])) / 3;
+            let canonical = 4 * coarse + 3;
+            canonical_of_face[inner as usize] = canonical;
+            face_of_canonical[canonical as usize] = 3 * inner + (3 - r as u32) % 3;
+        }
+        debug_assert_eq!(corner_vertex.len(), 3 * coarse_faces);
+        let twin = first_half
+            .iter()
+            .map(|&first| {
+                let t = fine.twin(first);
+                if t == NONE {
+                    return NONE;
+                }
+                // t = m -> y_l in the corner face of coarse corner l of the other face;
+                // the coarse twin is that face's half-edge l - 1 -> l.
+                let canonical = canonical_of_face[(t / 3) as usize];
+                let (other, l) = (canonical / 4, canonical % 4);
+                debug_assert!(l < 3);
+                3 * other + (l + 2) % 3
+            })
+            .collect();
+        let coarse = CornerTable::from_parts(vertex_point.len(), corner_vertex, twin);
+        let edge_point =
+            (0..coarse.edge_count() as u32).map(|e| corner_edge_point[coarse.edge_corner(e) as usize]).collect();
+        debug_assert_eq!(vertex_point.len() + coarse.edge_count(), nv);
+        Coarsening { coarse, vertex_point, edge_point, face_of_canonical }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reference::{
+        bipyramid, cylinder, flip_edge, loop_step, open_fan, perturb, random_diagonal_grid, scramble, swap_vertices,
+    };
+    use crate::reverse::LoopOptions;
+    use glam::DVec3;
+    use mesh_topo::PolygonSoup;
+    use mesh_topo::shapes::{self, CellKind};
+    use proptest::prelude::*;
+
+    fn mesh(soup: &PolygonSoup) -> HalfedgeMesh {
+        HalfedgeMesh::from_soup(soup).expect("valid test mesh")
+    }
+
+    fn refined(soup: &PolygonSoup) -> PolygonSoup {
+        loop_step(&mesh(soup), &LoopOptions::default())
+    }
+
+    fn detect_soup(soup: &PolygonSoup, seed_vertex: Option<u32>) -> Result<LoopConnectivity, LoopError> {
+        detect(&mesh(soup), &DetectOptions { seed_vertex })
+    }
+
+    #[test]
+    fn detection_recovers_the_coarse_mesh_of_a_refinement() {
+        let shapes = [
+            shapes::tetrahedron(),
+            shapes::icosahedron(),
+            shapes::grid(4, 3, CellKind::Triangles),
+            shapes::torus(4, 3, CellKind::Triangles),
+            bipyramid(9),
+            open_fan(3),
+            cylinder(5, 2),
+        ];
+        for soup in shapes {
+            let coarse = mesh(&soup);
+            let structure = detect_soup(&refined(&soup), None).unwrap();
+            let nv = coarse.vertex_count() as u32;
+            assert_eq!(structure.vertex_points(), (0..nv).collect::<Vec<_>>());
+            assert_eq!(structure.edge_points(), (nv..nv + coarse.edge_count() as u32).collect::<Vec<_>>());
+            let faces: Vec<[u32; 3]> = soup.faces().map(|f| [f[0], f[1], f[2]]).collect();
+            assert_eq!(structure.coarse_faces(), faces);
+            for e in coarse.edges() {
+                let [a, b] = coarse.edge_vertices(e);
+                assert_eq!(structure.coarse_edge(e.index()), Some([a.raw(), b.raw()]));
+            }
+            assert_eq!(structure.coarse_edge(coarse.edge_count()), None);
+            assert!(structure.fine_order().is_none());
+        }
+    }
+
+    #[test]
+    fn detection_finds_the_vertex_points_of_a_renumbered_refinement() {
+        let soup = shapes::torus(5, 4, CellKind::Triangles);
+        let fine = refined(&soup);
+        let scrambled = scramble(&fine, 99);
+        let structure = detect_soup(&scrambled, None).unwrap();
+        assert_eq!(structure.coarse_vertex_count(), 20);
+        assert_eq!(structure.coarse_edge_count(), 60);
+        assert_eq!(structure.coarse_face_count(), 40);
+        let order = structure.fine_order().expect("renumbered");
+        order.check(scrambled.vertex_count(), scrambled.face_count()).unwrap();
+        // Every canonical fine face, mapped through the order, is an input face.
+        let table = structure.coarsening.coarse.refine();
+        for (k, &code) in order.face_of_canonical.iter().enumerate() {
+            let (face, rotation) = ((code / 3) as usize, code % 3);
+            for j in 0..3u32 {
+                let canonical_corner = 3 * k as u32 + (j + rotation) % 3;
+                let expected = order.vertex_of_canonical[table.vertex(canonical_corner) as usize];
+                assert_eq!(scrambled.face(face)[j as usize], expected);
+            }
+        }
+    }
+
+    #[test]
+    fn any_seed_of_a_regular_torus_gives_a_valid_labeling() {
+        let fine = refined(&shapes::torus(4, 4, CellKind::Triangles));
+        for seed in 0..fine.vertex_count() as u32 {
+            let structure = detect_soup(&fine, Some(seed)).unwrap();
+            assert!(structure.vertex_points().contains(&seed));
+            assert_eq!(structure.coarse_vertex_count(), 16);
+        }
+    }
+
+    #[test]
+    fn regular_meshes_fall_back_to_other_seed_candidates() {
+        // On a cylinder only vertices of even rows can be vertex points. Make vertex 0
+        // an edge point of a vertical edge, so the first candidate fails.
+        let coarse = cylinder(4, 2);
+        let fine = refined(&coarse);
+        let coarse_mesh = mesh(&coarse);
+        let vertical = coarse_mesh
+            .edges()
+            .find(|&e| {
+                let [a, b] = coarse_mesh.edge_vertices(e);
+                a.raw() / 4 != b.raw() / 4
+            })
+            .unwrap();
+        let odd_row_vertex = (coarse_mesh.vertex_count() + vertical.index()) as u32;
+        let swapped = swap_vertices(&fine, 0, odd_row_vertex);
+        assert!(detect_soup(&swapped, Some(0)).is_err(), "an odd-row vertex cannot be a vertex point of the cylinder");
+        let structure = detect_soup(&swapped, None).unwrap();
+        assert_eq!(structure.coarse_vertex_count(), 12);
+        assert!(!structure.vertex_points().contains(&0));
+    }
+
+    fn assert_not_loop(soup: &PolygonSoup, what: &str) {
+        match detect_soup(soup, None) {
+            Err(LoopError::NotLoopConnectivity { at, reason }) => {
+                let index = match at {
+                    FineElement::Vertex(v) => v as usize,
+                    FineElement::Face(f) => f as usize,
+                };
+                let bound = if matches!(at, FineElement::Vertex(_)) { soup.vertex_count() } else { soup.face_count() };
+                assert!(index < bound && !reason.is_empty(), "{what}: {at} {reason}");
+            }
+            other => panic!("{what}: expected NotLoopConnectivity, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn meshes_without_loop_connectivity_are_rejected_with_a_location() {
+        assert_not_loop(&shapes::icosahedron(), "icosahedron");
+        assert_not_loop(&shapes::octahedron(), "octahedron");
+        assert_not_loop(&shapes::tetrahedron(), "tetrahedron");
+        assert_not_loop(&shapes::grid(5, 5, CellKind::Triangles), "regular grid with odd sides");
+        for seed in 0..5 {
+            assert_not_loop(&random_diagonal_grid(8, seed), "irregular triangulation");
+        }
+        // A refined mesh with one edge flipped, for every kind of edge.
+        let fine = refined(&bipyramid(5));
+        let fine_mesh = mesh(&fine);
+        for e in fine_mesh.edges() {
+            let [a, b] = fine_mesh.edge_vertices(e);
+            assert_not_loop(&flip_edge(&fine, a.raw(), b.raw()), &format!("flipped edge {e:?}"));
+        }
+        // A refined mesh with one face removed, for every face of one coarse face.
+        for removed in 0..4 {
+            let mut holed = PolygonSoup::from_faces(fine.positions.clone(), Vec::<[u32; 3]>::new());
+            for (f, face) in fine.faces().enumerate() {
+                if f != removed {
+                    holed.push_face(face);
+                }
+            }
+            assert_not_loop(&holed, &format!("face {removed} removed"));
+        }
+    }
+
+    #[test]
+    fn seed_out_of_range_and_quads_are_errors() {
+        let fine = refined(&shapes::octahedron());
+        assert_eq!(
+            detect_soup(&fine, Some(18)).unwrap_err(),
+            LoopError::SeedOutOfRange { vertex: 18, vertex_count: 18 }
+        );
+        assert!(matches!(
+            detect(&mesh(&shapes::cube()), &DetectOptions::default()),
+            Err(LoopError::NotTriangle { face: 0, corners: 4 })
+        ));
+        // A vertex point given as seed works, an edge point of a non-regular mesh does not.
+        assert!(detect_soup(&fine, Some(0)).is_ok());
+        assert!(detect_soup(&fine, Some(6)).is_err());
+    }
+
+    #[test]
+    fn isolated_vertices_are_kept_as_isolated_coarse_vertices() {
+        let mut coarse = shapes::octahedron();
+        coarse.positions.push(DVec3::new(5.0, 5.0, 5.0));
+        let fine = refined(&coarse);
+        let structure = detect_soup(&fine, None).unwrap();
+        assert_eq!(structure.coarse_vertex_count(), 7);
+        assert!(structure.fine_order().is_none());
+    }
+
+    #[test]
+    fn several_components_are_detected_independently() {
+        let a = scramble(&refined(&shapes::icosahedron()), 3);
+        let b = refined(&cylinder(3, 1));
+        let offset = a.vertex_count() as u32;
+        let mut both = a.clone();
+        both.positions.extend(b.positions.iter().map(|p| *p + DVec3::X * 5.0));
+        for face in b.faces() {
+            both.push_face(&face.iter().map(|v| v + offset).collect::<Vec<_>>());
+        }
+        let structure = detect_soup(&both, None).unwrap();
+        assert_eq!(structure.coarse_vertex_count(), 12 + 6);
+        assert_eq!(structure.coarse_face_count(), 20 + 6);
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Detection never panics; when it succeeds on an arbitrary mesh, the coarse mesh
+        /// is valid and its canonical refinement, renumbered, is the input.
+        #[test]
+        fn detection_is_total_and_sound(
+            soup in mesh_topo::testing::arb_triangle_mesh(),
+            refine in any::<bool>(),
+            flips in 0usize..3,
+            seed in any::<u64>(),
+        ) {
+            let mut soup = if refine { scramble(&refined(&soup), seed) } else { soup };
+            let mut rng = crate::reference::Rng::new(seed);
+            for _ in 0..flips {
+                let m = mesh(&soup);
+                let e = m.edge(rng.below(m.edge_count())).unwrap();
+                if !m.is_boundary_edge(e) {
+                    let [a, b] = m.edge_vertices(e);
+                    let flipped = flip_edge(&soup, a.raw(), b.raw());
+                    if HalfedgeMesh::from_soup(&flipped).is_ok() {
+                        soup = flipped;
+                    }
+                }
+            }
+            let soup = perturb(&soup, 0.01, seed);
+            if let Ok(structure) = detect_soup(&soup, None) {
+                let coarse = structure.coarsening.coarse.to_soup(vec![DVec3::ZERO; structure.coarse_vertex_count()]);
+                prop_assert!(HalfedgeMesh::from_soup(&coarse).is_ok());
+                let canonical = structure.coarsening.coarse.refine();
+                let actual = match structure.fine_order() {
+                    None => canonical,
+                    Some(order) => canonical.permuted(&order.vertex_of_canonical, &order.face_of_canonical),
+                };
+                prop_assert_eq!(actual.to_soup(soup.positions.clone()), soup);
+            }
+        }
+    }
+}

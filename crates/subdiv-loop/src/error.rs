@@ -2,6 +2,8 @@
 
 use thiserror::Error;
 
+use crate::detect::FineElement;
+
 /// What went wrong, named by the offending element.
 #[derive(Debug, Clone, PartialEq, Error)]
 #[non_exhaustive]
@@ -16,5 +18,80 @@ pub enum LoopError {
         face: usize,
         /// Its number of corners.
         corners: usize,
+    },
+    /// The mesh does not have Loop (1-to-4) subdivision connectivity: the structure of
+    /// vertex points and edge points breaks at the named vertex or face.
+    #[error("no Loop subdivision connectivity at {at}: {reason}")]
+    NotLoopConnectivity {
+        /// Where the structure breaks (fine-mesh index).
+        at: FineElement,
+        /// What is wrong there.
+        reason: String,
+    },
+    /// Reverse subdivision needs at least one face.
+    #[error("the mesh has no faces: there is no Loop subdivision to reverse")]
+    NoFaces,
+    /// A user-given seed vertex does not exist.
+    #[error("seed vertex {vertex} does not exist (the mesh has {vertex_count} vertices)")]
+    SeedOutOfRange {
+        /// The seed given.
+        vertex: u32,
+        /// Number of vertices of the mesh.
+        vertex_count: usize,
+    },
+    /// Details or orders do not fit the mesh they are applied to (or a pyramid is
+    /// corrupted): `level` counts refinement steps from the coarse mesh (1 = the first).
+    #[error("level {level}: {reason}")]
+    InvalidDetails {
+        /// The refinement step (1-based from the coarsest mesh).
+        level: usize,
+        /// What does not fit.
+        reason: String,
+    },
+    /// A computed position overflowed to infinity or NaN.
+    #[error("level {level}: vertex {vertex} has a non-finite position (details too large)")]
+    NonFiniteResult {
+        /// The refinement step (1-based from the coarsest mesh).
+        level: usize,
+        /// The vertex.
+        vertex: usize,
+    },
+    /// A pyramid file could not be encoded or decoded.
+    #[error("Loop pyramid: {0}")]
+    Binary(String),
+    /// A per-vertex attribute array does not have one value per vertex.
+    #[error("attribute has {found} values but the mesh has {expected} vertices")]
+    AttributeCount {
+        /// Number of vertices (values needed).
+        expected: usize,
+        /// Number of values given.
+        found: usize,
+    },
+    /// A parameter is out of its range.
+    #[error("invalid {name}: {reason}")]
+    InvalidParameter {
+        /// The parameter.
+        name: &'static str,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The scheme has no rule for boundaries.
+    #[error("{scheme} needs a closed mesh; edge ({from}, {to}) is on a boundary")]
+    BoundaryNotSupported {
+        /// The scheme.
+        scheme: &'static str,
+        /// One end of a boundary edge.
+        from: u32,
+        /// The other end.
+        to: u32,
+    },
+    /// Two triangles glued along all three edges (a closed "pillow" whose vertices
+    /// have interior valence 2): one Loop step would make the mesh non-manifold.
+    #[error("interior vertex {vertex} has valence 2 (face {face} shares all its edges with one other face)")]
+    InteriorValenceTwo {
+        /// A vertex of valence 2.
+        vertex: u32,
+        /// A face of the pillow.
+        face: usize,
     },
 }

@@ -1,1 +1,342 @@
-//! See the crate documentation.
+//! Loop subdivision of triangle meshes (Loop 1987), closed or with boundaries.
+//!
+//! # Rules
+//! One step splits every triangle into four and computes
+//! - a **vertex point** for every vertex `p` of valence `n` with neighbours `q_j`:
+//!   `alpha_n p + beta_n sum q_j` with `alpha_n = 1 - n beta_n` and Loop's original
+//!   `beta_n = (5/8 - (3/8 + cos(2 pi / n) / 4)^2) / n` ([`VertexWeights::Loop`], the
+//!   default, as in OpenSubdiv, CGAL, OpenMesh) or Warren's `beta_3 = 3/16`,
+//!   `beta_n = 3 / (8 n)` ([`VertexWeights::Warren`], as in libigl);
+//! - an **edge point** for every interior edge `(a, b)` with opposite vertices `c, d`:
+//!   `3/8 (a + b) + 1/8 (c + d)`;
+//! - on the boundary (Hoppe et al. 1994): edge midpoints `(a + b) / 2` and, for a
+//!   boundary vertex with boundary neighbours `q-`, `q+`, `3/4 p + 1/8 (q- + q+)`, so the
+//!   boundary follows a cubic B-spline that depends on the boundary alone. With
+//!   [`LoopOptions::keep_corners`] a boundary vertex of valence 2 (one incident face)
+//!   stays where it is. Interior edges that touch the boundary use the interior rule.
+//!
+//! Isolated vertices are copied. The only manifold triangle meshes with interior
+//! vertices of valence 2 are closed "pillows" (two triangles glued along all three
+//! edges); their subdivision would not be a manifold, so they are rejected
+//! ([`LoopError::InteriorValenceTwo`]).
+//!
+//! # Output order (a stable contract)
+//! One step on a mesh with `V` vertices, `E` edges and `F` faces gives `V + E` vertices
+//! and `4F` faces, in this order:
+//! - **vertices** `0 .. V`: the vertex point of coarse vertex `i` has index `i`;
+//! - **vertices** `V + e`: the edge point of coarse edge `e`, where edges are numbered in
+//!   order of first appearance when the faces are scanned in order and the corners of
+//!   each face in order (the edge of corner `k` of face `f` joins corners `k` and
+//!   `k + 1 mod 3`). This is the numbering of [`HalfedgeMesh`]'s `EdgeId`s;
+//! - **faces**: coarse face `f = (a, b, c)` (corners as given) with edge points
+//!   `m_ab, m_bc, m_ca` gives
+//!   `4f = (a, m_ab, m_ca)`, `4f + 1 = (b, m_bc, m_ab)`, `4f + 2 = (c, m_ca, m_bc)` and
+//!   the central face `4f + 3 = (m_ab, m_bc, m_ca)`.
+//!
+//! Several levels are repeated single steps, each numbering the edges of the previous
+//! level's output as above: `subdivide(m, 2)` has the vertex and face order of
+//! `subdivide(subdivide(m, 1).to_halfedge_mesh(), 1)` and the same positions up to
+//! rounding (neighbours may be summed in another order). So at every level vertex
+//! `i < V` is an *even* vertex (it came from coarse vertex `i`), the others are *odd*,
+//! and detail vectors can be addressed across levels by index.
+//!
+//! # Performance
+//! After the initial conversion of the [`HalfedgeMesh`] the refinement never touches a
+//! general half-edge structure: each level is a compact triangle topology (three
+//! half-edges per face, one twin index each, plus one word per face and per vertex) and
+//! the next level's topology follows from the previous one by index arithmetic
+//! (Dupuy and Vanhoey 2021), without hashing. Faces, edges and vertices are processed in
+//! parallel with `rayon`, each output written by exactly one task with a fixed formula,
+//! so results are bit-identical for any number of threads. The last level computes only
+//! positions and triangles. Peak memory beyond the output is the previous level: about
+//! 40% of the output size. The result is flat arrays; building a [`HalfedgeMesh`] from
+//! them ([`LoopMesh::to_halfedge_mesh`]) validates and sorts, and costs more than the
+//! subdivision itself at large sizes.
+//!
+//! # References
+//! C. Loop, *Smooth subdivision surfaces based on triangles*, MS thesis, Utah, 1987.
+//! J. Warren, *Subdivision methods for geometric design*, 1995 (simplified weights).
+//! H. Hoppe et al., *Piecewise smooth surface reconstruction*, SIGGRAPH 1994 (boundaries).
+//! J. Dupuy, K. Vanhoey, *A halfedge refinement rule for parallel Loop/Catmull-Clark
+//! subdivision*, HPG 2021 (index-arithmetic refinement).
+
+mod attribute;
+pub(crate) mod kernel;
+mod matrix;
+pub(crate) mod topology;
+
+use glam::DVec3;
+use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
+use serde::{Deserialize, Serialize};
+
+pub use attribute::Attribute;
+pub(crate) use attribute::SparseRow;
+pub use matrix::SubdivisionMatrix;
+
+use crate::LoopError;
+use kernel::Rules;
+use topology::{BASE_MASK, MAX_FACES, Topology};
+
+/// The vertex weights of interior vertices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum VertexWeights {
+    /// Loop's original `beta_n = (5/8 - (3/8 + cos(2 pi / n) / 4)^2) / n`.
+    #[default]
+    Loop,
+    /// Warren's simplification: `beta_3 = 3/16`, `beta_n = 3 / (8 n)` for `n > 3`.
+    Warren,
+}
+
+/// Options of Loop subdivision.
+///
+/// ```
+/// use subdiv_loop::forward::{LoopOptions, VertexWeights};
+/// let options = LoopOptions { weights: VertexWeights::Warren, ..LoopOptions::default() };
+/// assert!(!options.keep_corners);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct LoopOptions {
+    /// Interior vertex weights (default: Loop's original).
+    pub weights: VertexWeights,
+    /// Keep boundary vertices of valence 2 (corners with one incident face) fixed.
+    pub keep_corners: bool,
+}
+
+impl LoopOptions {
+    /// Loop's original weights, boundary corners smoothed like other boundary vertices.
+    pub fn loop_weights() -> Self {
+        Self::default()
+    }
+
+    /// Warren's weights (libigl's variant).
+    pub fn warren_weights() -> Self {
+        Self { weights: VertexWeights::Warren, ..Self::default() }
+    }
+}
+
+/// A subdivided triangle mesh as flat arrays, in the order documented in the
+/// [module docs](self).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LoopMesh {
+    /// Vertex positions.
+    pub positions: Vec<DVec3>,
+    /// Triangles as vertex index triples, counter-clockwise like the input.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl LoopMesh {
+    /// Number of vertices.
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Number of triangles.
+    pub fn face_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// The mesh as a polygon soup (copies the arrays).
+    pub fn to_soup(&self) -> PolygonSoup {
+        let mut soup = PolygonSoup::with_capacity(self.positions.len(), self.triangles.len(), 3 * self.triangles.len());
+        soup.positions.extend_from_slice(&self.positions);
+        for t in &self.triangles {
+            soup.push_face(t);
+        }
+        soup
+    }
+
+    /// Builds the half-edge mesh (validating it; linear time plus a sort per vertex).
+    /// Its edge numbering is the one the next step uses.
+    ///
+    /// # Errors
+    /// [`LoopError::Mesh`] if the arrays were edited into an invalid mesh.
+    pub fn to_halfedge_mesh(&self) -> Result<HalfedgeMesh, LoopError> {
+        Ok(HalfedgeMesh::from_soup(&self.to_soup())?)
+    }
+}
+
+/// Subdivides a triangle mesh `levels` times with Loop's scheme.
+///
+/// `levels = 0` returns the input as flat arrays.
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes};
+/// use subdiv_loop::forward::{LoopOptions, subdivide};
+///
+/// let tetrahedron = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+/// let fine = subdivide(&tetrahedron, 2, &LoopOptions::default())?;
+/// // V' = V + E and F' = 4F per level: (4, 6, 4) -> (10, 24, 16) -> (34, 96, 64).
+/// assert_eq!((fine.vertex_count(), fine.face_count()), (34, 64));
+/// # Ok::<(), subdiv_loop::LoopError>(())
+/// ```
+///
+/// # Errors
+/// [`LoopError::NotTriangle`] naming the first face that is not a triangle;
+/// [`LoopError::Mesh`] with [`MeshError::NonFiniteCoordinate`] if a position is NaN or
+/// infinite, or [`MeshError::TooLarge`] if the output would not fit `u32` indices.
+pub fn subdivide(mesh: &HalfedgeMesh, levels: u32, options: &LoopOptions) -> Result<LoopMesh, LoopError> {
+    check_finite(mesh.positions())?;
+    let topology = Topology::from_mesh(mesh)?;
+    check_sizes(&topology, levels)?;
+    let (positions, topology) = refine(topology, mesh.positions(), levels, &Rules::new(options));
+    Ok(LoopMesh { positions, triangles: topology.triangles })
+}
+
+/// [`subdivide`] for a polygon soup: builds (and validates) the half-edge mesh first.
+///
+/// ```
+/// use glam::DVec3;
+/// use mesh_topo::PolygonSoup;
+/// use subdiv_loop::forward::{LoopOptions, subdivide_soup};
+///
+/// let square = PolygonSoup::from_faces(
+///     vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
+///     [[0u32, 1, 2], [0, 2, 3]],
+/// );
+/// let fine = subdivide_soup(&square, 1, &LoopOptions::default())?;
+/// assert_eq!((fine.vertex_count(), fine.face_count()), (9, 8));
+/// # Ok::<(), subdiv_loop::LoopError>(())
+/// ```
+///
+/// # Errors
+/// As [`subdivide`], plus [`LoopError::Mesh`] for an invalid soup (non-manifold,
+/// inconsistent orientation, bad indices, ...).
+pub fn subdivide_soup(soup: &PolygonSoup, levels: u32, options: &LoopOptions) -> Result<LoopMesh, LoopError> {
+    check_triangles(soup)?;
+    subdivide(&HalfedgeMesh::from_soup(soup)?, levels, options)
+}
+
+/// Refines any per-vertex attribute (one value per vertex of `mesh`) `levels` times
+/// with the stencils of [`subdivide`]; the result is in the same vertex order.
+///
+/// ```
+/// use glam::DVec3;
+/// use mesh_topo::{HalfedgeMesh, shapes};
+/// use subdiv_loop::forward::{LoopOptions, refine_attribute, subdivide};
+///
+/// let mesh = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+/// let options = LoopOptions::default();
+/// // A scalar field and an RGB colour per vertex.
+/// let heat: Vec<f64> = mesh.positions().iter().map(|p| p.z).collect();
+/// let colour: Vec<[f64; 3]> = (0..6).map(|i| [i as f64 / 5.0, 0.5, 1.0]).collect();
+/// let fine_heat = refine_attribute(&mesh, 2, &options, &heat)?;
+/// let fine_colour = refine_attribute(&mesh, 2, &options, &colour)?;
+/// // Positions refined as an attribute are exactly the subdivided positions.
+/// let fine = subdivide(&mesh, 2, &options)?;
+/// assert_eq!(refine_attribute(&mesh, 2, &options, mesh.positions())?, fine.positions);
+/// assert_eq!((fine_heat.len(), fine_colour.len()), (66, 66));
+/// assert!(fine.positions.iter().zip(&fine_heat).all(|(p, h)| (p.z - h).abs() < 1e-15));
+/// # Ok::<(), subdiv_loop::LoopError>(())
+/// ```
+///
+/// # Errors
+/// [`LoopError::AttributeCount`] if `values.len() != mesh.vertex_count()`; the errors
+/// of [`subdivide`] for the mesh.
+pub fn refine_attribute<T: Attribute>(
+    mesh: &HalfedgeMesh,
+    levels: u32,
+    options: &LoopOptions,
+    values: &[T],
+) -> Result<Vec<T>, LoopError> {
+    if values.len() != mesh.vertex_count() {
+        return Err(LoopError::AttributeCount { expected: mesh.vertex_count(), found: values.len() });
+    }
+    let topology = Topology::from_mesh(mesh)?;
+    check_sizes(&topology, levels)?;
+    Ok(refine(topology, values, levels, &Rules::new(options)).0)
+}
+
+/// The sparse matrix of `levels` Loop steps: row `i` holds the weights of fine vertex
+/// `i` on the coarse vertices. Built by refining the unit vectors through the same
+/// stencil code as [`subdivide`], so `S · positions` equals the subdivided positions.
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes};
+/// use subdiv_loop::forward::{LoopOptions, subdivide, subdivision_matrix};
+///
+/// let mesh = HalfedgeMesh::from_soup(&shapes::icosahedron())?;
+/// let s = subdivision_matrix(&mesh, 1, &LoopOptions::default())?;
+/// let fine = subdivide(&mesh, 1, &LoopOptions::default())?;
+/// let applied = s.apply(mesh.positions())?;
+/// assert!(applied.iter().zip(&fine.positions).all(|(a, b)| (*a - *b).length() < 1e-15));
+/// // The vertex row of a valence-5 vertex: alpha_5 and five times beta_5.
+/// assert_eq!(s.row(0).0.len(), 6);
+/// # Ok::<(), subdiv_loop::LoopError>(())
+/// ```
+///
+/// # Errors
+/// The errors of [`subdivide`].
+pub fn subdivision_matrix(
+    mesh: &HalfedgeMesh,
+    levels: u32,
+    options: &LoopOptions,
+) -> Result<SubdivisionMatrix, LoopError> {
+    let units: Vec<SparseRow> = (0..mesh.vertex_count() as u32).map(SparseRow::unit).collect();
+    let rows = refine_attribute(mesh, levels, options, &units)?;
+    Ok(SubdivisionMatrix::from_rows(rows, mesh.vertex_count()))
+}
+
+/// Runs `levels` steps; the returned topology is complete except at the last level
+/// (triangles and counts only).
+pub(crate) fn refine<T: Attribute>(
+    mut topology: Topology,
+    values: &[T],
+    levels: u32,
+    rules: &Rules,
+) -> (Vec<T>, Topology) {
+    let mut current: Option<Vec<T>> = None;
+    for level in 0..levels {
+        let last = level + 1 == levels;
+        let step = kernel::step(&topology, current.as_deref().unwrap_or(values), rules, !last);
+        // The coarser level is dropped here, before the next step allocates.
+        current = Some(step.values);
+        topology = step.topology;
+    }
+    (current.unwrap_or_else(|| values.to_vec()), topology)
+}
+
+/// Rejects NaN and infinite coordinates, naming the vertex.
+pub(crate) fn check_finite(positions: &[DVec3]) -> Result<(), LoopError> {
+    match positions.iter().position(|p| !p.is_finite()) {
+        None => Ok(()),
+        Some(vertex) => {
+            let p = positions[vertex];
+            let axis = (0..3).find(|&a| !p[a].is_finite()).unwrap_or(0);
+            Err(MeshError::NonFiniteCoordinate { vertex, axis, value: p[axis] }.into())
+        }
+    }
+}
+
+/// Rejects soups with non-triangular faces, naming the first one.
+pub(crate) fn check_triangles(soup: &PolygonSoup) -> Result<(), LoopError> {
+    match soup.faces().position(|f| f.len() != 3) {
+        None => Ok(()),
+        Some(face) => Err(LoopError::NotTriangle { face, corners: soup.face(face).len() }),
+    }
+}
+
+/// Checks that every level fits the `u32` layout: half-edge indices and edge counts of
+/// the levels that are refined further, vertex indices of the last.
+fn check_sizes(topology: &Topology, levels: u32) -> Result<(), LoopError> {
+    let (mut v, mut e, mut f) =
+        (topology.vertex_count as u64, topology.edge_count as u64, topology.face_count() as u64);
+    let too_large = |what: &'static str, count: u64, max: u64| {
+        Err(MeshError::TooLarge { what, count: count.min(usize::MAX as u64) as usize, max: max as usize }.into())
+    };
+    for _ in 0..levels {
+        if f > MAX_FACES {
+            return too_large("faces", f, MAX_FACES);
+        }
+        if e > BASE_MASK as u64 {
+            return too_large("edges", e, BASE_MASK as u64);
+        }
+        (v, e, f) = (v.saturating_add(e), e.saturating_mul(2).saturating_add(f.saturating_mul(3)), f.saturating_mul(4));
+    }
+    if v >= u32::MAX as u64 {
+        return too_large("vertices", v, u32::MAX as u64 - 1);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests;

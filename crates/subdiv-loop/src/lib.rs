@@ -5,16 +5,22 @@
 //!   matrix.
 //! - [`limit`]: limit positions and normals at the vertices of any level.
 //! - [`detect`]: recognising Loop (1-to-4) connectivity in a plain triangle mesh.
-//! - [`reverse`]: reverse Loop with detail vectors, exact reconstruction, pyramids.
+//! - [`reverse`]: reverse Loop with detail vectors and exact reconstruction, one level.
+//! - [`pyramid`]: multiresolution pyramids (base mesh + details of every level),
+//!   compression, and the `.mres` file format.
 //! - [`mband`]: ternary (1-to-9) and quaternary (1-to-16) Loop from the box spline.
 //! - [`analysis`]: local subdivision matrices, spectra and Reif's C1 check.
 
 pub mod analysis;
+mod corner_table;
 pub mod detect;
 mod error;
 pub mod forward;
 pub mod limit;
 pub mod mband;
+pub mod pyramid;
+#[cfg(test)]
+mod reference;
 pub mod reverse;
 
 pub use error::LoopError;

@@ -1,0 +1,1 @@
+//! Local subdivision matrices, spectra and Reif's C1 check.

@@ -1,0 +1,436 @@
+//! Flat corner-based connectivity and the Doo-Sabin topology step by index arithmetic.
+//!
+//! A *corner* is a (face, position) pair; corners are numbered face after face, in
+//! order, so corner `c` of a polygon soup is `soup.indices[c]`. Each corner also stands
+//! for the half-edge leaving it inside its face, and `corner_twin[c]` is the corner of
+//! the opposite half-edge (or [`NONE`] on the boundary). This is all Doo-Sabin needs:
+//! one step turns every corner into a fine vertex, so the fine mesh's faces, its corner
+//! twins and even the parents of its faces are index arithmetic on the coarse arrays,
+//! level after level, without ever rebuilding a half-edge structure.
+
+use glam::DVec3;
+use mesh_topo::HalfedgeMesh;
+use rayon::prelude::*;
+
+use crate::DooError;
+use crate::rule::FaceMaps;
+
+/// "No corner": the twin of a boundary corner, the first corner of an isolated vertex.
+pub(crate) const NONE: u32 = u32::MAX;
+
+/// Connectivity of a manifold polygon mesh as corner arrays (see the module docs).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub(crate) struct CornerMesh {
+    /// Start of each face's corners, plus the total (faces + 1 entries).
+    pub offsets: Vec<u32>,
+    /// Vertex of each corner.
+    pub corner_vertex: Vec<u32>,
+    /// Corner of the opposite half-edge, [`NONE`] on the boundary.
+    pub corner_twin: Vec<u32>,
+    /// The next corner in the same face.
+    pub corner_next: Vec<u32>,
+    /// Number of vertices.
+    pub vertex_count: usize,
+    /// Smallest corner of each vertex ([`NONE`] if isolated); `None` means the identity
+    /// (vertex `v`'s smallest corner is `v`), which holds for every Doo-Sabin output.
+    pub vertex_corner: Option<Vec<u32>>,
+}
+
+impl CornerMesh {
+    /// Number of faces.
+    #[inline]
+    pub fn face_count(&self) -> usize {
+        self.offsets.len().saturating_sub(1)
+    }
+
+    /// Number of corners.
+    #[inline]
+    pub fn corner_count(&self) -> usize {
+        self.corner_vertex.len()
+    }
+
+    /// The corner after `c` in its face.
+    #[inline]
+    pub fn next(&self, c: u32) -> u32 {
+        self.corner_next[c as usize]
+    }
+
+    /// Smallest corner of vertex `v`, or [`NONE`].
+    #[inline]
+    pub fn first_corner(&self, v: usize) -> u32 {
+        match &self.vertex_corner {
+            Some(corners) => corners[v],
+            None => v as u32,
+        }
+    }
+
+    /// The corner arrays of a half-edge mesh (linear time).
+    pub fn from_halfedge(mesh: &HalfedgeMesh) -> Self {
+        let soup_faces = mesh.face_count();
+        let mut offsets = Vec::with_capacity(soup_faces + 1);
+        offsets.push(0u32);
+        let mut corner_vertex = Vec::with_capacity(mesh.halfedge_count());
+        let mut halfedge_corner = vec![NONE; mesh.halfedge_count()];
+        for f in mesh.faces() {
+            for h in mesh.face_halfedges(f) {
+                halfedge_corner[h.index()] = corner_vertex.len() as u32;
+                corner_vertex.push(mesh.origin(h).raw());
+            }
+            offsets.push(corner_vertex.len() as u32);
+        }
+        let mut corner_twin = vec![NONE; corner_vertex.len()];
+        for (h, &c) in halfedge_corner.iter().enumerate() {
+            if c != NONE {
+                corner_twin[c as usize] = halfedge_corner[h ^ 1];
+            }
+        }
+        let mut vertex_corner = vec![NONE; mesh.vertex_count()];
+        for (c, &v) in corner_vertex.iter().enumerate() {
+            if vertex_corner[v as usize] == NONE {
+                vertex_corner[v as usize] = c as u32;
+            }
+        }
+        Self {
+            corner_next: next_of_corners(&offsets),
+            offsets,
+            corner_vertex,
+            corner_twin,
+            vertex_count: mesh.vertex_count(),
+            vertex_corner: Some(vertex_corner),
+        }
+    }
+
+    /// Walks clockwise around the vertex of corner `start` (`c -> next(twin(c))`),
+    /// calling `visit` on each corner after `start`. Returns the number of corners of
+    /// the vertex if its fan is closed, `None` if the walk reaches the boundary.
+    #[inline]
+    pub fn walk_clockwise(&self, start: u32, mut visit: impl FnMut(u32)) -> Option<usize> {
+        let mut c = start;
+        let mut count = 1usize;
+        loop {
+            let t = self.corner_twin[c as usize];
+            if t == NONE {
+                return None;
+            }
+            c = self.corner_next[t as usize];
+            if c == start {
+                return Some(count);
+            }
+            visit(c);
+            count += 1;
+            debug_assert!(count <= self.corner_count(), "internal: vertex cycle does not close");
+        }
+    }
+}
+
+/// The next corner of every corner, from the face offsets.
+pub(crate) fn next_of_corners(offsets: &[u32]) -> Vec<u32> {
+    let corners = offsets.last().copied().unwrap_or(0) as usize;
+    let mut next = Vec::with_capacity(corners);
+    for w in offsets.windows(2) {
+        if w[1] > w[0] {
+            next.extend(w[0] + 1..w[1]);
+            next.push(w[0]);
+        }
+    }
+    next
+}
+
+/// The face of every corner, from the face offsets.
+pub(crate) fn faces_of_corners(offsets: &[u32]) -> Vec<u32> {
+    let corners = offsets.last().copied().unwrap_or(0) as usize;
+    let mut face = Vec::with_capacity(corners);
+    for (f, w) in offsets.windows(2).enumerate() {
+        face.extend(std::iter::repeat_n(f as u32, (w[1] - w[0]) as usize));
+    }
+    face
+}
+
+/// Which element of the coarse mesh a fine face comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+pub enum FaceOrigin {
+    /// An F_F face: the shrunken copy of coarse face `.0`.
+    Face(u32),
+    /// An F_E quad: across coarse edge `.0` (numbered as `mesh-topo` numbers the edges of
+    /// the coarse mesh: in order of first appearance, face by face, corner by corner).
+    Edge(u32),
+    /// An F_V face: around interior coarse vertex `.0`.
+    Vertex(u32),
+}
+
+/// The three kinds of faces of a Doo-Sabin step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+pub enum FaceKind {
+    /// F_F: from a coarse face, same number of sides.
+    Face,
+    /// F_E: a quad across an interior coarse edge.
+    Edge,
+    /// F_V: around an interior coarse vertex, as many sides as the vertex has edges.
+    Vertex,
+}
+
+impl FaceOrigin {
+    /// The kind of face.
+    pub fn kind(self) -> FaceKind {
+        match self {
+            FaceOrigin::Face(_) => FaceKind::Face,
+            FaceOrigin::Edge(_) => FaceKind::Edge,
+            FaceOrigin::Vertex(_) => FaceKind::Vertex,
+        }
+    }
+}
+
+/// The fine connectivity of one Doo-Sabin step.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub(crate) struct DooTopology {
+    /// Face offsets of the fine mesh.
+    pub offsets: Vec<u32>,
+    /// Corner vertices of the fine mesh (fine vertex = coarse corner).
+    pub indices: Vec<u32>,
+    /// Number of F_F faces (= coarse faces); they come first.
+    pub ff_count: usize,
+    /// Number of F_E quads; they follow.
+    pub fe_count: usize,
+    /// Number of F_V faces; they come last.
+    pub fv_count: usize,
+    /// Coarse edge of each F_E quad; `None` = the identity (no boundary edge).
+    pub edge_parent: Option<Vec<u32>>,
+    /// Coarse vertex of each F_V face; `None` = the identity (every vertex interior).
+    pub vertex_parent: Option<Vec<u32>>,
+    /// Fine corner twins and next corners, if asked for.
+    pub adjacency: Option<(Vec<u32>, Vec<u32>)>,
+}
+
+impl DooTopology {
+    /// The fine connectivity as a corner mesh (needs the adjacency).
+    pub fn into_corner_mesh(self, vertex_count: usize) -> CornerMesh {
+        let (corner_twin, corner_next) = self.adjacency.expect("internal: adjacency was requested");
+        CornerMesh {
+            offsets: self.offsets,
+            corner_vertex: self.indices,
+            corner_twin,
+            corner_next,
+            vertex_count,
+            vertex_corner: None,
+        }
+    }
+
+    /// Origin of fine face `f`.
+    pub fn origin(&self, f: usize) -> FaceOrigin {
+        let fe_end = self.ff_count + self.fe_count;
+        if f < self.ff_count {
+            FaceOrigin::Face(f as u32)
+        } else if f < fe_end {
+            let q = f - self.ff_count;
+            FaceOrigin::Edge(self.edge_parent.as_ref().map_or(q as u32, |p| p[q]))
+        } else {
+            let k = f - fe_end;
+            FaceOrigin::Vertex(self.vertex_parent.as_ref().map_or(k as u32, |p| p[k]))
+        }
+    }
+}
+
+fn check_size(what: &'static str, count: usize) -> Result<(), DooError> {
+    if count >= NONE as usize {
+        return Err(DooError::TooLarge { what, count, max: NONE as usize - 1 });
+    }
+    Ok(())
+}
+
+/// One Doo-Sabin step on the connectivity (see [`crate::forward`] for the order of the
+/// fine faces). With `with_adjacency`, also the fine corner twins and next corners, for a
+/// further step. Every array is written once, front to back, except the twins of the
+/// quads' two side edges, which the F_V pass fills in.
+///
+/// # Errors
+/// [`DooError::ValenceTwoVertex`] for an interior vertex with two edges;
+/// [`DooError::TooLarge`] if the fine mesh would not fit `u32` indices.
+pub(crate) fn doo_topology(coarse: &CornerMesh, with_adjacency: bool) -> Result<DooTopology, DooError> {
+    let corners = coarse.corner_count();
+    let faces = coarse.face_count();
+    check_size("fine vertices", corners)?;
+    let twin = &coarse.corner_twin;
+    let next = &coarse.corner_next;
+    let interior_edges = (0..corners as u32).filter(|&c| twin[c as usize] != NONE && c < twin[c as usize]).count();
+    let quad_base = corners as u32;
+    let fv_base = corners + 4 * interior_edges;
+    // Fine corners: at most one F_V corner per coarse corner.
+    check_size("fine corners", fv_base + corners)?;
+
+    let mut offsets = Vec::with_capacity(faces + interior_edges + coarse.vertex_count + 1);
+    offsets.extend_from_slice(&coarse.offsets);
+    if offsets.is_empty() {
+        offsets.push(0);
+    }
+    let mut indices = Vec::with_capacity(fv_base + corners);
+    indices.extend(0..quad_base);
+    let (mut twins, mut nexts) = if with_adjacency {
+        let mut twins = Vec::with_capacity(fv_base + corners);
+        twins.resize(corners, NONE);
+        let mut nexts = Vec::with_capacity(fv_base + corners);
+        nexts.extend_from_slice(next);
+        (twins, nexts)
+    } else {
+        (Vec::new(), Vec::new())
+    };
+
+    // F_E quads (c, next(t), t, next(c)) in coarse edge order. Coarse edges are named by
+    // their first corner (the smaller one; the only one on the boundary): mesh-topo's
+    // edge numbering.
+    let mut edge_parent: Option<Vec<u32>> = None;
+    let mut edge_rank = 0u32;
+    for (c, &t) in twin.iter().enumerate() {
+        let c = c as u32;
+        if t == NONE {
+            if edge_parent.is_none() {
+                edge_parent = Some((0..(offsets.len() - 1 - faces) as u32).collect());
+            }
+            edge_rank += 1;
+            continue;
+        }
+        if c > t {
+            continue;
+        }
+        let b = *offsets.last().expect("internal: offsets start with 0");
+        indices.extend_from_slice(&[c, next[t as usize], t, next[c as usize]]);
+        offsets.push(b + 4);
+        if let Some(parents) = &mut edge_parent {
+            parents.push(edge_rank);
+        }
+        edge_rank += 1;
+        if with_adjacency {
+            twins.extend_from_slice(&[NONE, t, NONE, c]);
+            nexts.extend_from_slice(&[b + 1, b + 2, b + 3, b]);
+            twins[c as usize] = b + 3;
+            twins[t as usize] = b + 1;
+        }
+    }
+    debug_assert_eq!(indices.len(), fv_base);
+
+    // F_V faces: one per interior vertex, its corners counter-clockwise from its first
+    // corner. The clockwise walk gives them in reverse after the first one.
+    let mut vertex_parent: Option<Vec<u32>> = None;
+    for v in 0..coarse.vertex_count {
+        let start = coarse.first_corner(v);
+        let begin = indices.len();
+        let closed = if start == NONE {
+            None
+        } else {
+            indices.push(start);
+            coarse.walk_clockwise(start, |c| indices.push(c))
+        };
+        let Some(valence) = closed else {
+            indices.truncate(begin);
+            if vertex_parent.is_none() {
+                vertex_parent = Some((0..(offsets.len() - 1 - faces - interior_edges) as u32).collect());
+            }
+            continue;
+        };
+        if valence == 2 {
+            return Err(DooError::ValenceTwoVertex { vertex: v });
+        }
+        indices[begin + 1..].reverse();
+        offsets.push(indices.len() as u32);
+        if let Some(parents) = &mut vertex_parent {
+            parents.push(v as u32);
+        }
+        if with_adjacency {
+            // The edge c_i -> c_{i+1} of the F_V face lies on the quad of the coarse edge
+            // {twin(c_{i+1}), c_{i+1}}; that quad's corner next to c_{i+1} is recorded
+            // in the F_F twin of c_{i+1}: b + 3 if c_{i+1} is the edge's first corner (the
+            // shared quad edge then leaves b), b + 1 otherwise (it leaves b + 2).
+            let end = indices.len();
+            for k in begin..end {
+                let following = indices[if k + 1 == end { begin } else { k + 1 }];
+                let relative = twins[following as usize] - quad_base;
+                let quad_corner = quad_base + (relative & !3) + if relative & 3 == 1 { 2 } else { 0 };
+                twins.push(quad_corner);
+                twins[quad_corner as usize] = k as u32;
+                nexts.push(if k + 1 == end { begin as u32 } else { k as u32 + 1 });
+            }
+        }
+    }
+    let fe_count = interior_edges;
+    let fv_count = offsets.len() - 1 - faces - fe_count;
+    check_size("fine faces", offsets.len() - 1)?;
+    let adjacency = with_adjacency.then_some((twins, nexts));
+    Ok(DooTopology { offsets, indices, ff_count: faces, fe_count, fv_count, edge_parent, vertex_parent, adjacency })
+}
+
+/// Splits `out` into pieces following whole faces, about `pieces` of them, so that
+/// faces can be processed in parallel with each piece written by one task.
+fn face_chunks<'a, T>(offsets: &[u32], mut out: &'a mut [T], target: usize) -> Vec<(usize, usize, &'a mut [T])> {
+    let faces = offsets.len().saturating_sub(1);
+    let per = faces.div_ceil(target.max(1)).max(1);
+    let mut chunks = Vec::with_capacity(faces / per + 1);
+    let mut f = 0;
+    while f < faces {
+        let end = (f + per).min(faces);
+        let len = (offsets[end] - offsets[f]) as usize;
+        let (head, tail) = std::mem::take(&mut out).split_at_mut(len);
+        chunks.push((f, end, head));
+        out = tail;
+        f = end;
+    }
+    chunks
+}
+
+/// Faces per parallel task below which a single task does everything.
+const PARALLEL_FACES: usize = 1 << 14;
+
+/// New positions of one step: for every face, its F_F corners computed from the points
+/// `point(c)` of its corners `c` (the coarse vertex positions, or per-corner candidates
+/// in reconstruction). Output index = corner index. Bit-identical for any thread count.
+pub(crate) fn face_points<P>(offsets: &[u32], maps: &FaceMaps, point: P) -> Vec<DVec3>
+where
+    P: Fn(usize) -> DVec3 + Sync,
+{
+    let corners = offsets.last().copied().unwrap_or(0) as usize;
+    let mut out = vec![DVec3::ZERO; corners];
+    let faces = offsets.len().saturating_sub(1);
+    let work = |first: usize, end: usize, slice: &mut [DVec3]| {
+        let base = offsets[first] as usize;
+        let mut gathered: Vec<DVec3> = Vec::new();
+        for f in first..end {
+            let (b, e) = (offsets[f] as usize, offsets[f + 1] as usize);
+            gathered.clear();
+            gathered.extend((b..e).map(&point));
+            maps.forward(&gathered, &mut slice[b - base..e - base]);
+        }
+    };
+    if faces < PARALLEL_FACES {
+        work(0, faces, &mut out);
+    } else {
+        let target = rayon::current_num_threads() * 8;
+        face_chunks(offsets, &mut out, target).into_par_iter().for_each(|(first, end, slice)| work(first, end, slice));
+    }
+    out
+}
+
+/// Per-face expansion (inverse map) of the points `point(c)` at the corners of the
+/// faces listed in `faces` (ranges given by `offsets`), written per corner.
+pub(crate) fn expand_faces<P>(offsets: &[u32], maps: &FaceMaps, point: P) -> Vec<DVec3>
+where
+    P: Fn(usize) -> DVec3 + Sync,
+{
+    let corners = offsets.last().copied().unwrap_or(0) as usize;
+    let mut out = vec![DVec3::ZERO; corners];
+    let faces = offsets.len().saturating_sub(1);
+    let work = |first: usize, end: usize, slice: &mut [DVec3]| {
+        let base = offsets[first] as usize;
+        let mut gathered: Vec<DVec3> = Vec::new();
+        for f in first..end {
+            let (b, e) = (offsets[f] as usize, offsets[f + 1] as usize);
+            gathered.clear();
+            gathered.extend((b..e).map(&point));
+            maps.inverse(&gathered, &mut slice[b - base..e - base]);
+        }
+    };
+    if faces < PARALLEL_FACES {
+        work(0, faces, &mut out);
+    } else {
+        let target = rayon::current_num_threads() * 8;
+        face_chunks(offsets, &mut out, target).into_par_iter().for_each(|(first, end, slice)| work(first, end, slice));
+    }
+    out
+}

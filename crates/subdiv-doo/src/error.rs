@@ -1,0 +1,94 @@
+//! The error type of this crate.
+
+use thiserror::Error;
+
+/// What went wrong, named by the offending element.
+///
+/// Face and vertex numbers are indices into the mesh the caller passed in (for a
+/// multi-level operation, into the mesh of the level named by the variant, counted from
+/// the input).
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum DooError {
+    /// The input is not a valid polygon mesh (non-manifold, faces with fewer than three
+    /// corners, NaN coordinates, ...), as reported by `mesh-topo`.
+    #[error(transparent)]
+    Mesh(#[from] mesh_topo::MeshError),
+    /// A coordinate is NaN or infinite.
+    #[error("vertex {vertex}: position {value:?} is not finite")]
+    NonFinite {
+        /// The vertex.
+        vertex: usize,
+        /// Its position.
+        value: [f64; 3],
+    },
+    /// An interior vertex has only two edges: its vertex face would be a two-sided
+    /// polygon (a digon), which is not a face.
+    #[error("interior vertex {vertex} has valence 2; its Doo-Sabin vertex face would be a digon")]
+    ValenceTwoVertex {
+        /// The vertex.
+        vertex: usize,
+    },
+    /// A rule parameter is out of its range.
+    #[error("invalid parameter {name} = {value}: {reason}")]
+    InvalidParameter {
+        /// The parameter.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// The allowed range, in words.
+        reason: &'static str,
+    },
+    /// The mesh does not have the connectivity of one Doo-Sabin step.
+    #[error("not Doo-Sabin connectivity at face {face}: {reason}")]
+    NotDooConnectivity {
+        /// The face where the structure breaks (in the mesh being reversed).
+        face: usize,
+        /// What is wrong there.
+        reason: String,
+    },
+    /// The mesh has a vertex that no face uses; reverse Doo-Sabin cannot place it.
+    #[error("vertex {vertex} is not a corner of any face; a Doo-Sabin mesh has no isolated vertices")]
+    IsolatedVertex {
+        /// The vertex.
+        vertex: usize,
+    },
+    /// A seed face given by the caller does not exist.
+    #[error("seed face {face} does not exist (the mesh has {face_count} faces)")]
+    SeedOutOfRange {
+        /// The seed given.
+        face: usize,
+        /// Number of faces of the mesh.
+        face_count: usize,
+    },
+    /// Two seed faces were given for the same connected component.
+    #[error("seed faces {first} and {second} lie in the same connected component; give one seed per component")]
+    DuplicateSeed {
+        /// The first seed.
+        first: usize,
+        /// The second seed in the same component.
+        second: usize,
+    },
+    /// A multiresolution pyramid is inconsistent (wrong array lengths, bad level).
+    #[error("invalid pyramid: {0}")]
+    InvalidPyramid(String),
+    /// A pyramid file could not be encoded or decoded.
+    #[error("pyramid encoding: {0}")]
+    Binary(String),
+    /// A mesh has more elements than `u32` indices can address.
+    #[error("too many {what}: {count} (at most {max} are supported)")]
+    TooLarge {
+        /// Which element kind overflowed.
+        what: &'static str,
+        /// How many there would be.
+        count: usize,
+        /// The limit.
+        max: usize,
+    },
+}
+
+impl From<mesh_topo::binary::BinaryError> for DooError {
+    fn from(error: mesh_topo::binary::BinaryError) -> Self {
+        DooError::Binary(error.to_string())
+    }
+}

@@ -1,0 +1,339 @@
+//! Doo-Sabin subdivision: one or more steps on a polygon mesh of any face sizes, closed
+//! or with boundary.
+//!
+//! # One step (specification §4.1)
+//! Every corner of the coarse mesh becomes a fine vertex: **fine vertex `c` is coarse
+//! corner `c`** (corners numbered face by face, in the order of the coarse faces, each
+//! face from its first corner), placed by the face's rule ([`FaceRule`]). The fine faces
+//! come in three blocks, always in this order:
+//!
+//! 1. **F_F** faces, one per coarse face, in coarse face order: coarse face `f` with
+//!    corners `c_0 .. c_{m-1}` becomes the fine face `(c_0, .., c_{m-1})`.
+//! 2. **F_E** quads, one per *interior* coarse edge, in the order in which `mesh-topo`
+//!    numbers the coarse edges (first appearance, face by face, corner by corner). For
+//!    the edge `u -> v` first seen at corner `c` of face `f`, with `t` the corner of
+//!    `v -> u` in the other face `g`, the quad is `(c, next(t), t, next(c))`, i.e.
+//!    `(ṽ_f(u), ṽ_g(u), ṽ_g(v), ṽ_f(v))`.
+//! 3. **F_V** faces, one per *interior* coarse vertex, in vertex order: the corners of
+//!    the vertex counter-clockwise (seen from outside), starting at its first corner (the
+//!    corner with the smallest index, which is where `mesh-topo` starts its circulators).
+//!
+//! All fine faces keep the orientation of the coarse mesh. Counts: `|NV| = Σ|f|`,
+//! `|NF| = |F| + |E_int| + |V_int|`; every interior fine vertex has valence 4.
+//! [`DooMesh::face_origin`] tells each fine face's kind and parent element.
+//!
+//! # Boundaries
+//! As in the reverse-Doo paper and in CGAL: boundary edges get no F_E quad and boundary
+//! vertices no F_V face, so an open mesh shrinks a little at every level and its limit
+//! surface does not reach the coarse boundary. The fine boundary consists of F_F edges
+//! only, which is what makes the step exactly reversible ([`crate::reverse`](mod@crate::reverse)).
+//!
+//! # Isolated vertices
+//! A vertex that no face uses has no corner, so it has no image in the fine mesh: it is
+//! dropped (the specification's "copied unchanged" would break the rule "fine vertex =
+//! coarse corner" that reverse Doo-Sabin and the pyramid rely on).
+//!
+//! # Performance
+//! The first step reads the half-edge mesh once into flat corner arrays; every further
+//! step builds the next level's connectivity by index arithmetic from the previous one
+//! (see `corner.rs`), without a half-edge structure. Positions are computed face by face
+//! in parallel with rayon; every output value is computed by one task in a fixed order,
+//! so results are bit-identical for any number of threads.
+
+use glam::DVec3;
+use mesh_topo::{HalfedgeMesh, PolygonSoup};
+
+use crate::DooError;
+use crate::corner::{CornerMesh, DooTopology, FaceKind, FaceOrigin, doo_topology, face_points};
+use crate::rule::{FaceMaps, FaceRule};
+
+/// Options of [`subdivide`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DooOptions {
+    /// The per-face rule (default: the original Doo-Sabin weights).
+    pub rule: FaceRule,
+    /// Number of steps (default 1). Zero returns the input mesh.
+    pub levels: u32,
+}
+
+impl Default for DooOptions {
+    fn default() -> Self {
+        Self { rule: FaceRule::DooSabin, levels: 1 }
+    }
+}
+
+impl DooOptions {
+    /// `levels` steps of `rule`.
+    pub fn new(rule: FaceRule, levels: u32) -> Self {
+        Self { rule, levels }
+    }
+}
+
+/// The result of Doo-Sabin subdivision: positions, faces, and where each face came from.
+///
+/// The faces are stored flat (struct-of-arrays, `u32` indices) in the order of the
+/// module docs; [`face_origin`](Self::face_origin) refers to the elements of the mesh one
+/// level coarser (for several levels: the second-finest level).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DooMesh {
+    positions: Vec<DVec3>,
+    topology: DooTopology,
+}
+
+impl DooMesh {
+    /// Number of vertices.
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Number of faces.
+    pub fn face_count(&self) -> usize {
+        self.topology.offsets.len().saturating_sub(1)
+    }
+
+    /// Vertex positions.
+    pub fn positions(&self) -> &[DVec3] {
+        &self.positions
+    }
+
+    /// The corners of face `f`.
+    ///
+    /// # Panics
+    /// If `f >= self.face_count()`.
+    pub fn face(&self, f: usize) -> &[u32] {
+        let o = &self.topology.offsets;
+        &self.topology.indices[o[f] as usize..o[f + 1] as usize]
+    }
+
+    /// All faces in order.
+    pub fn faces(&self) -> impl ExactSizeIterator<Item = &[u32]> + '_ {
+        self.topology.offsets.windows(2).map(|w| &self.topology.indices[w[0] as usize..w[1] as usize])
+    }
+
+    /// Kind and parent element of face `f`.
+    ///
+    /// # Panics
+    /// If `f >= self.face_count()`.
+    pub fn face_origin(&self, f: usize) -> FaceOrigin {
+        assert!(f < self.face_count(), "face {f} out of range");
+        self.topology.origin(f)
+    }
+
+    /// Kind of face `f` (F_F, F_E or F_V).
+    ///
+    /// # Panics
+    /// If `f >= self.face_count()`.
+    pub fn face_kind(&self, f: usize) -> FaceKind {
+        self.face_origin(f).kind()
+    }
+
+    /// Numbers of F_F, F_E and F_V faces (the three consecutive blocks of faces).
+    pub fn kind_counts(&self) -> [usize; 3] {
+        [self.topology.ff_count, self.topology.fe_count, self.topology.fv_count]
+    }
+
+    /// The mesh as a polygon soup (copies).
+    pub fn to_soup(&self) -> PolygonSoup {
+        PolygonSoup {
+            positions: self.positions.clone(),
+            offsets: self.topology.offsets.clone(),
+            indices: self.topology.indices.clone(),
+        }
+    }
+
+    /// The mesh as a polygon soup (no copy).
+    pub fn into_soup(self) -> PolygonSoup {
+        PolygonSoup { positions: self.positions, offsets: self.topology.offsets, indices: self.topology.indices }
+    }
+
+    /// Builds the half-edge mesh of the result.
+    ///
+    /// # Errors
+    /// None in practice (a Doo-Sabin step of a valid mesh is a valid mesh); the
+    /// [`DooError::Mesh`] of `mesh-topo` is passed on if it ever were not.
+    pub fn to_mesh(&self) -> Result<HalfedgeMesh, DooError> {
+        Ok(HalfedgeMesh::from_soup(&self.to_soup())?)
+    }
+}
+
+/// Checks that every position is finite.
+pub(crate) fn check_finite(positions: &[DVec3]) -> Result<(), DooError> {
+    match positions.iter().position(|p| !p.is_finite()) {
+        Some(vertex) => Err(DooError::NonFinite { vertex, value: positions[vertex].to_array() }),
+        None => Ok(()),
+    }
+}
+
+/// Doo-Sabin subdivision of a polygon mesh, `options.levels` steps.
+///
+/// ```
+/// use subdiv_doo::{DooOptions, FaceKind, FaceOrigin, FaceRule, subdivide};
+/// use mesh_topo::{HalfedgeMesh, shapes};
+///
+/// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+/// let fine = subdivide(&cube, &DooOptions::default())?;
+/// // 6 F_F quads, 12 F_E quads, 8 F_V triangles; 24 vertices, one per coarse corner.
+/// assert_eq!(fine.kind_counts(), [6, 12, 8]);
+/// assert_eq!(fine.vertex_count(), 24);
+/// assert_eq!(fine.face_origin(0), FaceOrigin::Face(0));
+/// assert_eq!(fine.face_kind(25), FaceKind::Vertex);
+///
+/// // Two more levels with the simple averaging rule: counts grow four times per level.
+/// let finer = subdivide(&cube, &DooOptions::new(FaceRule::Simple, 3))?;
+/// assert_eq!(finer.vertex_count(), 24 * 4 * 4);
+/// # Ok::<(), subdiv_doo::DooError>(())
+/// ```
+///
+/// # Errors
+/// [`DooError::NonFinite`] for a NaN or infinite position;
+/// [`DooError::ValenceTwoVertex`] for an interior vertex with two edges (its vertex face
+/// would be a digon); [`DooError::InvalidParameter`] for a centroid parameter outside
+/// `(0, 1)`; [`DooError::TooLarge`] if the result would not fit `u32` indices.
+/// Non-manifold input and faces with fewer than three corners cannot be a
+/// [`HalfedgeMesh`]; [`subdivide_soup`] reports them.
+pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, DooError> {
+    options.rule.validate()?;
+    check_finite(mesh.positions())?;
+    if options.levels == 0 {
+        let soup = mesh.to_soup();
+        let topology = DooTopology {
+            ff_count: soup.face_count(),
+            offsets: if soup.offsets.is_empty() { vec![0] } else { soup.offsets },
+            indices: soup.indices,
+            ..DooTopology::default()
+        };
+        return Ok(DooMesh { positions: soup.positions, topology });
+    }
+    let corners = CornerMesh::from_halfedge(mesh);
+    subdivide_corner_mesh(corners, mesh.positions().to_vec(), options)
+}
+
+/// [`subdivide`] for a polygon soup, validated first.
+///
+/// ```
+/// use subdiv_doo::{DooError, DooOptions, subdivide_soup};
+/// use mesh_topo::{DVec3, MeshError, PolygonSoup};
+/// let digon = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X], [[0u32, 1]]);
+/// let error = subdivide_soup(&digon, &DooOptions::default()).unwrap_err();
+/// assert!(matches!(error, DooError::Mesh(MeshError::FaceTooSmall { face: 0, len: 2 })));
+/// ```
+///
+/// # Errors
+/// [`DooError::Mesh`] if the soup is not a valid manifold mesh (naming the face, edge or
+/// vertex at fault), and the errors of [`subdivide`].
+pub fn subdivide_soup(soup: &PolygonSoup, options: &DooOptions) -> Result<DooMesh, DooError> {
+    let mesh = HalfedgeMesh::from_soup(soup)?;
+    subdivide(&mesh, options)
+}
+
+/// The subdivision loop on corner arrays.
+pub(crate) fn subdivide_corner_mesh(
+    mut corners: CornerMesh,
+    mut positions: Vec<DVec3>,
+    options: &DooOptions,
+) -> Result<DooMesh, DooError> {
+    let maps = FaceMaps::new(options.rule);
+    let mut level = 0;
+    loop {
+        level += 1;
+        let last = level == options.levels;
+        let topology = doo_topology(&corners, !last)?;
+        let fine_positions = {
+            let vertex = &corners.corner_vertex;
+            let coarse = &positions;
+            face_points(&corners.offsets, &maps, |c| coarse[vertex[c] as usize])
+        };
+        if last {
+            return Ok(DooMesh { positions: fine_positions, topology });
+        }
+        let vertex_count = fine_positions.len();
+        positions = fine_positions;
+        corners = topology.into_corner_mesh(vertex_count);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mesh_topo::shapes::{self, CellKind};
+
+    fn doo(soup: &PolygonSoup, rule: FaceRule, levels: u32) -> DooMesh {
+        subdivide_soup(soup, &DooOptions::new(rule, levels)).unwrap()
+    }
+
+    #[test]
+    fn cube_counts_and_validity() {
+        let fine = doo(&shapes::cube(), FaceRule::DooSabin, 1);
+        assert_eq!((fine.vertex_count(), fine.face_count()), (24, 26));
+        assert_eq!(fine.kind_counts(), [6, 12, 8]);
+        let mesh = fine.to_mesh().unwrap();
+        assert_eq!(mesh.topology_stats().genus, 0);
+        for v in mesh.vertices() {
+            assert_eq!(mesh.valence(v), 4);
+        }
+        // F_V faces of the cube are triangles, F_E quads.
+        for f in 0..fine.face_count() {
+            let expected = match fine.face_kind(f) {
+                FaceKind::Face | FaceKind::Edge => 4,
+                FaceKind::Vertex => 3,
+            };
+            assert_eq!(fine.face(f).len(), expected);
+        }
+    }
+
+    #[test]
+    fn index_arithmetic_equals_a_fresh_half_edge_build() {
+        // Level 2 computed from level 1's corner arrays must equal level 2 computed from
+        // a half-edge mesh rebuilt from level 1's soup (faces, order, origins, positions).
+        for soup in [
+            shapes::cube(),
+            shapes::torus(5, 4, CellKind::Mixed),
+            shapes::grid(3, 4, CellKind::Mixed),
+            shapes::icosahedron(),
+        ] {
+            for rule in [FaceRule::DooSabin, FaceRule::Simple, FaceRule::CENTROID_HALF] {
+                let two = doo(&soup, rule, 2);
+                let one = doo(&soup, rule, 1);
+                let again = doo(&one.to_soup(), rule, 1);
+                assert_eq!(two.topology, again.topology);
+                assert_eq!(two.positions, again.positions);
+                two.to_mesh().unwrap().validate().unwrap();
+            }
+        }
+    }
+
+    #[test]
+    fn boundary_gets_no_edge_or_vertex_faces() {
+        let grid = shapes::grid(3, 2, CellKind::Quads);
+        let fine = doo(&grid, FaceRule::DooSabin, 1);
+        // 6 faces, 7 interior edges, 2 interior vertices.
+        assert_eq!(fine.kind_counts(), [6, 7, 2]);
+        let mesh = fine.to_mesh().unwrap();
+        assert_eq!(mesh.topology_stats().boundary_loops, 1);
+    }
+
+    #[test]
+    fn valence_two_interior_vertex_is_an_error() {
+        // Two triangles glued along all three edges: a closed "pillow", every vertex has
+        // valence 2.
+        let soup = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2], [0, 2, 1]]);
+        match subdivide_soup(&soup, &DooOptions::default()) {
+            Err(DooError::ValenceTwoVertex { vertex: 0 }) => {}
+            Err(DooError::Mesh(_)) => {} // mesh-topo may already reject the pillow
+            other => panic!("unexpected {other:?}"),
+        }
+    }
+
+    #[test]
+    fn nan_is_an_error() {
+        let mut mesh = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
+        mesh.positions_mut()[3].y = f64::NAN;
+        assert!(matches!(subdivide(&mesh, &DooOptions::default()), Err(DooError::NonFinite { vertex: 3, .. })));
+    }
+
+    #[test]
+    fn levels_zero_returns_the_input() {
+        let fine = doo(&shapes::cube(), FaceRule::DooSabin, 0);
+        assert_eq!(fine.to_soup(), shapes::cube());
+    }
+}

@@ -1,0 +1,507 @@
+//! Multiresolution pyramids: several reverse Doo-Sabin steps, reconstruction to any
+//! level, compression by keeping only the largest details, and `.mres` files.
+//!
+//! A [`DooPyramid`] holds the coarsest (*base*) mesh and, for each finer level, the
+//! detail vectors of [`crate::reverse`](mod@crate::reverse) and the numbering of that level relative to the
+//! Doo-Sabin connectivity of the level below ([`FineOrder`], empty when it is the
+//! canonical one). That is all reconstruction needs: connectivity is Doo-Sabin
+//! connectivity, and positions come from coarse vertices plus details. The base mesh
+//! plus all details are exactly as many 3-vectors as the finest mesh has vertices.
+//!
+//! # Compression (`keep`)
+//! [`DooPyramid::reconstruct`] can keep only a fraction of the detail vectors, the
+//! others being set to zero. Details are ranked by their Euclidean norm (the stored
+//! prefix-sum vectors `e_j`) times `2^(L - k)` for level `k` of `L` (level `L` the finest):
+//! a detail at a coarser level moves a region of the finest mesh about four times larger
+//! per level with about the same amplitude, so this weight ranks details by their share
+//! of the squared (RMS) error they would cause. Ties keep the earlier level, then the
+//! earlier vector. [`DooPyramid::rate_distortion`] measures the result.
+//!
+//! # File format
+//! `.mres` files go through `mesh_topo::binary` (magic [`PYRAMID_MAGIC`], version
+//! [`PYRAMID_VERSION`], bincode payload of [`DooPyramid`]). Decoding checks every array
+//! length and permutation before use: a corrupted file is an error, never a panic.
+
+use glam::DVec3;
+use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
+use serde::{Deserialize, Serialize};
+
+use crate::DooError;
+use crate::corner::{CornerMesh, NONE, doo_topology};
+use crate::forward::check_finite;
+use crate::reverse::{FineOrder, ReverseOptions, SeedChoice, Session, reconstruct_level};
+use crate::rule::FaceRule;
+
+/// Magic number of a Doo-Sabin `.mres` pyramid.
+pub const PYRAMID_MAGIC: [u8; 8] = *b"MRSDOO\0\0";
+/// Current version of the Doo-Sabin pyramid format.
+pub const PYRAMID_VERSION: u32 = 1;
+
+/// True if `bytes` starts like a Doo-Sabin pyramid file.
+pub fn is_doo_pyramid(bytes: &[u8]) -> bool {
+    bytes.len() >= 8 && bytes[..8] == PYRAMID_MAGIC
+}
+
+/// How many levels to decompose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Depth {
+    /// Exactly this many levels (an error if the mesh does not allow them).
+    Levels(u32),
+    /// As many levels as the connectivity allows (at least one).
+    Max,
+}
+
+/// Options of [`decompose`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct DecomposeOptions {
+    /// The per-face rule the mesh is assumed to come from.
+    pub rule: FaceRule,
+    /// How many levels.
+    pub depth: Depth,
+    /// Seed faces for the first (finest) reversal; coarser levels use the automatic
+    /// choice (their F_F faces are found automatically).
+    pub seeds: Vec<usize>,
+}
+
+impl DecomposeOptions {
+    /// `levels` levels with automatic seeds.
+    pub fn levels(rule: FaceRule, levels: u32) -> Self {
+        Self { rule, depth: Depth::Levels(levels), seeds: Vec::new() }
+    }
+
+    /// As many levels as possible, automatic seeds.
+    pub fn max(rule: FaceRule) -> Self {
+        Self { rule, depth: Depth::Max, seeds: Vec::new() }
+    }
+}
+
+/// Details and numbering of one level of a pyramid.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct PyramidLevel {
+    /// Detail vectors (see [`crate::reverse`](mod@crate::reverse)).
+    pub details: Vec<DVec3>,
+    /// Numbering of this level relative to the canonical Doo-Sabin order.
+    pub order: FineOrder,
+}
+
+/// A multiresolution pyramid: the base mesh and the details of each finer level.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DooPyramid {
+    /// The per-face rule.
+    pub rule: FaceRule,
+    /// The coarsest mesh.
+    pub base: PolygonSoup,
+    /// Levels from coarse to fine: `levels[0]` rebuilds level 1 from the base.
+    pub levels: Vec<PyramidLevel>,
+}
+
+/// A pyramid and the reports of the reversals that made it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Decomposition {
+    /// The pyramid.
+    pub pyramid: DooPyramid,
+    /// For each level, finest first, the seed choices of its reversal.
+    pub choices: Vec<Vec<SeedChoice>>,
+    /// Why the decomposition stopped (for [`Depth::Max`]).
+    pub stopped: Option<String>,
+}
+
+/// One row of a rate-distortion table.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RateDistortion {
+    /// Fraction of detail vectors kept.
+    pub fraction: f64,
+    /// Number of detail vectors kept.
+    pub kept: usize,
+    /// Largest vertex distance to the exact finest mesh, divided by its bounding-box diagonal.
+    pub max_error: f64,
+    /// Root-mean-square vertex distance, divided by the same diagonal.
+    pub rms_error: f64,
+}
+
+/// Levels decomposed by [`Depth::Max`] at most.
+pub const MAX_LEVELS: u32 = 32;
+
+/// Decomposes a mesh into a base mesh and per-level details by repeated reverse
+/// Doo-Sabin.
+///
+/// ```
+/// use subdiv_doo::pyramid::{DecomposeOptions, decompose};
+/// use subdiv_doo::{DooOptions, FaceRule, subdivide};
+/// use mesh_topo::{HalfedgeMesh, shapes};
+///
+/// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+/// let mut fine = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 3))?.to_mesh()?;
+/// fine.positions_mut()[100].z += 0.1;
+/// let pyramid = decompose(&fine, &DecomposeOptions::max(FaceRule::DooSabin))?.pyramid;
+/// assert_eq!(pyramid.levels.len(), 3);
+/// assert_eq!(pyramid.base.face_count(), 6);
+/// let rebuilt = pyramid.reconstruct(3, None)?;
+/// let error = rebuilt.positions.iter().zip(fine.positions()).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+/// assert!(error < 1e-14);
+/// # Ok::<(), subdiv_doo::DooError>(())
+/// ```
+///
+/// # Errors
+/// The errors of [`crate::reverse`](mod@crate::reverse) for the first level; for [`Depth::Levels`], also
+/// for any further level (the error says which level failed).
+pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
+    check_finite(mesh.positions())?;
+    if options.depth == Depth::Levels(0) {
+        return Err(DooError::InvalidParameter { name: "levels", value: 0.0, reason: "decompose at least one level" });
+    }
+    let corners = CornerMesh::from_halfedge(mesh);
+    let mut steps = Vec::new();
+    let mut stopped = None;
+    match options.depth {
+        Depth::Levels(n) => {
+            steps = descend(&corners, mesh.positions(), options, 0, n)?;
+        }
+        Depth::Max => {
+            let mut current = (corners, mesh.positions().to_vec());
+            for level in 0..MAX_LEVELS {
+                let step = match greedy_step(&current.0, &current.1, options, level) {
+                    Ok(step) => step,
+                    Err(error) if level > 0 => {
+                        stopped = Some(format!("level {} is not a Doo-Sabin refinement: {error}", level + 1));
+                        break;
+                    }
+                    Err(error) => return Err(error),
+                };
+                current = (step.coarse.clone(), step.coarse_positions.clone());
+                steps.push(step);
+            }
+            if stopped.is_none() {
+                stopped = Some(format!("reached the limit of {MAX_LEVELS} levels"));
+            }
+        }
+    }
+    let last = steps.last().expect("internal: at least one level");
+    let base = PolygonSoup {
+        positions: last.coarse_positions.clone(),
+        offsets: last.coarse.offsets.clone(),
+        indices: last.coarse.corner_vertex.clone(),
+    };
+    let choices = steps.iter().map(|s| s.choices.clone()).collect();
+    let levels = steps.into_iter().rev().map(|s| PyramidLevel { details: s.details, order: s.order }).collect();
+    Ok(Decomposition { pyramid: DooPyramid { rule: options.rule, base, levels }, choices, stopped })
+}
+
+/// One reversal of a decomposition.
+struct Step {
+    coarse: CornerMesh,
+    coarse_positions: Vec<DVec3>,
+    details: Vec<DVec3>,
+    order: FineOrder,
+    choices: Vec<SeedChoice>,
+}
+
+impl Step {
+    fn from_reversal(reversal: crate::DooReversal) -> Self {
+        let (coarse, coarse_positions, details, order, choices) = reversal.into_parts();
+        Self { coarse, coarse_positions, details, order, choices }
+    }
+}
+
+fn reverse_options(options: &DecomposeOptions, level: u32) -> ReverseOptions {
+    ReverseOptions { rule: options.rule, seeds: if level == 0 { options.seeds.clone() } else { Vec::new() } }
+}
+
+fn with_level(error: DooError, level: u32) -> DooError {
+    match error {
+        DooError::NotDooConnectivity { face, reason } if level > 0 => {
+            DooError::NotDooConnectivity { face, reason: format!("{reason} (in the mesh after {level} reversal(s))") }
+        }
+        other => other,
+    }
+}
+
+/// Exactly `target - level` more levels: depth-first over the readings of each level,
+/// best first, backtracking when a reading's coarse mesh cannot be reversed far enough.
+fn descend(
+    fine: &CornerMesh,
+    positions: &[DVec3],
+    options: &DecomposeOptions,
+    level: u32,
+    target: u32,
+) -> Result<Vec<Step>, DooError> {
+    if level == target {
+        return Ok(Vec::new());
+    }
+    let mut session =
+        Session::new(fine, positions, &reverse_options(options, level)).map_err(|e| with_level(e, level))?;
+    let mut first_error = None;
+    for picks in session.alternatives() {
+        let step = match session.build(picks) {
+            Ok(reversal) => Step::from_reversal(reversal),
+            Err(error) => {
+                first_error.get_or_insert(with_level(error, level));
+                continue;
+            }
+        };
+        match descend(&step.coarse, &step.coarse_positions, options, level + 1, target) {
+            Ok(rest) => {
+                let mut steps = vec![step];
+                steps.extend(rest);
+                return Ok(steps);
+            }
+            Err(error) => {
+                first_error.get_or_insert(error);
+            }
+        }
+    }
+    Err(first_error.expect("internal: there is always a first reading"))
+}
+
+/// One level of [`Depth::Max`]: the best reading whose coarse mesh can itself be reversed
+/// (one level of look-ahead), else the best reading.
+fn greedy_step(
+    fine: &CornerMesh,
+    positions: &[DVec3],
+    options: &DecomposeOptions,
+    level: u32,
+) -> Result<Step, DooError> {
+    let mut session =
+        Session::new(fine, positions, &reverse_options(options, level)).map_err(|e| with_level(e, level))?;
+    let mut fallback = None;
+    let mut first_error = None;
+    for picks in session.alternatives() {
+        match session.build(picks) {
+            Ok(reversal) => {
+                let step = Step::from_reversal(reversal);
+                let auto = ReverseOptions::auto(options.rule);
+                if Session::new(&step.coarse, &step.coarse_positions, &auto).is_ok() {
+                    return Ok(step);
+                }
+                fallback.get_or_insert(step);
+            }
+            Err(error) => {
+                first_error.get_or_insert(with_level(error, level));
+            }
+        }
+    }
+    fallback.ok_or_else(|| first_error.expect("internal: there is always a first reading"))
+}
+
+impl DooPyramid {
+    /// Number of detail levels (the finest mesh is level `level_count()`, the base is 0).
+    pub fn level_count(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// Total number of detail vectors.
+    pub fn detail_count(&self) -> usize {
+        self.levels.iter().map(|l| l.details.len()).sum()
+    }
+
+    /// Rebuilds level `level` (0 = the base mesh), keeping the fraction `keep` of the
+    /// detail vectors (all if `None`; see the module docs for the ranking).
+    ///
+    /// # Errors
+    /// [`DooError::InvalidPyramid`] if `level` is out of range, `keep` is not in `[0, 1]`,
+    /// or the pyramid is inconsistent (wrong array lengths, bad permutations).
+    pub fn reconstruct(&self, level: usize, keep: Option<f64>) -> Result<PolygonSoup, DooError> {
+        if level > self.levels.len() {
+            return Err(DooError::InvalidPyramid(format!(
+                "level {level} requested, the pyramid has levels 0 to {}",
+                self.levels.len()
+            )));
+        }
+        let kept = match keep {
+            None => None,
+            Some(f) if (0.0..=1.0).contains(&f) => Some(self.kept_details(f)),
+            Some(f) => {
+                return Err(DooError::InvalidPyramid(format!("keep fraction {f} is not in [0, 1]")));
+            }
+        };
+        self.rule.validate()?;
+        check_finite(&self.base.positions)?;
+        let base =
+            HalfedgeMesh::from_soup(&self.base).map_err(|e| DooError::InvalidPyramid(format!("base mesh: {e}")))?;
+        let mut mesh = CornerMesh::from_halfedge(&base);
+        let mut positions = self.base.positions.clone();
+        for (k, data) in self.levels[..level].iter().enumerate() {
+            self.check_level(k, &mesh, data)?;
+            let filtered;
+            let details = match &kept {
+                None => &data.details,
+                Some(mask) => {
+                    filtered = data
+                        .details
+                        .iter()
+                        .zip(&mask[k])
+                        .map(|(&d, &keep)| if keep { d } else { DVec3::ZERO })
+                        .collect::<Vec<_>>();
+                    &filtered
+                }
+            };
+            check_finite(details).map_err(|e| DooError::InvalidPyramid(format!("level {}: detail {e}", k + 1)))?;
+            let with_adjacency = k + 1 < level;
+            let (fine, fine_positions) =
+                reconstruct_level(&mesh, &positions, details, &data.order, self.rule, with_adjacency)
+                    .map_err(|e| DooError::InvalidPyramid(format!("level {}: {e}", k + 1)))?;
+            mesh = fine;
+            positions = fine_positions;
+        }
+        if level == 0 {
+            return Ok(self.base.clone());
+        }
+        Ok(PolygonSoup { positions, offsets: mesh.offsets, indices: mesh.corner_vertex })
+    }
+
+    /// For each level, which detail vectors the fraction `keep` keeps.
+    fn kept_details(&self, keep: f64) -> Vec<Vec<bool>> {
+        let levels = self.levels.len();
+        let mut ranked: Vec<(f64, usize, usize)> = Vec::with_capacity(self.detail_count());
+        for (k, level) in self.levels.iter().enumerate() {
+            let weight = (2.0f64).powi((levels - 1 - k) as i32);
+            ranked.extend(level.details.iter().enumerate().map(|(i, d)| (d.length() * weight, k, i)));
+        }
+        let count = ((keep * ranked.len() as f64).round() as usize).min(ranked.len());
+        ranked.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+        let mut mask: Vec<Vec<bool>> = self.levels.iter().map(|l| vec![false; l.details.len()]).collect();
+        for &(_, k, i) in &ranked[..count] {
+            mask[k][i] = true;
+        }
+        mask
+    }
+
+    /// Checks the arrays of level `k` against the mesh it refines.
+    fn check_level(&self, k: usize, coarse: &CornerMesh, data: &PyramidLevel) -> Result<(), DooError> {
+        let fail = |what: String| Err(DooError::InvalidPyramid(format!("level {}: {what}", k + 1)));
+        let corners = coarse.corner_count();
+        if data.details.len() + coarse.vertex_count != corners {
+            return fail(format!(
+                "{} details for {} coarse vertices and {corners} fine vertices",
+                data.details.len(),
+                coarse.vertex_count
+            ));
+        }
+        if coarse.vertex_corner.as_ref().is_some_and(|v| v.contains(&NONE)) {
+            return fail("a coarse vertex is not used by any face".into());
+        }
+        let order = &data.order;
+        if !order.vertices.is_empty() && !is_permutation(&order.vertices, corners) {
+            return fail("the vertex order is not a permutation of the fine vertices".into());
+        }
+        if order.faces.is_empty() && order.rotations.is_empty() {
+            return Ok(());
+        }
+        let topology = doo_topology(coarse, false).map_err(|e| DooError::InvalidPyramid(e.to_string()))?;
+        let faces = topology.offsets.len() - 1;
+        if !order.faces.is_empty() && !is_permutation(&order.faces, faces) {
+            return fail("the face order is not a permutation of the fine faces".into());
+        }
+        if !order.rotations.is_empty() {
+            if order.rotations.len() != faces {
+                return fail("wrong number of face rotations".into());
+            }
+            for (f, &r) in order.rotations.iter().enumerate() {
+                if r >= topology.offsets[f + 1] - topology.offsets[f] {
+                    return fail(format!("rotation {r} of face {f} exceeds its size"));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Rate-distortion table of the finest level: for each fraction, the errors of the
+    /// reconstruction keeping that fraction of the details, relative to the bounding-box
+    /// diagonal of the exact finest mesh.
+    ///
+    /// # Errors
+    /// As [`reconstruct`](Self::reconstruct).
+    pub fn rate_distortion(&self, fractions: &[f64]) -> Result<Vec<RateDistortion>, DooError> {
+        let finest = self.levels.len();
+        let exact = self.reconstruct(finest, None)?;
+        let (lo, hi) =
+            exact.positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let diagonal = (hi - lo).length().max(f64::MIN_POSITIVE);
+        let total = self.detail_count();
+        fractions
+            .iter()
+            .map(|&fraction| {
+                let approx = self.reconstruct(finest, Some(fraction))?;
+                let (mut max, mut sum) = (0.0f64, 0.0f64);
+                for (a, b) in approx.positions.iter().zip(&exact.positions) {
+                    let d = (*a - *b).length();
+                    max = max.max(d);
+                    sum += d * d;
+                }
+                let n = exact.positions.len().max(1) as f64;
+                Ok(RateDistortion {
+                    fraction,
+                    kept: ((fraction * total as f64).round() as usize).min(total),
+                    max_error: max / diagonal,
+                    rms_error: (sum / n).sqrt() / diagonal,
+                })
+            })
+            .collect()
+    }
+
+    /// Encodes the pyramid as a `.mres` file.
+    ///
+    /// # Errors
+    /// [`DooError::Binary`] if encoding fails.
+    pub fn to_bytes(&self) -> Result<Vec<u8>, DooError> {
+        Ok(binary::encode(PYRAMID_MAGIC, PYRAMID_VERSION, self)?)
+    }
+
+    /// Decodes a `.mres` file written by [`to_bytes`](Self::to_bytes) and checks it
+    /// (every level's arrays against the mesh it refines).
+    ///
+    /// ```
+    /// use subdiv_doo::pyramid::{DecomposeOptions, DooPyramid, decompose, is_doo_pyramid};
+    /// use subdiv_doo::{DooOptions, FaceRule, subdivide};
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 2))?.to_mesh()?;
+    /// let pyramid = decompose(&fine, &DecomposeOptions::levels(FaceRule::DooSabin, 2))?.pyramid;
+    /// let bytes = pyramid.to_bytes()?;
+    /// assert!(is_doo_pyramid(&bytes));
+    /// assert_eq!(DooPyramid::from_bytes(&bytes)?, pyramid);
+    /// assert!(DooPyramid::from_bytes(&bytes[..bytes.len() - 3]).is_err());
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`DooError::Binary`] for a truncated, corrupted or foreign file;
+    /// [`DooError::InvalidPyramid`] if the content is inconsistent.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, DooError> {
+        let pyramid: DooPyramid = binary::decode(bytes, PYRAMID_MAGIC, PYRAMID_VERSION, "multires Doo-Sabin pyramid")?;
+        pyramid.validate()?;
+        Ok(pyramid)
+    }
+
+    /// Checks that the pyramid can be reconstructed (array lengths, permutations), level
+    /// by level, without computing positions.
+    ///
+    /// # Errors
+    /// [`DooError::InvalidPyramid`] naming the first inconsistency.
+    pub fn validate(&self) -> Result<(), DooError> {
+        self.rule.validate()?;
+        let base =
+            HalfedgeMesh::from_soup(&self.base).map_err(|e| DooError::InvalidPyramid(format!("base mesh: {e}")))?;
+        let mut mesh = CornerMesh::from_halfedge(&base);
+        for (k, data) in self.levels.iter().enumerate() {
+            self.check_level(k, &mesh, data)?;
+            if k + 1 < self.levels.len() {
+                // Connectivity only: zero positions and details.
+                let zeros = vec![DVec3::ZERO; mesh.vertex_count];
+                let details = vec![DVec3::ZERO; data.details.len()];
+                mesh = reconstruct_level(&mesh, &zeros, &details, &data.order, self.rule, true)
+                    .map_err(|e| DooError::InvalidPyramid(format!("level {}: {e}", k + 1)))?
+                    .0;
+            }
+        }
+        Ok(())
+    }
+}
+
+fn is_permutation(values: &[u32], n: usize) -> bool {
+    if values.len() != n {
+        return false;
+    }
+    let mut seen = vec![false; n];
+    values.iter().all(|&v| (v as usize) < n && !std::mem::replace(&mut seen[v as usize], true))
+}

@@ -1,0 +1,1269 @@
+//! Reverse Doo-Sabin: coarse mesh plus local details from any mesh with the connectivity
+//! of one Doo-Sabin step, with exact reconstruction.
+//!
+//! Method of Mahdavi-Amiri and Samavati (the reverse-Doo paper; specification §5):
+//!
+//! 1. **Find the F_F faces** by a breadth-first search over the graph whose nodes are the
+//!    F_F faces and whose edges are the F_E quads: from an F_F face, the face across each
+//!    of its edges must be a quad, and the face across that quad's opposite edge is the
+//!    next F_F face. Every fine vertex must end up a corner of exactly one F_F face.
+//! 2. **Expand** every F_F face by the inverse of the per-face rule
+//!    ([`FaceRule::inverse_weights`]): one *candidate* for a coarse vertex per fine vertex.
+//! 3. **Group the candidates**: the candidates of one coarse vertex are the corners of
+//!    the F_F faces around it, linked across the F_E quads (the candidate graph; its
+//!    connected components are found with union-find).
+//! 4. **Coarse vertex = mean of its `r` candidates** (the local least-squares choice);
+//!    **details** = the offsets `d_i` of the candidates from the mean, stored in the basis
+//!    of the null space of `(1, .., 1)` given by the columns `E_j - E_{j+1}`: the `r - 1`
+//!    prefix sums `e_j = d_1 + .. + d_j`. The candidates of a vertex are ordered by their
+//!    coarse corner index (face by face, corner by corner), so the coarse mesh alone
+//!    fixes the order. Coarse vertices plus details are exactly as many 3-vectors as the
+//!    fine mesh has vertices.
+//!
+//! Reconstruction undoes each step: `d_1 = e_1`, `d_j = e_j - e_{j-1}`, `d_r = -e_{r-1}`,
+//! candidates `v + d_i`, then the *forward* rule applied to each coarse face's own
+//! candidates (not to the means) gives back every fine vertex; the fine faces are the
+//! Doo-Sabin connectivity of the coarse mesh, mapped to the input's vertex and face
+//! order by a stored permutation. Everything is exact up to rounding: a mesh that was not
+//! produced by Doo-Sabin (moved vertices, noise) is reconstructed to about `1e-15`
+//! relative, and `reverse(doo(C))` gives `C` with details at rounding level.
+//!
+//! # Validation
+//! The interpretation is checked completely: after the search, the Doo-Sabin
+//! connectivity of the coarse mesh is matched face by face against the input (F_E quads
+//! and F_V faces included), and the coarse mesh itself must be a manifold polygon mesh.
+//! Any mismatch is a [`DooError::NotDooConnectivity`] naming the input face where the
+//! structure breaks; nothing is returned half-done.
+//!
+//! # Seed faces and the choice among interpretations
+//! The answer is not unique: on a closed mesh, starting the search from an F_V face finds
+//! all F_V faces and reverses to the *dual* coarse mesh, just as valid topologically; on
+//! all-quad meshes even the F_E quads can play the role of F_F faces. A search needs one
+//! seed per connected component. [`ReverseOptions::seeds`] may name them; for every
+//! component without one, the *automatic* mode tries the classes in turn (the lowest
+//! face of the component, or its first neighbour that works, as an F_F face; then the
+//! lowest face that this reading calls an F_V face; then the lowest F_E quad) and keeps
+//! the valid interpretation with the **smallest total squared detail norm**
+//! `Σ |d_i|²`, the earliest on ties. An interpretation whose details are all zero to
+//! `1e-12` of the component's size is accepted at once (nothing can beat it).
+//! [`DooReversal::choices`] reports what was tried and why the winner won.
+//!
+//! # Cost
+//! Linear in the size of the fine mesh: the search visits each F_F face once and looks
+//! across each of its edges once; the candidate graph has two edges per F_E quad, at
+//! most `|NV|` ([`ReverseStats`] counts both, so tests can assert the bound).
+//!
+//! # Boundaries and components
+//! Coarse boundary edges are the F_F edges on the fine boundary (the default boundary
+//! rule of [`crate::forward`] puts nothing else there). Several connected components are
+//! reversed independently, one seed each. A coarse vertex whose faces form two fans would
+//! give two candidate groups: it is split into two vertices (which keeps the coarse mesh
+//! manifold).
+//!
+//! # Errata of the seed paper used here
+//! The sign in its eq. (6) (expansion of the centroid contraction) is wrong, see
+//! [`crate::rule`]; its claim `|F_E| <= |NF| <= |NV|` is false (a cube after one step has
+//! 26 faces and 24 vertices) but linearity holds since `|F_E| = |E_int| <= |NV| / 2`.
+
+use glam::DVec3;
+use mesh_topo::graph::UnionFind;
+use mesh_topo::{HalfedgeMesh, PolygonSoup};
+use serde::{Deserialize, Serialize};
+
+use crate::DooError;
+use crate::corner::{CornerMesh, NONE, doo_topology, expand_faces, face_points, faces_of_corners, next_of_corners};
+use crate::forward::check_finite;
+use crate::rule::{FaceMaps, FaceRule};
+
+/// Options of [`reverse`].
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ReverseOptions {
+    /// The per-face rule the fine mesh is assumed to come from.
+    pub rule: FaceRule,
+    /// Seed faces known to be F_F faces, at most one per connected component; components
+    /// without a seed are resolved automatically (see the module docs).
+    pub seeds: Vec<usize>,
+}
+
+impl ReverseOptions {
+    /// Automatic seeds for every component.
+    pub fn auto(rule: FaceRule) -> Self {
+        Self { rule, seeds: Vec::new() }
+    }
+
+    /// One given seed face (for a mesh with one component; other components are
+    /// resolved automatically).
+    pub fn with_seed(rule: FaceRule, seed: usize) -> Self {
+        Self { rule, seeds: vec![seed] }
+    }
+}
+
+/// How the fine mesh's vertices and faces are numbered relative to the Doo-Sabin
+/// connectivity of the coarse mesh (the *canonical* order of [`crate::forward`]).
+/// Empty arrays mean the identity (e.g. for a mesh written by [`crate::subdivide`]).
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct FineOrder {
+    /// `vertices[c]` = input vertex of canonical vertex `c` (= coarse corner `c`).
+    pub vertices: Vec<u32>,
+    /// `faces[k]` = input face of canonical face `k`.
+    pub faces: Vec<u32>,
+    /// `rotations[k]` = `r` such that corner `i` of the input face is corner `(i + r) mod m`
+    /// of canonical face `k`.
+    pub rotations: Vec<u32>,
+}
+
+impl FineOrder {
+    /// True if the input order is the canonical one.
+    pub fn is_identity(&self) -> bool {
+        self.vertices.is_empty() && self.faces.is_empty() && self.rotations.is_empty()
+    }
+}
+
+/// Counters of the traversal, for checking the linear cost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct ReverseStats {
+    /// F_F faces visited by the search (each once), summed over the interpretations tried.
+    pub visited_faces: usize,
+    /// Edges of F_F faces looked across by the search, summed over the interpretations tried.
+    pub edges_crossed: usize,
+    /// Edges of the candidate graph of the result (two per F_E quad).
+    pub candidate_edges: usize,
+    /// Number of interpretations evaluated in full (automatic mode).
+    pub interpretations: usize,
+}
+
+/// One seed tried for a component.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SeedTrial {
+    /// The face tried as an F_F face.
+    pub seed_face: usize,
+    /// The role of that face in the first interpretation found (`"F_F"`, `"F_V"`,
+    /// `"F_E"`), or `"neighbour"` while looking for a first valid one.
+    pub class: String,
+    /// Total squared detail norm of the interpretation, or why it is not valid.
+    pub outcome: Result<f64, String>,
+}
+
+/// Which seed a component was reversed with, and why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SeedChoice {
+    /// The component (numbered in order of its lowest face).
+    pub component: usize,
+    /// The seed face used.
+    pub seed_face: usize,
+    /// True if the caller gave it.
+    pub given: bool,
+    /// Everything tried (empty for a given seed).
+    pub trials: Vec<SeedTrial>,
+    /// The total squared detail norm of the chosen interpretation.
+    pub detail_energy: f64,
+    /// Why this one, in words.
+    pub reason: String,
+}
+
+/// The result of reversing one Doo-Sabin step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DooReversal {
+    rule: FaceRule,
+    coarse: CornerMesh,
+    coarse_positions: Vec<DVec3>,
+    details: Vec<DVec3>,
+    order: FineOrder,
+    choices: Vec<SeedChoice>,
+    stats: ReverseStats,
+}
+
+impl DooReversal {
+    /// The coarse mesh: vertices at the means of their candidates, faces in the order of
+    /// their F_F faces in the input, each starting at its F_F face's first corner.
+    pub fn coarse(&self) -> PolygonSoup {
+        PolygonSoup {
+            positions: self.coarse_positions.clone(),
+            offsets: self.coarse.offsets.clone(),
+            indices: self.coarse.corner_vertex.clone(),
+        }
+    }
+
+    /// Coarse vertex positions.
+    pub fn coarse_positions(&self) -> &[DVec3] {
+        &self.coarse_positions
+    }
+
+    /// The detail vectors: for every coarse vertex in order, the `r - 1` prefix sums of
+    /// its candidates' offsets from the mean (module docs).
+    pub fn details(&self) -> &[DVec3] {
+        &self.details
+    }
+
+    /// The rule assumed.
+    pub fn rule(&self) -> FaceRule {
+        self.rule
+    }
+
+    /// The numbering of the input relative to the canonical Doo-Sabin order.
+    pub fn fine_order(&self) -> &FineOrder {
+        &self.order
+    }
+
+    /// The seed chosen for each component, with the reasons.
+    pub fn choices(&self) -> &[SeedChoice] {
+        &self.choices
+    }
+
+    /// Traversal counters.
+    pub fn stats(&self) -> ReverseStats {
+        self.stats
+    }
+
+    /// Rebuilds the fine mesh exactly (same vertex and face order as the input).
+    ///
+    /// ```
+    /// use subdiv_doo::{DooOptions, ReverseOptions, reverse, subdivide};
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let mut fine = subdivide(&cube, &DooOptions::default())?.to_mesh()?;
+    /// fine.positions_mut()[5].x += 0.25; // not a Doo-Sabin surface any more
+    /// let reversal = reverse(&fine, &ReverseOptions::default())?;
+    /// let rebuilt = reversal.reconstruct();
+    /// assert_eq!(rebuilt.offsets, fine.to_soup().offsets);
+    /// let error = rebuilt.positions.iter().zip(fine.positions()).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+    /// assert!(error < 1e-14);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
+    pub fn reconstruct(&self) -> PolygonSoup {
+        let (mesh, positions) =
+            reconstruct_level(&self.coarse, &self.coarse_positions, &self.details, &self.order, self.rule, false)
+                .expect("internal: a reversal reconstructs");
+        PolygonSoup { positions, offsets: mesh.offsets, indices: mesh.corner_vertex }
+    }
+
+    pub(crate) fn into_parts(self) -> (CornerMesh, Vec<DVec3>, Vec<DVec3>, FineOrder, Vec<SeedChoice>) {
+        (self.coarse, self.coarse_positions, self.details, self.order, self.choices)
+    }
+}
+
+/// Reverses one Doo-Sabin step: coarse mesh, details and everything needed to rebuild
+/// the input exactly (see the module docs).
+///
+/// ```
+/// use subdiv_doo::{DooOptions, FaceRule, ReverseOptions, reverse, subdivide};
+/// use mesh_topo::{HalfedgeMesh, shapes};
+/// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+/// let fine = subdivide(&cube, &DooOptions::default())?.to_mesh()?;
+/// let reversal = reverse(&fine, &ReverseOptions::auto(FaceRule::DooSabin))?;
+/// // The cube comes back (same faces, vertices renumbered in order of appearance),
+/// // with all details zero.
+/// assert_eq!(reversal.coarse().face_count(), 6);
+/// assert!(reversal.details().iter().all(|d| d.length() < 1e-14));
+/// assert_eq!(reversal.coarse_positions().len() + reversal.details().len(), fine.vertex_count());
+/// # Ok::<(), subdiv_doo::DooError>(())
+/// ```
+///
+/// # Errors
+/// [`DooError::NotDooConnectivity`] naming the face where the structure breaks (in
+/// automatic mode: the error of the first seed tried in the first component that has no
+/// valid interpretation); [`DooError::IsolatedVertex`]; [`DooError::NonFinite`];
+/// [`DooError::SeedOutOfRange`] and [`DooError::DuplicateSeed`] for bad seeds;
+/// [`DooError::InvalidParameter`] for a bad centroid parameter.
+pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
+    check_finite(fine.positions())?;
+    let corners = CornerMesh::from_halfedge(fine);
+    reverse_corner_mesh(&corners, fine.positions(), options)
+}
+
+/// [`reverse`] on corner arrays.
+pub(crate) fn reverse_corner_mesh(
+    fine: &CornerMesh,
+    positions: &[DVec3],
+    options: &ReverseOptions,
+) -> Result<DooReversal, DooError> {
+    let mut session = Session::new(fine, positions, options)?;
+    let best = vec![0; session.readings.len()];
+    session.build(best)
+}
+
+/// The valid readings of a fine mesh, ranked per component, from which reversals are
+/// built on demand (the best one, or alternatives when a multi-level decomposition
+/// needs another reading to go on).
+pub(crate) struct Session<'a> {
+    search: Search<'a>,
+    rule: FaceRule,
+    component_of_face: Vec<u32>,
+    given: Vec<u32>,
+    /// Per component: (seed face, detail energy), best first.
+    readings: Vec<Vec<(usize, f64)>>,
+    choices: Vec<SeedChoice>,
+}
+
+impl<'a> Session<'a> {
+    /// Finds and ranks the readings of every component.
+    pub(crate) fn new(
+        fine: &'a CornerMesh,
+        positions: &'a [DVec3],
+        options: &ReverseOptions,
+    ) -> Result<Self, DooError> {
+        options.rule.validate()?;
+        let face_count = fine.face_count();
+        for &s in &options.seeds {
+            if s >= face_count {
+                return Err(DooError::SeedOutOfRange { face: s, face_count });
+            }
+        }
+        if let Some(v) = (0..fine.vertex_count).find(|&v| fine.first_corner(v) == NONE) {
+            return Err(DooError::IsolatedVertex { vertex: v });
+        }
+        let mut search = Search::new(fine, positions, FaceMaps::new(options.rule));
+
+        // Components of the face graph, numbered by their lowest face.
+        let (component_of_face, component_count) = search.face_components();
+        let mut given = vec![NONE; component_count];
+        for &s in &options.seeds {
+            let k = component_of_face[s] as usize;
+            if given[k] != NONE {
+                return Err(DooError::DuplicateSeed { first: given[k] as usize, second: s });
+            }
+            given[k] = s as u32;
+        }
+        let mut lowest_face = vec![NONE; component_count];
+        for (f, &k) in component_of_face.iter().enumerate().rev() {
+            lowest_face[k as usize] = f as u32;
+        }
+
+        // Per component: the readings to use, best first (a given seed: just that one).
+        let mut readings: Vec<Vec<(usize, f64)>> = Vec::with_capacity(component_count);
+        let mut choices = Vec::with_capacity(component_count);
+        for k in 0..component_count {
+            if given[k] != NONE {
+                let seed = given[k] as usize;
+                readings.push(vec![(seed, f64::NAN)]);
+                choices.push(SeedChoice {
+                    component: k,
+                    seed_face: seed,
+                    given: true,
+                    trials: Vec::new(),
+                    detail_energy: f64::NAN,
+                    reason: "seed face given".into(),
+                });
+            } else {
+                let (choice, ranked) = search.choose(k, lowest_face[k] as usize)?;
+                readings.push(ranked);
+                choices.push(choice);
+            }
+        }
+        Ok(Self { search, rule: options.rule, component_of_face, given, readings, choices })
+    }
+
+    /// Alternative choices of readings, best first: all components at their best, then
+    /// each component in turn at each of its other readings.
+    pub(crate) fn alternatives(&self) -> Vec<Vec<usize>> {
+        let best = vec![0; self.readings.len()];
+        let mut out = vec![best.clone()];
+        for (k, ranked) in self.readings.iter().enumerate() {
+            for j in 1..ranked.len() {
+                let mut picks = best.clone();
+                picks[k] = j;
+                out.push(picks);
+            }
+        }
+        out
+    }
+
+    /// Builds the reversal for the given readings; if the full check rejects a
+    /// component's automatic choice, falls back to its next reading.
+    pub(crate) fn build(&mut self, mut pick: Vec<usize>) -> Result<DooReversal, DooError> {
+        let component_count = self.readings.len();
+        let mut choices = self.choices.clone();
+        let search = &mut self.search;
+        loop {
+            search.role.fill(UNKNOWN);
+            search.queue.clear();
+            for (ranked, &p) in self.readings.iter().zip(&pick) {
+                search.classify(ranked[p].0)?;
+            }
+            match search.finish(self.rule, &self.component_of_face, component_count) {
+                Ok((mut reversal, energies)) => {
+                    for (k, choice) in choices.iter_mut().enumerate() {
+                        let (seed, _) = self.readings[k][pick[k]];
+                        choice.detail_energy = energies[k];
+                        if seed != choice.seed_face && !choice.given {
+                            choice.reason = format!(
+                                "face {seed} as F_F, reading number {} by detail norm (the better ones were rejected \
+                                 by the full check or could not be reversed further); {}",
+                                pick[k] + 1,
+                                std::mem::take(&mut choice.reason)
+                            );
+                        }
+                        choice.seed_face = seed;
+                    }
+                    reversal.choices = choices;
+                    return Ok(reversal);
+                }
+                Err(error) => {
+                    let face = match &error {
+                        DooError::NotDooConnectivity { face, .. } => *face,
+                        _ => return Err(error),
+                    };
+                    let k = self.component_of_face[face] as usize;
+                    if self.given[k] != NONE || pick[k] + 1 >= self.readings[k].len() {
+                        return Err(error);
+                    }
+                    choices[k].trials.push(SeedTrial {
+                        seed_face: self.readings[k][pick[k]].0,
+                        class: "full check".into(),
+                        outcome: Err(error.to_string()),
+                    });
+                    pick[k] += 1;
+                }
+            }
+        }
+    }
+}
+
+const UNKNOWN: u8 = 0;
+const FF: u8 = 1;
+const FE: u8 = 2;
+
+/// State of the F_F search over the fine mesh.
+struct Search<'a> {
+    fine: &'a CornerMesh,
+    positions: &'a [DVec3],
+    maps: FaceMaps,
+    corner_face: Vec<u32>,
+    /// Role of each face in the current interpretation.
+    role: Vec<u8>,
+    /// F_F faces of the current interpretation, in search order.
+    queue: Vec<u32>,
+    /// Scratch: per face, per vertex (reset after each use).
+    face_mark: Vec<bool>,
+    local_of_vertex: Vec<u32>,
+    stats: ReverseStats,
+}
+
+impl<'a> Search<'a> {
+    fn new(fine: &'a CornerMesh, positions: &'a [DVec3], maps: FaceMaps) -> Self {
+        Self {
+            fine,
+            positions,
+            maps,
+            corner_face: faces_of_corners(&fine.offsets),
+            role: vec![UNKNOWN; fine.face_count()],
+            queue: Vec::new(),
+            face_mark: Vec::new(),
+            local_of_vertex: Vec::new(),
+            stats: ReverseStats::default(),
+        }
+    }
+
+    fn face_size(&self, f: usize) -> usize {
+        (self.fine.offsets[f + 1] - self.fine.offsets[f]) as usize
+    }
+
+    /// Connected components of faces (across interior edges), labelled in order of their
+    /// lowest face.
+    fn face_components(&self) -> (Vec<u32>, usize) {
+        let faces = self.fine.face_count();
+        let mut label = vec![NONE; faces];
+        let mut stack = Vec::new();
+        let mut count = 0u32;
+        for s in 0..faces {
+            if label[s] != NONE {
+                continue;
+            }
+            label[s] = count;
+            stack.push(s as u32);
+            while let Some(f) = stack.pop() {
+                for c in self.fine.offsets[f as usize]..self.fine.offsets[f as usize + 1] {
+                    let t = self.fine.corner_twin[c as usize];
+                    if t != NONE {
+                        let g = self.corner_face[t as usize] as usize;
+                        if label[g] == NONE {
+                            label[g] = count;
+                            stack.push(g as u32);
+                        }
+                    }
+                }
+            }
+            count += 1;
+        }
+        (label, count as usize)
+    }
+
+    fn broken(face: usize, reason: String) -> DooError {
+        DooError::NotDooConnectivity { face, reason }
+    }
+
+    /// The fine corner across the F_E quad from F_F corner `fc` (the corner of the next
+    /// F_F face at the far end of the quad), checking the quad on the way.
+    #[inline]
+    fn across(&self, f: usize, fc: u32) -> Result<Option<u32>, DooError> {
+        let fine = self.fine;
+        let ft = fine.corner_twin[fc as usize];
+        if ft == NONE {
+            return Ok(None);
+        }
+        let g = self.corner_face[ft as usize] as usize;
+        let m = self.face_size(g);
+        if m != 4 {
+            return Err(Self::broken(g, format!("it lies across an edge of F_F face {f} but has {m} sides, not 4")));
+        }
+        let far = fine.next(fine.next(ft));
+        let gt = fine.corner_twin[far as usize];
+        if gt == NONE {
+            return Err(Self::broken(
+                g,
+                format!("this F_E quad (next to F_F face {f}) has its opposite edge on the boundary"),
+            ));
+        }
+        Ok(Some(gt))
+    }
+
+    /// Breadth-first search from `seed` as an F_F face; marks the roles. On error the
+    /// roles of the component are left partly set: call [`Self::reset`].
+    fn classify(&mut self, seed: usize) -> Result<(), DooError> {
+        let start = self.queue.len();
+        self.role[seed] = FF;
+        self.queue.push(seed as u32);
+        let mut head = start;
+        while head < self.queue.len() {
+            let f = self.queue[head] as usize;
+            head += 1;
+            self.stats.visited_faces += 1;
+            for fc in self.fine.offsets[f]..self.fine.offsets[f + 1] {
+                self.stats.edges_crossed += 1;
+                let Some(gt) = self.across(f, fc)? else { continue };
+                let g = self.corner_face[self.fine.corner_twin[fc as usize] as usize] as usize;
+                match self.role[g] {
+                    FF => {
+                        return Err(Self::broken(
+                            g,
+                            format!("F_F faces {f} and {g} share an edge (expected a quad between)"),
+                        ));
+                    }
+                    _ => self.role[g] = FE,
+                }
+                let h = self.corner_face[gt as usize] as usize;
+                match self.role[h] {
+                    FE => {
+                        return Err(Self::broken(
+                            h,
+                            format!("it is both an F_E quad and, across quad {g}, an F_F face"),
+                        ));
+                    }
+                    FF => {}
+                    _ => {
+                        self.role[h] = FF;
+                        self.queue.push(h as u32);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Clears the roles of one component (all faces reachable from `face`) and drops the
+    /// queue entries from `queue_start`.
+    fn reset(&mut self, component_faces: &[u32], queue_start: usize) {
+        for &f in component_faces {
+            self.role[f as usize] = UNKNOWN;
+        }
+        self.queue.truncate(queue_start);
+    }
+
+    /// The faces of the component of `face`, in increasing order.
+    fn component_faces(&mut self, face: usize) -> Vec<u32> {
+        if self.face_mark.is_empty() {
+            self.face_mark = vec![false; self.fine.face_count()];
+        }
+        let mut stack = vec![face as u32];
+        self.face_mark[face] = true;
+        let mut out = Vec::new();
+        while let Some(f) = stack.pop() {
+            out.push(f);
+            for c in self.fine.offsets[f as usize]..self.fine.offsets[f as usize + 1] {
+                let t = self.fine.corner_twin[c as usize];
+                if t != NONE {
+                    let g = self.corner_face[t as usize];
+                    if !std::mem::replace(&mut self.face_mark[g as usize], true) {
+                        stack.push(g);
+                    }
+                }
+            }
+        }
+        for &f in &out {
+            self.face_mark[f as usize] = false;
+        }
+        out.sort_unstable();
+        out
+    }
+
+    /// Total squared detail norm of the current interpretation of a component (whose F_F
+    /// faces are `self.queue[queue_start..]`), and the component's size (bounding-box
+    /// diagonal) for the zero test. Also checks that every vertex of the component is a
+    /// corner of exactly one F_F face.
+    fn energy(&mut self, queue_start: usize, component_faces: &[u32]) -> Result<(f64, f64), DooError> {
+        let fine = self.fine;
+        if self.local_of_vertex.is_empty() {
+            self.local_of_vertex = vec![NONE; fine.vertex_count];
+        }
+        // Local numbering of the F_F corners of this reading.
+        let mut offsets = Vec::with_capacity(self.queue.len() - queue_start + 1);
+        offsets.push(0u32);
+        let mut fine_corner = Vec::new();
+        for &f in &self.queue[queue_start..] {
+            fine_corner.extend(fine.offsets[f as usize]..fine.offsets[f as usize + 1]);
+            offsets.push(fine_corner.len() as u32);
+        }
+        let result = self.energy_inner(&offsets, &fine_corner, component_faces);
+        for &fc in &fine_corner {
+            self.local_of_vertex[fine.corner_vertex[fc as usize] as usize] = NONE;
+        }
+        result
+    }
+
+    fn energy_inner(
+        &mut self,
+        offsets: &[u32],
+        fine_corner: &[u32],
+        component_faces: &[u32],
+    ) -> Result<(f64, f64), DooError> {
+        let fine = self.fine;
+        let vertex_of = |c: usize| fine.corner_vertex[fine_corner[c] as usize];
+        for c in 0..fine_corner.len() {
+            let v = vertex_of(c) as usize;
+            let other = std::mem::replace(&mut self.local_of_vertex[v], c as u32);
+            if other != NONE {
+                let f = self.corner_face[fine_corner[c] as usize] as usize;
+                let g = self.corner_face[fine_corner[other as usize] as usize] as usize;
+                return Err(Self::broken(
+                    f.max(g),
+                    format!("vertex {v} is a corner of two F_F faces ({} and {})", f.min(g), f.max(g)),
+                ));
+            }
+        }
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for &f in component_faces {
+            for c in fine.offsets[f as usize]..fine.offsets[f as usize + 1] {
+                let v = fine.corner_vertex[c as usize] as usize;
+                if self.local_of_vertex[v] == NONE {
+                    return Err(Self::broken(f as usize, format!("its corner vertex {v} is on no F_F face")));
+                }
+                lo = lo.min(self.positions[v]);
+                hi = hi.max(self.positions[v]);
+            }
+        }
+        let candidates = expand_faces(offsets, &self.maps, |c| self.positions[vertex_of(c) as usize]);
+        let mut groups = UnionFind::new(fine_corner.len());
+        for (c, &fc) in fine_corner.iter().enumerate() {
+            let f = self.corner_face[fc as usize] as usize;
+            if let Some(gt) = self.across(f, fc)? {
+                // The corner after the far corner is at the same coarse vertex.
+                let a_star = fine.corner_vertex[fine.next(gt) as usize];
+                groups.union(c as u32, self.local_of_vertex[a_star as usize]);
+            }
+        }
+        let (labels, count) = groups.labels();
+        let mut sums = vec![DVec3::ZERO; count];
+        let mut sizes = vec![0usize; count];
+        for (c, &l) in labels.iter().enumerate() {
+            sums[l as usize] += candidates[c];
+            sizes[l as usize] += 1;
+        }
+        let energy = labels
+            .iter()
+            .enumerate()
+            .map(|(c, &l)| (candidates[c] - sums[l as usize] / sizes[l as usize] as f64).length_squared())
+            .sum();
+        self.stats.interpretations += 1;
+        Ok((energy, (hi - lo).length()))
+    }
+
+    /// Automatic choice of the interpretation of component `k` (lowest face `lowest`).
+    fn choose(&mut self, k: usize, lowest: usize) -> Result<(SeedChoice, Vec<(usize, f64)>), DooError> {
+        let faces = self.component_faces(lowest);
+        let queue_start = self.queue.len();
+        let mut trials = Vec::new();
+
+        // A first valid reading: the lowest face, else its neighbours in order.
+        let mut first_error = None;
+        let mut candidates: Vec<(usize, &'static str)> = vec![(lowest, "F_F")];
+        let b = self.fine.offsets[lowest] as usize;
+        let e = self.fine.offsets[lowest + 1] as usize;
+        for c in b..e {
+            let t = self.fine.corner_twin[c];
+            if t != NONE {
+                let g = self.corner_face[t as usize] as usize;
+                if !candidates.iter().any(|&(s, _)| s == g) {
+                    candidates.push((g, "neighbour"));
+                }
+            }
+        }
+        let mut found: Vec<(usize, f64, Vec<u32>)> = Vec::new();
+        let mut other_classes = Vec::new();
+        let mut scale = 0.0;
+        for (seed, class) in candidates {
+            let result = self.classify(seed).and_then(|()| self.energy(queue_start, &faces));
+            match result {
+                Ok((energy, size)) => {
+                    scale = size;
+                    trials.push(SeedTrial { seed_face: seed, class: "F_F".into(), outcome: Ok(energy) });
+                    // The other classes of this reading.
+                    let fv = faces.iter().find(|&&f| self.role[f as usize] == UNKNOWN).copied();
+                    let fe = faces.iter().find(|&&f| self.role[f as usize] == FE).copied();
+                    if let Some(f) = fv {
+                        other_classes.push((f as usize, "F_V"));
+                    }
+                    if let Some(f) = fe {
+                        other_classes.push((f as usize, "F_E"));
+                    }
+                    found.push((seed, energy, self.queue[queue_start..].to_vec()));
+                    self.reset(&faces, queue_start);
+                    break;
+                }
+                Err(error) => {
+                    trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Err(error.to_string()) });
+                    first_error.get_or_insert(error);
+                    self.reset(&faces, queue_start);
+                }
+            }
+        }
+        let Some(first) = found.first() else {
+            return Err(first_error.expect("internal: a failed search leaves an error"));
+        };
+        let zero = |energy: f64| energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * faces.len() as f64;
+        if !zero(first.1) {
+            for (seed, class) in other_classes {
+                let result = self.classify(seed).and_then(|()| self.energy(queue_start, &faces));
+                match result {
+                    Ok((energy, _)) => {
+                        trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Ok(energy) });
+                        found.push((seed, energy, self.queue[queue_start..].to_vec()));
+                    }
+                    Err(error) => {
+                        trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Err(error.to_string()) })
+                    }
+                }
+                self.reset(&faces, queue_start);
+            }
+        }
+        // Smallest energy, earliest on ties (the sort below is stable).
+        let mut best = 0;
+        for (i, f) in found.iter().enumerate() {
+            if f.1 < found[best].1 {
+                best = i;
+            }
+        }
+        let (seed, energy, _) = found[best].clone();
+        let reason = if found.len() == 1 && zero(energy) {
+            format!("face {seed} as F_F gives all details zero (exact Doo-Sabin refinement); no other reading tried")
+        } else if found.len() == 1 {
+            format!("face {seed} as F_F is the only valid reading found")
+        } else {
+            let others: Vec<String> =
+                found.iter().filter(|f| f.0 != seed).map(|f| format!("{:.6e} (seed {})", f.1, f.0)).collect();
+            format!(
+                "smallest total squared detail norm among {} valid readings: {energy:.6e} against {}",
+                found.len(),
+                others.join(", ")
+            )
+        };
+        let mut ranked: Vec<(usize, f64)> = found.iter().map(|f| (f.0, f.1)).collect();
+        ranked.sort_by(|a, b| a.1.total_cmp(&b.1));
+        Ok((SeedChoice { component: k, seed_face: seed, given: false, trials, detail_energy: energy, reason }, ranked))
+    }
+
+    /// Builds the coarse mesh, details and fine order from the roles of all components;
+    /// also returns the total squared detail norm of each component.
+    fn finish(
+        &self,
+        rule: FaceRule,
+        component_of_face: &[u32],
+        component_count: usize,
+    ) -> Result<(DooReversal, Vec<f64>), DooError> {
+        let fine = self.fine;
+        let faces = fine.face_count();
+        // Coarse faces: the F_F faces in increasing order.
+        let mut coarse_offsets = vec![0u32];
+        let mut fine_corner_of = Vec::with_capacity(fine.vertex_count);
+        let mut coarse_of_fine_corner = vec![NONE; fine.corner_count()];
+        let mut ff_faces = Vec::new();
+        for f in 0..faces {
+            if self.role[f] == FF {
+                ff_faces.push(f as u32);
+                for fc in fine.offsets[f]..fine.offsets[f + 1] {
+                    coarse_of_fine_corner[fc as usize] = fine_corner_of.len() as u32;
+                    fine_corner_of.push(fc);
+                }
+                coarse_offsets.push(fine_corner_of.len() as u32);
+            }
+        }
+        let coarse_corners = fine_corner_of.len();
+        // Fine vertex of each coarse corner; every fine vertex exactly once.
+        let vertex_of: Vec<u32> = fine_corner_of.iter().map(|&fc| fine.corner_vertex[fc as usize]).collect();
+        let mut canonical_of_vertex = vec![NONE; fine.vertex_count];
+        for (c, &x) in vertex_of.iter().enumerate() {
+            if canonical_of_vertex[x as usize] != NONE {
+                let f = self.corner_face[fine_corner_of[c] as usize] as usize;
+                let g = self.corner_face[fine_corner_of[canonical_of_vertex[x as usize] as usize] as usize] as usize;
+                return Err(Self::broken(f, format!("vertex {x} is a corner of two F_F faces ({g} and {f})")));
+            }
+            canonical_of_vertex[x as usize] = c as u32;
+        }
+        if let Some(x) = canonical_of_vertex.iter().position(|&c| c == NONE) {
+            let f = self.corner_face[fine.first_corner(x) as usize] as usize;
+            return Err(Self::broken(f, format!("its corner vertex {x} is on no F_F face")));
+        }
+
+        // Coarse twins (through the F_E quads) and the quad of each coarse edge.
+        let mut twins = vec![NONE; coarse_corners];
+        let mut quad_face = vec![NONE; coarse_corners];
+        for (c, &fc) in fine_corner_of.iter().enumerate() {
+            let f = self.corner_face[fc as usize] as usize;
+            if let Some(gt) = self.across(f, fc)? {
+                twins[c] = coarse_of_fine_corner[gt as usize];
+                quad_face[c] = self.corner_face[fine.corner_twin[fc as usize] as usize];
+                debug_assert!(twins[c] != NONE, "internal: the search made the far face F_F");
+            }
+        }
+        for c in 0..coarse_corners {
+            let t = twins[c];
+            if t != NONE && twins[t as usize] != c as u32 {
+                return Err(Self::broken(
+                    quad_face[c] as usize,
+                    "this quad does not join the same two F_F edges from both sides".into(),
+                ));
+            }
+            if t != NONE && quad_face[t as usize] != quad_face[c] {
+                return Err(Self::broken(quad_face[c] as usize, "two F_F edges meet through different quads".into()));
+            }
+        }
+        let coarse_next = next_of_corners(&coarse_offsets);
+
+        // Candidate groups = coarse vertices: union across each coarse edge (the corner
+        // after the twin is at the same coarse vertex).
+        let mut groups = UnionFind::new(coarse_corners);
+        let mut candidate_edges = 0;
+        for (c, &t) in twins.iter().enumerate() {
+            if t != NONE {
+                groups.union(c as u32, coarse_next[t as usize]);
+                candidate_edges += 1;
+            }
+        }
+        let (labels, coarse_vertex_count) = groups.labels();
+        let mut vertex_corner = vec![NONE; coarse_vertex_count];
+        for (c, &l) in labels.iter().enumerate() {
+            if vertex_corner[l as usize] == NONE {
+                vertex_corner[l as usize] = c as u32;
+            }
+        }
+        let mut coarse = CornerMesh {
+            offsets: coarse_offsets,
+            corner_vertex: labels,
+            corner_twin: twins,
+            corner_next: coarse_next,
+            vertex_count: coarse_vertex_count,
+            vertex_corner: Some(vertex_corner),
+        };
+        // Number the coarse vertices as the input numbers their F_V faces (interior
+        // vertices; on a mesh made by `subdivide` this is the original order), then the
+        // boundary vertices in order of first appearance.
+        let vertex_face = find_vertex_faces(fine, &self.corner_face, &coarse, &vertex_of, &fine_corner_of)?;
+        let mut new_order: Vec<u32> = (0..coarse_vertex_count as u32).collect();
+        let key = |v: u32| match vertex_face[v as usize] {
+            NONE => faces as u64 + coarse.first_corner(v as usize) as u64,
+            f => f as u64,
+        };
+        new_order.sort_by_key(|&v| key(v));
+        let mut renumber = vec![0u32; coarse_vertex_count];
+        for (new, &old) in new_order.iter().enumerate() {
+            renumber[old as usize] = new as u32;
+        }
+        for v in coarse.corner_vertex.iter_mut() {
+            *v = renumber[*v as usize];
+        }
+        let old_corner = coarse.vertex_corner.take().expect("internal: vertex corners");
+        coarse.vertex_corner = Some(new_order.iter().map(|&old| old_corner[old as usize]).collect());
+        let vertex_face: Vec<u32> = new_order.iter().map(|&old| vertex_face[old as usize]).collect();
+        check_coarse_manifold(&coarse, &ff_faces)?;
+
+        // Candidates, means and details.
+        let candidates = expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize]);
+        let by_vertex = corners_by_vertex(&coarse);
+        let (coarse_positions, details) = means_and_details(&by_vertex, &candidates);
+        debug_assert_eq!(coarse_positions.len() + details.len(), fine.vertex_count);
+
+        let order =
+            match_fine_faces(fine, &self.corner_face, &coarse, &vertex_of, &fine_corner_of, &quad_face, &vertex_face)?;
+        let mut energies = vec![0.0; component_count];
+        for (v, corners) in by_vertex.iter().enumerate() {
+            let k = component_of_face[self.corner_face[fine_corner_of[corners[0] as usize] as usize] as usize];
+            energies[k as usize] +=
+                corners.iter().map(|&c| (candidates[c as usize] - coarse_positions[v]).length_squared()).sum::<f64>();
+        }
+        let mut stats = self.stats;
+        stats.candidate_edges = candidate_edges;
+        let reversal = DooReversal { rule, coarse, coarse_positions, details, order, choices: Vec::new(), stats };
+        Ok((reversal, energies))
+    }
+}
+
+/// Corners of each coarse vertex, in increasing corner order (CSR).
+pub(crate) struct CornersByVertex {
+    offsets: Vec<u32>,
+    corners: Vec<u32>,
+}
+
+impl CornersByVertex {
+    fn iter(&self) -> impl Iterator<Item = &[u32]> + '_ {
+        self.offsets.windows(2).map(|w| &self.corners[w[0] as usize..w[1] as usize])
+    }
+}
+
+pub(crate) fn corners_by_vertex(mesh: &CornerMesh) -> CornersByVertex {
+    let mut offsets = vec![0u32; mesh.vertex_count + 1];
+    for &v in &mesh.corner_vertex {
+        offsets[v as usize + 1] += 1;
+    }
+    for v in 0..mesh.vertex_count {
+        offsets[v + 1] += offsets[v];
+    }
+    let mut fill = offsets.clone();
+    let mut corners = vec![0u32; mesh.corner_vertex.len()];
+    for (c, &v) in mesh.corner_vertex.iter().enumerate() {
+        corners[fill[v as usize] as usize] = c as u32;
+        fill[v as usize] += 1;
+    }
+    CornersByVertex { offsets, corners }
+}
+
+/// Start of vertex `v`'s details in the flat detail array (`Σ_{u<v} (r_u - 1)`).
+fn details_offset(by_vertex: &CornersByVertex, v: usize) -> usize {
+    by_vertex.offsets[v] as usize - v
+}
+
+/// `d_1 .. d_r` from the prefix sums `e_1 .. e_{r-1}`.
+fn detail_offsets_of(e: &[DVec3], r: usize) -> impl Iterator<Item = DVec3> + '_ {
+    (0..r).map(move |i| {
+        let current = if i + 1 < r { e[i] } else { DVec3::ZERO };
+        let previous = if i > 0 { e[i - 1] } else { DVec3::ZERO };
+        current - previous
+    })
+}
+
+/// Coarse vertex = mean of its candidates; details = prefix sums of the offsets.
+fn means_and_details(by_vertex: &CornersByVertex, candidates: &[DVec3]) -> (Vec<DVec3>, Vec<DVec3>) {
+    let vertices = by_vertex.offsets.len() - 1;
+    let mut means = Vec::with_capacity(vertices);
+    let mut details = Vec::with_capacity(by_vertex.corners.len() - vertices);
+    for corners in by_vertex.iter() {
+        let mean = corners.iter().map(|&c| candidates[c as usize]).sum::<DVec3>() / corners.len() as f64;
+        means.push(mean);
+        let mut prefix = DVec3::ZERO;
+        for &c in &corners[..corners.len() - 1] {
+            prefix += candidates[c as usize] - mean;
+            details.push(prefix);
+        }
+    }
+    (means, details)
+}
+
+/// The coarse mesh must be a valid manifold mesh: no face visits a vertex twice, and no
+/// two edges join the same two vertices.
+fn check_coarse_manifold(coarse: &CornerMesh, ff_faces: &[u32]) -> Result<(), DooError> {
+    let mut stamp = vec![NONE; coarse.vertex_count];
+    for (f, &ff) in ff_faces.iter().enumerate() {
+        for c in coarse.offsets[f]..coarse.offsets[f + 1] {
+            let v = coarse.corner_vertex[c as usize] as usize;
+            if stamp[v] == f as u32 {
+                return Err(DooError::NotDooConnectivity {
+                    face: ff as usize,
+                    reason: "as an F_F face it would visit one coarse vertex twice".into(),
+                });
+            }
+            stamp[v] = f as u32;
+        }
+    }
+    // Outgoing half-edges of each vertex: from its corners, and the boundary half-edges
+    // opposite boundary corners.
+    let mut out_offsets = vec![0u32; coarse.vertex_count + 1];
+    let mut push_count = |from: u32| out_offsets[from as usize + 1] += 1;
+    for c in 0..coarse.corner_count() {
+        push_count(coarse.corner_vertex[c]);
+        if coarse.corner_twin[c] == NONE {
+            push_count(coarse.corner_vertex[coarse.corner_next[c] as usize]);
+        }
+    }
+    for v in 0..coarse.vertex_count {
+        out_offsets[v + 1] += out_offsets[v];
+    }
+    let mut fill = out_offsets.clone();
+    let mut targets = vec![(0u32, 0u32); out_offsets[coarse.vertex_count] as usize];
+    for c in 0..coarse.corner_count() {
+        let (u, w) = (coarse.corner_vertex[c], coarse.corner_vertex[coarse.corner_next[c] as usize]);
+        targets[fill[u as usize] as usize] = (w, c as u32);
+        fill[u as usize] += 1;
+        if coarse.corner_twin[c] == NONE {
+            targets[fill[w as usize] as usize] = (u, c as u32);
+            fill[w as usize] += 1;
+        }
+    }
+    stamp.fill(NONE);
+    for u in 0..coarse.vertex_count {
+        for &(w, c) in &targets[out_offsets[u] as usize..out_offsets[u + 1] as usize] {
+            if stamp[w as usize] == u as u32 {
+                let f = ff_faces[faces_of_corner(coarse, c)] as usize;
+                return Err(DooError::NotDooConnectivity {
+                    face: f,
+                    reason: format!("the coarse mesh would have two edges between coarse vertices {u} and {w}"),
+                });
+            }
+            stamp[w as usize] = u as u32;
+        }
+    }
+    Ok(())
+}
+
+fn faces_of_corner(mesh: &CornerMesh, c: u32) -> usize {
+    mesh.offsets.partition_point(|&o| o <= c) - 1
+}
+
+/// The corners of interior coarse vertex `v`, counter-clockwise from its first corner
+/// (empty for a boundary vertex).
+fn vertex_cycle(coarse: &CornerMesh, v: usize, cycle: &mut Vec<u32>) {
+    let start = coarse.first_corner(v);
+    cycle.clear();
+    cycle.push(start);
+    if coarse.walk_clockwise(start, |c| cycle.push(c)).is_none() {
+        cycle.clear();
+        return;
+    }
+    cycle[1..].reverse();
+}
+
+/// For every coarse vertex, the input face that is its F_V face (found through the fine
+/// half-edge between the first two of its candidates), [`NONE`] for boundary vertices.
+fn find_vertex_faces(
+    fine: &CornerMesh,
+    corner_face: &[u32],
+    coarse: &CornerMesh,
+    vertex_of: &[u32],
+    fine_corner_of: &[u32],
+) -> Result<Vec<u32>, DooError> {
+    let mut faces = vec![NONE; coarse.vertex_count];
+    let mut cycle = Vec::new();
+    for (v, slot) in faces.iter_mut().enumerate() {
+        vertex_cycle(coarse, v, &mut cycle);
+        if cycle.is_empty() {
+            continue;
+        }
+        if cycle.len() == 2 {
+            return Err(DooError::NotDooConnectivity {
+                face: corner_face[fine_corner_of[cycle[0] as usize] as usize] as usize,
+                reason: "a coarse vertex next to this face would have valence 2".into(),
+            });
+        }
+        let to = vertex_of[cycle[1] as usize];
+        let first = fine_corner_of[cycle[0] as usize];
+        let mut found = None;
+        let mut probe = |k: u32| {
+            if found.is_none() && fine.corner_vertex[fine.next(k) as usize] == to {
+                found = Some(k);
+            }
+        };
+        probe(first);
+        fine.walk_clockwise(first, &mut probe);
+        match found {
+            Some(k) => *slot = corner_face[k as usize],
+            None => {
+                return Err(DooError::NotDooConnectivity {
+                    face: corner_face[first as usize] as usize,
+                    reason: format!(
+                        "no face has the edge {} -> {to} of the F_V face of a coarse vertex",
+                        vertex_of[cycle[0] as usize]
+                    ),
+                });
+            }
+        }
+    }
+    Ok(faces)
+}
+
+/// Matches the canonical Doo-Sabin faces of `coarse` with the faces of `fine`, giving the
+/// fine order; fails at the first fine face that does not fit.
+fn match_fine_faces(
+    fine: &CornerMesh,
+    corner_face: &[u32],
+    coarse: &CornerMesh,
+    vertex_of: &[u32],
+    fine_corner_of: &[u32],
+    quad_face: &[u32],
+    vertex_face: &[u32],
+) -> Result<FineOrder, DooError> {
+    let faces = fine.face_count();
+    let mut matched = vec![false; faces];
+    let mut face_order = Vec::with_capacity(faces);
+    let mut rotations = Vec::with_capacity(faces);
+    let broken = |face: usize, reason: String| DooError::NotDooConnectivity { face, reason };
+    // Claims fine face `g` for the canonical face with (fine) vertices `cycle`.
+    let mut claim = |g: usize, cycle: &[u32], what: &str| -> Result<(), DooError> {
+        let (b, e) = (fine.offsets[g] as usize, fine.offsets[g + 1] as usize);
+        let m = e - b;
+        if m != cycle.len() {
+            return Err(broken(g, format!("expected an {what} with {} sides, found {m}", cycle.len())));
+        }
+        let r = (0..m).find(|&r| fine.corner_vertex[b] == cycle[r]);
+        let fits = r.is_some_and(|r| (0..m).all(|i| fine.corner_vertex[b + i] == cycle[(i + r) % m]));
+        if !fits {
+            return Err(broken(g, format!("its corners are not those of the expected {what}")));
+        }
+        if std::mem::replace(&mut matched[g], true) {
+            return Err(broken(g, format!("it would be the {what} of two coarse elements")));
+        }
+        face_order.push(g as u32);
+        rotations.push(r.unwrap_or(0) as u32);
+        Ok(())
+    };
+    // F_F faces: the coarse faces, same corners.
+    for f in 0..coarse.face_count() {
+        let b = coarse.offsets[f] as usize;
+        let g = corner_face[fine_corner_of[b] as usize] as usize;
+        let cycle: Vec<u32> = (b..coarse.offsets[f + 1] as usize).map(|c| vertex_of[c]).collect();
+        claim(g, &cycle, "F_F face")?;
+    }
+    // F_E quads: (c, next(t), t, next(c)) for each interior coarse edge.
+    for c in 0..coarse.corner_count() {
+        let t = coarse.corner_twin[c];
+        if t == NONE || (c as u32) > t {
+            continue;
+        }
+        let cycle = [
+            vertex_of[c],
+            vertex_of[coarse.corner_next[t as usize] as usize],
+            vertex_of[t as usize],
+            vertex_of[coarse.corner_next[c] as usize],
+        ];
+        claim(quad_face[c] as usize, &cycle, "F_E quad")?;
+    }
+    // F_V faces: around each interior coarse vertex.
+    let mut cycle = Vec::new();
+    for (v, &face) in vertex_face.iter().enumerate() {
+        if face == NONE {
+            continue;
+        }
+        vertex_cycle(coarse, v, &mut cycle);
+        for x in cycle.iter_mut() {
+            *x = vertex_of[*x as usize];
+        }
+        claim(face as usize, &cycle, "F_V face")?;
+    }
+    if let Some(g) = matched.iter().position(|&m| !m) {
+        return Err(broken(g, "it is neither an F_F face, nor an F_E quad, nor an F_V face of this reading".into()));
+    }
+    // Compress the identity.
+    let identity_vertices = vertex_of.iter().enumerate().all(|(c, &x)| x == c as u32);
+    let identity_faces = face_order.iter().enumerate().all(|(k, &g)| g == k as u32);
+    let no_rotation = rotations.iter().all(|&r| r == 0);
+    Ok(FineOrder {
+        vertices: if identity_vertices { Vec::new() } else { vertex_of.to_vec() },
+        faces: if identity_faces { Vec::new() } else { face_order },
+        rotations: if no_rotation { Vec::new() } else { rotations },
+    })
+}
+
+/// Rebuilds one level: candidates from coarse positions and details, forward rule per
+/// coarse face, canonical connectivity, then the fine order. Returns the fine mesh (with
+/// adjacency if `with_adjacency`) and its positions.
+pub(crate) fn reconstruct_level(
+    coarse: &CornerMesh,
+    coarse_positions: &[DVec3],
+    details: &[DVec3],
+    order: &FineOrder,
+    rule: FaceRule,
+    with_adjacency: bool,
+) -> Result<(CornerMesh, Vec<DVec3>), DooError> {
+    let maps = FaceMaps::new(rule);
+    let by_vertex = corners_by_vertex(coarse);
+    let mut candidates = vec![DVec3::ZERO; coarse.corner_count()];
+    for (v, corners) in by_vertex.iter().enumerate() {
+        let base = details_offset(&by_vertex, v);
+        let e = &details[base..base + corners.len() - 1];
+        for (&c, d) in corners.iter().zip(detail_offsets_of(e, corners.len())) {
+            candidates[c as usize] = coarse_positions[v] + d;
+        }
+    }
+    let canonical_positions = face_points(&coarse.offsets, &maps, |c| candidates[c]);
+    let topology = doo_topology(coarse, with_adjacency)?;
+    let vertex_count = canonical_positions.len();
+    let canonical = if with_adjacency {
+        topology.into_corner_mesh(vertex_count)
+    } else {
+        CornerMesh { offsets: topology.offsets, corner_vertex: topology.indices, vertex_count, ..CornerMesh::default() }
+    };
+    if order.is_identity() {
+        return Ok((canonical, canonical_positions));
+    }
+    Ok(apply_order(canonical, canonical_positions, order, with_adjacency))
+}
+
+/// Renumbers a canonical fine mesh into the input order.
+fn apply_order(
+    canonical: CornerMesh,
+    canonical_positions: Vec<DVec3>,
+    order: &FineOrder,
+    with_adjacency: bool,
+) -> (CornerMesh, Vec<DVec3>) {
+    let vertices = canonical_positions.len();
+    let faces = canonical.face_count();
+    let vertex = |c: u32| if order.vertices.is_empty() { c } else { order.vertices[c as usize] };
+    let mut positions = vec![DVec3::ZERO; vertices];
+    for (c, &p) in canonical_positions.iter().enumerate() {
+        positions[vertex(c as u32) as usize] = p;
+    }
+    // Canonical face of each input face.
+    let mut canonical_of = vec![0u32; faces];
+    for k in 0..faces {
+        let g = if order.faces.is_empty() { k as u32 } else { order.faces[k] };
+        canonical_of[g as usize] = k as u32;
+    }
+    let mut offsets = Vec::with_capacity(faces + 1);
+    offsets.push(0u32);
+    let mut corner_vertex = Vec::with_capacity(canonical.corner_count());
+    // Input corner of each canonical corner (for the twins).
+    let mut corner_map = if with_adjacency { vec![0u32; canonical.corner_count()] } else { Vec::new() };
+    for &k in &canonical_of {
+        let (b, e) = (canonical.offsets[k as usize] as usize, canonical.offsets[k as usize + 1] as usize);
+        let m = e - b;
+        let r = if order.rotations.is_empty() { 0 } else { order.rotations[k as usize] as usize };
+        for i in 0..m {
+            let canonical_corner = b + (i + r) % m;
+            if with_adjacency {
+                corner_map[canonical_corner] = corner_vertex.len() as u32;
+            }
+            corner_vertex.push(vertex(canonical.corner_vertex[canonical_corner]));
+        }
+        offsets.push(corner_vertex.len() as u32);
+    }
+    let mut mesh = CornerMesh {
+        corner_next: next_of_corners(&offsets),
+        offsets,
+        corner_vertex,
+        vertex_count: vertices,
+        ..CornerMesh::default()
+    };
+    if with_adjacency {
+        let mut twins = vec![NONE; mesh.corner_vertex.len()];
+        for (k, &t) in canonical.corner_twin.iter().enumerate() {
+            if t != NONE {
+                twins[corner_map[k] as usize] = corner_map[t as usize];
+            }
+        }
+        mesh.corner_twin = twins;
+        let mut vertex_corner = vec![NONE; vertices];
+        for (c, &v) in mesh.corner_vertex.iter().enumerate() {
+            if vertex_corner[v as usize] == NONE {
+                vertex_corner[v as usize] = c as u32;
+            }
+        }
+        mesh.vertex_corner = Some(vertex_corner);
+    }
+    (mesh, positions)
+}

@@ -1,0 +1,59 @@
+//! Runs `forward::subdivide` on a mesh file: timing, output size, optional OBJ output.
+//! Used for timing and peak-memory measurements from outside (`/usr/bin/time -v`) and
+//! to produce outputs for comparisons with other libraries.
+//!
+//! `cargo run --release --example loop_level -- MESH LEVEL [--threads T] [--repeats R]
+//! [--out OUT.obj] [--warren] [--keep-corners]`
+
+#[path = "support/mesh_file.rs"]
+mod mesh_file;
+
+use std::path::Path;
+use std::time::Instant;
+
+use mesh_topo::HalfedgeMesh;
+use subdiv_loop::forward::{LoopOptions, VertexWeights, subdivide};
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.len() < 2 {
+        eprintln!(
+            "usage: loop_level MESH LEVEL [--threads T] [--repeats R] [--out OUT.obj] [--warren] [--keep-corners]"
+        );
+        std::process::exit(2);
+    }
+    let level: u32 = args[1].parse().expect("LEVEL");
+    let value = |flag: &str| args.iter().position(|a| a == flag).map(|i| args[i + 1].clone());
+    let threads: usize = value("--threads").map_or(1, |t| t.parse().expect("--threads"));
+    let repeats: usize = value("--repeats").map_or(1, |t| t.parse().expect("--repeats"));
+    let options = LoopOptions {
+        weights: if args.iter().any(|a| a == "--warren") { VertexWeights::Warren } else { VertexWeights::Loop },
+        keep_corners: args.iter().any(|a| a == "--keep-corners"),
+    };
+    let soup = mesh_file::read_mesh(Path::new(&args[0]));
+    let mesh = HalfedgeMesh::from_soup(&soup).expect("valid mesh");
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
+    let mut best = f64::INFINITY;
+    let mut fine = None;
+    for _ in 0..repeats {
+        drop(fine.take());
+        let start = Instant::now();
+        let result = pool.install(|| subdivide(&mesh, level, &options).expect("subdivide"));
+        let seconds = start.elapsed().as_secs_f64();
+        best = best.min(seconds);
+        let bytes = result.positions.len() * 24 + result.triangles.len() * 12;
+        println!(
+            "level {level} threads {threads}: {} vertices, {} faces, {:.1} MB output, {:.4} s ({:.2} M faces/s)",
+            result.vertex_count(),
+            result.face_count(),
+            bytes as f64 / 1e6,
+            seconds,
+            result.face_count() as f64 / seconds / 1e6
+        );
+        fine = Some(result);
+    }
+    println!("best {best:.4} s");
+    if let (Some(out), Some(fine)) = (value("--out"), fine) {
+        mesh_file::write_obj(Path::new(&out), &fine.positions, &fine.triangles);
+    }
+}

@@ -1,0 +1,148 @@
+//! Detect Loop connectivity and reverse on arbitrary valid meshes.
+//!
+//! Inputs are built structurally from the fuzz bytes: a procedural base shape or a raw
+//! index soup, optionally refined one or two Loop steps with arbitrary details (so that
+//! many inputs do have Loop connectivity), then renumbered, and optionally broken by an
+//! edge flip or a removed face. Whatever comes out, `reverse` and `decompose` must not
+//! panic; when they succeed, reconstruction must give the input back.
+
+#![no_main]
+
+use arbitrary::{Arbitrary, Unstructured};
+use glam::DVec3;
+use libfuzzer_sys::fuzz_target;
+use mesh_topo::shapes::{self, CellKind};
+use mesh_topo::{HalfedgeMesh, PolygonSoup};
+use subdiv_loop::detect::{DetectOptions, detect};
+use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, bounding_box_diagonal, decompose};
+use subdiv_loop::reverse::{LoopOptions, ReverseOptions, VertexWeights, reconstruct, reverse};
+
+fn coordinate(u: &mut Unstructured<'_>) -> arbitrary::Result<f64> {
+    Ok(i16::arbitrary(u)? as f64 / 256.0)
+}
+
+fn base_shape(u: &mut Unstructured<'_>) -> arbitrary::Result<PolygonSoup> {
+    Ok(match u.int_in_range(0..=6)? {
+        0 => shapes::tetrahedron(),
+        1 => shapes::octahedron(),
+        2 => shapes::icosahedron(),
+        3 => shapes::grid(u.int_in_range(1..=5)?, u.int_in_range(1..=5)?, CellKind::Triangles),
+        4 => shapes::torus(u.int_in_range(3..=6)?, u.int_in_range(3..=6)?, CellKind::Triangles),
+        _ => {
+            // A raw soup: a few vertices and arbitrary triangles (often invalid).
+            let n = u.int_in_range(3..=24u32)?;
+            let positions = (0..n)
+                .map(|_| Ok(DVec3::new(coordinate(u)?, coordinate(u)?, coordinate(u)?)))
+                .collect::<arbitrary::Result<Vec<_>>>()?;
+            let faces = (0..u.int_in_range(1..=40)?)
+                .map(|_| Ok([u.int_in_range(0..=n - 1)?, u.int_in_range(0..=n - 1)?, u.int_in_range(0..=n - 1)?]))
+                .collect::<arbitrary::Result<Vec<_>>>()?;
+            PolygonSoup::from_faces(positions, faces)
+        }
+    })
+}
+
+fn renumber(soup: &PolygonSoup, u: &mut Unstructured<'_>) -> arbitrary::Result<PolygonSoup> {
+    let n = soup.vertex_count();
+    let mut new_of_old: Vec<u32> = (0..n as u32).collect();
+    for i in (1..n).rev() {
+        new_of_old.swap(i, u.int_in_range(0..=i)?);
+    }
+    let mut positions = vec![DVec3::ZERO; n];
+    for (old, &new) in new_of_old.iter().enumerate() {
+        positions[new as usize] = soup.positions[old];
+    }
+    let mut faces: Vec<Vec<u32>> = soup.faces().map(|f| f.iter().map(|&v| new_of_old[v as usize]).collect()).collect();
+    for i in (1..faces.len()).rev() {
+        faces.swap(i, u.int_in_range(0..=i)?);
+    }
+    for face in &mut faces {
+        let shift = u.int_in_range(0..=face.len() - 1)?;
+        face.rotate_left(shift);
+    }
+    Ok(PolygonSoup::from_faces(positions, faces))
+}
+
+fn break_mesh(soup: &PolygonSoup, u: &mut Unstructured<'_>) -> arbitrary::Result<PolygonSoup> {
+    let mut faces: Vec<Vec<u32>> = soup.faces().map(<[u32]>::to_vec).collect();
+    if faces.is_empty() {
+        return Ok(soup.clone());
+    }
+    let f = u.int_in_range(0..=faces.len() - 1)?;
+    if bool::arbitrary(u)? {
+        faces.remove(f);
+    } else {
+        // Flip the edge after corner k of face f, if it is interior.
+        let k = u.int_in_range(0..=2usize)?;
+        let (a, b) = (faces[f][k], faces[f][(k + 1) % 3]);
+        let c = faces[f][(k + 2) % 3];
+        if let Some(g) = faces.iter().position(|g| (0..3).any(|j| g[j] == b && g[(j + 1) % 3] == a)) {
+            let d = *faces[g].iter().find(|&&v| v != a && v != b).unwrap_or(&a);
+            faces[f] = vec![a, d, c];
+            faces[g] = vec![d, b, c];
+        }
+    }
+    Ok(PolygonSoup::from_faces(soup.positions.clone(), faces))
+}
+
+fn check(fine: &PolygonSoup, rules: LoopOptions, must_succeed: bool) {
+    let Ok(mesh) = HalfedgeMesh::from_soup(fine) else { return };
+    let _ = detect(&mesh, &DetectOptions::default());
+    let level = match reverse(&mesh, &ReverseOptions { rules, seed_vertex: None }) {
+        Ok(level) => level,
+        Err(error) => {
+            assert!(!must_succeed, "reverse failed on a renumbered Loop mesh: {error}");
+            return;
+        }
+    };
+    assert_eq!(level.coarse.vertex_count() + level.details.len(), mesh.vertex_count());
+    let rebuilt = reconstruct(&level.coarse, &level.details, level.order.as_ref(), &rules).expect("valid level");
+    let rebuilt = rebuilt.to_soup();
+    assert_eq!(rebuilt.indices, fine.indices);
+    let scale = bounding_box_diagonal(&fine.positions).max(1e-300);
+    for (p, q) in rebuilt.positions.iter().zip(&fine.positions) {
+        assert!(p.distance(*q) <= 1e-9 * scale, "reconstruction error {}", p.distance(*q) / scale);
+    }
+    let pyramid = decompose(&mesh, &DecomposeOptions { rules, levels: Levels::Max, seed_vertex: None })
+        .expect("one level exists");
+    let rebuilt = pyramid.reconstruct(pyramid.level_count()).expect("valid pyramid");
+    assert_eq!(rebuilt.indices, fine.indices);
+    let decoded = LoopPyramid::from_bytes(&pyramid.to_bytes().expect("encodes")).expect("decodes");
+    assert_eq!(decoded, pyramid);
+}
+
+fuzz_target!(|data: &[u8]| {
+    let mut u = Unstructured::new(data);
+    let run = |u: &mut Unstructured<'_>| -> arbitrary::Result<()> {
+        let rules = LoopOptions {
+            weights: if bool::arbitrary(u)? { VertexWeights::Warren } else { VertexWeights::Loop },
+            keep_corners: bool::arbitrary(u)?,
+        };
+        let base = base_shape(u)?;
+        let refinements = u.int_in_range(0..=2)?;
+        let mut soup = base;
+        let mut loop_mesh = false;
+        if refinements > 0 {
+            let Ok(mut pyramid) = LoopPyramid::smooth(soup.clone(), rules, refinements) else { return Ok(()) };
+            for level in &mut pyramid.levels {
+                for d in &mut level.details {
+                    if bool::arbitrary(u)? {
+                        *d = DVec3::new(coordinate(u)?, coordinate(u)?, coordinate(u)?) / 16.0;
+                    }
+                }
+            }
+            soup = pyramid.reconstruct(refinements).expect("valid smooth pyramid");
+            loop_mesh = true;
+        }
+        if bool::arbitrary(u)? {
+            soup = renumber(&soup, u)?;
+        }
+        let broken = bool::arbitrary(u)?;
+        if broken {
+            soup = break_mesh(&soup, u)?;
+        }
+        check(&soup, rules, loop_mesh && !broken);
+        Ok(())
+    };
+    let _ = run(&mut u);
+});

@@ -1,0 +1,387 @@
+//! One Loop step on the compact topology: fine values, fine triangles and (unless it is
+//! the last level) the fine topology, all by index arithmetic and in parallel.
+//!
+//! Work is split into chunks of faces (edge points, vertex points of odd vertices, fine
+//! faces, fine links) and chunks of even vertices (vertex points by a one-ring walk).
+//! Every output element is written by exactly one chunk with a fixed formula, so results
+//! are bit-identical for any number of threads.
+
+use rayon::prelude::*;
+
+use super::attribute::Attribute;
+use super::topology::{BASE_BITS, INVALID, NEXT, PREV, Topology, edge_at, edge_base, is_first};
+use super::{LoopOptions, VertexWeights};
+
+/// Faces per parallel work item (a multiple of 4: chunks hold whole groups).
+const FACE_CHUNK: usize = 2048;
+/// Vertices per parallel work item.
+const VERTEX_CHUNK: usize = 4096;
+/// Valences whose weights are tabulated.
+const TABLE: usize = 32;
+
+/// The weights of one scheme variant, with the interior vertex weights tabulated.
+#[derive(Debug, Clone)]
+pub(crate) struct Rules {
+    keep_corners: bool,
+    weights: VertexWeights,
+    /// `(alpha_n, beta_n)` for `n < TABLE`.
+    table: [(f64, f64); TABLE],
+}
+
+/// Loop's vertex weight `beta_n = (5/8 - (3/8 + cos(2 pi / n) / 4)^2) / n`.
+pub(crate) fn loop_beta(n: usize) -> f64 {
+    let c = 0.375 + 0.25 * (2.0 * std::f64::consts::PI / n as f64).cos();
+    (0.625 - c * c) / n as f64
+}
+
+/// Warren's vertex weight: `3/16` for `n = 3`, `3 / (8 n)` otherwise.
+pub(crate) fn warren_beta(n: usize) -> f64 {
+    if n == 3 { 3.0 / 16.0 } else { 3.0 / (8.0 * n as f64) }
+}
+
+impl Rules {
+    pub(crate) fn new(options: &LoopOptions) -> Self {
+        let mut table = [(1.0, 0.0); TABLE];
+        for (n, entry) in table.iter_mut().enumerate().skip(1) {
+            *entry = Self::weights_of(options.weights, n);
+        }
+        Self { keep_corners: options.keep_corners, weights: options.weights, table }
+    }
+
+    fn weights_of(weights: VertexWeights, n: usize) -> (f64, f64) {
+        let beta = match weights {
+            VertexWeights::Loop => loop_beta(n),
+            VertexWeights::Warren => warren_beta(n),
+        };
+        (1.0 - n as f64 * beta, beta)
+    }
+
+    /// `(alpha_n, beta_n)` of an interior vertex of valence `n`.
+    #[inline]
+    pub(crate) fn interior(&self, n: usize) -> (f64, f64) {
+        if n < TABLE { self.table[n] } else { Self::weights_of(self.weights, n) }
+    }
+
+    /// True if a boundary vertex of valence `valence` keeps its position.
+    #[inline]
+    pub(crate) fn is_fixed_corner(&self, valence: usize) -> bool {
+        self.keep_corners && valence == 2
+    }
+}
+
+/// The result of one step.
+pub(crate) struct Step<T> {
+    pub(crate) values: Vec<T>,
+    /// Fine topology; only `triangles` and the counts are filled when the step was
+    /// asked not to refine the topology (the last level).
+    pub(crate) topology: Topology,
+}
+
+/// A chunk of faces and the disjoint output ranges it writes.
+struct FaceWork<'a, T> {
+    faces: std::ops::Range<usize>,
+    first_edge: usize,
+    edge_values: &'a mut [T],
+    first_odd: usize,
+    odd_values: &'a mut [T],
+    odd_starts: &'a mut [u32],
+    triangles: &'a mut [[u32; 3]],
+    links: &'a mut [[u32; 4]],
+}
+
+/// Splits `n` elements off the front of `slice` (nothing if `slice` is empty: outputs
+/// that are not computed).
+fn take_front<'a, T>(slice: &mut &'a mut [T], n: usize) -> &'a mut [T] {
+    if slice.is_empty() {
+        return &mut [];
+    }
+    let (front, back) = std::mem::take(slice).split_at_mut(n);
+    *slice = back;
+    front
+}
+
+/// The first half of half-edge `h = 4f + k`: half-edge 0 of child `4f + k`.
+#[inline(always)]
+fn first_half(h: u32) -> u32 {
+    4 * h
+}
+
+/// The second half of half-edge `h = 4f + k`: half-edge 2 of child `4f + k + 1`.
+#[inline(always)]
+fn second_half(h: u32) -> u32 {
+    4 * (h - (h & 3) + NEXT[(h & 3) as usize] as u32) + 2
+}
+
+/// One Loop step of `values` on `topo`. With `refine_topology` the fine links and
+/// vertex starts are produced too (needed for a further step).
+pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, refine_topology: bool) -> Step<T> {
+    let nv = topo.vertex_count;
+    let ne = topo.edge_count;
+    let nf = topo.face_count();
+    let even = topo.vertex_halfedge.len();
+    debug_assert_eq!(values.len(), nv, "internal: one value per vertex");
+    debug_assert!(even == nv || nf.is_multiple_of(4), "internal: a refined level has whole groups");
+    let fine_vertex_count = nv + ne;
+
+    let mut fine_values: Vec<T> = Vec::with_capacity(fine_vertex_count);
+    if let Some(placeholder) = values.first() {
+        // Parallel first touch: page faults of a large output are the biggest fixed
+        // cost on many machines, and they scale with threads when spread like this.
+        fine_values.par_extend(rayon::iter::repeat_n(placeholder.clone(), fine_vertex_count));
+    }
+    let mut fine_triangles = vec![[0u32; 3]; 4 * nf];
+    let (mut fine_links, mut fine_starts) =
+        if refine_topology { (vec![[0u32; 4]; 4 * nf], vec![0u32; nv]) } else { (Vec::new(), Vec::new()) };
+
+    let (vertex_values, edge_values) = fine_values.split_at_mut(nv.min(fine_vertex_count));
+    let (even_values, odd_values) = vertex_values.split_at_mut(even.min(vertex_values.len()));
+    let (even_starts, odd_starts) = fine_starts.split_at_mut(if refine_topology { even } else { 0 });
+
+    // Face chunks: edge points, odd vertex points, fine faces and fine links.
+    let mut work = Vec::with_capacity(nf.div_ceil(FACE_CHUNK));
+    {
+        let (mut ev, mut ov, mut os, mut tr, mut li) =
+            (edge_values, odd_values, odd_starts, &mut fine_triangles[..], &mut fine_links[..]);
+        let edges_before = |f: usize| if f == nf { ne } else { edge_base(topo.links[f][3]) as usize };
+        // Odd vertices are the edge points of the level before, numbered by its edges:
+        // group g has 3g + 2 e_g edges before it, e_g of the level before.
+        let odd_before = |f: usize| {
+            if even == nv {
+                0
+            } else if f == nf {
+                nv - even
+            } else {
+                (edges_before(f) - 3 * (f / 4)) / 2
+            }
+        };
+        let mut f0 = 0;
+        while f0 < nf {
+            let f1 = (f0 + FACE_CHUNK).min(nf);
+            let edges = edges_before(f1) - edges_before(f0);
+            let odd = odd_before(f1) - odd_before(f0);
+            work.push(FaceWork {
+                faces: f0..f1,
+                first_edge: edges_before(f0),
+                edge_values: take_front(&mut ev, edges),
+                first_odd: even + odd_before(f0),
+                odd_values: take_front(&mut ov, odd),
+                odd_starts: take_front(&mut os, odd),
+                triangles: take_front(&mut tr, 4 * (f1 - f0)),
+                links: take_front(&mut li, 4 * (f1 - f0)),
+            });
+            f0 = f1;
+        }
+    }
+    work.into_par_iter().for_each(|mut w| {
+        if even < nv {
+            odd_chunk(topo, values, rules, &mut w, refine_topology);
+        }
+        face_chunk(topo, values, w, refine_topology);
+    });
+
+    // Vertex chunks: vertex points of even vertices.
+    even_values.par_chunks_mut(VERTEX_CHUNK).enumerate().for_each(|(chunk, out)| {
+        let first = chunk * VERTEX_CHUNK;
+        for (i, slot) in out.iter_mut().enumerate() {
+            *slot = vertex_point(topo, values, rules, (first + i) as u32);
+        }
+    });
+    if refine_topology {
+        // Corner k of face f becomes corner 0 of child 4f + k: the outgoing half-edge
+        // becomes its first half, with the same boundary status.
+        even_starts.par_chunks_mut(VERTEX_CHUNK).enumerate().for_each(|(chunk, out)| {
+            let first = chunk * VERTEX_CHUNK;
+            for (i, slot) in out.iter_mut().enumerate() {
+                let h = topo.vertex_halfedge[first + i];
+                *slot = if h == INVALID { INVALID } else { first_half(h) };
+            }
+        });
+    }
+
+    let topology = Topology {
+        triangles: fine_triangles,
+        links: fine_links,
+        vertex_halfedge: fine_starts,
+        vertex_count: fine_vertex_count,
+        edge_count: 2 * ne + 3 * nf,
+    };
+    Step { values: fine_values, topology }
+}
+
+/// Vertex points of the odd vertices owned by a chunk of groups.
+///
+/// Group `g` (faces `4g .. 4g + 3`) has corner faces `4g + k = (c_k, m_k, m_{k-1})` and
+/// the centre face `4g + 3 = (m_0, m_1, m_2)`. The odd vertex `m_k` is owned by the group
+/// where its edge `c_k c_{k+1}` was first seen (half-edge 0 of face `4g + k` is first).
+/// Inside, it has valence 6 and its neighbours are `c_k, c_{k+1}`, the other two centre
+/// vertices of its group and the other two centre vertices of the group across the edge;
+/// on the boundary it has valence 4 and boundary neighbours `c_k, c_{k+1}`.
+#[inline(never)]
+fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut FaceWork<'_, T>, refine: bool) {
+    let tri = &topo.triangles[..];
+    let links = &topo.links[..];
+    let (alpha, beta) = rules.interior(6);
+    for g in w.faces.start / 4..w.faces.end / 4 {
+        let centre = tri[4 * g + 3];
+        for k in 0..3usize {
+            let corner_face = 4 * g + k;
+            if links[corner_face][3] & (1 << BASE_BITS) == 0 {
+                continue;
+            }
+            let m = centre[k];
+            let slot = m as usize - w.first_odd;
+            let p = &values[m as usize];
+            let mut ends = values[tri[corner_face][0] as usize].clone();
+            ends.add(&values[tri[4 * g + NEXT[k]][0] as usize]);
+            let across = links[corner_face][0];
+            if across == INVALID {
+                let mut point = p.scaled(0.75);
+                point.add_scaled(&ends, 0.125);
+                w.odd_values[slot] = point;
+                if refine {
+                    w.odd_starts[slot] = first_half(second_half(corner_face as u32));
+                }
+            } else {
+                // `across` is the second half of the twin edge: half-edge 2 of face
+                // 4g' + j of the group g' across, whose centre vertex j - 1 is m.
+                let face = (across >> 2) as usize;
+                let other = tri[(face & !3) + 3];
+                let j = face & 3;
+                debug_assert_eq!(other[PREV[j]], m, "internal: odd vertex across groups");
+                let mut sum = ends;
+                sum.add(&values[centre[NEXT[k]] as usize]);
+                sum.add(&values[centre[PREV[k]] as usize]);
+                sum.add(&values[other[j] as usize]);
+                sum.add(&values[other[NEXT[j]] as usize]);
+                let mut point = p.scaled(alpha);
+                point.add_scaled(&sum, beta);
+                w.odd_values[slot] = point;
+                if refine {
+                    w.odd_starts[slot] = first_half((4 * corner_face + 1) as u32);
+                }
+            }
+        }
+    }
+}
+
+/// Edge points, fine faces and (optionally) fine links of one chunk of faces.
+///
+/// Face `f = (c0, c1, c2)` with edge points `m_k` on half-edge `4f + k` (from `c_k` to
+/// `c_{k+1}`) gives the children `4f + k = (c_k, m_k, m_{k-1})` for `k = 0, 1, 2` and
+/// `4f + 3 = (m0, m1, m2)`. Child half-edges: `(4f + k, 0)` is the first half of
+/// `4f + k`, `(4f + k, 1)` runs `m_k -> m_{k-1}`, `(4f + k, 2)` is the second half of
+/// `4f + k - 1`, `(4f + 3, j)` runs `m_j -> m_{j+1}`.
+#[inline(never)]
+fn face_chunk<T: Attribute>(topo: &Topology, values: &[T], w: FaceWork<'_, T>, refine_topology: bool) {
+    let nv = topo.vertex_count as u32;
+    let tri = &topo.triangles[..];
+    let links = &topo.links[..];
+    let first_face = w.faces.start;
+    for f in w.faces {
+        let local = f - first_face;
+        let c = tri[f];
+        let link = links[f];
+        let h0 = 4 * f as u32;
+        let info = link[3];
+        let mut next_edge = edge_base(info);
+        let mut m = [0u32; 3];
+        for k in 0..3 {
+            let t = link[k];
+            if is_first(h0 + k as u32, t) {
+                let e = next_edge;
+                next_edge += 1;
+                m[k] = nv + e;
+                let a = &values[c[k] as usize];
+                let b = &values[c[NEXT[k]] as usize];
+                let mut point = a.clone();
+                point.add(b);
+                w.edge_values[e as usize - w.first_edge] = if t == INVALID {
+                    point.scaled(0.5)
+                } else {
+                    let d = tri[(t >> 2) as usize][PREV[(t & 3) as usize]];
+                    let mut wings = values[c[PREV[k]] as usize].clone();
+                    wings.add(&values[d as usize]);
+                    let mut point = point.scaled(0.375);
+                    point.add_scaled(&wings, 0.125);
+                    point
+                };
+            } else {
+                m[k] = nv + edge_at(links[(t >> 2) as usize][3], t & 3);
+            }
+        }
+        let out = &mut w.triangles[4 * local..4 * local + 4];
+        out[0] = [c[0], m[0], m[2]];
+        out[1] = [c[1], m[1], m[0]];
+        out[2] = [c[2], m[2], m[1]];
+        out[3] = [m[0], m[1], m[2]];
+        if refine_topology {
+            let base = 16 * f as u32;
+            // Fine first-masks: child k holds the first half of 4f + k (bit 0), an
+            // interior edge (bit 1, always first) and the second half of 4f + k - 1
+            // (bit 2); the centre face holds no first half-edge.
+            let first = (info >> BASE_BITS) & 7;
+            let bit = |k: usize| (first >> k) & 1;
+            let mut edges = 3 * f as u32 + 2 * edge_base(info);
+            let out = &mut w.links[4 * local..4 * local + 4];
+            for k in 0..3usize {
+                let outer = link[k];
+                let inner = link[PREV[k]];
+                let mask = bit(k) | 2 | (bit(PREV[k]) << 2);
+                out[k] = [
+                    if outer == INVALID { INVALID } else { second_half(outer) },
+                    base + 12 + PREV[k] as u32,
+                    if inner == INVALID { INVALID } else { first_half(inner) },
+                    edges | (mask << BASE_BITS),
+                ];
+                edges += mask.count_ones();
+            }
+            out[3] = [base + 5, base + 9, base + 1, edges];
+        }
+    }
+}
+
+/// The vertex point of even vertex `v`, by a walk around its one-ring.
+#[inline]
+fn vertex_point<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, v: u32) -> T {
+    let start = topo.vertex_halfedge[v as usize];
+    let p = &values[v as usize];
+    if start == INVALID {
+        return p.clone();
+    }
+    let tri = &topo.triangles[..];
+    let links = &topo.links[..];
+    let mut f = (start >> 2) as usize;
+    let mut k = (start & 3) as usize;
+    let mut corners = tri[f];
+    let mut sum = values[corners[NEXT[k]] as usize].clone();
+    let mut valence = 1usize;
+    loop {
+        let t = links[f][PREV[k]];
+        if t == INVALID {
+            // Boundary: the fan ends here; the two boundary neighbours are the target of
+            // the first and the origin of the last fan half-edge.
+            if rules.is_fixed_corner(valence + 1) {
+                return p.clone();
+            }
+            let first = tri[(start >> 2) as usize][NEXT[(start & 3) as usize]];
+            let mut ends = values[first as usize].clone();
+            ends.add(&values[corners[PREV[k]] as usize]);
+            let mut point = p.scaled(0.75);
+            point.add_scaled(&ends, 0.125);
+            return point;
+        }
+        if t == start || valence > tri.len() {
+            debug_assert!(t == start, "internal: one-ring walk did not close");
+            break;
+        }
+        f = (t >> 2) as usize;
+        k = (t & 3) as usize;
+        corners = tri[f];
+        sum.add(&values[corners[NEXT[k]] as usize]);
+        valence += 1;
+    }
+    let (alpha, beta) = rules.interior(valence);
+    let mut point = p.scaled(alpha);
+    point.add_scaled(&sum, beta);
+    point
+}

@@ -1,0 +1,197 @@
+//! Sparse subdivision matrices in compressed-row form.
+
+use serde::{Deserialize, Serialize};
+
+use super::attribute::{Attribute, SparseRow};
+use crate::LoopError;
+
+/// A sparse matrix in compressed-row (CSR) form: `P_fine = S · P_coarse`, one row per
+/// fine vertex, one column per coarse vertex.
+///
+/// Row `i` holds the stencil of fine vertex `i`: its columns in increasing order and
+/// their weights. Every row of a subdivision matrix sums to 1 (affine invariance).
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes};
+/// use subdiv_loop::forward::{LoopOptions, subdivision_matrix};
+///
+/// let mesh = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+/// let s = subdivision_matrix(&mesh, 1, &LoopOptions::default())?;
+/// assert_eq!((s.rows(), s.columns()), (10, 4));
+/// assert!(s.row_sums().iter().all(|&sum| (sum - 1.0).abs() < 1e-15));
+/// # Ok::<(), subdiv_loop::LoopError>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SubdivisionMatrix {
+    columns: usize,
+    row_offsets: Vec<usize>,
+    column_indices: Vec<u32>,
+    values: Vec<f64>,
+}
+
+impl SubdivisionMatrix {
+    /// Builds the matrix from sorted sparse rows.
+    pub(crate) fn from_rows(rows: Vec<SparseRow>, columns: usize) -> Self {
+        let mut row_offsets = Vec::with_capacity(rows.len() + 1);
+        row_offsets.push(0);
+        let nnz = rows.iter().map(|r| r.0.len()).sum();
+        let mut column_indices = Vec::with_capacity(nnz);
+        let mut values = Vec::with_capacity(nnz);
+        for row in rows {
+            for (c, w) in row.0 {
+                column_indices.push(c);
+                values.push(w);
+            }
+            row_offsets.push(column_indices.len());
+        }
+        Self { columns, row_offsets, column_indices, values }
+    }
+
+    /// A matrix from explicit CSR arrays.
+    ///
+    /// # Errors
+    /// [`LoopError::InvalidParameter`] if the arrays are inconsistent: offsets not
+    /// starting at 0, decreasing or not ending at the entry count, columns out of range
+    /// or not strictly increasing within a row, lengths that differ, non-finite values.
+    pub fn from_csr(
+        columns: usize,
+        row_offsets: Vec<usize>,
+        column_indices: Vec<u32>,
+        values: Vec<f64>,
+    ) -> Result<Self, LoopError> {
+        let bad = |reason: String| LoopError::InvalidParameter { name: "csr", reason };
+        if row_offsets.first() != Some(&0) || row_offsets.last() != Some(&column_indices.len()) {
+            return Err(bad("row offsets must start at 0 and end at the number of entries".into()));
+        }
+        if column_indices.len() != values.len() {
+            return Err(bad(format!("{} column indices but {} values", column_indices.len(), values.len())));
+        }
+        for (row, w) in row_offsets.windows(2).enumerate() {
+            if w[0] > w[1] {
+                return Err(bad(format!("row {row}: offsets decrease")));
+            }
+            let cols = &column_indices[w[0]..w[1]];
+            if cols.windows(2).any(|p| p[0] >= p[1]) || cols.last().is_some_and(|&c| c as usize >= columns) {
+                return Err(bad(format!("row {row}: columns must increase strictly and stay below {columns}")));
+            }
+        }
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(bad(format!("entry {i} is not finite")));
+        }
+        Ok(Self { columns, row_offsets, column_indices, values })
+    }
+
+    /// Number of rows (fine vertices).
+    pub fn rows(&self) -> usize {
+        self.row_offsets.len() - 1
+    }
+
+    /// Number of columns (coarse vertices).
+    pub fn columns(&self) -> usize {
+        self.columns
+    }
+
+    /// Number of stored entries.
+    pub fn nnz(&self) -> usize {
+        self.values.len()
+    }
+
+    /// The columns and weights of row `i`.
+    ///
+    /// # Panics
+    /// If `i >= self.rows()`.
+    pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        let range = self.row_offsets[i]..self.row_offsets[i + 1];
+        (&self.column_indices[range.clone()], &self.values[range])
+    }
+
+    /// The entry at `(row, column)` (0 if not stored, or out of range).
+    pub fn get(&self, row: usize, column: usize) -> f64 {
+        if row >= self.rows() {
+            return 0.0;
+        }
+        let (cols, vals) = self.row(row);
+        cols.binary_search(&(column as u32)).map_or(0.0, |k| vals[k])
+    }
+
+    /// The raw CSR arrays: row offsets, column indices, values.
+    pub fn csr(&self) -> (&[usize], &[u32], &[f64]) {
+        (&self.row_offsets, &self.column_indices, &self.values)
+    }
+
+    /// The sum of each row (1 for every row of a subdivision matrix, up to rounding).
+    pub fn row_sums(&self) -> Vec<f64> {
+        (0..self.rows()).map(|i| self.row(i).1.iter().sum()).collect()
+    }
+
+    /// `S · values`: applies the stencils to per-vertex data.
+    ///
+    /// # Errors
+    /// [`LoopError::AttributeCount`] if `values` does not have one entry per column.
+    pub fn apply<T: Attribute>(&self, values: &[T]) -> Result<Vec<T>, LoopError> {
+        if values.len() != self.columns {
+            return Err(LoopError::AttributeCount { expected: self.columns, found: values.len() });
+        }
+        let Some(zero) = values.first().map(|v| v.scaled(0.0)) else {
+            return if self.rows() == 0 {
+                Ok(Vec::new())
+            } else {
+                Err(LoopError::InvalidParameter { name: "matrix", reason: "rows over zero columns".into() })
+            };
+        };
+        Ok((0..self.rows())
+            .map(|i| {
+                let (cols, weights) = self.row(i);
+                match cols.first() {
+                    None => zero.clone(),
+                    Some(&c0) => {
+                        let mut acc = values[c0 as usize].scaled(weights[0]);
+                        for (&c, &w) in cols.iter().zip(weights).skip(1) {
+                            acc.add_scaled(&values[c as usize], w);
+                        }
+                        acc
+                    }
+                }
+            })
+            .collect())
+    }
+
+    /// The product `self · other` (apply `other` first): the matrix of two steps.
+    ///
+    /// # Errors
+    /// [`LoopError::InvalidParameter`] if `self.columns() != other.rows()`.
+    pub fn compose(&self, other: &SubdivisionMatrix) -> Result<SubdivisionMatrix, LoopError> {
+        if self.columns != other.rows() {
+            return Err(LoopError::InvalidParameter {
+                name: "matrix",
+                reason: format!("cannot multiply {} columns by {} rows", self.columns, other.rows()),
+            });
+        }
+        let rows = (0..self.rows())
+            .map(|i| {
+                let (cols, weights) = self.row(i);
+                let mut acc = SparseRow::default();
+                for (&c, &w) in cols.iter().zip(weights) {
+                    let (oc, ow) = other.row(c as usize);
+                    acc.add_scaled(&SparseRow(oc.iter().copied().zip(ow.iter().copied()).collect()), w);
+                }
+                acc
+            })
+            .collect();
+        Ok(Self::from_rows(rows, other.columns))
+    }
+
+    /// The dense matrix, row by row (for small matrices: analysis, tests).
+    pub fn to_dense(&self) -> Vec<Vec<f64>> {
+        (0..self.rows())
+            .map(|i| {
+                let mut row = vec![0.0; self.columns];
+                let (cols, weights) = self.row(i);
+                for (&c, &w) in cols.iter().zip(weights) {
+                    row[c as usize] = w;
+                }
+                row
+            })
+            .collect()
+    }
+}

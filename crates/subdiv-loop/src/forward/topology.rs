@@ -1,0 +1,239 @@
+//! The compact triangle topology refined level after level.
+//!
+//! Half-edge `k` of face `f` runs from corner `k` to corner `k + 1` (mod 3) and is
+//! encoded as `4f + k`, so its face, `next`, `prev`, origin and target are bit
+//! operations, and only the twin is stored (after Dupuy and Vanhoey, "A halfedge
+//! refinement rule for parallel Loop/Catmull-Clark subdivision", 2021). Each face stores
+//! one *link* word per half-edge (the twin, [`INVALID`] on the boundary) and a fourth
+//! word with its edge information: the number of edges first seen in earlier faces and
+//! a 3-bit mask of which of its half-edges are the first appearance of their edge.
+//! Edges are numbered by first appearance in face order, the numbering of
+//! [`HalfedgeMesh`], and a half-edge is first when its twin is missing or lies in a later
+//! face; the edge of any half-edge is then one look-up in its (or its twin's) face.
+//!
+//! After one Loop step every array of the finer level follows from the coarser one by
+//! index arithmetic (see `kernel.rs`): nothing is hashed, sorted or searched. Faces
+//! `4f .. 4f + 3` of a refined level are the children of face `f` of the level before
+//! (a *group*); its *odd* vertices (the edge points of the level before) have valence 6
+//! (4 on the boundary) and their neighbours are read off the group and its neighbour
+//! group, so only the *even* vertices need a walk around their one-ring and a start
+//! half-edge.
+
+use mesh_topo::{HalfedgeMesh, MeshError};
+
+use crate::LoopError;
+
+/// "No half-edge": the twin of a boundary half-edge, the start of an isolated vertex.
+pub(crate) const INVALID: u32 = u32::MAX;
+/// Bits of the edge-information word that hold the face's edge base; the 3 bits above
+/// hold the mask of first half-edges.
+pub(crate) const BASE_BITS: u32 = 29;
+pub(crate) const BASE_MASK: u32 = (1 << BASE_BITS) - 1;
+/// Largest number of faces of a level that is refined further (half-edges are `4f + k`).
+pub(crate) const MAX_FACES: u64 = (u32::MAX / 4) as u64;
+
+/// `k + 1 mod 3` and `k + 2 mod 3` for corners `k` in `0..4` (3 is never a corner).
+pub(crate) const NEXT: [usize; 4] = [1, 2, 0, 0];
+pub(crate) const PREV: [usize; 4] = [2, 0, 1, 0];
+
+/// Connectivity of one level of a triangle mesh.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Topology {
+    /// Corner vertices of each face (the origin of half-edge `4f + k` is `triangles[f][k]`).
+    pub(crate) triangles: Vec<[u32; 3]>,
+    /// Per face: the twins of its three half-edges and its edge information.
+    pub(crate) links: Vec<[u32; 4]>,
+    /// Per even vertex (`0 .. vertex_halfedge.len()`): an outgoing half-edge, the one
+    /// whose twin is missing for boundary vertices (so that the counter-clockwise walk
+    /// covers the whole fan), [`INVALID`] for isolated vertices. The remaining vertices
+    /// are the odd vertices of a refined level and need none.
+    pub(crate) vertex_halfedge: Vec<u32>,
+    /// Number of vertices.
+    pub(crate) vertex_count: usize,
+    /// Number of edges.
+    pub(crate) edge_count: usize,
+}
+
+/// True if half-edge `h` with twin `twin` is the first appearance of its edge.
+#[inline(always)]
+pub(crate) fn is_first(h: u32, twin: u32) -> bool {
+    // INVALID is the largest u32, so boundary half-edges are first too.
+    twin > h
+}
+
+/// The edge base of an edge-information word.
+#[inline(always)]
+pub(crate) fn edge_base(info: u32) -> u32 {
+    info & BASE_MASK
+}
+
+/// The edge of half-edge `k` of a face with edge-information word `info`, if that
+/// half-edge is the first of its edge (else look in the twin's face).
+#[inline(always)]
+pub(crate) fn edge_at(info: u32, k: u32) -> u32 {
+    let below = (1u32 << k) - 1;
+    (info & BASE_MASK) + ((info >> BASE_BITS) & below).count_ones()
+}
+
+impl Topology {
+    /// Builds the compact topology of a triangle mesh.
+    ///
+    /// # Errors
+    /// [`LoopError::NotTriangle`] naming the first face that is not a triangle;
+    /// [`LoopError::InteriorValenceTwo`] for two triangles glued along all three edges;
+    /// [`MeshError::TooLarge`] if the mesh has too many faces or edges for the layout.
+    pub(crate) fn from_mesh(mesh: &HalfedgeMesh) -> Result<Self, LoopError> {
+        let face_count = mesh.face_count();
+        if face_count as u64 > MAX_FACES {
+            return Err(MeshError::TooLarge { what: "faces", count: face_count, max: MAX_FACES as usize }.into());
+        }
+        if mesh.edge_count() > BASE_MASK as usize {
+            return Err(MeshError::TooLarge { what: "edges", count: mesh.edge_count(), max: BASE_MASK as usize }.into());
+        }
+        // Mesh half-edge -> compact half-edge (boundary half-edges have none).
+        let mut compact = vec![INVALID; mesh.halfedge_count()];
+        let mut triangles = Vec::with_capacity(face_count);
+        for f in mesh.faces() {
+            let mut corners = [0u32; 3];
+            let mut count = 0;
+            for h in mesh.face_halfedges(f) {
+                if count < 3 {
+                    corners[count] = mesh.origin(h).raw();
+                    compact[h.index()] = (4 * f.index() + count) as u32;
+                }
+                count += 1;
+            }
+            if count != 3 {
+                return Err(LoopError::NotTriangle { face: f.index(), corners: count });
+            }
+            triangles.push(corners);
+        }
+        let mut links = vec![[INVALID; 4]; face_count];
+        let mut edges_before = 0u32;
+        for f in mesh.faces() {
+            let fi = f.index();
+            let mut mask = 0u32;
+            for (k, h) in mesh.face_halfedges(f).enumerate() {
+                let twin = compact[h.twin().index()];
+                links[fi][k] = twin;
+                if is_first((4 * fi + k) as u32, twin) {
+                    mask |= 1 << k;
+                }
+            }
+            let [t0, t1, t2, _] = links[fi];
+            if t0 != INVALID && (t0 >> 2 == t1 >> 2 || t0 >> 2 == t2 >> 2) || t1 != INVALID && t1 >> 2 == t2 >> 2 {
+                // Two triangles sharing two edges share all three: a closed "pillow"
+                // whose vertices have interior valence 2. One Loop step would glue the
+                // children along three faces per edge (a non-manifold result).
+                return Err(LoopError::InteriorValenceTwo { vertex: triangles[fi][0], face: fi });
+            }
+            links[fi][3] = edges_before | (mask << BASE_BITS);
+            edges_before += mask.count_ones();
+        }
+        debug_assert_eq!(edges_before as usize, mesh.edge_count(), "internal: edge numbering");
+        let mut vertex_halfedge = vec![INVALID; mesh.vertex_count()];
+        for v in mesh.vertices() {
+            if let Some(h) = mesh.vertex_halfedge(v) {
+                // Boundary vertices get their start below.
+                if !mesh.is_boundary_halfedge(h) {
+                    vertex_halfedge[v.index()] = compact[h.index()];
+                }
+            }
+        }
+        for (f, link) in links.iter().enumerate() {
+            for k in 0..3 {
+                if link[k] == INVALID {
+                    vertex_halfedge[triangles[f][k] as usize] = (4 * f + k) as u32;
+                }
+            }
+        }
+        Ok(Self { triangles, links, vertex_halfedge, vertex_count: mesh.vertex_count(), edge_count: mesh.edge_count() })
+    }
+
+    /// Number of faces.
+    #[inline]
+    pub(crate) fn face_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// The edge index of half-edge `h` (any half-edge, first or not).
+    #[cfg(test)]
+    pub(crate) fn edge_of(&self, h: u32) -> u32 {
+        let twin = self.links[(h >> 2) as usize][(h & 3) as usize];
+        let owner = if is_first(h, twin) { h } else { twin };
+        edge_at(self.links[(owner >> 2) as usize][3], owner & 3)
+    }
+
+    /// Walks the one-ring of even vertex `v` counter-clockwise: the neighbours in order
+    /// and whether `v` is on the boundary (then the first and last neighbours are its two
+    /// boundary neighbours). Empty for an isolated vertex.
+    #[cfg(test)]
+    pub(crate) fn ring(&self, v: u32) -> (Vec<u32>, bool) {
+        let start = self.vertex_halfedge[v as usize];
+        let mut ring = Vec::new();
+        if start == INVALID {
+            return (ring, false);
+        }
+        let mut h = start;
+        loop {
+            let (f, k) = ((h >> 2) as usize, (h & 3) as usize);
+            let corners = self.triangles[f];
+            ring.push(corners[NEXT[k]]);
+            let twin = self.links[f][PREV[k]];
+            if twin == INVALID {
+                ring.push(corners[PREV[k]]);
+                return (ring, true);
+            }
+            if twin == start || ring.len() > self.triangles.len() * 3 {
+                return (ring, false);
+            }
+            h = twin;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+    use mesh_topo::PolygonSoup;
+    use mesh_topo::shapes::{self, CellKind};
+
+    use super::*;
+
+    #[test]
+    fn edge_numbering_matches_the_halfedge_mesh() {
+        for soup in [shapes::icosahedron(), shapes::grid(3, 2, CellKind::Triangles), shapes::tetrahedron()] {
+            let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+            let topo = Topology::from_mesh(&mesh).unwrap();
+            for f in mesh.faces() {
+                for (k, h) in mesh.face_halfedges(f).enumerate() {
+                    assert_eq!(topo.edge_of((4 * f.index() + k) as u32) as usize, h.edge().index());
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn rings_match_the_halfedge_mesh() {
+        let mesh = HalfedgeMesh::from_soup(&shapes::grid(3, 3, CellKind::Triangles)).unwrap();
+        let topo = Topology::from_mesh(&mesh).unwrap();
+        for v in mesh.vertices() {
+            let (ring, boundary) = topo.ring(v.raw());
+            assert_eq!(boundary, mesh.is_boundary_vertex(v));
+            let mut expected: Vec<u32> = mesh.vertex_neighbors(v).map(|w| w.raw()).collect();
+            let mut sorted = ring.clone();
+            sorted.sort_unstable();
+            expected.sort_unstable();
+            assert_eq!(sorted, expected, "vertex {v:?}");
+        }
+    }
+
+    #[test]
+    fn quads_and_pillows_are_rejected_by_face() {
+        let mesh = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
+        assert_eq!(Topology::from_mesh(&mesh).unwrap_err(), LoopError::NotTriangle { face: 0, corners: 4 });
+        let pillow = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2], [0, 2, 1]]);
+        let mesh = HalfedgeMesh::from_soup(&pillow).unwrap();
+        assert!(matches!(Topology::from_mesh(&mesh), Err(LoopError::InteriorValenceTwo { .. })));
+    }
+}

@@ -1,0 +1,574 @@
+//! Multiresolution pyramids: a base mesh plus the details of every level, decomposition
+//! by repeated reverse Loop, reconstruction to any level, compression and the `.mres`
+//! file format.
+//!
+//! # Layout
+//! A [`LoopPyramid`] holds the [`LoopOptions`] it was made with, the coarsest mesh
+//! (`base`, a polygon soup), and one [`DetailLevel`] per refinement step, **coarsest
+//! first**: `levels[0]` refines the base to level 1, `levels.last()` rebuilds the input
+//! mesh. A level holds one detail per edge of the mesh it refines (in that mesh's edge
+//! order) and, only if the finer mesh was not numbered canonically (see
+//! [`detect`](crate::detect)), the [`FineOrder`] that renumbers it. So the pyramid of a
+//! mesh made by canonical Loop subdivision stores exactly `|V|` vectors and the base
+//! faces; any other numbering adds one `u32` per fine vertex and per fine face.
+//!
+//! # File format
+//! [`LoopPyramid::to_bytes`] writes the pyramid through `mesh_topo::binary` (the one
+//! binary encoding of the project) with magic number [`PYRAMID_MAGIC`] and version
+//! [`PYRAMID_VERSION`]. Reading validates everything (the base mesh, the number of
+//! details and the orders of every level), so a corrupted file is an error, never a
+//! panic or a wrong mesh.
+//!
+//! # Compression
+//! [`LoopPyramid::compressed`] keeps the given fraction of all details, the largest by
+//! Euclidean norm across all levels (ties broken by level, then index), and sets the
+//! others to zero. A zero detail means "exactly what Loop subdivision predicts", so the
+//! compressed pyramid reconstructs a smooth approximation of the input.
+//! [`LoopPyramid::rate_distortion`] measures the resulting error.
+
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
+
+use crate::LoopError;
+use crate::corner_table::CornerTable;
+use crate::detect::{FineOrder, detect_table};
+use crate::reverse::{LoopOptions, check_finite, check_level, refine_level, reverse_positions};
+
+/// Magic number of a Loop pyramid file.
+pub const PYRAMID_MAGIC: [u8; 8] = *b"MRSLOOP\0";
+/// Current version of the Loop pyramid format.
+pub const PYRAMID_VERSION: u32 = 1;
+
+/// The details of one refinement step (see the [module docs](self)).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DetailLevel {
+    /// One detail per edge of the coarser mesh, in its edge order.
+    pub details: Vec<DVec3>,
+    /// Numbering of the finer mesh, `None` for the canonical order.
+    pub order: Option<FineOrder>,
+}
+
+/// A base mesh plus per-level details (see the [module docs](self)).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LoopPyramid {
+    /// The subdivision rules of every level.
+    pub rules: LoopOptions,
+    /// The coarsest mesh.
+    pub base: PolygonSoup,
+    /// The refinement steps, coarsest first.
+    pub levels: Vec<DetailLevel>,
+}
+
+/// How many levels [`decompose`] reverses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Levels {
+    /// Exactly this many (an error if the connectivity allows fewer).
+    Count(usize),
+    /// As many as the connectivity allows (at least one).
+    Max,
+}
+
+/// Options of [`decompose`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DecomposeOptions {
+    /// The subdivision rules.
+    pub rules: LoopOptions,
+    /// How many levels.
+    pub levels: Levels,
+    /// A vertex point of the input mesh, for the first level only (see
+    /// [`DetectOptions::seed_vertex`](crate::detect::DetectOptions::seed_vertex)).
+    pub seed_vertex: Option<u32>,
+}
+
+impl Default for DecomposeOptions {
+    /// Loop's rules, one level, automatic seed.
+    fn default() -> Self {
+        Self { rules: LoopOptions::default(), levels: Levels::Count(1), seed_vertex: None }
+    }
+}
+
+/// One row of [`LoopPyramid::rate_distortion`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RateDistortion {
+    /// Fraction of details requested.
+    pub fraction: f64,
+    /// Number of details kept.
+    pub kept: usize,
+    /// Total number of details.
+    pub total: usize,
+    /// Largest vertex displacement from the exact reconstruction, divided by the
+    /// bounding-box diagonal of the exact reconstruction.
+    pub max_error: f64,
+    /// Root-mean-square vertex displacement, divided by the same diagonal.
+    pub rms_error: f64,
+}
+
+/// Decomposes a mesh with Loop connectivity into a base mesh plus details by repeated
+/// reverse Loop (each level as [`reverse`](crate::reverse::reverse)).
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes};
+/// use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, decompose};
+/// use subdiv_loop::reverse::LoopOptions;
+///
+/// // An icosahedron refined twice (zero details = Loop subdivision).
+/// let ico = HalfedgeMesh::from_soup(&shapes::icosahedron())?;
+/// let smooth = LoopPyramid::smooth(ico.to_soup(), LoopOptions::default(), 2)?;
+/// let fine = HalfedgeMesh::from_soup(&smooth.reconstruct(2)?)?;
+/// assert_eq!(fine.face_count(), 20 * 16);
+///
+/// let pyramid = decompose(&fine, &DecomposeOptions { levels: Levels::Max, ..Default::default() })?;
+/// assert_eq!(pyramid.level_count(), 2); // the icosahedron has no Loop connectivity
+/// assert_eq!(pyramid.base.indices, ico.to_soup().indices);
+/// let rebuilt = pyramid.reconstruct(2)?;
+/// for (p, q) in rebuilt.positions.iter().zip(fine.positions()) {
+///     assert!(p.distance(*q) < 1e-12);
+/// }
+/// # Ok::<(), subdiv_loop::LoopError>(())
+/// ```
+///
+/// # Errors
+/// [`LoopError::NotTriangle`], [`LoopError::SeedOutOfRange`],
+/// [`LoopError::Mesh`] for non-finite positions, and [`LoopError::NotLoopConnectivity`]
+/// when a requested level (or, with [`Levels::Max`], the first level) has no Loop
+/// connectivity.
+pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
+    check_input_positions(mesh.positions())?;
+    let mut table = CornerTable::from_mesh(mesh)?;
+    let mut positions = mesh.positions().to_vec();
+    let mut levels = Vec::new();
+    let wanted = match options.levels {
+        Levels::Count(n) => n,
+        Levels::Max => usize::MAX,
+    };
+    // Every reversal divides the face count by 4 (a mesh without faces is an error), so
+    // `Levels::Max` ends after at most log4(faces) + 1 rounds.
+    while levels.len() < wanted {
+        let seed = if levels.is_empty() { options.seed_vertex } else { None };
+        let coarsening = match detect_table(&table, seed) {
+            Ok(coarsening) => coarsening,
+            Err(LoopError::NotLoopConnectivity { .. }) if options.levels == Levels::Max && !levels.is_empty() => {
+                break;
+            }
+            Err(error) => return Err(error),
+        };
+        let (coarse_positions, details) = reverse_positions(&coarsening, &positions, &options.rules);
+        levels.push(DetailLevel { details, order: coarsening.fine_order() });
+        table = coarsening.coarse;
+        positions = coarse_positions;
+    }
+    levels.reverse();
+    Ok(LoopPyramid { rules: options.rules, base: table.to_soup(positions), levels })
+}
+
+/// Positions given by the user must be finite (a `HalfedgeMesh` may have been edited).
+pub(crate) fn check_input_positions(positions: &[DVec3]) -> Result<(), LoopError> {
+    for (vertex, p) in positions.iter().enumerate() {
+        if let Some(axis) = (0..3).find(|&a| !p[a].is_finite()) {
+            return Err(LoopError::Mesh(mesh_topo::MeshError::NonFiniteCoordinate { vertex, axis, value: p[axis] }));
+        }
+    }
+    Ok(())
+}
+
+impl LoopPyramid {
+    /// The pyramid of `levels` Loop subdivision steps of `base` (all details zero):
+    /// reconstructing it is Loop subdivision in the canonical order.
+    ///
+    /// # Errors
+    /// Any [`mesh_topo::MeshError`] of `base`, or [`LoopError::NotTriangle`].
+    pub fn smooth(base: PolygonSoup, rules: LoopOptions, levels: usize) -> Result<Self, LoopError> {
+        let mut table = CornerTable::from_soup(&base)?;
+        let mut detail_levels = Vec::with_capacity(levels);
+        for _ in 0..levels {
+            detail_levels.push(DetailLevel { details: vec![DVec3::ZERO; table.edge_count()], order: None });
+            table = table.refine();
+        }
+        Ok(Self { rules, base, levels: detail_levels })
+    }
+
+    /// Number of refinement steps.
+    pub fn level_count(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// Total number of detail vectors.
+    pub fn detail_count(&self) -> usize {
+        self.levels.iter().map(|l| l.details.len()).sum()
+    }
+
+    /// Checks that the pyramid is consistent: a valid triangle base mesh and, at every
+    /// level, one finite detail per edge and a valid order. Linear in the size of the
+    /// finest mesh.
+    ///
+    /// # Errors
+    /// [`LoopError::Mesh`] or [`LoopError::NotTriangle`] for a bad base mesh,
+    /// [`LoopError::InvalidDetails`] naming the first level that does not fit.
+    pub fn validate(&self) -> Result<(), LoopError> {
+        let mut table = CornerTable::from_soup(&self.base)?;
+        for (i, level) in self.levels.iter().enumerate() {
+            check_level(&table, &level.details, level.order.as_ref(), i + 1)?;
+            table = next_table(&table, level.order.as_ref());
+        }
+        Ok(())
+    }
+
+    /// Rebuilds the mesh of level `level` (0 = the base mesh, [`level_count`] = the
+    /// decomposed mesh) in its original numbering.
+    ///
+    /// # Errors
+    /// [`LoopError::InvalidParameter`] if `level > level_count()`, the errors of
+    /// [`validate`](Self::validate), and [`LoopError::NonFiniteResult`] if a position
+    /// overflows.
+    ///
+    /// [`level_count`]: Self::level_count
+    pub fn reconstruct(&self, level: usize) -> Result<PolygonSoup, LoopError> {
+        if level > self.levels.len() {
+            return Err(LoopError::InvalidParameter {
+                name: "level",
+                reason: format!("{level}: the pyramid has {} levels", self.levels.len()),
+            });
+        }
+        let mut table = CornerTable::from_soup(&self.base)?;
+        let mut positions = self.base.positions.clone();
+        for (i, step) in self.levels[..level].iter().enumerate() {
+            check_level(&table, &step.details, step.order.as_ref(), i + 1)?;
+            let (fine, fine_positions) =
+                refine_level(&table, &positions, &step.details, step.order.as_ref(), &self.rules);
+            check_finite(&fine_positions, i + 1)?;
+            table = fine;
+            positions = fine_positions;
+        }
+        Ok(table.to_soup(positions))
+    }
+
+    /// A copy keeping only the largest `fraction` of the details (see the
+    /// [module docs](self)); `round(fraction × detail_count())` details are kept.
+    ///
+    /// # Errors
+    /// [`LoopError::InvalidParameter`] unless `0 <= fraction <= 1`.
+    pub fn compressed(&self, fraction: f64) -> Result<Self, LoopError> {
+        if !(0.0..=1.0).contains(&fraction) {
+            return Err(LoopError::InvalidParameter {
+                name: "fraction",
+                reason: format!("{fraction}: expected a number between 0 and 1"),
+            });
+        }
+        let total = self.detail_count();
+        let keep = ((fraction * total as f64).round() as usize).min(total);
+        let mut out = self.clone();
+        if keep == total {
+            return Ok(out);
+        }
+        // (squared norm, level, index): a total order, so the selection is deterministic.
+        let mut ranked: Vec<(f64, u32, u32)> = Vec::with_capacity(total);
+        for (l, level) in self.levels.iter().enumerate() {
+            ranked.extend(level.details.iter().enumerate().map(|(i, d)| (d.length_squared(), l as u32, i as u32)));
+        }
+        let larger_first =
+            |a: &(f64, u32, u32), b: &(f64, u32, u32)| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2));
+        if keep > 0 {
+            ranked.select_nth_unstable_by(keep - 1, larger_first);
+        }
+        for &(_, l, i) in &ranked[keep..] {
+            out.levels[l as usize].details[i as usize] = DVec3::ZERO;
+        }
+        Ok(out)
+    }
+
+    /// Error of [`compressed`](Self::compressed) reconstructions at the finest level, for
+    /// each fraction, relative to the bounding-box diagonal of the exact reconstruction.
+    ///
+    /// ```
+    /// use mesh_topo::shapes;
+    /// use subdiv_loop::pyramid::LoopPyramid;
+    /// use subdiv_loop::reverse::LoopOptions;
+    ///
+    /// let mut pyramid = LoopPyramid::smooth(shapes::octahedron(), LoopOptions::default(), 2)?;
+    /// pyramid.levels[1].details[5] = glam::DVec3::new(0.0, 0.0, 0.1); // one bump
+    /// let rows = pyramid.rate_distortion(&[1.0, 0.0])?;
+    /// assert_eq!(rows[0].max_error, 0.0);
+    /// assert!(rows[1].max_error > 0.0 && rows[1].kept == 0);
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`compressed`](Self::compressed) and [`reconstruct`](Self::reconstruct).
+    pub fn rate_distortion(&self, fractions: &[f64]) -> Result<Vec<RateDistortion>, LoopError> {
+        let finest = self.levels.len();
+        let exact = self.reconstruct(finest)?;
+        let diagonal = bounding_box_diagonal(&exact.positions);
+        let scale = if diagonal > 0.0 { 1.0 / diagonal } else { 1.0 };
+        let total = self.detail_count();
+        fractions
+            .iter()
+            .map(|&fraction| {
+                let compressed = self.compressed(fraction)?;
+                let kept = compressed.levels.iter().flat_map(|l| &l.details).filter(|d| **d != DVec3::ZERO).count();
+                let approx = compressed.reconstruct(finest)?;
+                let (mut max, mut sum) = (0.0f64, 0.0f64);
+                for (p, q) in approx.positions.iter().zip(&exact.positions) {
+                    let d = p.distance_squared(*q);
+                    max = max.max(d);
+                    sum += d;
+                }
+                let n = exact.positions.len().max(1) as f64;
+                Ok(RateDistortion {
+                    fraction,
+                    kept,
+                    total,
+                    max_error: max.sqrt() * scale,
+                    rms_error: (sum / n).sqrt() * scale,
+                })
+            })
+            .collect()
+    }
+
+    /// Encodes the pyramid as a `.mres` file (see the [module docs](self)).
+    ///
+    /// # Errors
+    /// [`LoopError::Binary`] if encoding fails.
+    pub fn to_bytes(&self) -> Result<Vec<u8>, LoopError> {
+        binary::encode(PYRAMID_MAGIC, PYRAMID_VERSION, self).map_err(|e| LoopError::Binary(e.to_string()))
+    }
+
+    /// Decodes and validates a `.mres` file written by [`to_bytes`](Self::to_bytes).
+    ///
+    /// ```
+    /// use mesh_topo::shapes;
+    /// use subdiv_loop::pyramid::LoopPyramid;
+    /// use subdiv_loop::reverse::LoopOptions;
+    ///
+    /// let pyramid = LoopPyramid::smooth(shapes::tetrahedron(), LoopOptions::default(), 1)?;
+    /// let bytes = pyramid.to_bytes()?;
+    /// assert!(LoopPyramid::is_loop_pyramid(&bytes));
+    /// assert_eq!(LoopPyramid::from_bytes(&bytes)?, pyramid);
+    /// assert!(LoopPyramid::from_bytes(&bytes[..bytes.len() - 3]).is_err());
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`LoopError::Binary`] for a truncated, corrupted or foreign file, and the errors
+    /// of [`validate`](Self::validate).
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, LoopError> {
+        let pyramid: Self = binary::decode(bytes, PYRAMID_MAGIC, PYRAMID_VERSION, "multires Loop pyramid")
+            .map_err(|e| LoopError::Binary(e.to_string()))?;
+        pyramid.validate()?;
+        Ok(pyramid)
+    }
+
+    /// True if `bytes` starts with the magic number of a Loop pyramid.
+    pub fn is_loop_pyramid(bytes: &[u8]) -> bool {
+        bytes.starts_with(&PYRAMID_MAGIC)
+    }
+
+    /// The mesh of level `level` as a validated half-edge mesh.
+    ///
+    /// # Errors
+    /// As [`reconstruct`](Self::reconstruct).
+    pub fn reconstruct_mesh(&self, level: usize) -> Result<HalfedgeMesh, LoopError> {
+        Ok(HalfedgeMesh::from_soup(&self.reconstruct(level)?)?)
+    }
+}
+
+/// The connectivity of the next level (validated inputs).
+fn next_table(table: &CornerTable, order: Option<&FineOrder>) -> CornerTable {
+    let canonical = table.refine();
+    match order {
+        None => canonical,
+        Some(order) => canonical.permuted(&order.vertex_of_canonical, &order.face_of_canonical),
+    }
+}
+
+/// Length of the diagonal of the axis-aligned bounding box (0 for no points).
+pub fn bounding_box_diagonal(points: &[DVec3]) -> f64 {
+    let Some(first) = points.first() else { return 0.0 };
+    let (lo, hi) = points.iter().fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    lo.distance(hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reference::{cylinder, loop_steps, open_fan, perturb, relative_distance, scramble};
+    use crate::reverse::{ReverseOptions, VertexWeights, reverse};
+    use mesh_topo::shapes::{self, CellKind};
+    use proptest::prelude::*;
+
+    fn mesh(soup: &PolygonSoup) -> HalfedgeMesh {
+        HalfedgeMesh::from_soup(soup).expect("valid test mesh")
+    }
+
+    fn max_levels(rules: LoopOptions) -> DecomposeOptions {
+        DecomposeOptions { rules, levels: Levels::Max, seed_vertex: None }
+    }
+
+    #[test]
+    fn decomposition_reconstructs_every_level() {
+        let rules = LoopOptions { weights: VertexWeights::Loop, keep_corners: true };
+        for (name, coarse) in [
+            ("icosahedron", shapes::icosahedron()),
+            ("open fan", open_fan(4)),
+            ("cylinder", cylinder(5, 2)),
+            ("grid", shapes::grid(3, 3, CellKind::Triangles)),
+        ] {
+            // Perturb every level so that every level has details.
+            let mut levels = vec![coarse.clone()];
+            for i in 0..3 {
+                let next = perturb(&loop_steps(levels.last().unwrap(), &rules, 1), 0.05, i);
+                levels.push(next);
+            }
+            let fine = scramble(levels.last().unwrap(), 5);
+            let pyramid = decompose(&mesh(&fine), &DecomposeOptions { levels: Levels::Count(3), ..max_levels(rules) })
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(pyramid.level_count(), 3);
+            // Storage: base vertices plus all details = fine vertices.
+            assert_eq!(pyramid.base.vertex_count() + pyramid.detail_count(), fine.vertex_count(), "{name}");
+            let error = relative_distance(&pyramid.reconstruct(3).unwrap(), &fine);
+            assert!(error < 1e-12, "{name}: {error}");
+            // Level k equals reversing the input 3 - k times.
+            let mut reversed = fine.clone();
+            for k in (0..3).rev() {
+                let level = reverse(&mesh(&reversed), &ReverseOptions { rules, seed_vertex: None }).unwrap();
+                reversed = level.coarse.to_soup();
+                let error = relative_distance(&pyramid.reconstruct(k).unwrap(), &reversed);
+                assert!(error < 1e-12, "{name} level {k}: {error}");
+            }
+            assert_eq!(pyramid.base.indices, reversed.indices);
+            // The unscrambled coarse levels are found again (numbering aside).
+            assert_eq!(pyramid.base.vertex_count(), coarse.vertex_count());
+            assert_eq!(pyramid.base.face_count(), coarse.face_count());
+        }
+    }
+
+    #[test]
+    fn max_levels_stops_where_the_connectivity_ends() {
+        let rules = LoopOptions::default();
+        let fine = loop_steps(&shapes::icosahedron(), &rules, 3);
+        let pyramid = decompose(&mesh(&fine), &max_levels(rules)).unwrap();
+        assert_eq!(pyramid.level_count(), 3);
+        assert_eq!(pyramid.base.indices, shapes::icosahedron().indices);
+        let error = relative_distance(&pyramid.base, &shapes::icosahedron());
+        assert!(error < 1e-12, "{error}");
+        assert!(pyramid.levels.iter().all(|l| l.order.is_none()), "canonical meshes store no order");
+        for level in &pyramid.levels {
+            assert!(level.details.iter().all(|d| d.length() < 1e-12));
+        }
+        let too_many = DecomposeOptions { levels: Levels::Count(4), ..max_levels(rules) };
+        assert!(matches!(decompose(&mesh(&fine), &too_many), Err(LoopError::NotLoopConnectivity { .. })));
+        // No connectivity at all: Max reports why.
+        assert!(matches!(
+            decompose(&mesh(&shapes::icosahedron()), &max_levels(rules)),
+            Err(LoopError::NotLoopConnectivity { .. })
+        ));
+        let zero = DecomposeOptions { levels: Levels::Count(0), ..max_levels(rules) };
+        assert_eq!(decompose(&mesh(&fine), &zero).unwrap().base, fine);
+    }
+
+    /// Fuzz finding: a mesh with vertices but no faces was "reversed" into itself again
+    /// and again by `Levels::Max` until memory ran out.
+    #[test]
+    fn fuzz_regression_mesh_without_faces_is_an_error() {
+        let soup = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X], Vec::<[u32; 3]>::new());
+        let faceless = mesh(&soup);
+        assert_eq!(decompose(&faceless, &max_levels(LoopOptions::default())), Err(LoopError::NoFaces));
+        let two = DecomposeOptions { levels: Levels::Count(2), ..max_levels(LoopOptions::default()) };
+        assert_eq!(decompose(&faceless, &two), Err(LoopError::NoFaces));
+    }
+
+    #[test]
+    fn smooth_pyramid_is_reference_subdivision() {
+        for rules in [LoopOptions::default(), LoopOptions { weights: VertexWeights::Warren, keep_corners: true }] {
+            for soup in [shapes::octahedron(), open_fan(2)] {
+                let pyramid = LoopPyramid::smooth(soup.clone(), rules, 3).unwrap();
+                for k in 0..=3 {
+                    let error = relative_distance(&pyramid.reconstruct(k).unwrap(), &loop_steps(&soup, &rules, k));
+                    assert!(error < 1e-12, "{rules:?} level {k}: {error}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn compression_keeps_the_largest_details() {
+        let rules = LoopOptions::default();
+        let fine = perturb(&loop_steps(&shapes::octahedron(), &rules, 3), 0.02, 1);
+        let pyramid = decompose(&mesh(&fine), &max_levels(rules)).unwrap();
+        let total = pyramid.detail_count();
+        assert_eq!(pyramid.compressed(1.0).unwrap(), pyramid);
+        let none = pyramid.compressed(0.0).unwrap();
+        assert!(none.levels.iter().all(|l| l.details.iter().all(|d| *d == DVec3::ZERO)));
+        let smooth = LoopPyramid::smooth(pyramid.base.clone(), rules, 3).unwrap();
+        assert!(relative_distance(&none.reconstruct(3).unwrap(), &smooth.reconstruct(3).unwrap()) < 1e-12);
+        let half = pyramid.compressed(0.5).unwrap();
+        let kept: Vec<f64> =
+            half.levels.iter().flat_map(|l| &l.details).filter(|d| **d != DVec3::ZERO).map(|d| d.length()).collect();
+        assert_eq!(kept.len(), (total as f64 * 0.5).round() as usize);
+        let smallest_kept = kept.iter().copied().fold(f64::INFINITY, f64::min);
+        let largest_dropped = pyramid
+            .levels
+            .iter()
+            .zip(&half.levels)
+            .flat_map(|(a, b)| a.details.iter().zip(&b.details))
+            .filter(|(_, b)| **b == DVec3::ZERO)
+            .map(|(a, _)| a.length())
+            .fold(0.0, f64::max);
+        assert!(smallest_kept >= largest_dropped);
+        let rows = pyramid.rate_distortion(&[1.0, 0.5, 0.1, 0.0]).unwrap();
+        assert_eq!(rows[0].max_error, 0.0);
+        for pair in rows.windows(2) {
+            assert!(pair[0].kept >= pair[1].kept);
+            assert!(pair[1].rms_error > 0.0 && pair[1].rms_error <= pair[1].max_error);
+        }
+        assert!(matches!(pyramid.compressed(1.5), Err(LoopError::InvalidParameter { .. })));
+        assert!(matches!(pyramid.compressed(f64::NAN), Err(LoopError::InvalidParameter { .. })));
+        assert!(matches!(pyramid.reconstruct(4), Err(LoopError::InvalidParameter { .. })));
+    }
+
+    #[test]
+    fn files_round_trip_and_corruption_is_an_error() {
+        let rules = LoopOptions { weights: VertexWeights::Warren, keep_corners: false };
+        let fine = scramble(&perturb(&loop_steps(&open_fan(3), &rules, 2), 0.1, 3), 4);
+        let pyramid = decompose(&mesh(&fine), &max_levels(rules)).unwrap();
+        let bytes = pyramid.to_bytes().unwrap();
+        assert!(LoopPyramid::is_loop_pyramid(&bytes));
+        assert_eq!(LoopPyramid::from_bytes(&bytes).unwrap(), pyramid);
+        for len in 0..bytes.len() {
+            assert!(LoopPyramid::from_bytes(&bytes[..len]).is_err(), "truncated to {len}");
+        }
+        // Every single-byte corruption either fails to load or loads a valid pyramid.
+        for i in 0..bytes.len() {
+            for delta in [1u8, 0x80] {
+                let mut corrupted = bytes.clone();
+                corrupted[i] = corrupted[i].wrapping_add(delta);
+                if let Ok(p) = LoopPyramid::from_bytes(&corrupted) {
+                    let _ = p.reconstruct(p.level_count());
+                }
+            }
+        }
+        let mut wrong_version = bytes.clone();
+        wrong_version[8] = 9;
+        assert!(matches!(LoopPyramid::from_bytes(&wrong_version), Err(LoopError::Binary(_))));
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+
+        /// Multi-level exact reconstruction on random perturbed two-level Loop meshes.
+        #[test]
+        fn decompose_then_reconstruct_is_exact(
+            soup in mesh_topo::testing::arb_triangle_mesh(),
+            seed in any::<u64>(),
+            warren in any::<bool>(),
+        ) {
+            let rules = LoopOptions { weights: if warren { VertexWeights::Warren } else { VertexWeights::Loop }, keep_corners: !warren };
+            let fine = scramble(&perturb(&loop_steps(&soup, &rules, 2), 0.1, seed), seed);
+            let pyramid = decompose(&mesh(&fine), &DecomposeOptions { levels: Levels::Count(2), ..max_levels(rules) }).unwrap();
+            prop_assert!(relative_distance(&pyramid.reconstruct(2).unwrap(), &fine) < 1e-12);
+            let decoded = LoopPyramid::from_bytes(&pyramid.to_bytes().unwrap()).unwrap();
+            prop_assert_eq!(decoded, pyramid);
+        }
+    }
+}
