@@ -1,0 +1,453 @@
+//! Triangular Bézier patches of any degree (ALGORITHMS.md §9).
+//!
+//! A patch of degree `n` over the domain triangle `T = (t0, t1, t2)` is
+//! `S(u) = sum_{|β| = n} b_β B_β(λ(u))`, with the Bernstein polynomials
+//! `B_β(λ) = n!/(β0! β1! β2!) λ0^β0 λ1^β1 λ2^β2` of the barycentric coordinates `λ` of `u`.
+//! Control points are stored in the order of [`crate::index`].
+//!
+//! Evaluation is de Casteljau's algorithm (O(n³), stable inside `T`); the direct
+//! Bernstein sum is offered for cross-checking. The blossom (polar form) `F(u_1, …, u_n)`
+//! is de Casteljau with a different point at each level; it gives derivatives
+//! (`D_d S(u) = n F(u, …, u, d)` for a direction `d`) and the control points of the
+//! patch restricted to any sub-triangle (`F(s0^β0, s1^β1, s2^β2)`).
+//!
+//! Reference: L. Ramshaw, Blossoms are polar forms, CAGD 6 (1989) 323–358; G. Farin,
+//! Triangular Bernstein–Bézier patches, CAGD 3 (1986) 83–127.
+
+use glam::{DVec2, DVec3};
+use serde::{Deserialize, Serialize};
+
+use crate::SplineError;
+use crate::domain::DomainTriangle;
+use crate::index::{multi_indices, multinomial, tri_count, tri_index};
+use crate::point::{Point, combine3};
+
+/// Largest supported degree of a Bézier patch.
+pub const MAX_BEZIER_DEGREE: usize = 64;
+
+/// A triangular Bézier patch with control points of type `P`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TriBezier<P = DVec3> {
+    degree: usize,
+    domain: DomainTriangle,
+    control: Vec<P>,
+}
+
+/// Control points up to this count (degree 10) are copied to a stack buffer for
+/// evaluation, larger nets to the heap.
+const STACK_POINTS: usize = 66;
+
+/// Runs `f` on a scratch copy of `control` (on the stack for small nets, sized in tiers
+/// so that small degrees do not pay for initialising a large buffer).
+#[inline]
+pub(crate) fn with_scratch<P: Point, R>(control: &[P], f: impl FnOnce(&mut [P]) -> R) -> R {
+    #[inline(always)]
+    fn on_stack<P: Point, R, const N: usize>(control: &[P], f: impl FnOnce(&mut [P]) -> R) -> R {
+        let mut buf = [P::ZERO; N];
+        buf[..control.len()].copy_from_slice(control);
+        f(&mut buf[..control.len()])
+    }
+    match control.len() {
+        0..=10 => on_stack::<P, R, 10>(control, f),
+        11..=28 => on_stack::<P, R, 28>(control, f),
+        29..=STACK_POINTS => on_stack::<P, R, STACK_POINTS>(control, f),
+        _ => f(&mut control.to_vec()),
+    }
+}
+
+/// One de Casteljau level in place: `buf` holds degree `m + 1` values; afterwards its
+/// first `tri_count(m)` entries hold the degree-`m` values `sum_i w_i b_{β + e_i}`.
+/// (Reads at positions at or after every write position, so one buffer suffices.)
+#[inline]
+pub(crate) fn casteljau_level<P: Point>(buf: &mut [P], m: usize, w: [f64; 3]) {
+    let mut dst = 0;
+    for k in 0..=m {
+        let row = tri_index(m + 1, 0, k);
+        let next_row = tri_index(m + 1, 0, k + 1);
+        for j in 0..=m - k {
+            buf[dst] = combine3(buf[row + j], buf[row + j + 1], buf[next_row + j], w);
+            dst += 1;
+        }
+    }
+}
+
+/// The Bernstein polynomials of degree `n` at barycentric coordinates `l`, in storage
+/// order, by the upward recursion `B^{m+1}_γ = sum_i l_i B^m_{γ - e_i}` (non-negative
+/// inside the triangle, sums to one exactly up to rounding). `out` is resized.
+pub fn bernstein_basis(n: usize, l: [f64; 3], out: &mut Vec<f64>) {
+    out.clear();
+    out.resize(tri_count(n), 0.0);
+    out[0] = 1.0;
+    // Work downwards in storage position so that degree-m values are read before they
+    // are overwritten by degree-(m+1) values.
+    for m in 0..n {
+        for k in (0..=m + 1).rev() {
+            for j in (0..=m + 1 - k).rev() {
+                let i0 = m + 1 - j - k;
+                let mut value = 0.0;
+                if i0 >= 1 {
+                    value += l[0] * out[tri_index(m, j, k)];
+                }
+                if j >= 1 {
+                    value += l[1] * out[tri_index(m, j - 1, k)];
+                }
+                if k >= 1 {
+                    value += l[2] * out[tri_index(m, j, k - 1)];
+                }
+                out[tri_index(m + 1, j, k)] = value;
+            }
+        }
+    }
+}
+
+impl<P: Point> TriBezier<P> {
+    /// A patch of degree `degree` over `domain` with control points in storage order.
+    ///
+    /// # Errors
+    /// [`SplineError::Degree`] above [`MAX_BEZIER_DEGREE`], [`SplineError::Count`] if
+    /// there are not `(n+1)(n+2)/2` control points, [`SplineError::NonFinite`] for a
+    /// NaN or infinite control point.
+    ///
+    /// ```
+    /// use glam::{DVec2, DVec3};
+    /// use tri_spline::{DomainTriangle, TriBezier};
+    /// // The linear patch through three points is the plane through them.
+    /// let control = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
+    /// let patch = TriBezier::new(1, DomainTriangle::reference(), control)?;
+    /// assert_eq!(patch.eval(DVec2::new(0.25, 0.5)), DVec3::new(0.25, 0.5, 0.0));
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
+    pub fn new(degree: usize, domain: DomainTriangle, control: Vec<P>) -> Result<Self, SplineError> {
+        if degree > MAX_BEZIER_DEGREE {
+            return Err(SplineError::Degree { degree, min: 0, max: MAX_BEZIER_DEGREE });
+        }
+        if control.len() != tri_count(degree) {
+            return Err(SplineError::Count {
+                what: "Bézier control points",
+                expected: tri_count(degree),
+                got: control.len(),
+            });
+        }
+        if let Some(index) = control.iter().position(|p| !p.is_finite_point()) {
+            return Err(SplineError::NonFinite { what: "control point", index });
+        }
+        Ok(Self { degree, domain, control })
+    }
+
+    /// The degree `n`.
+    pub fn degree(&self) -> usize {
+        self.degree
+    }
+
+    /// The domain triangle.
+    pub fn domain(&self) -> &DomainTriangle {
+        &self.domain
+    }
+
+    /// The control points in storage order.
+    pub fn control_points(&self) -> &[P] {
+        &self.control
+    }
+
+    /// Mutable control points (the count is fixed).
+    pub fn control_points_mut(&mut self) -> &mut [P] {
+        &mut self.control
+    }
+
+    /// The control point `b_β`.
+    ///
+    /// # Panics
+    /// If `|β|` is not the degree.
+    pub fn control_point(&self, beta: [usize; 3]) -> P {
+        assert_eq!(beta.iter().sum::<usize>(), self.degree, "multi-index of the wrong degree");
+        self.control[tri_index(self.degree, beta[1], beta[2])]
+    }
+
+    /// `S(u)` by de Casteljau's algorithm.
+    pub fn eval(&self, u: DVec2) -> P {
+        self.eval_barycentric(self.domain.barycentric(u))
+    }
+
+    /// `S` at barycentric coordinates `l` by de Casteljau's algorithm.
+    pub fn eval_barycentric(&self, l: [f64; 3]) -> P {
+        with_scratch(&self.control, |buf| {
+            for m in (0..self.degree).rev() {
+                casteljau_level(buf, m, l);
+            }
+            buf[0]
+        })
+    }
+
+    /// `S(u)` as the direct Bernstein sum (for checking; de Casteljau is preferred).
+    pub fn eval_bernstein(&self, u: DVec2) -> P {
+        let l = self.domain.barycentric(u);
+        let mut sum = P::ZERO;
+        for (beta, &b) in multi_indices(self.degree).zip(&self.control) {
+            let weight =
+                multinomial(beta) * l[0].powi(beta[0] as i32) * l[1].powi(beta[1] as i32) * l[2].powi(beta[2] as i32);
+            sum = sum + b * weight;
+        }
+        sum
+    }
+
+    /// The blossom `F(u_1, …, u_n)`: symmetric, affine in each argument,
+    /// `F(u, …, u) = S(u)` and `b_β = F(t0^β0, t1^β1, t2^β2)`.
+    ///
+    /// # Errors
+    /// [`SplineError::Count`] unless exactly `n` arguments are given.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::{DomainTriangle, TriBezier};
+    /// let patch = TriBezier::new(2, DomainTriangle::reference(), vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0])?;
+    /// let [t0, t1, t2] = patch.domain().corners();
+    /// assert_eq!(patch.blossom(&[t1, t2])?, patch.control_point([0, 1, 1]));
+    /// let u = DVec2::new(0.2, 0.3);
+    /// assert!((patch.blossom(&[u, u])? - patch.eval(u)).abs() < 1e-15);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
+    pub fn blossom(&self, args: &[DVec2]) -> Result<P, SplineError> {
+        if args.len() != self.degree {
+            return Err(SplineError::Count { what: "blossom arguments", expected: self.degree, got: args.len() });
+        }
+        Ok(with_scratch(&self.control, |buf| {
+            for (level, m) in (0..self.degree).rev().enumerate() {
+                casteljau_level(buf, m, self.domain.barycentric(args[level]));
+            }
+            buf[0]
+        }))
+    }
+
+    /// The directional derivative `D_d S(u) = n F(u, …, u, d)` (with `d` a vector).
+    pub fn derivative(&self, u: DVec2, d: DVec2) -> P {
+        if self.degree == 0 {
+            return P::ZERO;
+        }
+        let l = self.domain.barycentric(u);
+        with_scratch(&self.control, |buf| {
+            casteljau_level(buf, self.degree - 1, self.domain.direction(d));
+            for m in (0..self.degree - 1).rev() {
+                casteljau_level(buf, m, l);
+            }
+            buf[0] * self.degree as f64
+        })
+    }
+
+    /// `S(u)` and its partial derivatives with respect to the two domain coordinates, in
+    /// one de Casteljau pass.
+    pub fn eval_with_gradient(&self, u: DVec2) -> (P, [P; 2]) {
+        if self.degree == 0 {
+            return (self.control[0], [P::ZERO; 2]);
+        }
+        let l = self.domain.barycentric(u);
+        with_scratch(&self.control, |buf| {
+            for m in (1..self.degree).rev() {
+                casteljau_level(buf, m, l);
+            }
+            // Three points of the linear patch left after n - 1 levels.
+            let n = self.degree as f64;
+            let value = combine3(buf[0], buf[1], buf[2], l);
+            let du = combine3(buf[0], buf[1], buf[2], self.domain.direction(DVec2::X)) * n;
+            let dv = combine3(buf[0], buf[1], buf[2], self.domain.direction(DVec2::Y)) * n;
+            (value, [du, dv])
+        })
+    }
+
+    /// The same surface as a patch of degree `n + 1` (degree elevation:
+    /// `b'_γ = sum_i γ_i / (n + 1) b_{γ - e_i}`).
+    ///
+    /// # Errors
+    /// [`SplineError::Degree`] above [`MAX_BEZIER_DEGREE`].
+    pub fn elevate(&self) -> Result<Self, SplineError> {
+        let n = self.degree;
+        if n + 1 > MAX_BEZIER_DEGREE {
+            return Err(SplineError::Degree { degree: n + 1, min: 0, max: MAX_BEZIER_DEGREE });
+        }
+        let scale = 1.0 / (n + 1) as f64;
+        let control = multi_indices(n + 1)
+            .map(|[i, j, k]| {
+                let mut p = P::ZERO;
+                if i > 0 {
+                    p = p + self.control[tri_index(n, j, k)] * (i as f64 * scale);
+                }
+                if j > 0 {
+                    p = p + self.control[tri_index(n, j - 1, k)] * (j as f64 * scale);
+                }
+                if k > 0 {
+                    p = p + self.control[tri_index(n, j, k - 1)] * (k as f64 * scale);
+                }
+                p
+            })
+            .collect();
+        Ok(Self { degree: n + 1, domain: self.domain, control })
+    }
+
+    /// The patch restricted to the sub-triangle `corners` (any non-degenerate triangle,
+    /// inside the domain or not): a patch over `corners` with control points
+    /// `F(s0^β0, s1^β1, s2^β2)` describing the same polynomial.
+    ///
+    /// # Errors
+    /// [`SplineError::DegenerateDomain`] for a degenerate sub-triangle.
+    pub fn subpatch(&self, corners: [DVec2; 3]) -> Result<Self, SplineError> {
+        let domain = DomainTriangle::new(corners)?;
+        let mut args = Vec::with_capacity(self.degree);
+        let control = multi_indices(self.degree)
+            .map(|beta| {
+                args.clear();
+                for (corner, &count) in corners.iter().zip(&beta) {
+                    args.extend(std::iter::repeat_n(*corner, count));
+                }
+                self.blossom(&args).expect("internal: blossom argument count")
+            })
+            .collect();
+        Ok(Self { degree: self.degree, domain, control })
+    }
+
+    /// The four patches of the midpoint subdivision of the domain: the corner triangles
+    /// at `t0`, `t1`, `t2` and the middle one `(m12, m20, m01)`.
+    pub fn split4(&self) -> [Self; 4] {
+        let [t0, t1, t2] = self.domain.corners();
+        let (m01, m12, m20) = ((t0 + t1) * 0.5, (t1 + t2) * 0.5, (t2 + t0) * 0.5);
+        [[t0, m01, m20], [m01, t1, m12], [m20, m12, t2], [m12, m20, m01]]
+            .map(|corners| self.subpatch(corners).expect("internal: midpoint triangles of a valid domain"))
+    }
+}
+
+impl TriBezier<DVec3> {
+    /// The unit normal `S_x × S_y / |S_x × S_y|` (oriented like the domain's `x, y`
+    /// axes); `None` where the patch is singular.
+    pub fn normal(&self, u: DVec2) -> Option<DVec3> {
+        let (_, [du, dv]) = self.eval_with_gradient(u);
+        du.cross(dv).try_normalize()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn patch(n: usize, seed: u64) -> TriBezier<DVec3> {
+        // Deterministic pseudo-random control points.
+        let mut state = seed.wrapping_mul(6364136223846793005).wrapping_add(1);
+        let mut next = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let control = (0..tri_count(n)).map(|_| DVec3::new(next(), next(), next())).collect();
+        let domain = DomainTriangle::new([DVec2::new(0.1, 0.2), DVec2::new(1.3, -0.1), DVec2::new(0.4, 1.1)]).unwrap();
+        TriBezier::new(n, domain, control).unwrap()
+    }
+
+    #[test]
+    fn corners_are_interpolated() {
+        for n in 0..7 {
+            let p = patch(n, n as u64);
+            let [t0, t1, t2] = p.domain().corners();
+            assert!((p.eval(t0) - p.control_point([n, 0, 0])).length() < 1e-14);
+            assert!((p.eval(t1) - p.control_point([0, n, 0])).length() < 1e-14);
+            assert!((p.eval(t2) - p.control_point([0, 0, n])).length() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn basis_sums_to_one_and_matches_direct_formula() {
+        let mut basis = Vec::new();
+        for n in 0..10 {
+            let l = [0.2, 0.5, 0.3];
+            bernstein_basis(n, l, &mut basis);
+            assert!((basis.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+            for (beta, b) in multi_indices(n).zip(&basis) {
+                let direct = multinomial(beta)
+                    * l[0].powi(beta[0] as i32)
+                    * l[1].powi(beta[1] as i32)
+                    * l[2].powi(beta[2] as i32);
+                assert!((direct - b).abs() < 1e-14, "{n} {beta:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn degree_elevation_and_subdivision_keep_the_surface() {
+        let p = patch(4, 7);
+        let e = p.elevate().unwrap();
+        let pieces = p.split4();
+        for &l in &[[0.2, 0.3, 0.5], [0.7, 0.1, 0.2], [0.05, 0.9, 0.05], [0.3, 0.3, 0.4]] {
+            let u = p.domain().point(l);
+            assert!((p.eval(u) - e.eval(u)).length() < 1e-14);
+            for piece in &pieces {
+                assert!((p.eval(u) - piece.eval(u)).length() < 1e-13);
+            }
+        }
+    }
+
+    #[test]
+    fn derivatives_match_finite_differences() {
+        let p = patch(5, 3);
+        let u = DVec2::new(0.5, 0.4);
+        let (value, [du, dv]) = p.eval_with_gradient(u);
+        assert!((value - p.eval(u)).length() < 1e-14);
+        let h = 1e-6;
+        let fd_u = (p.eval(u + DVec2::X * h) - p.eval(u - DVec2::X * h)) / (2.0 * h);
+        let fd_v = (p.eval(u + DVec2::Y * h) - p.eval(u - DVec2::Y * h)) / (2.0 * h);
+        assert!((du - fd_u).length() < 1e-7, "{du} {fd_u}");
+        assert!((dv - fd_v).length() < 1e-7);
+        let d = DVec2::new(0.3, -0.8);
+        assert!((p.derivative(u, d) - (du * d.x + dv * d.y)).length() < 1e-12);
+        let normal = p.normal(u).unwrap();
+        assert!(normal.dot(du).abs() < 1e-12 && normal.dot(dv).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bad_input_is_rejected() {
+        let d = DomainTriangle::reference();
+        assert!(matches!(TriBezier::new(2, d, vec![0.0; 5]), Err(SplineError::Count { expected: 6, .. })));
+        assert!(matches!(TriBezier::new(1, d, vec![0.0, f64::NAN, 1.0]), Err(SplineError::NonFinite { index: 1, .. })));
+        assert!(TriBezier::new(1000, d, vec![0.0]).is_err());
+        assert!(TriBezier::new(1, d, vec![0.0; 3]).unwrap().blossom(&[]).is_err());
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        #[test]
+        fn casteljau_equals_bernstein_and_blossom_is_symmetric(
+            n in 1usize..8, seed in 0u64..1000, a in 0.0..1.0f64, b in 0.0..1.0f64,
+        ) {
+            let p = patch(n, seed);
+            let l = [a * (1.0 - b), b, (1.0 - a) * (1.0 - b)];
+            let u = p.domain().point(l);
+            prop_assert!((p.eval(u) - p.eval_bernstein(u)).length() < 1e-13);
+            // Blossom symmetry: reversing the arguments does not change the value.
+            let args: Vec<DVec2> = (0..n).map(|i| u + DVec2::new(i as f64 * 0.1, -(i as f64) * 0.05)).collect();
+            let reversed: Vec<DVec2> = args.iter().rev().copied().collect();
+            prop_assert!((p.blossom(&args).unwrap() - p.blossom(&reversed).unwrap()).length() < 1e-13);
+        }
+
+        #[test]
+        fn affine_invariance(n in 1usize..7, seed in 0u64..1000, a in 0.0..1.0f64, b in 0.0..1.0f64,
+                             m in proptest::array::uniform9(-2.0..2.0f64), t in proptest::array::uniform3(-5.0..5.0f64)) {
+            let p = patch(n, seed);
+            let map = |q: DVec3| DVec3::new(
+                m[0] * q.x + m[1] * q.y + m[2] * q.z + t[0],
+                m[3] * q.x + m[4] * q.y + m[5] * q.z + t[1],
+                m[6] * q.x + m[7] * q.y + m[8] * q.z + t[2],
+            );
+            let mapped = TriBezier::new(n, *p.domain(), p.control_points().iter().map(|&q| map(q)).collect()).unwrap();
+            let u = p.domain().point([a * (1.0 - b), b, (1.0 - a) * (1.0 - b)]);
+            prop_assert!((mapped.eval(u) - map(p.eval(u))).length() < 1e-12);
+        }
+
+        #[test]
+        fn convex_hull(n in 1usize..8, seed in 0u64..1000, a in 0.0..1.0f64, b in 0.0..1.0f64) {
+            // Inside the domain the surface lies in the bounding box of its control points
+            // (a consequence of non-negative weights summing to one).
+            let p = patch(n, seed);
+            let u = p.domain().point([a * (1.0 - b), b, (1.0 - a) * (1.0 - b)]);
+            let s = p.eval(u);
+            let lo = p.control_points().iter().fold(DVec3::INFINITY, |m, &q| m.min(q));
+            let hi = p.control_points().iter().fold(DVec3::NEG_INFINITY, |m, &q| m.max(q));
+            prop_assert!(s.cmpge(lo - 1e-14).all() && s.cmple(hi + 1e-14).all());
+        }
+    }
+}

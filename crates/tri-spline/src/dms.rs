@@ -1,0 +1,770 @@
+//! DMS triangular B-splines (Dahmen, Micchelli, Seidel 1992; ALGORITHMS.md §11).
+//!
+//! Inputs: a proper triangulation `Δ` of the parameter domain (vertices and
+//! counter-clockwise triangles), a degree `n`, and for every vertex `i` a knot cloud
+//! `t_{i,0} = vertex i, t_{i,1}, …, t_{i,n}`. For triangle `I = (i0, i1, i2)` with clouds
+//! `r = cloud(i0)`, `s = cloud(i1)`, `t = cloud(i2)` and `|β| = n`:
+//! `V^I_β = {r_0..r_{β0}, s_0..s_{β1}, t_0..t_{β2}}` (`n + 3` knots) and
+//! `N^I_β(u) = |det(r_{β0}, s_{β1}, t_{β2})| M(u | V^I_β)` with the simplex spline `M`
+//! of [`crate::simplex`]. The spline is `F(u) = sum_I sum_β c^I_β N^I_β(u)`.
+//!
+//! Knot conditions, checked when the basis is built (typed errors name the triangle and
+//! knots): every triangle of `Δ` is counter-clockwise and non-degenerate; for every `I`
+//! and `i + j + k <= n` the knot triangle `(r_i, s_j, t_k)` is non-degenerate and
+//! counter-clockwise; the `3n + 3` knots of each triangle are in general position (no
+//! three collinear, which also excludes coincident knots).
+//!
+//! Properties (tested): the `N^I_β` are non-negative and sum to one wherever the
+//! configuration is complete (away from the outer boundary of `Δ`, whose missing
+//! neighbours would contribute near it); with `c^I_β = F_P(r_0..r_{β0-1},
+//! s_0..s_{β1-1}, t_0..t_{β2-1})` (blossom of a polynomial `P` of degree `n`) the spline
+//! reproduces `P` on the same region; the value does not depend on the recurrence's
+//! choice of `W`; the spline is `C^{n-1}` for knots in general position.
+//!
+//! Evaluation (§11.3): a uniform grid over the bounding boxes of the triangles' knot
+//! sets lists the candidate triangles of a query point; for each, the simplex splines of
+//! its `(n+1)(n+2)/2` functions are evaluated by the recurrence memoised over subsets of
+//! the triangle's `3n + 3` knots (the `V^I_β` are nested subsets of one set), with the
+//! half-open rule making sums exact on knot lines.
+//!
+//! Note on seed 001, eqs. (2)–(3) (ALGORITHMS.md §11.5, erratum): the seed defines its
+//! "triangular B-spline" basis as a product of three univariate B-splines along the
+//! barycentric directions "of degree r + s + t - 2". A product of univariate B-splines of
+//! degrees r, s, t has degree r + s + t; the degree r + s + t - 2 belongs to the
+//! three-direction box spline (a convolution). That formula is not a usable definition;
+//! this module implements DMS splines as defined above instead.
+//!
+//! References: W. Dahmen, C. A. Micchelli, H.-P. Seidel, Blossoming begets B-spline
+//! bases built better by B-patches, Math. Comp. 59 (1992) 97–115; P. Fong, H.-P. Seidel,
+//! An implementation of triangular B-spline surfaces over arbitrary triangulations,
+//! CAGD 10 (1993) 267–275.
+
+use glam::{DVec2, DVec3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::SplineError;
+use crate::domain::{is_degenerate, orient};
+use crate::index::multi_indices;
+use crate::point::Point;
+use crate::simplex::{Memo, SimplexRecurrence, WChoice};
+
+/// Largest supported DMS degree (each triangle has `3n + 3` knots; the memo table grows
+/// quickly with `n`; degrees 2 and 3 are the practical ones).
+pub const MAX_DMS_DEGREE: usize = 6;
+
+/// A uniform grid over the plane listing, per cell, the triangles whose knot bounding
+/// box meets the cell.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+struct SupportGrid {
+    origin: DVec2,
+    inv_cell: DVec2,
+    nx: usize,
+    ny: usize,
+    /// `cell_start[c]..cell_start[c + 1]` indexes `items` for cell `c`.
+    cell_start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl SupportGrid {
+    fn new(boxes: &[[DVec2; 2]]) -> Self {
+        let (mut lo, mut hi) = (DVec2::INFINITY, DVec2::NEG_INFINITY);
+        for b in boxes {
+            lo = lo.min(b[0]);
+            hi = hi.max(b[1]);
+        }
+        let extent = (hi - lo).max(DVec2::splat(1e-300));
+        // About one cell per box, in the aspect ratio of the domain.
+        let cells = (boxes.len().max(1) as f64).max(1.0);
+        let aspect = extent.x / extent.y;
+        let nx = ((cells * aspect).sqrt().ceil() as usize).clamp(1, 4096);
+        let ny = ((cells / aspect).sqrt().ceil() as usize).clamp(1, 4096);
+        let inv_cell = DVec2::new(nx as f64 / extent.x, ny as f64 / extent.y);
+        let cell_range = |b: &[DVec2; 2]| {
+            let a = ((b[0] - lo) * inv_cell).floor();
+            let z = ((b[1] - lo) * inv_cell).floor();
+            let clamp = |v: f64, n: usize| (v.max(0.0) as usize).min(n - 1);
+            (clamp(a.x, nx), clamp(z.x, nx), clamp(a.y, ny), clamp(z.y, ny))
+        };
+        let mut counts = vec![0u32; nx * ny + 1];
+        for b in boxes {
+            let (x0, x1, y0, y1) = cell_range(b);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    counts[y * nx + x + 1] += 1;
+                }
+            }
+        }
+        for c in 0..nx * ny {
+            counts[c + 1] += counts[c];
+        }
+        let mut fill = counts.clone();
+        let mut items = vec![0u32; counts[nx * ny] as usize];
+        for (i, b) in boxes.iter().enumerate() {
+            let (x0, x1, y0, y1) = cell_range(b);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let c = y * nx + x;
+                    items[fill[c] as usize] = i as u32;
+                    fill[c] += 1;
+                }
+            }
+        }
+        Self { origin: lo, inv_cell, nx, ny, cell_start: counts, items }
+    }
+
+    /// Candidate triangles for `u`, ascending.
+    fn candidates(&self, u: DVec2) -> &[u32] {
+        let p = (u - self.origin) * self.inv_cell;
+        if !(p.x >= 0.0 && p.y >= 0.0) {
+            return &[];
+        }
+        // Points on the far boundary belong to the last cell.
+        let (x, y) = (p.x.floor() as usize, p.y.floor() as usize);
+        let x = if x == self.nx && p.x == self.nx as f64 { x - 1 } else { x };
+        let y = if y == self.ny && p.y == self.ny as f64 { y - 1 } else { y };
+        if x >= self.nx || y >= self.ny {
+            return &[];
+        }
+        let c = y * self.nx + x;
+        &self.items[self.cell_start[c] as usize..self.cell_start[c + 1] as usize]
+    }
+}
+
+/// How [`DmsBasis::with_generated_knots`] places the extra knots of each vertex.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KnotPlacement {
+    /// Knots lie within this fraction of the vertex's shortest incident edge.
+    pub radius: f64,
+    /// Seed of the random offsets (the result is a deterministic function of it).
+    pub seed: u64,
+    /// Place the knots of boundary vertices outside the triangulation (Fong–Seidel
+    /// practice), within the outward half-disk.
+    pub boundary_outward: bool,
+}
+
+impl Default for KnotPlacement {
+    fn default() -> Self {
+        Self { radius: 0.15, seed: 0x5eed, boundary_outward: true }
+    }
+}
+
+/// Scratch memory for DMS evaluation (the simplex-spline memo); reuse it across calls.
+#[derive(Debug, Default, Clone)]
+pub struct DmsScratch {
+    memo: Memo,
+}
+
+/// The DMS basis over a triangulation with knot clouds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DmsBasis {
+    degree: usize,
+    vertices: Vec<DVec2>,
+    triangles: Vec<[u32; 3]>,
+    /// `n + 1` knots per vertex, the vertex itself first.
+    clouds: Vec<DVec2>,
+    /// Per triangle its `3n + 3` knots `r_0..r_n, s_0..s_n, t_0..t_n`.
+    tri_knots: Vec<DVec2>,
+    /// `|det(r_{β0}, s_{β1}, t_{β2})|` per basis function.
+    scales: Vec<f64>,
+    /// Knot subset `V^I_β` of each multi-index (same for every triangle), as a mask over
+    /// the triangle's knots.
+    masks: Vec<u64>,
+    /// Bounding box of each triangle's knots.
+    boxes: Vec<[DVec2; 2]>,
+    grid: SupportGrid,
+}
+
+impl DmsBasis {
+    /// The basis of degree `degree` over the triangulation `(vertices, triangles)` with
+    /// the given extra knots: `degree` per vertex, vertex `v`'s at
+    /// `extra_knots[v * degree .. (v + 1) * degree]` (its first knot is the vertex).
+    ///
+    /// # Errors
+    /// [`SplineError::Degree`] outside `1..=MAX_DMS_DEGREE`; [`SplineError::Count`],
+    /// [`SplineError::NonFinite`], [`SplineError::VertexIndex`] for malformed input;
+    /// [`SplineError::BadDomainTriangle`] for a degenerate or clockwise triangle;
+    /// [`SplineError::DmsKnotOrientation`] and [`SplineError::CollinearKnots`] for
+    /// knots violating the DMS conditions (module docs).
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::DmsBasis;
+    /// // Two triangles of the unit square, degree 1, one extra knot per vertex.
+    /// let vertices = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let triangles = vec![[0, 1, 2], [0, 2, 3]];
+    /// let extra = vec![
+    ///     DVec2::new(-0.1, -0.05), DVec2::new(1.1, -0.07),
+    ///     DVec2::new(1.05, 1.1), DVec2::new(-0.08, 1.06),
+    /// ];
+    /// let basis = DmsBasis::new(1, vertices, triangles, extra)?;
+    /// let values = basis.eval_basis(DVec2::new(0.5, 0.45));
+    /// assert!(values.iter().all(|&(_, v)| v >= 0.0));
+    /// assert_eq!(basis.basis_count(), 6);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
+    pub fn new(
+        degree: usize,
+        vertices: Vec<DVec2>,
+        triangles: Vec<[u32; 3]>,
+        extra_knots: Vec<DVec2>,
+    ) -> Result<Self, SplineError> {
+        if !(1..=MAX_DMS_DEGREE).contains(&degree) {
+            return Err(SplineError::Degree { degree, min: 1, max: MAX_DMS_DEGREE });
+        }
+        let n = degree;
+        if let Some(index) = vertices.iter().position(|p| !p.is_finite()) {
+            return Err(SplineError::NonFinite { what: "vertex", index });
+        }
+        if extra_knots.len() != vertices.len() * n {
+            return Err(SplineError::Count {
+                what: "extra knots (degree per vertex)",
+                expected: vertices.len() * n,
+                got: extra_knots.len(),
+            });
+        }
+        if let Some(index) = extra_knots.iter().position(|p| !p.is_finite()) {
+            return Err(SplineError::NonFinite { what: "knot", index });
+        }
+        for (t, tri) in triangles.iter().enumerate() {
+            if let Some(&v) = tri.iter().find(|&&v| v as usize >= vertices.len()) {
+                return Err(SplineError::VertexIndex { triangle: t, vertex: v, vertex_count: vertices.len() });
+            }
+            let [a, b, c] = tri.map(|v| vertices[v as usize]);
+            if is_degenerate(a, b, c) || orient(a, b, c) <= 0.0 {
+                return Err(SplineError::BadDomainTriangle { triangle: t, vertices: *tri });
+            }
+        }
+        let mut clouds = Vec::with_capacity(vertices.len() * (n + 1));
+        for (v, &p) in vertices.iter().enumerate() {
+            clouds.push(p);
+            clouds.extend_from_slice(&extra_knots[v * n..(v + 1) * n]);
+        }
+        let k = n + 1;
+        let mut tri_knots = Vec::with_capacity(triangles.len() * 3 * k);
+        for tri in &triangles {
+            for &v in tri {
+                tri_knots.extend_from_slice(&clouds[v as usize * k..(v as usize + 1) * k]);
+            }
+        }
+        // Knot conditions.
+        for (t, tri) in triangles.iter().enumerate() {
+            let knots = &tri_knots[t * 3 * k..(t + 1) * 3 * k];
+            for d in 0..=n {
+                for [i, j, l] in multi_indices(d) {
+                    let (a, b, c) = (knots[i], knots[k + j], knots[2 * k + l]);
+                    if is_degenerate(a, b, c) || orient(a, b, c) <= 0.0 {
+                        return Err(SplineError::DmsKnotOrientation { triangle: t, i, j, k: l });
+                    }
+                }
+            }
+            let name = |p: usize| (tri[p / k], p % k);
+            for a in 0..3 * k {
+                for b in a + 1..3 * k {
+                    for c in b + 1..3 * k {
+                        if is_degenerate(knots[a], knots[b], knots[c]) {
+                            return Err(SplineError::CollinearKnots {
+                                triangle: t,
+                                knots: [name(a), name(b), name(c)],
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        let masks: Vec<u64> = multi_indices(n)
+            .map(|[i, j, l]| {
+                let run = |start: usize, len: usize| ((1u64 << (len + 1)) - 1) << start;
+                run(0, i) | run(k, j) | run(2 * k, l)
+            })
+            .collect();
+        let mut scales = Vec::with_capacity(triangles.len() * masks.len());
+        let mut boxes = Vec::with_capacity(triangles.len());
+        for t in 0..triangles.len() {
+            let knots = &tri_knots[t * 3 * k..(t + 1) * 3 * k];
+            for [i, j, l] in multi_indices(n) {
+                scales.push(orient(knots[i], knots[k + j], knots[2 * k + l]).abs());
+            }
+            let lo = knots.iter().fold(DVec2::INFINITY, |m, &p| m.min(p));
+            let hi = knots.iter().fold(DVec2::NEG_INFINITY, |m, &p| m.max(p));
+            boxes.push([lo, hi]);
+        }
+        let grid = SupportGrid::new(&boxes);
+        Ok(Self { degree, vertices, triangles, clouds, tri_knots, scales, masks, boxes, grid })
+    }
+
+    /// The basis with generated knot clouds: each vertex gets `degree` extra knots at
+    /// seeded random offsets within `placement.radius` times its shortest incident edge
+    /// (outward for boundary vertices when asked). If the knot conditions fail, the
+    /// radius is halved and the seed advanced, up to 12 times; the last error is returned.
+    ///
+    /// # Errors
+    /// As [`new`](Self::new) (for the triangulation itself, or when no placement passes).
+    pub fn with_generated_knots(
+        degree: usize,
+        vertices: Vec<DVec2>,
+        triangles: Vec<[u32; 3]>,
+        placement: KnotPlacement,
+    ) -> Result<Self, SplineError> {
+        let mut last = None;
+        let mut radius = placement.radius;
+        for attempt in 0..12u64 {
+            let extra = generate_knots(
+                degree,
+                &vertices,
+                &triangles,
+                radius,
+                placement.seed.wrapping_add(attempt),
+                placement.boundary_outward,
+            )?;
+            match Self::new(degree, vertices.clone(), triangles.clone(), extra) {
+                Ok(basis) => return Ok(basis),
+                Err(e @ (SplineError::DmsKnotOrientation { .. } | SplineError::CollinearKnots { .. })) => {
+                    last = Some(e);
+                    if attempt % 2 == 1 {
+                        radius *= 0.5;
+                    }
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        Err(last.expect("internal: at least one attempt"))
+    }
+
+    /// The degree `n`.
+    pub fn degree(&self) -> usize {
+        self.degree
+    }
+
+    /// The triangulation's vertices.
+    pub fn vertices(&self) -> &[DVec2] {
+        &self.vertices
+    }
+
+    /// The triangulation's triangles.
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// The knot cloud of vertex `v` (`n + 1` knots, the vertex first).
+    pub fn cloud(&self, v: usize) -> &[DVec2] {
+        &self.clouds[v * (self.degree + 1)..(v + 1) * (self.degree + 1)]
+    }
+
+    /// Number of basis functions: `(n + 1)(n + 2)/2` per triangle.
+    pub fn basis_count(&self) -> usize {
+        self.triangles.len() * self.masks.len()
+    }
+
+    /// Index of `N^I_β` (triangle-major, multi-indices in [`crate::index`] order).
+    pub fn basis_index(&self, triangle: usize, beta: [usize; 3]) -> usize {
+        triangle * self.masks.len() + crate::index::beta_index(beta)
+    }
+
+    /// The blossom arguments `r_0..r_{β0-1}, s_0..s_{β1-1}, t_0..t_{β2-1}` of the control
+    /// point `c^I_β`: with `c^I_β = F_P(args)` the spline reproduces the polynomial `P`.
+    pub fn blossom_args(&self, triangle: usize, beta: [usize; 3]) -> Vec<DVec2> {
+        let k = self.degree + 1;
+        let knots = &self.tri_knots[triangle * 3 * k..(triangle + 1) * 3 * k];
+        let mut args = Vec::with_capacity(self.degree);
+        args.extend_from_slice(&knots[..beta[0]]);
+        args.extend_from_slice(&knots[k..k + beta[1]]);
+        args.extend_from_slice(&knots[2 * k..2 * k + beta[2]]);
+        args
+    }
+
+    /// The Greville point of basis function `index`: the mean of its blossom arguments
+    /// (a linear function's control point is its value there).
+    pub fn greville(&self, index: usize) -> DVec2 {
+        let nb = self.masks.len();
+        let beta = multi_indices(self.degree).nth(index % nb).expect("internal: multi-index");
+        let args = self.blossom_args(index / nb, beta);
+        args.iter().copied().sum::<DVec2>() / self.degree as f64
+    }
+
+    /// The non-zero basis functions at `u` as `(index, value)`, ascending by index.
+    pub fn eval_basis(&self, u: DVec2) -> Vec<(usize, f64)> {
+        let mut out = Vec::new();
+        self.eval_basis_with(u, &mut DmsScratch::default(), &mut out);
+        out
+    }
+
+    /// As [`eval_basis`](Self::eval_basis) with caller-provided scratch and output.
+    pub fn eval_basis_with(&self, u: DVec2, scratch: &mut DmsScratch, out: &mut Vec<(usize, f64)>) {
+        out.clear();
+        let k = self.degree + 1;
+        let nb = self.masks.len();
+        for &t in self.grid.candidates(u) {
+            let t = t as usize;
+            let [lo, hi] = self.boxes[t];
+            if u.x < lo.x || u.y < lo.y || u.x > hi.x || u.y > hi.y {
+                continue;
+            }
+            scratch.memo.reset(3 * k);
+            let mut rec = SimplexRecurrence {
+                knots: &self.tri_knots[t * 3 * k..(t + 1) * 3 * k],
+                u,
+                choice: WChoice::Widest,
+                memo: &mut scratch.memo,
+                degenerate: None,
+            };
+            for (b, &mask) in self.masks.iter().enumerate() {
+                let m = rec.value(mask);
+                if m != 0.0 {
+                    out.push((t * nb + b, self.scales[t * nb + b] * m));
+                }
+            }
+            debug_assert!(rec.degenerate.is_none(), "internal: knots were checked to be in general position");
+        }
+    }
+
+    /// The non-zero basis functions at `u` with their gradients: `(index, value, d/dx, d/dy)`.
+    pub fn eval_basis_gradient_with(&self, u: DVec2, scratch: &mut DmsScratch, out: &mut Vec<(usize, f64, DVec2)>) {
+        out.clear();
+        let k = self.degree + 1;
+        let nb = self.masks.len();
+        for &t in self.grid.candidates(u) {
+            let t = t as usize;
+            let [lo, hi] = self.boxes[t];
+            if u.x < lo.x || u.y < lo.y || u.x > hi.x || u.y > hi.y {
+                continue;
+            }
+            scratch.memo.reset(3 * k);
+            let mut rec = SimplexRecurrence {
+                knots: &self.tri_knots[t * 3 * k..(t + 1) * 3 * k],
+                u,
+                choice: WChoice::Widest,
+                memo: &mut scratch.memo,
+                degenerate: None,
+            };
+            for (b, &mask) in self.masks.iter().enumerate() {
+                let scale = self.scales[t * nb + b];
+                let m = rec.value(mask);
+                let gx = rec.derivative(mask, DVec2::X);
+                let gy = rec.derivative(mask, DVec2::Y);
+                if m != 0.0 || gx != 0.0 || gy != 0.0 {
+                    out.push((t * nb + b, scale * m, DVec2::new(gx, gy) * scale));
+                }
+            }
+        }
+    }
+
+    /// Evaluates one basis function with a chosen `W` rule (for testing that the value
+    /// does not depend on it).
+    pub fn eval_one_with(&self, index: usize, u: DVec2, choice: WChoice) -> f64 {
+        let k = self.degree + 1;
+        let nb = self.masks.len();
+        let t = index / nb;
+        let mut memo = Memo::default();
+        memo.reset(3 * k);
+        let mut rec = SimplexRecurrence {
+            knots: &self.tri_knots[t * 3 * k..(t + 1) * 3 * k],
+            u,
+            choice,
+            memo: &mut memo,
+            degenerate: None,
+        };
+        self.scales[index] * rec.value(self.masks[index % nb])
+    }
+}
+
+/// Seeded knot clouds for [`DmsBasis::with_generated_knots`].
+fn generate_knots(
+    degree: usize,
+    vertices: &[DVec2],
+    triangles: &[[u32; 3]],
+    radius: f64,
+    seed: u64,
+    boundary_outward: bool,
+) -> Result<Vec<DVec2>, SplineError> {
+    let nv = vertices.len();
+    let mut shortest = vec![f64::INFINITY; nv];
+    // Outward direction of boundary vertices: sum of the outward normals of their
+    // boundary edges (an edge is on the boundary when only one triangle uses it).
+    let mut edges: Vec<(u32, u32)> = Vec::with_capacity(triangles.len() * 3);
+    for (t, tri) in triangles.iter().enumerate() {
+        for c in 0..3 {
+            let (a, b) = (tri[c], tri[(c + 1) % 3]);
+            if a as usize >= nv || b as usize >= nv {
+                return Err(SplineError::VertexIndex { triangle: t, vertex: a.max(b), vertex_count: nv });
+            }
+            let len = (vertices[a as usize] - vertices[b as usize]).length();
+            shortest[a as usize] = shortest[a as usize].min(len);
+            shortest[b as usize] = shortest[b as usize].min(len);
+            edges.push((a, b));
+        }
+    }
+    let mut sorted: Vec<(u32, u32)> = edges.iter().map(|&(a, b)| (a.min(b), a.max(b))).collect();
+    sorted.sort_unstable();
+    let mut outward = vec![DVec2::ZERO; nv];
+    for &(a, b) in &edges {
+        let key = (a.min(b), a.max(b));
+        let count = sorted.partition_point(|&e| e <= key) - sorted.partition_point(|&e| e < key);
+        if count == 1 {
+            // Triangles are counter-clockwise, so the outside is on the right of a -> b.
+            let d = vertices[b as usize] - vertices[a as usize];
+            let normal = DVec2::new(d.y, -d.x).normalize_or_zero();
+            outward[a as usize] += normal;
+            outward[b as usize] += normal;
+        }
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut extra = Vec::with_capacity(nv * degree);
+    for v in 0..nv {
+        let h = if shortest[v].is_finite() { shortest[v] } else { 1.0 };
+        let out = outward[v].normalize_or_zero();
+        for _ in 0..degree {
+            let mut offset;
+            loop {
+                offset = DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+                let len = offset.length();
+                if (0.25..=1.0).contains(&len) {
+                    break;
+                }
+            }
+            if boundary_outward && out != DVec2::ZERO && offset.dot(out) < 0.0 {
+                offset -= out * (2.0 * offset.dot(out));
+            }
+            extra.push(vertices[v] + offset * (radius * h));
+        }
+    }
+    Ok(extra)
+}
+
+/// A DMS spline surface: a basis and one control point per basis function.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DmsSpline<P = DVec3> {
+    basis: DmsBasis,
+    control: Vec<P>,
+}
+
+impl<P: Point> DmsSpline<P> {
+    /// The spline with `control[i]` for basis function `i`.
+    ///
+    /// # Errors
+    /// [`SplineError::Count`], [`SplineError::NonFinite`].
+    pub fn new(basis: DmsBasis, control: Vec<P>) -> Result<Self, SplineError> {
+        if control.len() != basis.basis_count() {
+            return Err(SplineError::Count {
+                what: "DMS control points",
+                expected: basis.basis_count(),
+                got: control.len(),
+            });
+        }
+        if let Some(index) = control.iter().position(|p| !p.is_finite_point()) {
+            return Err(SplineError::NonFinite { what: "control point", index });
+        }
+        Ok(Self { basis, control })
+    }
+
+    /// The control points that reproduce a polynomial with blossom `blossom` (called
+    /// with the `n` blossom arguments of each control point).
+    ///
+    /// # Errors
+    /// As [`new`](Self::new).
+    pub fn from_blossom(basis: DmsBasis, blossom: impl Fn(&[DVec2]) -> P) -> Result<Self, SplineError> {
+        let n = basis.degree();
+        let mut control = Vec::with_capacity(basis.basis_count());
+        for t in 0..basis.triangles().len() {
+            for beta in multi_indices(n) {
+                control.push(blossom(&basis.blossom_args(t, beta)));
+            }
+        }
+        Self::new(basis, control)
+    }
+
+    /// The basis.
+    pub fn basis(&self) -> &DmsBasis {
+        &self.basis
+    }
+
+    /// The control points (one per basis function).
+    pub fn control_points(&self) -> &[P] {
+        &self.control
+    }
+
+    /// `F(u)`.
+    pub fn eval(&self, u: DVec2) -> P {
+        self.eval_with(u, &mut DmsScratch::default(), &mut Vec::new())
+    }
+
+    /// `F(u)` with reusable scratch memory.
+    pub fn eval_with(&self, u: DVec2, scratch: &mut DmsScratch, values: &mut Vec<(usize, f64)>) -> P {
+        self.basis.eval_basis_with(u, scratch, values);
+        values.iter().fold(P::ZERO, |sum, &(i, v)| sum + self.control[i] * v)
+    }
+
+    /// `F(u)` and its partial derivatives along the domain axes.
+    pub fn eval_with_gradient(&self, u: DVec2) -> (P, [P; 2]) {
+        let mut values = Vec::new();
+        self.basis.eval_basis_gradient_with(u, &mut DmsScratch::default(), &mut values);
+        let mut out = (P::ZERO, [P::ZERO; 2]);
+        for &(i, v, g) in &values {
+            let c = self.control[i];
+            out.0 = out.0 + c * v;
+            out.1[0] = out.1[0] + c * g.x;
+            out.1[1] = out.1[1] + c * g.y;
+        }
+        out
+    }
+}
+
+impl DmsSpline<DVec3> {
+    /// The unit normal; `None` where the surface is singular.
+    pub fn normal(&self, u: DVec2) -> Option<DVec3> {
+        let (_, [du, dv]) = self.eval_with_gradient(u);
+        du.cross(dv).try_normalize()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{DomainTriangle, TriBezier, index::tri_count};
+
+    /// A `cells x cells` square grid split into 2 cells² triangles.
+    pub(crate) fn square_grid(cells: u32) -> (Vec<DVec2>, Vec<[u32; 3]>) {
+        let mut vertices = Vec::new();
+        for j in 0..=cells {
+            for i in 0..=cells {
+                vertices.push(DVec2::new(i as f64, j as f64));
+            }
+        }
+        let row = cells + 1;
+        let mut triangles = Vec::new();
+        for j in 0..cells {
+            for i in 0..cells {
+                let a = j * row + i;
+                triangles.push([a, a + 1, a + row + 1]);
+                triangles.push([a, a + row + 1, a + row]);
+            }
+        }
+        (vertices, triangles)
+    }
+
+    fn basis(n: usize, seed: u64) -> DmsBasis {
+        let (v, t) = square_grid(4);
+        DmsBasis::with_generated_knots(n, v, t, KnotPlacement { radius: 0.12, seed, boundary_outward: true }).unwrap()
+    }
+
+    fn interior_points(count: usize, seed: u64) -> Vec<DVec2> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        (0..count).map(|_| DVec2::new(rng.random_range(1.0..3.0), rng.random_range(1.0..3.0))).collect()
+    }
+
+    #[test]
+    fn partition_of_unity_and_non_negativity_in_the_interior() {
+        for n in 1..=3 {
+            let b = basis(n, 7 + n as u64);
+            for u in interior_points(40, n as u64) {
+                let values = b.eval_basis(u);
+                let sum: f64 = values.iter().map(|v| v.1).sum();
+                assert!((sum - 1.0).abs() < 1e-12, "n = {n}, u = {u}: {sum}");
+                assert!(values.iter().all(|v| v.1 >= 0.0));
+            }
+        }
+    }
+
+    #[test]
+    fn partition_of_unity_on_knot_lines() {
+        // Grid vertices are knots and edges are knot lines; dyadic points on them make
+        // the half-open rule decide exactly.
+        let b = basis(2, 3);
+        for i in 2..=6 {
+            for j in 2..=6 {
+                for u in [DVec2::new(i as f64 * 0.5, j as f64 * 0.5), DVec2::new(i as f64 * 0.5 + 0.25, j as f64 * 0.5)]
+                {
+                    let sum: f64 = b.eval_basis(u).iter().map(|v| v.1).sum();
+                    assert!((sum - 1.0).abs() < 1e-12, "{u}: {sum}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn polynomials_of_the_degree_are_reproduced() {
+        let mut rng = ChaCha8Rng::seed_from_u64(99);
+        for n in 1..=3 {
+            let control = (0..tri_count(n)).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let domain = DomainTriangle::new([DVec2::ZERO, DVec2::new(4.0, 0.0), DVec2::new(0.0, 4.0)]).unwrap();
+            let poly = TriBezier::<f64>::new(n, domain, control).unwrap();
+            let spline = DmsSpline::from_blossom(basis(n, 21), |args| poly.blossom(args).unwrap()).unwrap();
+            for u in interior_points(30, 5) {
+                let (value, [dx, dy]) = spline.eval_with_gradient(u);
+                assert!((value - poly.eval(u)).abs() < 1e-10, "n = {n}: {value} vs {}", poly.eval(u));
+                assert!((spline.eval(u) - value).abs() < 1e-14);
+                let (_, [px, py]) = poly.eval_with_gradient(u);
+                assert!((dx - px).abs() < 1e-8 && (dy - py).abs() < 1e-8);
+            }
+        }
+    }
+
+    #[test]
+    fn value_does_not_depend_on_the_choice_of_w() {
+        let b = basis(2, 4);
+        for u in interior_points(10, 8) {
+            for (index, value) in b.eval_basis(u) {
+                for choice in [WChoice::First, WChoice::Last, WChoice::Spread] {
+                    let other = b.eval_one_with(index, u, choice);
+                    assert!((other - value).abs() <= 1e-11 * value.max(1.0), "{choice:?}: {other} vs {value}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn derivatives_match_finite_differences() {
+        let b = basis(2, 6);
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let control: Vec<DVec3> = (0..b.basis_count())
+            .map(|_| DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)))
+            .collect();
+        let spline = DmsSpline::new(b, control).unwrap();
+        let h = 1e-6;
+        for u in interior_points(10, 2) {
+            let (_, [du, dv]) = spline.eval_with_gradient(u);
+            let fd_u = (spline.eval(u + DVec2::X * h) - spline.eval(u - DVec2::X * h)) / (2.0 * h);
+            let fd_v = (spline.eval(u + DVec2::Y * h) - spline.eval(u - DVec2::Y * h)) / (2.0 * h);
+            assert!((du - fd_u).length() < 1e-6 * du.length().max(1.0), "{du} vs {fd_u}");
+            assert!((dv - fd_v).length() < 1e-6 * dv.length().max(1.0));
+            let normal = spline.normal(u).unwrap();
+            assert!(normal.dot(du).abs() < 1e-10);
+        }
+    }
+
+    #[test]
+    fn knot_conditions_are_checked() {
+        let (v, t) = square_grid(2);
+        let n = 2;
+        let good = generate_knots(n, &v, &t, 0.1, 1, true).unwrap();
+        assert!(DmsBasis::new(n, v.clone(), t.clone(), good.clone()).is_ok());
+        // A knot far away breaks the orientation of some knot triangle.
+        let mut bad = good.clone();
+        bad[4 * n] = DVec2::new(-10.0, 5.0);
+        assert!(matches!(
+            DmsBasis::new(n, v.clone(), t.clone(), bad),
+            Err(SplineError::DmsKnotOrientation { .. } | SplineError::CollinearKnots { .. })
+        ));
+        // A knot on the line through two others.
+        let mut bad = good.clone();
+        bad[4 * n] = v[4] + (good[4 * n + 1] - v[4]) * 0.5;
+        assert!(matches!(DmsBasis::new(n, v.clone(), t.clone(), bad), Err(SplineError::CollinearKnots { .. })));
+        // Clockwise triangle, bad index, wrong counts, degree.
+        let mut flipped = t.clone();
+        flipped[3].swap(0, 1);
+        assert!(matches!(
+            DmsBasis::new(n, v.clone(), flipped, good.clone()),
+            Err(SplineError::BadDomainTriangle { triangle: 3, .. })
+        ));
+        let mut out_of_range = t.clone();
+        out_of_range[0][2] = 99;
+        assert!(matches!(
+            DmsBasis::new(n, v.clone(), out_of_range, good.clone()),
+            Err(SplineError::VertexIndex { vertex: 99, .. })
+        ));
+        assert!(matches!(DmsBasis::new(n, v.clone(), t.clone(), good[1..].to_vec()), Err(SplineError::Count { .. })));
+        assert!(matches!(DmsBasis::new(0, v.clone(), t.clone(), vec![]), Err(SplineError::Degree { .. })));
+        assert!(matches!(DmsBasis::new(7, v, t, vec![]), Err(SplineError::Degree { .. })));
+    }
+}

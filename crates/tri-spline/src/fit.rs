@@ -1,0 +1,610 @@
+//! Progressive iterative approximation: classical PIA, LSPIA and the seed paper's
+//! geometric-approximation loop, with error reports, spectral radii of the iteration
+//! matrices and a direct least-squares baseline (ALGORITHMS.md §12).
+//!
+//! Notation: data `D_j` at parameters `u_j` (`m` points), control points `C_k`
+//! (`m_c`), collocation matrix `N_jk = N_k(u_j)` (`m × m_c`), residuals
+//! `E = D - N C`, one vector per data point.
+//!
+//! * **Classical PIA** (interpolation, `m_c` targets for `m_c` control points):
+//!   `C ← C + w (T - N_T C)` with `N_T` the square collocation matrix at the targets'
+//!   parameters. Its residuals satisfy `E^k = (I - w N_T)^k E^0` exactly; it converges iff
+//!   `ρ(I - w N_T) < 1`. For triangular Bézier patches at the uniform domain points,
+//!   `ρ(I - N_T) = 1 - n!/n^n` (Chen & Wang 2011; the eigenvalues of `N_T` are those of the
+//!   Bernstein operator, `n! / ((n - k)! n^k)`, Cooper & Waldron 2000).
+//! * **LSPIA** (Deng & Lin 2014): `C ← C + μ Nᵀ (D - N C)`. For `0 < μ <= 2/λ_max(NᵀN)`
+//!   the residual 2-norm never increases, and for `μ < 2/λ_max` with `N` of full column
+//!   rank it converges to the least-squares fit, at rate `ρ(I - μ NᵀN)`. The default
+//!   step is `μ = 1/c` with `c` a rigorous upper bound of `λ_max(NᵀN)` that is tight for
+//!   non-negative bases ([`gram_lambda_max_bound`]): no oscillating mode, monotone
+//!   residual, within a factor two of the optimal stationary step on the slow modes.
+//! * **Seed loop** (seed 001 §III, ALGORITHMS.md §12.4): `P* := D`; repeat
+//!   `C := R(P*)`, `E := D - N C`, `P* := P* + E`, with `R` the linear map from data to
+//!   control points (i-fold reverse Loop). In control-point form `C ← C + R (D - N C)`: a
+//!   PIA with weighting matrix `R`; it converges iff `ρ(I - R N) < 1`, to the oblique
+//!   projection `C* = (R N)^{-1} R D`, which is neither interpolation nor least squares.
+//!
+//! **Errata of the seed's convergence argument** (ALGORITHMS.md §12.5): (a) the seed's
+//! eq. (4) defines the error as a norm (a scalar) but eq. (6) adds it to a point; the
+//! vector error `E_j = D_j - S(u_j)` is used here. (b) Non-negative matrix entries do not
+//! imply non-negative eigenvalues, and `‖N‖∞ = 1` only gives `|λ| <= 1`. (c) Even with
+//! `0 <= λ <= 1`, `ρ(I - N) < 1` needs `λ_min > 0`. (d) The analysed iteration (as many
+//! control points as data) is not the implemented one (reverse Loop inside the loop,
+//! fewer control points than data), whose errors do not tend to zero in general. Hence
+//! nothing is assumed here: [`lspia_spectrum`], [`pia_spectral_radius`] and
+//! [`seed_spectral_radius`] compute the spectral radius of the iteration at hand.
+//!
+//! What is monotone (§12.3, and what the tests check): `E^k = (I - w N)^k E^0`; the LSPIA
+//! residual 2-norm; not the maximum error of PIA or of the seed loop (the seed's own
+//! Table 2 shows `ε_max` and `N_ε` rising between iterations).
+//!
+//! References: H. Lin, G. Wang, C. Dong, Constructing iterative non-uniform B-spline
+//! curve and surface to fit data points, Sci. China F 47 (2004) 315–331; J. Chen,
+//! G.-J. Wang, Progressive iterative approximation for triangular Bézier surfaces, CAD 43
+//! (2011) 889–895; C. Deng, H. Lin, Progressive and iterative approximation for least
+//! squares B-spline curve and surface fitting, CAD 47 (2014) 32–44.
+
+use std::time::Instant;
+
+use faer::Mat;
+use glam::DVec3;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::SplineError;
+pub use crate::linalg::gram_lambda_max_bound;
+use crate::linalg::{SparseMatrix, eigenvalues, least_squares, spectral_radius, symmetric_eigenvalues};
+
+/// One row of the convergence table (the columns of the seed paper's Table 2).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct IterationRecord {
+    /// Iteration number, from 1 (the first control net, before any correction).
+    pub k: usize,
+    /// Largest error `max_j |E_j|`.
+    pub eps_max: f64,
+    /// Mean error `mean_j |E_j|`.
+    pub eps_avg: f64,
+    /// Percentage of data points with `|E_j| <= hit_tol`.
+    pub n_eps: f64,
+    /// Seconds since the iteration started (cumulative).
+    pub seconds: f64,
+}
+
+/// Error statistics of a residual.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ErrorStats {
+    /// `max_j |E_j|`.
+    pub eps_max: f64,
+    /// `mean_j |E_j|`.
+    pub eps_avg: f64,
+    /// Percentage of `|E_j| <= hit_tol`.
+    pub n_eps: f64,
+    /// `sqrt(sum_j |E_j|²)`, the residual 2-norm.
+    pub norm2: f64,
+}
+
+/// Statistics of the residual vectors `residuals`.
+pub fn error_stats(residuals: &[DVec3], hit_tol: f64) -> ErrorStats {
+    let m = residuals.len().max(1) as f64;
+    let (mut max, mut sum, mut sum2, mut hits) = (0.0f64, 0.0, 0.0, 0usize);
+    for e in residuals {
+        let len = e.length();
+        max = max.max(len);
+        sum += len;
+        sum2 += len * len;
+        hits += usize::from(len <= hit_tol);
+    }
+    ErrorStats { eps_max: max, eps_avg: sum / m, n_eps: 100.0 * hits as f64 / m, norm2: sum2.sqrt() }
+}
+
+/// When to stop and how to count hits.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct IterationOptions {
+    /// Largest number of iterations (control nets evaluated), at least 1.
+    pub max_iterations: usize,
+    /// Stop as soon as `ε_avg` falls below this.
+    pub tolerance: Option<f64>,
+    /// A data point is "hit" when its error is at most this (for `N_ε`).
+    pub hit_tol: f64,
+}
+
+/// The result of an iteration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct IterationOutcome {
+    /// The last control points.
+    pub control: Vec<DVec3>,
+    /// One record per iteration.
+    pub records: Vec<IterationRecord>,
+    /// Residual 2-norm per iteration (for monotonicity checks).
+    pub residual_norms: Vec<f64>,
+    /// Whether the tolerance was reached.
+    pub reached_tolerance: bool,
+}
+
+/// A linear map between point sets, applied coordinate-wise (e.g. i-fold reverse Loop
+/// from data points to control points).
+pub trait LinearOperator: Sync {
+    /// Number of input points.
+    fn input_len(&self) -> usize;
+    /// Number of output points.
+    fn output_len(&self) -> usize;
+    /// Applies the map.
+    ///
+    /// # Errors
+    /// Whatever the underlying map reports.
+    fn apply(&self, x: &[DVec3]) -> Result<Vec<DVec3>, SplineError>;
+}
+
+impl LinearOperator for SparseMatrix {
+    fn input_len(&self) -> usize {
+        self.cols()
+    }
+    fn output_len(&self) -> usize {
+        self.rows()
+    }
+    fn apply(&self, x: &[DVec3]) -> Result<Vec<DVec3>, SplineError> {
+        Ok(self.mul_vec(x))
+    }
+}
+
+/// `second ∘ first`.
+pub struct Composed<'a> {
+    /// Applied first.
+    pub first: &'a dyn LinearOperator,
+    /// Applied to the result.
+    pub second: &'a dyn LinearOperator,
+}
+
+impl LinearOperator for Composed<'_> {
+    fn input_len(&self) -> usize {
+        self.first.input_len()
+    }
+    fn output_len(&self) -> usize {
+        self.second.output_len()
+    }
+    fn apply(&self, x: &[DVec3]) -> Result<Vec<DVec3>, SplineError> {
+        self.second.apply(&self.first.apply(x)?)
+    }
+}
+
+fn check_options(options: &IterationOptions) -> Result<(), SplineError> {
+    if options.max_iterations == 0 {
+        return Err(SplineError::BadOption { name: "iterations", value: "0".into(), reason: "at least 1" });
+    }
+    if !(options.hit_tol.is_finite() && options.hit_tol >= 0.0) {
+        return Err(SplineError::BadOption {
+            name: "hit_tol",
+            value: options.hit_tol.to_string(),
+            reason: "a finite non-negative distance",
+        });
+    }
+    if let Some(t) = options.tolerance
+        && !(t.is_finite() && t >= 0.0)
+    {
+        return Err(SplineError::BadOption {
+            name: "tolerance",
+            value: t.to_string(),
+            reason: "a finite non-negative distance",
+        });
+    }
+    Ok(())
+}
+
+fn check_dims(n: &SparseMatrix, data: &[DVec3], control: &[DVec3]) -> Result<(), SplineError> {
+    if data.len() != n.rows() {
+        return Err(SplineError::Count {
+            what: "data points (rows of the collocation matrix)",
+            expected: n.rows(),
+            got: data.len(),
+        });
+    }
+    if control.len() != n.cols() {
+        return Err(SplineError::Count { what: "control points", expected: n.cols(), got: control.len() });
+    }
+    if let Some(index) = data.iter().position(|p| !p.is_finite()) {
+        return Err(SplineError::NonFinite { what: "data point", index });
+    }
+    Ok(())
+}
+
+fn residuals(n: &SparseMatrix, data: &[DVec3], control: &[DVec3]) -> Vec<DVec3> {
+    let fitted = n.mul_vec(control);
+    data.par_iter().zip(fitted).map(|(&d, s)| d - s).collect()
+}
+
+/// Shared loop: evaluate, record, stop, update.
+fn iterate(
+    n: &SparseMatrix,
+    data: &[DVec3],
+    mut control: Vec<DVec3>,
+    options: &IterationOptions,
+    mut update: impl FnMut(&mut Vec<DVec3>, &[DVec3]) -> Result<(), SplineError>,
+) -> Result<IterationOutcome, SplineError> {
+    let start = Instant::now();
+    let mut records = Vec::with_capacity(options.max_iterations);
+    let mut norms = Vec::with_capacity(options.max_iterations);
+    let mut reached = false;
+    for k in 1..=options.max_iterations {
+        let e = residuals(n, data, &control);
+        let stats = error_stats(&e, options.hit_tol);
+        records.push(IterationRecord {
+            k,
+            eps_max: stats.eps_max,
+            eps_avg: stats.eps_avg,
+            n_eps: stats.n_eps,
+            seconds: start.elapsed().as_secs_f64(),
+        });
+        norms.push(stats.norm2);
+        if options.tolerance.is_some_and(|t| stats.eps_avg < t) {
+            reached = true;
+            break;
+        }
+        if k == options.max_iterations {
+            break;
+        }
+        update(&mut control, &e)?;
+    }
+    Ok(IterationOutcome { control, records, residual_norms: norms, reached_tolerance: reached })
+}
+
+/// LSPIA: `C ← C + μ Nᵀ (D - N C)` from `initial`.
+///
+/// # Errors
+/// [`SplineError::Count`] / [`SplineError::NonFinite`] for inconsistent or bad input,
+/// [`SplineError::BadOption`] for bad options or a step `μ` outside `(0, ∞)`.
+pub fn lspia(
+    n: &SparseMatrix,
+    data: &[DVec3],
+    initial: Vec<DVec3>,
+    mu: f64,
+    options: &IterationOptions,
+) -> Result<IterationOutcome, SplineError> {
+    check_options(options)?;
+    check_dims(n, data, &initial)?;
+    if !(mu.is_finite() && mu > 0.0) {
+        return Err(SplineError::BadOption { name: "mu", value: mu.to_string(), reason: "a positive step" });
+    }
+    let nt = n.transpose();
+    iterate(n, data, initial, options, |control, e| {
+        let step = nt.mul_vec(e);
+        control.par_iter_mut().zip(step).for_each(|(c, s)| *c += s * mu);
+        Ok(())
+    })
+}
+
+/// The default LSPIA step `1 / c`, `c >= λ_max(NᵀN)` ([`gram_lambda_max_bound`]).
+pub fn default_lspia_step(n: &SparseMatrix) -> f64 {
+    1.0 / gram_lambda_max_bound(n, 50)
+}
+
+/// Classical PIA towards `targets` (one per control point) at the parameters whose
+/// square collocation matrix is `n_targets`, reporting errors against all `data`
+/// through `n`: `C ← C + w (T - N_T C)`, `C⁰ = initial`.
+///
+/// # Errors
+/// As [`lspia`]; [`SplineError::Count`] if `n_targets` is not square of the control size.
+pub fn pia(
+    n: &SparseMatrix,
+    data: &[DVec3],
+    n_targets: &SparseMatrix,
+    targets: &[DVec3],
+    initial: Vec<DVec3>,
+    weight: f64,
+    options: &IterationOptions,
+) -> Result<IterationOutcome, SplineError> {
+    check_options(options)?;
+    check_dims(n, data, &initial)?;
+    check_dims(n_targets, targets, &initial)?;
+    if !(weight.is_finite() && weight > 0.0) {
+        return Err(SplineError::BadOption { name: "weight", value: weight.to_string(), reason: "a positive weight" });
+    }
+    iterate(n, data, initial, options, |control, _| {
+        let fitted = n_targets.mul_vec(control);
+        control.par_iter_mut().zip(targets.par_iter().zip(fitted)).for_each(|(c, (&t, f))| *c += (t - f) * weight);
+        Ok(())
+    })
+}
+
+/// The seed loop: `P* := D`; repeat `C := R(P*)`, `E := D - N C`, `P* := P* + E`.
+///
+/// # Errors
+/// As [`lspia`]; [`SplineError::Count`] if `r` does not map data to control points;
+/// errors of `r`.
+pub fn seed_iteration(
+    n: &SparseMatrix,
+    data: &[DVec3],
+    r: &dyn LinearOperator,
+    options: &IterationOptions,
+) -> Result<IterationOutcome, SplineError> {
+    check_options(options)?;
+    if r.input_len() != data.len() || r.output_len() != n.cols() {
+        return Err(SplineError::Count {
+            what: "reverse map (data -> control points)",
+            expected: n.cols(),
+            got: r.output_len(),
+        });
+    }
+    let mut shifted = data.to_vec();
+    let initial = r.apply(&shifted)?;
+    check_dims(n, data, &initial)?;
+    iterate(n, data, initial, options, |control, e| {
+        shifted.par_iter_mut().zip(e).for_each(|(p, &d)| *p += d);
+        *control = r.apply(&shifted)?;
+        Ok(())
+    })
+}
+
+/// Spectrum summary of LSPIA's iteration matrix `I - μ NᵀN`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LspiaSpectrum {
+    /// Smallest eigenvalue of `NᵀN`.
+    pub lambda_min: f64,
+    /// Largest eigenvalue of `NᵀN`.
+    pub lambda_max: f64,
+    /// `ρ(I - μ NᵀN) = max(|1 - μ λ_min|, |1 - μ λ_max|)`.
+    pub spectral_radius: f64,
+}
+
+/// The spectrum of `NᵀN` and the spectral radius of `I - μ NᵀN` (dense, `O(m_c³)`).
+///
+/// # Errors
+/// [`SplineError::Singular`] if the eigenvalue computation fails.
+pub fn lspia_spectrum(n: &SparseMatrix, mu: f64) -> Result<LspiaSpectrum, SplineError> {
+    let gram = n.transpose().mul(n).to_dense();
+    let values = symmetric_eigenvalues(&gram)?;
+    let (lambda_min, lambda_max) = (values[0], *values.last().expect("internal: non-empty"));
+    let spectral_radius = (1.0 - mu * lambda_min).abs().max((1.0 - mu * lambda_max).abs());
+    Ok(LspiaSpectrum { lambda_min, lambda_max, spectral_radius })
+}
+
+/// `ρ(I - w N_T)` for a square collocation matrix (dense, `O(m_c³)`).
+///
+/// # Errors
+/// [`SplineError::Count`] if `n_targets` is not square; [`SplineError::Singular`] if the
+/// eigenvalue computation fails.
+pub fn pia_spectral_radius(n_targets: &SparseMatrix, weight: f64) -> Result<f64, SplineError> {
+    if n_targets.rows() != n_targets.cols() {
+        return Err(SplineError::Count {
+            what: "rows of the square PIA matrix",
+            expected: n_targets.cols(),
+            got: n_targets.rows(),
+        });
+    }
+    let mut a = n_targets.to_dense() * faer::Scale(-weight);
+    for i in 0..a.nrows() {
+        a[(i, i)] += 1.0;
+    }
+    spectral_radius(&a)
+}
+
+/// `R N` as a dense `m_c × m_c` matrix: `R` applied to the columns of `N`, three at a
+/// time (as the coordinates of point sets).
+///
+/// # Errors
+/// Errors of `r`.
+pub fn weighted_collocation(n: &SparseMatrix, r: &dyn LinearOperator) -> Result<Mat<f64>, SplineError> {
+    let k = n.cols();
+    let dense = n.to_dense();
+    let mut out = Mat::<f64>::zeros(k, k);
+    for first in (0..k).step_by(3) {
+        let cols: Vec<usize> = (first..(first + 3).min(k)).collect();
+        let packed: Vec<DVec3> = (0..n.rows())
+            .map(|i| {
+                let mut p = DVec3::ZERO;
+                for (slot, &c) in cols.iter().enumerate() {
+                    p[slot] = dense[(i, c)];
+                }
+                p
+            })
+            .collect();
+        let mapped = r.apply(&packed)?;
+        for (row, p) in mapped.iter().enumerate() {
+            for (slot, &c) in cols.iter().enumerate() {
+                out[(row, c)] = p[slot];
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// `ρ(I - R N)`, the spectral radius of the seed loop's iteration matrix.
+///
+/// # Errors
+/// As [`weighted_collocation`]; [`SplineError::Singular`] if the eigenvalues fail.
+pub fn seed_spectral_radius(n: &SparseMatrix, r: &dyn LinearOperator) -> Result<f64, SplineError> {
+    let rn = weighted_collocation(n, r)?;
+    let mut a = rn * faer::Scale(-1.0);
+    for i in 0..a.nrows() {
+        a[(i, i)] += 1.0;
+    }
+    spectral_radius(&a)
+}
+
+/// The eigenvalues of a dense matrix (re-exported helper for reports and tests).
+///
+/// # Errors
+/// [`SplineError::Singular`] if the computation fails.
+pub fn matrix_eigenvalues(a: &Mat<f64>) -> Result<Vec<(f64, f64)>, SplineError> {
+    eigenvalues(a)
+}
+
+/// The direct least-squares fit of the same control net (the baseline).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LeastSquaresReport {
+    /// Errors of the least-squares fit at the data.
+    pub stats: ErrorStats,
+    /// Seconds for building the dense matrix, factorising and solving.
+    pub seconds: f64,
+    /// The solver used.
+    pub solver: String,
+    /// The least-squares control points.
+    pub control: Vec<DVec3>,
+}
+
+/// Solves `min ‖N C - D‖` by dense Householder QR of `N` (conditioning of `N`, not of
+/// `NᵀN`) and reports its errors and time.
+///
+/// # Errors
+/// [`SplineError::Singular`] if `N` is rank deficient or has fewer rows than columns.
+pub fn least_squares_fit(n: &SparseMatrix, data: &[DVec3], hit_tol: f64) -> Result<LeastSquaresReport, SplineError> {
+    let start = Instant::now();
+    let control = least_squares(n, data)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let stats = error_stats(&residuals(n, data, &control), hit_tol);
+    Ok(LeastSquaresReport { stats, seconds, solver: "dense Householder QR (faer, sequential)".into(), control })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::index::multi_indices;
+    use crate::{DomainTriangle, SurfaceBasis};
+    use glam::DVec2;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn domain_points(n: usize, domain: &DomainTriangle) -> Vec<DVec2> {
+        multi_indices(n)
+            .map(|[i, j, k]| domain.point([i as f64 / n as f64, j as f64 / n as f64, k as f64 / n as f64]))
+            .collect()
+    }
+
+    fn random_points(count: usize, seed: u64) -> Vec<DVec3> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        (0..count)
+            .map(|_| DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)))
+            .collect()
+    }
+
+    fn options(k: usize) -> IterationOptions {
+        IterationOptions { max_iterations: k, tolerance: None, hit_tol: 1e-3 }
+    }
+
+    #[test]
+    fn pia_errors_follow_the_iteration_matrix_exactly() {
+        // E^k = (I - w N)^k E^0 (§12.3), to rounding.
+        let domain = DomainTriangle::equilateral();
+        let n_deg = 3;
+        let basis = SurfaceBasis::Bezier { degree: n_deg, domain };
+        let params = domain_points(n_deg, &domain);
+        let n = basis.collocation(&params);
+        let targets = random_points(params.len(), 1);
+        let w = 0.9;
+        let out = pia(&n, &targets, &n, &targets, targets.clone(), w, &options(8)).unwrap();
+        let mut step = n.to_dense() * faer::Scale(-w);
+        for i in 0..step.nrows() {
+            step[(i, i)] += 1.0;
+        }
+        let mut e = Mat::<f64>::from_fn(targets.len(), 3, |i, j| {
+            let s: DVec3 = n.row(i).0.iter().zip(n.row(i).1).map(|(&c, &v)| targets[c as usize] * v).sum();
+            (targets[i] - s)[j]
+        });
+        for record in &out.records {
+            let predicted = (0..targets.len()).map(|i| DVec3::new(e[(i, 0)], e[(i, 1)], e[(i, 2)]).length());
+            let predicted_max = predicted.fold(0.0, f64::max);
+            assert!((predicted_max - record.eps_max).abs() < 1e-14, "k = {}", record.k);
+            e = &step * &e;
+        }
+    }
+
+    #[test]
+    fn pia_on_uniform_bezier_converges_at_rate_one_minus_n_factorial_over_n_to_the_n() {
+        let domain = DomainTriangle::equilateral();
+        for (degree, rate) in [(2usize, 0.5), (3, 1.0 - 6.0 / 27.0), (4, 1.0 - 24.0 / 256.0)] {
+            let basis = SurfaceBasis::Bezier { degree, domain };
+            let n = basis.collocation(&domain_points(degree, &domain));
+            // The computed spectral radius is the closed form.
+            let rho = pia_spectral_radius(&n, 1.0).unwrap();
+            assert!((rho - rate).abs() < 1e-12, "n = {degree}: {rho} vs {rate}");
+            // The measured error ratio tends to it (measured while the error is still far
+            // above rounding: about 1e-6 of its start).
+            let targets = random_points(n.rows(), degree as u64);
+            let steps = (1e-6f64.ln() / rate.ln()).ceil() as usize;
+            let out = pia(&n, &targets, &n, &targets, targets.clone(), 1.0, &options(steps)).unwrap();
+            let norms = &out.residual_norms;
+            let ratio = norms[norms.len() - 1] / norms[norms.len() - 2];
+            assert!((ratio - rate).abs() < 1e-6, "n = {degree}: measured {ratio} vs {rate}");
+        }
+    }
+
+    #[test]
+    fn lspia_residual_norm_never_increases_and_reaches_least_squares() {
+        let domain = DomainTriangle::equilateral();
+        let basis = SurfaceBasis::Bezier { degree: 3, domain };
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let params: Vec<DVec2> = (0..80)
+            .map(|_| {
+                let (a, b): (f64, f64) = (rng.random(), rng.random());
+                let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+                domain.point([1.0 - a - b, a, b])
+            })
+            .collect();
+        let n = basis.collocation(&params);
+        let data = random_points(80, 6);
+        let mu = default_lspia_step(&n);
+        let spectrum = lspia_spectrum(&n, mu).unwrap();
+        assert!(mu * spectrum.lambda_max <= 1.0 + 1e-12, "the step bound is an upper bound");
+        assert!(spectrum.spectral_radius < 1.0);
+        let out = lspia(&n, &data, vec![DVec3::ZERO; n.cols()], mu, &options(400)).unwrap();
+        for pair in out.residual_norms.windows(2) {
+            assert!(pair[1] <= pair[0] * (1.0 + 1e-15), "{} > {}", pair[1], pair[0]);
+        }
+        let ls = least_squares_fit(&n, &data, 1e-3).unwrap();
+        let last = *out.residual_norms.last().unwrap();
+        assert!((last - ls.stats.norm2) / ls.stats.norm2 < 1e-6, "{last} vs {}", ls.stats.norm2);
+        // Even the optimal-looking larger step 2/λ_max keeps the norm monotone.
+        let out = lspia(&n, &data, vec![DVec3::ZERO; n.cols()], 2.0 / spectrum.lambda_max, &options(50)).unwrap();
+        for pair in out.residual_norms.windows(2) {
+            assert!(pair[1] <= pair[0] * (1.0 + 1e-12));
+        }
+    }
+
+    #[test]
+    fn seed_loop_is_pia_with_weighting_matrix_r() {
+        // With R = selection of the data at the domain points, the seed loop equals
+        // C <- C + R (D - N C); its radius is rho(I - R N) and the residual at the fixed
+        // point is the oblique projection's.
+        let domain = DomainTriangle::equilateral();
+        let (deg, fine) = (2usize, 4usize);
+        let basis = SurfaceBasis::Bezier { degree: deg, domain };
+        let params = domain_points(fine, &domain);
+        let n = basis.collocation(&params);
+        // Control point (j, k) sits at fine grid point (2j, 2k).
+        let select = SparseMatrix::from_rows(
+            params.len(),
+            multi_indices(deg).map(|[_, j, k]| vec![(crate::index::tri_index(fine, 2 * j, 2 * k), 1.0)]).collect(),
+        );
+        let data = random_points(params.len(), 9);
+        let out = seed_iteration(&n, &data, &select, &options(60)).unwrap();
+        let rho = seed_spectral_radius(&n, &select).unwrap();
+        assert!((rho - 0.5).abs() < 1e-12, "R N is the square uniform collocation: {rho}");
+        // Same iterates as PIA on the selected data.
+        let sub = n.clone().transpose().transpose();
+        let targets = select.mul_vec(&data);
+        let n_sub = select.mul(&sub);
+        let pia_out = pia(&n, &data, &n_sub, &targets, targets.clone(), 1.0, &options(60)).unwrap();
+        for (a, b) in out.records.iter().zip(&pia_out.records) {
+            assert!((a.eps_avg - b.eps_avg).abs() < 1e-13);
+        }
+        assert!(matches!(seed_iteration(&n, &data[1..], &select, &options(3)), Err(SplineError::Count { .. })));
+    }
+
+    #[test]
+    fn bad_options_are_rejected() {
+        let domain = DomainTriangle::equilateral();
+        let n = SurfaceBasis::Bezier { degree: 1, domain }.collocation(&domain_points(1, &domain));
+        let d = random_points(3, 1);
+        assert!(lspia(&n, &d, d.clone(), 1.0, &options(0)).is_err());
+        assert!(lspia(&n, &d, d.clone(), -1.0, &options(3)).is_err());
+        assert!(lspia(&n, &d, d[..2].to_vec(), 1.0, &options(3)).is_err());
+        let bad = IterationOptions { max_iterations: 3, tolerance: Some(f64::NAN), hit_tol: 0.1 };
+        assert!(lspia(&n, &d, d.clone(), 1.0, &bad).is_err());
+        let mut nan = d.clone();
+        nan[1].y = f64::INFINITY;
+        assert!(matches!(lspia(&n, &nan, d.clone(), 1.0, &options(3)), Err(SplineError::NonFinite { index: 1, .. })));
+        // Tolerance stops early.
+        let stop = IterationOptions { max_iterations: 10, tolerance: Some(1e-9), hit_tol: 0.1 };
+        let out = pia(&n, &d, &n, &d, d.clone(), 1.0, &stop).unwrap();
+        assert!(out.reached_tolerance && out.records.len() == 1);
+    }
+}

@@ -1,0 +1,84 @@
+//! Triangular multi-indices `β = (β0, β1, β2)`, `|β| = n`, and their storage order.
+//!
+//! Control points of a degree-`n` patch are stored row by row: row `k = β2` runs over
+//! `j = β1 = 0..=n-k` (and `β0 = n - j - k`), so `β` sits at position
+//! `k (n + 1) - k (k - 1) / 2 + j`. On a regular triangular grid whose corners are the
+//! domain corners `t0, t1, t2`, position `(j, k)` is the grid point `t0 + (j/n)(t1 - t0)
+//! + (k/n)(t2 - t0)`: the order is that of the grid rows from edge `t0 t1` to corner `t2`.
+
+/// Number of multi-indices of degree `n`: `(n + 1)(n + 2) / 2`.
+#[inline]
+pub const fn tri_count(n: usize) -> usize {
+    (n + 1) * (n + 2) / 2
+}
+
+/// Number of multi-indices of all degrees `0..d` (exclusive): `d (d + 1)(d + 2) / 6`.
+#[inline]
+pub const fn tet_count(d: usize) -> usize {
+    d * (d + 1) * (d + 2) / 6
+}
+
+/// Storage position of `β = (n - j - k, j, k)` among the multi-indices of degree `n`.
+#[inline(always)]
+pub const fn tri_index(n: usize, j: usize, k: usize) -> usize {
+    k * (n + 1) - (k * k.saturating_sub(1)) / 2 + j
+}
+
+/// Storage position of `β` (whose degree is `β0 + β1 + β2`).
+#[inline(always)]
+pub const fn beta_index(beta: [usize; 3]) -> usize {
+    tri_index(beta[0] + beta[1] + beta[2], beta[1], beta[2])
+}
+
+/// The multi-indices of degree `n` in storage order.
+pub fn multi_indices(n: usize) -> impl ExactSizeIterator<Item = [usize; 3]> + Clone {
+    let mut all = Vec::with_capacity(tri_count(n));
+    for k in 0..=n {
+        for j in 0..=n - k {
+            all.push([n - j - k, j, k]);
+        }
+    }
+    all.into_iter()
+}
+
+/// `n! / (β0! β1! β2!)`, exactly as `f64` for the degrees used here.
+pub fn multinomial(beta: [usize; 3]) -> f64 {
+    // Product of binomials, each exact in f64 up to far beyond the supported degrees.
+    binomial(beta[0] + beta[1] + beta[2], beta[0]) * binomial(beta[1] + beta[2], beta[1])
+}
+
+/// Binomial coefficient `C(n, k)` as `f64`.
+pub fn binomial(n: usize, k: usize) -> f64 {
+    let k = k.min(n - k);
+    let mut value = 1.0;
+    for i in 0..k {
+        value = value * (n - i) as f64 / (i + 1) as f64;
+    }
+    value.round()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn storage_order_is_dense_and_row_major() {
+        for n in 0..9 {
+            let betas: Vec<_> = multi_indices(n).collect();
+            assert_eq!(betas.len(), tri_count(n));
+            for (position, beta) in betas.iter().enumerate() {
+                assert_eq!(beta.iter().sum::<usize>(), n);
+                assert_eq!(beta_index(*beta), position);
+            }
+        }
+        assert_eq!(tet_count(3), 1 + 3 + 6);
+    }
+
+    #[test]
+    fn multinomials() {
+        assert_eq!(multinomial([1, 1, 1]), 6.0);
+        assert_eq!(multinomial([2, 0, 0]), 1.0);
+        assert_eq!(multinomial([2, 1, 1]), 12.0);
+        assert_eq!(binomial(24, 12), 2_704_156.0);
+    }
+}

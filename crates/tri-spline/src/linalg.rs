@@ -1,0 +1,375 @@
+//! Sparse collocation matrices and the dense linear algebra of the fitting reports
+//! (spectra, least squares), all sequential inside faer so that results do not depend
+//! on the number of threads.
+
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::{Mat, Par};
+use glam::DVec3;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::SplineError;
+use crate::point::Point;
+
+/// A sparse matrix in compressed-row form (`u32` column indices).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SparseMatrix {
+    rows: usize,
+    cols: usize,
+    row_start: Vec<usize>,
+    col_index: Vec<u32>,
+    values: Vec<f64>,
+}
+
+impl SparseMatrix {
+    /// From per-row `(column, value)` lists (columns need not be sorted; duplicates are
+    /// summed).
+    ///
+    /// # Panics
+    /// If a column index is `>= cols` (an internal invariant of the callers).
+    pub fn from_rows(cols: usize, rows: Vec<Vec<(usize, f64)>>) -> Self {
+        let mut row_start = Vec::with_capacity(rows.len() + 1);
+        row_start.push(0);
+        let mut col_index = Vec::new();
+        let mut values = Vec::new();
+        let n_rows = rows.len();
+        for mut row in rows {
+            row.sort_unstable_by_key(|e| e.0);
+            let start = col_index.len();
+            for (c, v) in row {
+                assert!(c < cols, "internal: column {c} out of range {cols}");
+                if col_index.len() > start && *col_index.last().expect("internal: non-empty") as usize == c {
+                    *values.last_mut().expect("internal: non-empty") += v;
+                } else {
+                    col_index.push(c as u32);
+                    values.push(v);
+                }
+            }
+            row_start.push(col_index.len());
+        }
+        Self { rows: n_rows, cols, row_start, col_index, values }
+    }
+
+    /// The identity of size `n`.
+    pub fn identity(n: usize) -> Self {
+        Self::from_rows(n, (0..n).map(|i| vec![(i, 1.0)]).collect())
+    }
+
+    /// Number of rows.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// Number of columns.
+    pub fn cols(&self) -> usize {
+        self.cols
+    }
+
+    /// Number of stored entries.
+    pub fn nnz(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Row `i` as `(columns, values)`.
+    pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        let r = self.row_start[i]..self.row_start[i + 1];
+        (&self.col_index[r.clone()], &self.values[r])
+    }
+
+    /// `A x`, rows in parallel (each output entry from one task: deterministic).
+    pub fn mul_vec<P: Point>(&self, x: &[P]) -> Vec<P> {
+        assert_eq!(x.len(), self.cols, "internal: dimension mismatch");
+        (0..self.rows)
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|i| {
+                let (cols, vals) = self.row(i);
+                cols.iter().zip(vals).fold(P::ZERO, |s, (&c, &v)| s + x[c as usize] * v)
+            })
+            .collect()
+    }
+
+    /// The transpose.
+    pub fn transpose(&self) -> Self {
+        let mut counts = vec![0usize; self.cols + 1];
+        for &c in &self.col_index {
+            counts[c as usize + 1] += 1;
+        }
+        for c in 0..self.cols {
+            counts[c + 1] += counts[c];
+        }
+        let mut fill = counts.clone();
+        let mut col_index = vec![0u32; self.nnz()];
+        let mut values = vec![0.0; self.nnz()];
+        for i in 0..self.rows {
+            let (cols, vals) = self.row(i);
+            for (&c, &v) in cols.iter().zip(vals) {
+                let at = fill[c as usize];
+                col_index[at] = i as u32;
+                values[at] = v;
+                fill[c as usize] += 1;
+            }
+        }
+        Self { rows: self.cols, cols: self.rows, row_start: counts, col_index, values }
+    }
+
+    /// The product `self * other`.
+    pub fn mul(&self, other: &SparseMatrix) -> Self {
+        assert_eq!(self.cols, other.rows, "internal: dimension mismatch");
+        let rows = (0..self.rows)
+            .into_par_iter()
+            .map(|i| {
+                let (cols, vals) = self.row(i);
+                let mut row: Vec<(usize, f64)> = Vec::new();
+                for (&k, &a) in cols.iter().zip(vals) {
+                    let (oc, ov) = other.row(k as usize);
+                    row.extend(oc.iter().zip(ov).map(|(&c, &b)| (c as usize, a * b)));
+                }
+                row
+            })
+            .collect();
+        Self::from_rows(other.cols, rows)
+    }
+
+    /// `max_j sum_i |a_ij|` (the 1-norm).
+    pub fn norm_1(&self) -> f64 {
+        let mut sums = vec![0.0; self.cols];
+        for (&c, &v) in self.col_index.iter().zip(&self.values) {
+            sums[c as usize] += v.abs();
+        }
+        sums.into_iter().fold(0.0, f64::max)
+    }
+
+    /// `max_i sum_j |a_ij|` (the infinity norm).
+    pub fn norm_inf(&self) -> f64 {
+        (0..self.rows).map(|i| self.row(i).1.iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max)
+    }
+
+    /// Whether every stored entry is non-negative.
+    pub fn is_non_negative(&self) -> bool {
+        self.values.iter().all(|&v| v >= 0.0)
+    }
+
+    /// As a dense faer matrix.
+    pub fn to_dense(&self) -> Mat<f64> {
+        let mut m = Mat::<f64>::zeros(self.rows, self.cols);
+        for i in 0..self.rows {
+            let (cols, vals) = self.row(i);
+            for (&c, &v) in cols.iter().zip(vals) {
+                m[(i, c as usize)] += v;
+            }
+        }
+        m
+    }
+}
+
+/// A rigorous upper bound on `λ_max(NᵀN)`, tight for non-negative `N`: the
+/// Collatz–Wielandt bound `max_i (A x)_i / x_i` along power iterations with a positive
+/// vector (Perron–Frobenius), else `‖N‖₁ ‖N‖∞`.
+pub fn gram_lambda_max_bound(n: &SparseMatrix, iterations: usize) -> f64 {
+    let crude = n.norm_1() * n.norm_inf();
+    if !n.is_non_negative() || n.cols() == 0 {
+        return crude;
+    }
+    let nt = n.transpose();
+    let mut x = vec![1.0f64; n.cols()];
+    let mut best = crude;
+    for _ in 0..iterations {
+        let y = nt.mul_vec(&n.mul_vec(&x));
+        // Components that vanish would make the ratio meaningless: stop there.
+        if x.iter().any(|&v| v <= 0.0) {
+            break;
+        }
+        let bound = y.iter().zip(&x).map(|(a, b)| a / b).fold(0.0, f64::max);
+        best = best.min(bound);
+        let scale = y.iter().fold(0.0, |m: f64, &v| m.max(v));
+        if scale <= 0.0 {
+            break;
+        }
+        x = y.into_iter().map(|v| v / scale).collect();
+    }
+    best
+}
+
+/// Eigenvalues (real and imaginary parts) of a dense square matrix, computed
+/// sequentially.
+///
+/// # Errors
+/// [`SplineError::Singular`] if the eigenvalue iteration does not converge.
+pub fn eigenvalues(a: &Mat<f64>) -> Result<Vec<(f64, f64)>, SplineError> {
+    let n = a.nrows();
+    let mut re = faer::diag::Diag::<f64>::zeros(n);
+    let mut im = faer::diag::Diag::<f64>::zeros(n);
+    let par = Par::Seq;
+    let scratch = faer::linalg::evd::evd_scratch::<f64>(
+        n,
+        faer::linalg::evd::ComputeEigenvectors::No,
+        faer::linalg::evd::ComputeEigenvectors::No,
+        par,
+        Default::default(),
+    );
+    faer::linalg::evd::evd_real(
+        a.as_ref(),
+        re.as_mut(),
+        im.as_mut(),
+        None,
+        None,
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    )
+    .map_err(|_| SplineError::Singular { what: "eigenvalues of the iteration matrix" })?;
+    Ok((0..n).map(|i| (re.column_vector()[i], im.column_vector()[i])).collect())
+}
+
+/// Eigenvalues of a dense symmetric matrix, ascending, computed sequentially.
+///
+/// # Errors
+/// [`SplineError::Singular`] if the iteration does not converge.
+pub fn symmetric_eigenvalues(a: &Mat<f64>) -> Result<Vec<f64>, SplineError> {
+    let n = a.nrows();
+    let mut s = faer::diag::Diag::<f64>::zeros(n);
+    let par = Par::Seq;
+    let scratch = faer::linalg::evd::self_adjoint_evd_scratch::<f64>(
+        n,
+        faer::linalg::evd::ComputeEigenvectors::No,
+        par,
+        Default::default(),
+    );
+    faer::linalg::evd::self_adjoint_evd(
+        a.as_ref(),
+        s.as_mut(),
+        None,
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    )
+    .map_err(|_| SplineError::Singular { what: "eigenvalues of NᵀN" })?;
+    let mut values: Vec<f64> = (0..n).map(|i| s.column_vector()[i]).collect();
+    values.sort_by(f64::total_cmp);
+    Ok(values)
+}
+
+/// The spectral radius `max |λ|` of a dense square matrix.
+///
+/// # Errors
+/// As [`eigenvalues`].
+pub fn spectral_radius(a: &Mat<f64>) -> Result<f64, SplineError> {
+    Ok(eigenvalues(a)?.into_iter().map(|(re, im)| re.hypot(im)).fold(0.0, f64::max))
+}
+
+/// Least-squares solution of `N C ≈ D` by a dense Householder QR of `N` (not the
+/// normal equations, whose condition number is the square of `N`'s), sequential.
+///
+/// # Errors
+/// [`SplineError::Singular`] when `N` has fewer rows than columns or is rank deficient
+/// (a zero on the diagonal of `R`).
+pub fn least_squares(n: &SparseMatrix, data: &[DVec3]) -> Result<Vec<DVec3>, SplineError> {
+    let (m, k) = (n.rows(), n.cols());
+    if m < k || k == 0 {
+        return Err(SplineError::Singular { what: "least squares (fewer data points than control points)" });
+    }
+    use faer::linalg::qr::no_pivoting::{factor, solve};
+    let par = Par::Seq;
+    let mut qr = n.to_dense();
+    let block = factor::recommended_block_size::<f64>(m, k);
+    let mut q_coeff = Mat::<f64>::zeros(block, k);
+    factor::qr_in_place(
+        qr.as_mut(),
+        q_coeff.as_mut(),
+        par,
+        MemStack::new(&mut MemBuffer::new(factor::qr_in_place_scratch::<f64>(m, k, block, par, Default::default()))),
+        Default::default(),
+    );
+    // R: upper triangle; Householder basis: strictly lower part with a unit diagonal.
+    let mut r = Mat::<f64>::zeros(k, k);
+    let mut basis = qr;
+    for j in 0..k {
+        for i in 0..=j {
+            r[(i, j)] = basis[(i, j)];
+        }
+        for i in 0..j {
+            basis[(i, j)] = 0.0;
+        }
+        basis[(j, j)] = 1.0;
+    }
+    let scale = (0..k).map(|i| r[(i, i)].abs()).fold(0.0, f64::max);
+    if (0..k).any(|i| r[(i, i)].abs() <= 1e-14 * scale) {
+        return Err(SplineError::Singular { what: "least squares (collocation matrix is rank deficient)" });
+    }
+    let mut rhs = Mat::<f64>::from_fn(m, 3, |i, j| data[i][j]);
+    solve::solve_lstsq_in_place_with_conj(
+        basis.as_ref(),
+        q_coeff.as_ref(),
+        r.as_ref(),
+        faer::Conj::No,
+        rhs.as_mut(),
+        par,
+        MemStack::new(&mut MemBuffer::new(solve::solve_lstsq_in_place_scratch::<f64>(m, k, block, 3, par))),
+    );
+    Ok((0..k).map(|i| DVec3::new(rhs[(i, 0)], rhs[(i, 1)], rhs[(i, 2)])).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> SparseMatrix {
+        SparseMatrix::from_rows(
+            3,
+            vec![
+                vec![(0, 0.5), (2, 0.5)],
+                vec![(1, 1.0)],
+                vec![(0, 0.25), (1, 0.25), (2, 0.5)],
+                vec![(2, 0.7), (2, 0.3)],
+            ],
+        )
+    }
+
+    #[test]
+    fn products_and_transpose() {
+        let a = sample();
+        assert_eq!(a.nnz(), 7);
+        let x = [1.0, 2.0, 4.0];
+        assert_eq!(a.mul_vec(&x), vec![2.5, 2.0, 2.75, 4.0]);
+        let t = a.transpose();
+        let y = [1.0, 1.0, 1.0, 1.0];
+        assert_eq!(t.mul_vec(&y), vec![0.75, 1.25, 2.0]);
+        let ata = t.mul(&a);
+        let dense = ata.to_dense();
+        let direct = a.to_dense().transpose() * a.to_dense();
+        assert!((dense - direct).norm_max() < 1e-15);
+        assert_eq!(a.norm_inf(), 1.0);
+        assert_eq!(a.norm_1(), 2.0);
+    }
+
+    #[test]
+    fn lambda_bound_is_an_upper_bound_and_tight() {
+        let a = sample();
+        let ata = a.transpose().mul(&a).to_dense();
+        let exact = symmetric_eigenvalues(&ata).unwrap().into_iter().fold(0.0, f64::max);
+        let bound = gram_lambda_max_bound(&a, 50);
+        assert!(bound >= exact * (1.0 - 1e-12) && bound <= exact * (1.0 + 1e-6), "{bound} vs {exact}");
+    }
+
+    #[test]
+    fn spectra() {
+        // Rotation by 90 degrees scaled by 0.5: eigenvalues ±0.5i.
+        let a = Mat::<f64>::from_fn(2, 2, |i, j| [[0.0, -0.5], [0.5, 0.0]][i][j]);
+        assert!((spectral_radius(&a).unwrap() - 0.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn least_squares_fits_a_line() {
+        // Fit c0 + c1 t to points on a line plus symmetric noise: exact line back.
+        let ts = [0.0, 1.0, 2.0, 3.0];
+        let n = SparseMatrix::from_rows(2, ts.iter().map(|&t| vec![(0, 1.0 - t / 3.0), (1, t / 3.0)]).collect());
+        let noise = [0.1, -0.1, -0.1, 0.1];
+        let data: Vec<DVec3> = ts.iter().zip(noise).map(|(&t, e)| DVec3::new(t, 2.0 * t + e, 1.0)).collect();
+        let c = least_squares(&n, &data).unwrap();
+        assert!((c[0] - DVec3::new(0.0, 0.0, 1.0)).length() < 1e-12, "{:?}", c);
+        assert!((c[1] - DVec3::new(3.0, 6.0, 1.0)).length() < 1e-12);
+        let deficient = SparseMatrix::from_rows(2, vec![vec![(0, 1.0)], vec![(0, 1.0)]]);
+        assert!(least_squares(&deficient, &data[..2]).is_err());
+    }
+}
