@@ -166,7 +166,7 @@ impl Symbol {
         }
         let remainder = c[0] - carry;
         let scale = c.iter().map(|x| x.abs()).sum::<f64>().max(1.0);
-        (remainder.abs() <= 1e-10 * scale).then(|| Symbol { lowest_power: self.lowest_power, coefficients: quotient })
+        (remainder.abs() <= 1e-10 * scale).then_some(Symbol { lowest_power: self.lowest_power, coefficients: quotient })
     }
 
     /// `factor * self`.

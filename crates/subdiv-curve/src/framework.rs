@@ -51,7 +51,7 @@
 //!
 //! # Open polygons
 //!
-//! Phantom points follow [`EndRule`](crate::EndRule), recomputed from the current polygon
+//! Phantom points follow [`EndRule`], recomputed from the current polygon
 //! at every level (spec §16.4); in the exact-global mode the phantoms of `G` are made from
 //! `G` itself. Every I-point, end points included, keeps its position at every level, so
 //! the limit passes through it: `result[i << levels] == points[i]` bit for bit.

@@ -3,7 +3,7 @@
 //!
 //! One level reads the current polygon from a buffer that carries a few extra points on
 //! each side (the *halo*: wrapped points of a closed polygon, phantom points of an open
-//! one, see [`EndRule`](crate::EndRule)), so that the inner loop needs no index arithmetic
+//! one, see [`EndRule`]), so that the inner loop needs no index arithmetic
 //! and no branches. Buffers are sized once for the finest intermediate level and reused
 //! across levels and across calls ([`Refiner`]); the last level is written straight into
 //! the caller's output vector.

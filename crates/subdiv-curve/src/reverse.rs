@@ -62,7 +62,7 @@ fn coarse_len(fine_len: usize, topology: Topology) -> Result<usize, CurveError> 
     if fine_len < needed {
         return Err(CurveError::TooFewPoints { what: "reverse Chaikin".into(), needed, got: fine_len, closed });
     }
-    if fine_len % 2 != 0 {
+    if !fine_len.is_multiple_of(2) {
         return Err(CurveError::IncompatibleLength {
             what: "reverse Chaikin",
             detail: format!(

@@ -114,7 +114,7 @@ impl Rule {
 }
 
 /// Where the new points of a scheme sit on an open polygon (closed polygons are the same
-/// in both layouts). See the [module docs](self).
+/// in both layouts). See the crate docs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Layout {
     /// Even rule = vertex point of vertex `i`, odd rule = edge point of edge `(i, i+1)`.
@@ -291,7 +291,7 @@ impl CurveScheme {
     /// # Errors
     /// [`CurveError::ParameterOutOfRange`] if `gamma` is outside `[0, 1/4)`, `|omega| > 1/2`,
     /// or the scheme is not established to converge (difference scheme not contractive
-    /// within 12 steps, [`crate::analysis::smoothness_checks`]).
+    /// within 12 steps, [`crate::analysis::contractivity`]).
     ///
     /// ```
     /// use subdiv_curve::CurveScheme;

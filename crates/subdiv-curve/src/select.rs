@@ -2,7 +2,7 @@
 //! (9) and spec §16.6).
 //!
 //! Discrete derivatives with uniform parameter and central differences (closed polygons
-//! wrap; open ones use the phantom points of their [`EndRule`](crate::EndRule)):
+//! wrap; open ones use the phantom points of their [`EndRule`]):
 //! `x'_i = (P_{i+1} - P_{i-1})/2`, `x''_i = P_{i+1} - 2 P_i + P_{i-1}`; the curvature is
 //! `K_i = |x'_i × x''_i| / |x'_i|^3`, signed in the plane (`(x' y'' - y' x'') / |x'|^3`).
 //! `K_i` is *undefined* when `|x'_i|^3 < 1e-12 scale^3` (scale = bounding-box diagonal).

@@ -36,9 +36,9 @@ use glam::DVec3;
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
+use crate::DooError;
 use crate::forward::{DooOptions, subdivide_soup};
 use crate::rule::FaceRule;
-use crate::DooError;
 use mesh_topo::PolygonSoup;
 
 /// Index of `p_i` in the local numbering.
@@ -219,11 +219,12 @@ pub fn reif_check(rule: FaceRule, n: usize) -> Result<ReifReport, DooError> {
     let next = values.get(1 + subdominant_multiplicity).map_or(0.0, |v| v.0.hypot(v.1));
     let gap = subdominant - next;
     let shifted = &s - DMatrix::identity(dim, dim) * subdominant;
-    let svd = nalgebra::SVD::try_new(shifted, false, true, f64::EPSILON, 100_000).ok_or(DooError::InvalidParameter {
-        name: "valence",
-        value: n as f64,
-        reason: "the singular value iteration did not converge",
-    })?;
+    let svd =
+        nalgebra::SVD::try_new(shifted, false, true, f64::EPSILON, 100_000).ok_or(DooError::InvalidParameter {
+            name: "valence",
+            value: n as f64,
+            reason: "the singular value iteration did not converge",
+        })?;
     let largest = svd.singular_values.max().max(1.0);
     let geometric_multiplicity = svd.singular_values.iter().filter(|&&x| x < 1e-8 * largest).count();
     let real = values[1].1.abs() < 1e-9;

@@ -222,7 +222,9 @@ mod tests {
     /// The regular triangle grid with `n` segments over the equilateral domain.
     fn net(n: usize) -> (Vec<DVec2>, Vec<[u32; 3]>) {
         let d = DomainTriangle::equilateral();
-        let params = multi_indices(n).map(|[i, j, k]| d.point([i as f64 / n as f64, j as f64 / n as f64, k as f64 / n as f64])).collect();
+        let params = multi_indices(n)
+            .map(|[i, j, k]| d.point([i as f64 / n as f64, j as f64 / n as f64, k as f64 / n as f64]))
+            .collect();
         (params, crate::surface::grid_triangles(n, true))
     }
 
@@ -234,7 +236,9 @@ mod tests {
             let dn = DmsNet::new(&params, &triangles, degree, KnotPlacement::default()).unwrap();
             // Samples on the whole closed domain, corners and edges included.
             let s = 17;
-            let samples: Vec<DVec2> = multi_indices(s).map(|[i, j, k]| d.point([i as f64 / s as f64, j as f64 / s as f64, k as f64 / s as f64])).collect();
+            let samples: Vec<DVec2> = multi_indices(s)
+                .map(|[i, j, k]| d.point([i as f64 / s as f64, j as f64 / s as f64, k as f64 / s as f64]))
+                .collect();
             let n = SurfaceBasis::Dms(dn.basis.clone()).collocation(&samples).mul(&dn.lift);
             let affine = |u: DVec2| DVec3::new(2.0 * u.x - u.y + 0.5, u.x + 3.0 * u.y, -u.x + 0.25);
             let values: Vec<DVec3> = params.iter().map(|&u| affine(u)).collect();

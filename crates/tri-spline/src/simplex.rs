@@ -2,7 +2,7 @@
 //!
 //! For a knot multiset `V` of at least three points in the plane, `M(u | V)` is:
 //! * `|V| = 3`: `1 / |det(V)|` on the half-open triangle `[V)` and 0 elsewhere (see
-//!   [`in_half_open`](crate::domain::in_half_open)), `det` being twice the signed area;
+//!   [`in_half_open`]), `det` being twice the signed area;
 //! * `|V| >= 4`: for any three affinely independent knots `W = {w0, w1, w2}` of `V`,
 //!   `M(u | V) = sum_j λ_j(u) M(u | V \ {w_j})`, with `λ` the barycentric coordinates of
 //!   `u` with respect to `W`.
