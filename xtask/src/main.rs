@@ -3,8 +3,9 @@
 //! - `ci`: everything CI checks, in order, stopping at the first failure: formatting,
 //!   clippy with warnings denied, the layering rules, the dependency diet of each library
 //!   crate, all tests and doctests, docs with warnings denied, and that benches compile.
-//! - `bench [crate]`: runs the criterion benches and prints a compact table (also written
-//!   to `target/bench-summary.md`).
+//! - `bench [crate]`: runs the criterion benches and prints a compact table, then compares
+//!   the `subdivide-*` benchmarks with the peer libraries found on the machine (see
+//!   `peers.rs`; `MULTIRES_PEERS_DIR`); both are written to `target/bench-summary.md`.
 //! - `golden [--bless]`: checks the golden files under `tests/golden/`, or re-blesses them
 //!   and shows the diff for review.
 
@@ -14,6 +15,8 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 use std::time::Instant;
+
+mod peers;
 
 /// Project crates each crate may depend on (normal dependencies). The facade may use
 /// all of them; a crate missing from this table is an error, so new crates must state
@@ -163,20 +166,29 @@ fn bench(krate: Option<&str>) -> Result<(), String> {
     let mut rows = BTreeMap::new();
     collect_estimates(&criterion_dir, &criterion_dir, &mut rows);
     let mut table = String::from("| benchmark | mean | throughput |\n|---|---:|---:|\n");
-    for (name, (mean_ns, throughput)) in &rows {
-        table.push_str(&format!("| {name} | {} | {} |\n", format_time(*mean_ns), throughput));
+    for (name, measurement) in &rows {
+        let throughput = measurement.elements.map(|n| format_throughput(n, measurement.mean_ns)).unwrap_or_default();
+        table.push_str(&format!("| {name} | {} | {throughput} |\n", format_time(measurement.mean_ns)));
     }
     println!("{table}");
+    let mesh_file = |mesh: &str| {
+        ["obj", "off", "ply"]
+            .iter()
+            .map(|ext| workspace_root().join("tests/data").join(format!("{mesh}.{ext}")))
+            .find(|p| p.is_file())
+    };
+    let comparison = peers::comparison(&rows, mesh_file);
+    println!("{comparison}");
     let summary = workspace_root().join("target/bench-summary.md");
-    fs::write(&summary, format!("# Benchmark summary\n\n{table}"))
+    fs::write(&summary, format!("# Benchmark summary\n\n{table}\n{comparison}"))
         .map_err(|e| format!("{}: {e}", summary.display()))?;
     eprintln!("    written to {}", summary.display());
     Ok(())
 }
 
 /// Finds `<id>/new/estimates.json` under the criterion directory: mean time and, when
-/// the benchmark declared one, its throughput.
-fn collect_estimates(root: &Path, dir: &Path, rows: &mut BTreeMap<String, (f64, String)>) {
+/// the benchmark declared one, its throughput in elements.
+fn collect_estimates(root: &Path, dir: &Path, rows: &mut BTreeMap<String, peers::Measurement>) {
     let Ok(entries) = fs::read_dir(dir) else { return };
     for entry in entries.flatten() {
         let path = entry.path();
@@ -184,33 +196,25 @@ fn collect_estimates(root: &Path, dir: &Path, rows: &mut BTreeMap<String, (f64, 
             continue;
         }
         if path.file_name().is_some_and(|n| n == "new") {
-            let estimates = fs::read_to_string(path.join("estimates.json")).ok();
-            let benchmark = fs::read_to_string(path.join("benchmark.json")).ok();
-            let mean = estimates
-                .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
-                .and_then(|v| v["mean"]["point_estimate"].as_f64());
-            let Some(mean_ns) = mean else { continue };
-            let throughput = benchmark
-                .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
-                .map(|v| format_throughput(&v["throughput"], mean_ns))
-                .unwrap_or_default();
+            let read_json = |name: &str| {
+                fs::read_to_string(path.join(name))
+                    .ok()
+                    .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
+            };
+            let Some(mean_ns) = read_json("estimates.json").and_then(|v| v["mean"]["point_estimate"].as_f64()) else {
+                continue;
+            };
+            let elements = read_json("benchmark.json").and_then(|v| v["throughput"]["Elements"].as_f64());
             let id = dir.strip_prefix(root).unwrap_or(dir).display().to_string();
-            rows.insert(id, (mean_ns, throughput));
+            rows.insert(id, peers::Measurement { mean_ns, elements });
         } else if path.file_name().is_some_and(|n| n != "report") {
             collect_estimates(root, &path, rows);
         }
     }
 }
 
-fn format_throughput(throughput: &serde_json::Value, mean_ns: f64) -> String {
-    let per_second = |count: f64| count / (mean_ns * 1e-9);
-    if let Some(elements) = throughput["Elements"].as_f64() {
-        format!("{:.2} M elem/s", per_second(elements) / 1e6)
-    } else if let Some(bytes) = throughput["Bytes"].as_f64() {
-        format!("{:.2} GB/s", per_second(bytes) / 1e9)
-    } else {
-        String::new()
-    }
+fn format_throughput(elements: f64, mean_ns: f64) -> String {
+    format!("{:.2} M elem/s", elements / (mean_ns * 1e-9) / 1e6)
 }
 
 fn format_time(ns: f64) -> String {
@@ -224,7 +228,8 @@ fn format_time(ns: f64) -> String {
 
 fn golden(bless: bool) -> Result<(), String> {
     let mut command = cargo();
-    command.args(["test", "--workspace", "--test", "golden"]);
+    // Every `tests/golden*.rs` target of the facade.
+    command.args(["test", "-p", "multires", "--test", "golden*"]);
     if bless {
         command.env("MULTIRES_BLESS", "1");
     }
