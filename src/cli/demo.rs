@@ -427,6 +427,15 @@ fn summary_table(rows: &[(String, String, f64)], total: f64) -> String {
     text
 }
 
+/// Marks the page's `<body>` once loaded with the number of images and the broken ones,
+/// so a headless browser (`cargo xtask html`) can check that every picture displays.
+const IMAGE_CHECK: &str = "<script>\nwindow.addEventListener('load', () => {\n  \
+    const images = Array.from(document.images);\n  \
+    const broken = images.filter(i => !i.complete || i.naturalWidth === 0).map(i => i.getAttribute('src'));\n  \
+    document.body.dataset.images = images.length;\n  \
+    document.body.dataset.broken = broken.join(' ');\n  \
+    document.body.dataset.checked = 'yes';\n});\n</script>\n";
+
 fn write_index(demo: &Demo, total: f64) -> CliResult {
     let summary = escape(&summary_table(&demo.summary, total));
     let page = format!(
@@ -434,7 +443,7 @@ fn write_index(demo: &Demo, total: f64) -> CliResult {
          <style>body{{font-family:sans-serif;max-width:1500px;margin:2em auto;padding:0 1em}}\
          img{{max-width:100%;border:1px solid #ddd;margin:4px}}pre{{background:#f6f6f6;padding:1em}}</style>\n\
          </head>\n<body>\n<h1>multires demo</h1>\n{}<section>\n<h2>Summary</h2>\n<pre>{summary}</pre>\n\
-         </section>\n</body>\n</html>\n",
+         </section>\n{IMAGE_CHECK}</body>\n</html>\n",
         demo.html
     );
     write_file(&demo.out.join("index.html"), page.as_bytes())

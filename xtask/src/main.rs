@@ -6,6 +6,8 @@
 //! - `bench [crate]`: runs the criterion benches and prints a compact table, then compares
 //!   the `subdivide-*` benchmarks with the peer libraries found on the machine (see
 //!   `peers.rs`; `MULTIRES_PEERS_DIR`); both are written to `target/bench-summary.md`.
+//! - `html`: runs the demo and opens its `index.html` in headless Chromium, checking that
+//!   every picture on the page loads (part of `ci` when a browser is installed).
 //! - `golden [--bless]`: checks the golden files under `tests/golden/`, or re-blesses them
 //!   and shows the diff for review.
 
@@ -42,8 +44,11 @@ fn main() -> ExitCode {
         Some("bench") => bench(args.get(1).map(String::as_str)),
         Some("golden") => golden(args.iter().any(|a| a == "--bless")),
         Some("layering") => layering(),
+        Some("html") => browser()
+            .ok_or_else(|| "html: no `chromium` or `chromium-browser` on the PATH".to_string())
+            .and_then(|b| html(&b)),
         _ => {
-            eprintln!("usage: cargo xtask ci | bench [crate] | golden [--bless] | layering");
+            eprintln!("usage: cargo xtask ci | bench [crate] | golden [--bless] | layering | html");
             return ExitCode::from(2);
         }
     };
@@ -82,6 +87,10 @@ fn ci() -> Result<(), String> {
     run("test", cargo().args(["test", "--workspace"]))?;
     run("doc", cargo().args(["doc", "--workspace", "--no-deps"]).env("RUSTDOCFLAGS", "-D warnings"))?;
     run("bench --no-run", cargo().args(["bench", "--workspace", "--no-run"]))?;
+    match browser() {
+        Some(browser) => html(&browser)?,
+        None => eprintln!("==> html: skipped, no headless browser (install Debian's `chromium`)"),
+    }
     eprintln!("==> ci passed in {:.0} s", total.elapsed().as_secs_f64());
     Ok(())
 }
@@ -240,5 +249,49 @@ fn golden(bless: bool) -> Result<(), String> {
             Command::new("git").current_dir(workspace_root()).args(["diff", "--stat", "--", "tests/golden"]).status();
         eprintln!("    review the changes with: git diff tests/golden");
     }
+    Ok(())
+}
+
+/// The headless browser used by [`html`], if one is installed.
+fn browser() -> Option<PathBuf> {
+    let path = env::var_os("PATH")?;
+    env::split_paths(&path)
+        .flat_map(|dir| ["chromium", "chromium-browser"].map(|name| dir.join(name)))
+        .find(|candidate| candidate.is_file())
+}
+
+/// Runs the demo into `target/demo-html` and loads its page in headless Chromium. The page
+/// marks its `<body>` with the number of images and the broken ones once loaded.
+fn html(browser: &Path) -> Result<(), String> {
+    let out = workspace_root().join("target/demo-html");
+    let _ = fs::remove_dir_all(&out);
+    run("html: demo", cargo().args(["run", "--quiet", "--", "demo", "--out"]).arg(&out))?;
+    let page = out.join("index.html");
+    let source = fs::read_to_string(&page).map_err(|e| format!("{}: {e}", page.display()))?;
+    let expected_images = source.matches("<img ").count();
+    eprintln!("==> html: {} in {}", page.display(), browser.display());
+    let output = Command::new(browser)
+        .args(["--headless", "--no-sandbox", "--disable-gpu", "--allow-file-access-from-files"])
+        .args(["--virtual-time-budget=10000", "--dump-dom"])
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .map_err(|e| format!("html: cannot start {}: {e}", browser.display()))?;
+    let dom = String::from_utf8_lossy(&output.stdout);
+    let attribute = |name: &str| {
+        let key = format!("data-{name}=\"");
+        dom.find(&key).map(|start| {
+            let rest = &dom[start + key.len()..];
+            rest[..rest.find('"').unwrap_or(0)].to_string()
+        })
+    };
+    if attribute("checked").as_deref() != Some("yes") {
+        return Err(format!("html: the page did not finish loading in the browser: {}", output.status));
+    }
+    let images: usize = attribute("images").and_then(|n| n.parse().ok()).unwrap_or(0);
+    let broken = attribute("broken").unwrap_or_default();
+    if images != expected_images || !broken.is_empty() {
+        return Err(format!("html: {images} of {expected_images} images found; broken: [{broken}]"));
+    }
+    eprintln!("    html: all {images} pictures load in the browser");
     Ok(())
 }
