@@ -65,6 +65,11 @@ fn workspace_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("xtask lives in the workspace").to_path_buf()
 }
 
+/// Cargo's target directory: `$CARGO_TARGET_DIR` when set, else `target/`.
+fn target_dir() -> PathBuf {
+    env::var_os("CARGO_TARGET_DIR").map(PathBuf::from).unwrap_or_else(|| workspace_root().join("target"))
+}
+
 fn cargo() -> Command {
     let mut command = Command::new(env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
     command.current_dir(workspace_root());
@@ -171,7 +176,7 @@ fn bench(krate: Option<&str>) -> Result<(), String> {
         None => command.arg("--workspace"),
     };
     run("bench", &mut command)?;
-    let criterion_dir = workspace_root().join("target/criterion");
+    let criterion_dir = target_dir().join("criterion");
     let mut rows = BTreeMap::new();
     collect_estimates(&criterion_dir, &criterion_dir, &mut rows);
     let mut table = String::from("| benchmark | mean | throughput |\n|---|---:|---:|\n");
@@ -188,7 +193,7 @@ fn bench(krate: Option<&str>) -> Result<(), String> {
     };
     let comparison = peers::comparison(&rows, mesh_file);
     println!("{comparison}");
-    let summary = workspace_root().join("target/bench-summary.md");
+    let summary = target_dir().join("bench-summary.md");
     fs::write(&summary, format!("# Benchmark summary\n\n{table}\n{comparison}"))
         .map_err(|e| format!("{}: {e}", summary.display()))?;
     eprintln!("    written to {}", summary.display());
@@ -263,7 +268,7 @@ fn browser() -> Option<PathBuf> {
 /// Runs the demo into `target/demo-html` and loads its page in headless Chromium. The page
 /// marks its `<body>` with the number of images and the broken ones once loaded.
 fn html(browser: &Path) -> Result<(), String> {
-    let out = workspace_root().join("target/demo-html");
+    let out = target_dir().join("demo-html");
     let _ = fs::remove_dir_all(&out);
     run("html: demo", cargo().args(["run", "--quiet", "--", "demo", "--out"]).arg(&out))?;
     let page = out.join("index.html");
