@@ -102,6 +102,7 @@ fn info_reports_non_manifold_soups_and_dropped_attributes() {
     let text = ok(&["info", path.to_str().unwrap()]);
     assert!(text.contains("manifold      no: non-manifold edge (0, 1)"), "{text}");
     assert!(text.contains("not kept      1 x normals (`vn`) (first at line 7)"), "{text}");
+    assert!(text.contains("unreferenced  1 (5)"), "{text}");
 }
 
 #[test]
@@ -153,6 +154,21 @@ fn compare_known_offsets() {
     assert!((result["rel_max"].as_f64().unwrap() - 0.5 / diagonal).abs() < 1e-15);
     assert_eq!(result["a"]["vertices"], 8);
     assert_eq!(result["b"]["faces"], 6);
+}
+
+#[test]
+fn compare_point_clouds_and_a_degenerate_reference() {
+    // A is one point repeated (its bounding box has no diagonal); B three points on a line.
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("same.off");
+    let b = dir.path().join("line.off");
+    std::fs::write(&a, format!("OFF\n50 0 0\n{}", "1 1 1\n".repeat(50))).unwrap();
+    std::fs::write(&b, "OFF\n3 0 0\n0 0 0\n1 0 0\n2 0 0\n").unwrap();
+    let result = json(&["compare", a.to_str().unwrap(), b.to_str().unwrap(), "--json"]);
+    assert_eq!(result["a_to_b"]["max"], 2f64.sqrt());
+    assert_eq!(result["b_to_a"]["max"], 3f64.sqrt());
+    assert_eq!(result["max_dist"], 3f64.sqrt());
+    assert!(result["rel_max"].is_null() && result["rel_mean"].is_null(), "{result}");
 }
 
 #[test]

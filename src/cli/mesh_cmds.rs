@@ -88,6 +88,8 @@ pub struct RenderArgs {
 
 /// Largest number of unreferenced vertex ids listed (the count is always complete).
 const LISTED_UNREFERENCED: usize = 100;
+/// Largest number of unreferenced vertex ids the text output lists.
+const LISTED_IN_TEXT: usize = 10;
 /// Largest number of components detailed in the text output (JSON lists all).
 const LISTED_COMPONENTS: usize = 10;
 
@@ -255,12 +257,15 @@ pub fn mesh_info_text(info: &Value) -> String {
         Some(error) => format!("no: {error}"),
     };
     line("manifold", manifold);
-    let unreferenced = info["unreferenced_vertices"].as_u64().unwrap_or(0);
-    let ids = info["unreferenced_vertex_ids"].as_array().map(Vec::len).unwrap_or(0);
+    let unreferenced = info["unreferenced_vertices"].as_u64().unwrap_or(0) as usize;
+    let ids: Vec<String> = info["unreferenced_vertex_ids"]
+        .as_array()
+        .map(|ids| ids.iter().take(LISTED_IN_TEXT).map(Value::to_string).collect())
+        .unwrap_or_default();
     let listed = match unreferenced {
         0 => "0".to_string(),
-        n if n as usize > ids => format!("{n} (first {ids}: {})", info["unreferenced_vertex_ids"]),
-        n => format!("{n} {}", info["unreferenced_vertex_ids"]),
+        n if n > ids.len() => format!("{n} (first {}: {}, ...)", ids.len(), ids.join(", ")),
+        n => format!("{n} ({})", ids.join(", ")),
     };
     line("unreferenced", listed);
     let dropped = info["dropped"].as_array().cloned().unwrap_or_default();

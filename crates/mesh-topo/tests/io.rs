@@ -1,5 +1,5 @@
-//! Mesh files: lossless round trips in every format and encoding, one test per error
-//! kind with its line number (or byte offset), and the real meshes of `tests/data/`.
+//! Mesh files: lossless round trips in every format and encoding, and one test per error
+//! kind with its line number (or byte offset). The real meshes are in `real_data.rs`.
 
 use std::path::PathBuf;
 
@@ -8,41 +8,8 @@ use mesh_topo::testing::arb_mesh;
 use mesh_topo::{DVec3, HalfedgeMesh, MeshError, PolygonSoup};
 use proptest::prelude::*;
 
-/// Every (format, PLY encoding) pair a soup can be written in.
-const TARGETS: [(Format, PlyEncoding); 5] = [
-    (Format::Obj, PlyEncoding::Ascii),
-    (Format::Off, PlyEncoding::Ascii),
-    (Format::Ply, PlyEncoding::Ascii),
-    (Format::Ply, PlyEncoding::BinaryLittleEndian),
-    (Format::Ply, PlyEncoding::BinaryBigEndian),
-];
-
-fn write(soup: &PolygonSoup, format: Format, ply_encoding: PlyEncoding) -> Vec<u8> {
-    let mut bytes = Vec::new();
-    io::write_to(&mut bytes, soup, format, &WriteOptions { ply_encoding }).unwrap();
-    bytes
-}
-
-/// Equal soups, positions compared bit for bit (so `-0.0` and `0.0` differ).
-fn assert_identical(back: &PolygonSoup, soup: &PolygonSoup, context: &str) {
-    assert_eq!(back.vertex_count(), soup.vertex_count(), "{context}");
-    for (i, (a, b)) in back.positions.iter().zip(&soup.positions).enumerate() {
-        assert_eq!(a.to_array().map(f64::to_bits), b.to_array().map(f64::to_bits), "{context}: vertex {i}");
-    }
-    assert_eq!(back.face_count(), soup.face_count(), "{context}");
-    assert!(back.faces().eq(soup.faces()), "{context}: faces differ");
-}
-
-fn round_trip(soup: &PolygonSoup) {
-    for (format, encoding) in TARGETS {
-        let bytes = write(soup, format, encoding);
-        let (back, report) = io::read_bytes(&bytes, format).unwrap();
-        let context = format!("{format} {encoding:?}");
-        assert_identical(&back, soup, &context);
-        assert!(report.is_lossless(), "{context}: {report}");
-        assert_eq!(report.format, format);
-    }
-}
+mod support;
+use support::{TARGETS, round_trip, write};
 
 /// Any f64 that a file can hold (finite), from every part of the range.
 fn arb_coordinate() -> impl Strategy<Value = f64> {
@@ -243,6 +210,40 @@ fn error_missing_file() {
 }
 
 #[test]
+fn error_stream_when_the_output_fails() {
+    /// A writer whose device is always full.
+    struct Full;
+    impl std::io::Write for Full {
+        fn write(&mut self, _: &[u8]) -> std::io::Result<usize> {
+            Err(std::io::Error::new(std::io::ErrorKind::StorageFull, "device full"))
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Err(std::io::Error::new(std::io::ErrorKind::StorageFull, "device full"))
+        }
+    }
+    let soup = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]]);
+    for (format, ply_encoding) in TARGETS {
+        let e = io::write_to(Full, &soup, format, &WriteOptions { ply_encoding }).unwrap_err();
+        assert!(matches!(&e, IoError::Stream(source) if source.kind() == std::io::ErrorKind::StorageFull), "{e}");
+    }
+}
+
+#[test]
+fn error_invalid_soup_is_refused_before_writing() {
+    let out_of_range = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 7]]);
+    let mut bad_offsets = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]]);
+    bad_offsets.offsets[1] = 2;
+    for (soup, expected) in [(&out_of_range, "face 0 uses vertex 7"), (&bad_offsets, "last face offset is 2")] {
+        for (format, ply_encoding) in TARGETS {
+            let mut bytes = Vec::new();
+            let e = io::write_to(&mut bytes, soup, format, &WriteOptions { ply_encoding }).unwrap_err();
+            assert!(matches!(&e, IoError::InvalidSoup(reason) if reason.contains(expected)), "{e}");
+            assert!(bytes.is_empty(), "{format}: wrote {} bytes before failing", bytes.len());
+        }
+    }
+}
+
+#[test]
 fn non_manifold_files_read_as_soups_and_fail_as_meshes() {
     let text = "OFF\n5 3 0\n0 0 0\n1 0 0\n0 1 0\n0 -1 0\n0 0 1\n3 0 1 2\n3 1 0 3\n3 0 1 4\n";
     let (soup, _) = io::read_bytes(text.as_bytes(), Format::Off).unwrap();
@@ -259,236 +260,4 @@ fn tempfile_dir() -> PathBuf {
     let dir = std::env::temp_dir().join(format!("mesh-topo-io-test-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
-}
-
-// ---------------------------------------------------------------------------------------
-// Real meshes.
-
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(name)
-}
-
-struct Expected {
-    file: &'static str,
-    vertices: usize,
-    edges: usize,
-    boundary_edges: usize,
-    faces: usize,
-    boundary_loops: usize,
-    genus: i64,
-    components: usize,
-    face_sizes: &'static [(usize, usize)],
-}
-
-/// The table of `tests/data/README.md`; edges, boundary edges, components and face sizes
-/// as counted independently by a plain Python edge-map script (no half-edges).
-const REAL_MESHES: &[Expected] = &[
-    Expected {
-        file: "bunny.obj",
-        vertices: 1839,
-        edges: 5511,
-        boundary_edges: 0,
-        faces: 3674,
-        boundary_loops: 0,
-        genus: 0,
-        components: 1,
-        face_sizes: &[(3, 3674)],
-    },
-    Expected {
-        file: "bunny00.off",
-        vertices: 37706,
-        edges: 113112,
-        boundary_edges: 0,
-        faces: 75408,
-        boundary_loops: 0,
-        genus: 0,
-        components: 1,
-        face_sizes: &[(3, 75408)],
-    },
-    Expected {
-        file: "cow.off",
-        vertices: 2904,
-        edges: 8706,
-        boundary_edges: 0,
-        faces: 5804,
-        boundary_loops: 0,
-        genus: 0,
-        components: 1,
-        face_sizes: &[(3, 5804)],
-    },
-    Expected {
-        file: "elephant.off",
-        vertices: 2775,
-        edges: 8337,
-        boundary_edges: 0,
-        faces: 5558,
-        boundary_loops: 0,
-        genus: 3,
-        components: 1,
-        face_sizes: &[(3, 5558)],
-    },
-    Expected {
-        file: "eight.off",
-        vertices: 315,
-        edges: 951,
-        boundary_edges: 0,
-        faces: 634,
-        boundary_loops: 0,
-        genus: 2,
-        components: 1,
-        face_sizes: &[(3, 634)],
-    },
-    Expected {
-        file: "knot1.off",
-        vertices: 3200,
-        edges: 9600,
-        boundary_edges: 0,
-        faces: 6400,
-        boundary_loops: 0,
-        genus: 1,
-        components: 1,
-        face_sizes: &[(3, 6400)],
-    },
-    Expected {
-        file: "mannequin-devil.off",
-        vertices: 12977,
-        edges: 38864,
-        boundary_edges: 64,
-        faces: 25888,
-        boundary_loops: 1,
-        genus: 0,
-        components: 1,
-        face_sizes: &[(3, 25888)],
-    },
-    Expected {
-        file: "elephant-with-holes.off",
-        vertices: 2798,
-        edges: 7371,
-        boundary_edges: 1353,
-        faces: 4463,
-        boundary_loops: 106,
-        genus: 3,
-        components: 1,
-        face_sizes: &[(3, 4463)],
-    },
-    Expected {
-        file: "open_cube.off",
-        vertices: 8,
-        edges: 17,
-        boundary_edges: 4,
-        faces: 10,
-        boundary_loops: 1,
-        genus: 0,
-        components: 1,
-        face_sizes: &[(3, 10)],
-    },
-    Expected {
-        file: "double-torus-example.off",
-        vertices: 231,
-        edges: 453,
-        boundary_edges: 0,
-        faces: 220,
-        boundary_loops: 0,
-        genus: 2,
-        components: 1,
-        face_sizes: &[(4, 202), (5, 12), (6, 4), (7, 2)],
-    },
-    Expected {
-        file: "torus_quad.off",
-        vertices: 25,
-        edges: 50,
-        boundary_edges: 0,
-        faces: 25,
-        boundary_loops: 0,
-        genus: 1,
-        components: 1,
-        face_sizes: &[(4, 25)],
-    },
-    Expected {
-        file: "cross_quad.off",
-        vertices: 40,
-        edges: 76,
-        boundary_edges: 0,
-        faces: 38,
-        boundary_loops: 0,
-        genus: 0,
-        components: 1,
-        face_sizes: &[(4, 38)],
-    },
-    Expected {
-        file: "cube_quad.off",
-        vertices: 8,
-        edges: 12,
-        boundary_edges: 0,
-        faces: 6,
-        boundary_loops: 0,
-        genus: 0,
-        components: 1,
-        face_sizes: &[(4, 6)],
-    },
-    Expected {
-        file: "cube_poly.off",
-        vertices: 8,
-        edges: 13,
-        boundary_edges: 0,
-        faces: 7,
-        boundary_loops: 0,
-        genus: 0,
-        components: 1,
-        face_sizes: &[(3, 2), (4, 5)],
-    },
-];
-
-#[test]
-fn real_meshes_have_the_documented_topology() {
-    for expected in REAL_MESHES {
-        let (soup, report) = io::read_soup(data(expected.file)).unwrap();
-        assert!(report.is_lossless(), "{}: {report}", expected.file);
-        let mesh = HalfedgeMesh::from_soup(&soup).unwrap_or_else(|e| panic!("{}: {e}", expected.file));
-        mesh.validate().unwrap();
-        let stats = mesh.topology_stats();
-        let found = (stats.vertices, stats.edges, stats.faces, stats.boundary_edges, stats.boundary_loops);
-        let wanted =
-            (expected.vertices, expected.edges, expected.faces, expected.boundary_edges, expected.boundary_loops);
-        assert_eq!(found, wanted, "{}: (V, E, F, boundary edges, loops)", expected.file);
-        assert_eq!((stats.genus, stats.components), (expected.genus, expected.components), "{}", expected.file);
-        assert!(stats.isolated_vertices.is_empty(), "{}", expected.file);
-        let sizes: Vec<(usize, usize)> = stats.face_sizes.into_iter().collect();
-        assert_eq!(sizes, expected.face_sizes, "{}", expected.file);
-        round_trip(&soup);
-    }
-}
-
-#[test]
-fn double_torus_is_polygonal_genus_2() {
-    let (mesh, _) = io::read_mesh(data("double-torus-example.off")).unwrap();
-    let stats = mesh.topology_stats();
-    let sizes: Vec<usize> = stats.face_sizes.keys().copied().collect();
-    assert_eq!(sizes, vec![4, 5, 6, 7]);
-    assert_eq!(stats.euler, -2);
-    assert_eq!(stats.per_component[0].genus, 2);
-}
-
-#[test]
-fn elephant_with_holes_loops() {
-    let (mesh, _) = io::read_mesh(data("elephant-with-holes.off")).unwrap();
-    let loops = mesh.boundary_loops();
-    assert_eq!(loops.len(), 106);
-    let boundary_edges: usize = loops.iter().map(Vec::len).sum();
-    assert_eq!(boundary_edges, mesh.topology_stats().boundary_edges);
-    // V - E + F = 2 - 2g - b with g = 3, b = 106.
-    assert_eq!(mesh.euler_characteristic(), 2 - 2 * 3 - 106);
-}
-
-#[test]
-fn bunny_obj_rewrites_to_its_own_lines() {
-    // The file's numbers are already in shortest form, so writing reproduces every
-    // `v` and `f` line byte for byte.
-    let original = std::fs::read_to_string(data("bunny.obj")).unwrap();
-    let (soup, _) = io::read_bytes(original.as_bytes(), Format::Obj).unwrap();
-    let written = String::from_utf8(write(&soup, Format::Obj, PlyEncoding::Ascii)).unwrap();
-    let statements = |text: &str| -> Vec<String> {
-        text.lines().filter(|l| !l.starts_with('#')).map(|l| l.trim_end().to_string()).collect()
-    };
-    assert_eq!(statements(&written), statements(&original));
 }

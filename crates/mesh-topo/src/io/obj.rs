@@ -75,6 +75,8 @@ impl ObjDropped {
 /// points outside the vertices ([`IoError::IndexOutOfRange`]), more than `u32` indices
 /// can address ([`IoError::TooLarge`]).
 pub fn read_obj(bytes: &[u8]) -> Result<(PolygonSoup, ReadReport), IoError> {
+    // A UTF-8 byte-order mark, as some Windows tools write, is not content.
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let mut soup = PolygonSoup::with_capacity(0, 0, 0);
     let mut dropped = ObjDropped::default();
     // Positive indices beyond the vertices defined so far: checked at the end.
@@ -317,6 +319,15 @@ mod tests {
             assert_eq!(err.location(), Some(Location::Line(line)), "{text:?}: {err}");
         }
         assert!(matches!(read("v 0 0 inf\n").unwrap_err(), IoError::NonFiniteCoordinate { vertex: 0, .. }));
+    }
+
+    #[test]
+    fn byte_order_mark_is_skipped() {
+        let (soup, report) = read_obj(b"\xEF\xBB\xBFv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        assert_eq!(soup.vertex_count(), 3);
+        assert!(report.is_lossless());
+        let (soup, _) = crate::io::read_off(b"\xEF\xBB\xBFOFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").unwrap();
+        assert_eq!(soup.face_count(), 1);
     }
 
     #[test]

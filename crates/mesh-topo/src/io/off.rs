@@ -63,6 +63,8 @@ impl Variant {
 /// a face line with fewer indices than it announces ([`IoError::CountMismatch`]), a
 /// non-numeric token, a NaN or infinite coordinate, an index out of range.
 pub fn read_off<'a>(bytes: &'a [u8]) -> Result<(PolygonSoup, ReadReport), IoError> {
+    // A UTF-8 byte-order mark, as some Windows tools write, is not content.
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let mut lines = Lines::new(bytes);
     // Content lines: comments removed, blank lines skipped.
     let mut next_content = move || -> Option<(usize, Tokens<'a>)> {
