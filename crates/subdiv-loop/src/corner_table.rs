@@ -107,7 +107,6 @@ impl CornerTable {
     pub(crate) fn from_mesh(mesh: &HalfedgeMesh) -> Result<Self, LoopError> {
         let next_halfedge = mesh.raw_halfedge_next();
         let targets = mesh.raw_halfedge_targets();
-        let halfedge_faces = mesh.raw_halfedge_faces();
         let faces = mesh.face_count();
         let face_halfedges = |f: u32| {
             let h0 = mesh.face_halfedge(mesh.face(f as usize).expect("internal: face in range")).raw();
@@ -120,6 +119,14 @@ impl CornerTable {
         }) {
             let face = mesh.face(f as usize).expect("internal: face in range");
             return Err(LoopError::NotTriangle { face: f as usize, corners: mesh.face_degree(face) });
+        }
+        // The corner of every face half-edge: one pass over the faces, in face order, so
+        // the writes follow the half-edge numbering (edges are numbered in face order).
+        let mut corner_of_halfedge = vec![NONE; mesh.halfedge_count()];
+        for f in 0..faces as u32 {
+            for (k, h) in face_halfedges(f).into_iter().enumerate() {
+                corner_of_halfedge[h as usize] = 3 * f + k as u32;
+            }
         }
         // Everything per face by gathers only, so faces are independent (parallel).
         let mut corner_vertex = vec![0u32; 3 * faces];
@@ -136,20 +143,11 @@ impl CornerTable {
                     // Corner k holds the origin of half-edge k: the target of half-edge k - 1.
                     vertices[k] = targets[h[(k + 2) % 3] as usize];
                     edges[k] = h[k] >> 1;
-                    let opposite = h[k] ^ 1;
-                    let g = halfedge_faces[opposite as usize];
-                    twins[k] = if g == NONE {
-                        NONE
-                    } else {
-                        let hg = face_halfedges(g);
-                        3 * g + hg.iter().position(|&x| x == opposite).expect("internal: twin in its face") as u32
-                    };
+                    // NONE for a boundary half-edge (it has no face).
+                    twins[k] = corner_of_halfedge[(h[k] ^ 1) as usize];
                 }
             });
-        let corner_of = |h: u32| {
-            let g = halfedge_faces[h as usize];
-            3 * g + face_halfedges(g).iter().position(|&x| x == h).expect("internal: half-edge in its face") as u32
-        };
+        let corner_of = |h: u32| corner_of_halfedge[h as usize];
         if let Some(face) = twin.par_chunks(3).position_first(|t| {
             let other = |k: usize| if t[k] == NONE { NONE - k as u32 } else { t[k] / 3 };
             other(0) == other(1) || other(1) == other(2) || other(2) == other(0)
