@@ -3,7 +3,11 @@
 //! to produce outputs for comparisons with other libraries.
 //!
 //! `cargo run --release --example loop_level -- MESH LEVEL [--threads T] [--repeats R]
-//! [--out OUT.obj] [--warren] [--keep-corners]`
+//! [--out OUT.obj] [--warren] [--keep-corners] [--from-soup]`
+//!
+//! With `--from-soup` the timed call also builds the half-edge mesh from the face list
+//! (as OpenSubdiv's timing includes building its topology refiner). The last line gives
+//! the process's peak resident memory (Linux `VmHWM`) and the output size.
 
 #[path = "support/mesh_file.rs"]
 mod mesh_file;
@@ -18,7 +22,8 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     if args.len() < 2 {
         eprintln!(
-            "usage: loop_level MESH LEVEL [--threads T] [--repeats R] [--out OUT.obj] [--warren] [--keep-corners]"
+            "usage: loop_level MESH LEVEL [--threads T] [--repeats R] [--out OUT.obj] [--warren] [--keep-corners] \
+             [--from-soup]"
         );
         std::process::exit(2);
     }
@@ -31,14 +36,23 @@ fn main() {
         keep_corners: args.iter().any(|a| a == "--keep-corners"),
     };
     let soup = mesh_file::read_mesh(Path::new(&args[0]));
+    let from_soup = args.iter().any(|a| a == "--from-soup");
     let mesh = HalfedgeMesh::from_soup(&soup).expect("valid mesh");
+    let resident_before = memory_kib("VmRSS");
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("pool");
     let mut best = f64::INFINITY;
     let mut fine = None;
     for _ in 0..repeats {
         drop(fine.take());
         let start = Instant::now();
-        let result = pool.install(|| subdivide(&mesh, level, &options).expect("subdivide"));
+        let result = pool.install(|| {
+            if from_soup {
+                let mesh = HalfedgeMesh::from_soup(&soup).expect("valid mesh");
+                subdivide(&mesh, level, &options).expect("subdivide")
+            } else {
+                subdivide(&mesh, level, &options).expect("subdivide")
+            }
+        });
         let seconds = start.elapsed().as_secs_f64();
         best = best.min(seconds);
         let bytes = result.positions.len() * 24 + result.triangles.len() * 12;
@@ -53,7 +67,27 @@ fn main() {
         fine = Some(result);
     }
     println!("best {best:.4} s");
+    if let Some(fine) = &fine {
+        let output = (fine.positions.len() * 24 + fine.triangles.len() * 12) as f64 / 1e6;
+        let (peak, before) = (memory_kib("VmHWM") as f64 / 1e3, resident_before as f64 / 1e3);
+        println!(
+            "memory: peak {peak:.1} MB, before subdividing {before:.1} MB, output {output:.1} MB, \
+             (peak - before) / output {:.2}, peak / output {:.2}",
+            (peak - before) / output,
+            peak / output
+        );
+    }
     if let (Some(out), Some(fine)) = (value("--out"), fine) {
         mesh_file::write_obj(Path::new(&out), &fine.positions, &fine.triangles);
     }
+}
+
+/// A `/proc/self/status` memory figure in KiB (0 where unavailable).
+fn memory_kib(key: &str) -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|status| {
+            status.lines().find(|l| l.starts_with(key)).and_then(|l| l.split_whitespace().nth(1)?.parse().ok())
+        })
+        .unwrap_or(0)
 }

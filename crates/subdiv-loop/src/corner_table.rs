@@ -8,14 +8,16 @@
 //! corner), so an edge index here is an `EdgeId` index of the same mesh built by
 //! `HalfedgeMesh::from_soup`.
 //!
-//! The Loop refinement of a corner table is pure index arithmetic
-//! ([`CornerTable::refine`]); nothing here hashes or sorts.
+//! The Loop refinement of a corner table ([`CornerTable::refine`]) is the forward
+//! kernel's index arithmetic on the equivalent compact topology; nothing here hashes or
+//! sorts.
 
 use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use rayon::prelude::*;
 
 use crate::LoopError;
+use crate::forward::kernel;
 use crate::forward::topology::{BASE_BITS, INVALID as TOPOLOGY_INVALID, Topology};
 
 /// "No element": a boundary twin, an isolated vertex's corner.
@@ -105,7 +107,6 @@ impl CornerTable {
     pub(crate) fn from_mesh(mesh: &HalfedgeMesh) -> Result<Self, LoopError> {
         let next_halfedge = mesh.raw_halfedge_next();
         let targets = mesh.raw_halfedge_targets();
-        let halfedge_faces = mesh.raw_halfedge_faces();
         let faces = mesh.face_count();
         let face_halfedges = |f: u32| {
             let h0 = mesh.face_halfedge(mesh.face(f as usize).expect("internal: face in range")).raw();
@@ -118,6 +119,14 @@ impl CornerTable {
         }) {
             let face = mesh.face(f as usize).expect("internal: face in range");
             return Err(LoopError::NotTriangle { face: f as usize, corners: mesh.face_degree(face) });
+        }
+        // The corner of every face half-edge: one pass over the faces, in face order, so
+        // the writes follow the half-edge numbering (edges are numbered in face order).
+        let mut corner_of_halfedge = vec![NONE; mesh.halfedge_count()];
+        for f in 0..faces as u32 {
+            for (k, h) in face_halfedges(f).into_iter().enumerate() {
+                corner_of_halfedge[h as usize] = 3 * f + k as u32;
+            }
         }
         // Everything per face by gathers only, so faces are independent (parallel).
         let mut corner_vertex = vec![0u32; 3 * faces];
@@ -134,20 +143,11 @@ impl CornerTable {
                     // Corner k holds the origin of half-edge k: the target of half-edge k - 1.
                     vertices[k] = targets[h[(k + 2) % 3] as usize];
                     edges[k] = h[k] >> 1;
-                    let opposite = h[k] ^ 1;
-                    let g = halfedge_faces[opposite as usize];
-                    twins[k] = if g == NONE {
-                        NONE
-                    } else {
-                        let hg = face_halfedges(g);
-                        3 * g + hg.iter().position(|&x| x == opposite).expect("internal: twin in its face") as u32
-                    };
+                    // NONE for a boundary half-edge (it has no face).
+                    twins[k] = corner_of_halfedge[(h[k] ^ 1) as usize];
                 }
             });
-        let corner_of = |h: u32| {
-            let g = halfedge_faces[h as usize];
-            3 * g + face_halfedges(g).iter().position(|&x| x == h).expect("internal: half-edge in its face") as u32
-        };
+        let corner_of = |h: u32| corner_of_halfedge[h as usize];
         if let Some(face) = twin.par_chunks(3).position_first(|t| {
             let other = |k: usize| if t[k] == NONE { NONE - k as u32 } else { t[k] / 3 };
             other(0) == other(1) || other(1) == other(2) || other(2) == other(0)
@@ -290,39 +290,8 @@ impl CornerTable {
     /// point of edge `e` is vertex `V + e`; coarse face `f = (a, b, c)` becomes faces
     /// `4f..4f+4` = `(a, ab, ca)`, `(b, bc, ab)`, `(c, ca, bc)`, `(ab, bc, ca)`.
     pub(crate) fn refine(&self) -> Self {
-        let nv = self.vertex_count as u32;
-        let faces = self.face_count();
-        let mut corner_vertex = vec![0u32; 12 * faces];
-        let mut twin = vec![NONE; 12 * faces];
-        for f in 0..faces as u32 {
-            let base = 3 * f;
-            let x = [self.vertex(base), self.vertex(base + 1), self.vertex(base + 2)];
-            let m = [nv + self.corner_edge(base), nv + self.corner_edge(base + 1), nv + self.corner_edge(base + 2)];
-            let fine = 12 * f;
-            for k in 0..3u32 {
-                let child = fine + 3 * k;
-                let before = (k + 2) % 3;
-                corner_vertex[child as usize] = x[k as usize];
-                corner_vertex[child as usize + 1] = m[k as usize];
-                corner_vertex[child as usize + 2] = m[before as usize];
-                // m_k -> m_{k-1} is the twin of the inner face's half-edge m_{k-1} -> m_k.
-                twin[child as usize + 1] = fine + 9 + before;
-                twin[(fine + 9 + before) as usize] = child + 1;
-                corner_vertex[(fine + 9 + k) as usize] = m[k as usize];
-                // The two halves of coarse half-edge k: x_k -> m_k (child k, corner 0)
-                // and m_k -> x_{k+1} (child k+1, corner 2).
-                let t = self.twin(base + k);
-                if t != NONE {
-                    let (g, l) = (t / 3, t % 3);
-                    let after_l = (l + 1) % 3;
-                    // Twin of x_k -> m_k is m -> x_k: child l+1 of g, corner 2.
-                    twin[child as usize] = 12 * g + 3 * after_l + 2;
-                    // Twin of m_k -> x_{k+1}: x_{k+1} -> m, child l of g, corner 0.
-                    twin[(fine + 3 * ((k + 1) % 3) + 2) as usize] = 12 * g + 3 * l;
-                }
-            }
-        }
-        Self::from_parts(self.vertex_count + self.edge_count(), corner_vertex, twin)
+        // The forward kernel's index arithmetic, so the whole crate has one refinement.
+        Self::from_topology(&kernel::refine_topology(&self.to_topology()))
     }
 
     /// The same mesh with vertices and faces renumbered: canonical vertex `i` becomes

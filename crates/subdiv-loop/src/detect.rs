@@ -52,7 +52,7 @@ use serde::{Deserialize, Serialize};
 use mesh_topo::HalfedgeMesh;
 
 use crate::LoopError;
-use crate::corner_table::{CornerTable, NONE, next, prev};
+use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 
 /// A fine-mesh element named by an error.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -273,10 +273,49 @@ pub(crate) fn detect_table(fine: &CornerTable, seed_vertex: Option<u32>) -> Resu
         // Only isolated vertices: "reversing" would change nothing, forever.
         return Err(LoopError::NoFaces);
     }
-    if let Some(coarsening) = detect_canonical(fine, seed_vertex) {
-        return Ok(coarsening);
+    let coarsening = match detect_canonical(fine, seed_vertex) {
+        Some(coarsening) => coarsening,
+        None => detect_general(fine, seed_vertex)?,
+    };
+    check_coarse_mesh(&coarsening)?;
+    Ok(coarsening)
+}
+
+/// A fine mesh can have the 1-to-4 structure of a coarse "mesh" that is not one: a
+/// coarse face with a repeated vertex, two coarse edges joining the same two vertices,
+/// or an interior coarse vertex of valence 2 (two faces glued along all their edges).
+/// Such a coarsening is refused where it shows, so that every coarse mesh handed out
+/// is valid for `mesh_topo` and can be refined again. Linear, one pass over the coarse
+/// vertices.
+fn check_coarse_mesh(coarsening: &Coarsening) -> Result<(), LoopError> {
+    let coarse = &coarsening.coarse;
+    let bad = (0..coarse.vertex_count() as u32)
+        .into_par_iter()
+        .map_init(Vec::new, |neighbours: &mut Vec<u32>, v| {
+            neighbours.clear();
+            let star = coarse.visit_star(v, |_, n| neighbours.push(n));
+            let reason = if neighbours.contains(&v) {
+                Some("the coarse face at this vertex point would repeat it")
+            } else if matches!(star, VertexStar::Interior { valence } if valence < 3) {
+                Some("this vertex point would have interior valence 2 in the coarse mesh")
+            } else {
+                neighbours.sort_unstable();
+                neighbours
+                    .windows(2)
+                    .any(|w| w[0] == w[1])
+                    .then_some("two coarse edges at this vertex point would join the same vertices")
+            };
+            reason.map(|reason| (v, reason))
+        })
+        .find_first(Option::is_some)
+        .flatten();
+    match bad {
+        None => Ok(()),
+        Some((v, reason)) => Err(LoopError::NotLoopConnectivity {
+            at: FineElement::Vertex(coarsening.vertex_point[v as usize]),
+            reason: reason.to_string(),
+        }),
     }
-    detect_general(fine, seed_vertex)
 }
 
 /// The fast path: a fine mesh in the canonical order (as made by Loop subdivision or

@@ -488,6 +488,59 @@ mod tests {
         assert_eq!(decompose(&faceless, &two), Err(LoopError::NoFaces));
     }
 
+    /// Found by the `detect_reverse` fuzz target: a renumbered, refined tetrahedron.
+    /// Its coarse mesh (a tetrahedron) looks like the refinement of one triangle whose
+    /// three corners are one vertex; `Levels::Max` went on to that non-mesh and the
+    /// pyramid did not reconstruct. Detection now refuses such coarse meshes.
+    #[test]
+    fn fuzz_regression_tetrahedron_is_not_refined_from_a_degenerate_triangle() {
+        let positions = [
+            [0.5, 0.0, 0.0],
+            [0.2499267578125, -0.2500732421875, -0.2500732421875],
+            [0.25, 0.25, 0.25],
+            [0.0, 0.0, 0.5],
+            [-0.25, 0.25, -0.25],
+            [-0.000244140625, -0.500244140625, -0.000244140625],
+            [0.0, 0.0, -0.5],
+            [-0.5, 0.0, 0.0],
+            [0.0, 0.5, 0.0],
+            [-0.2500732421875, -0.2500732421875, 0.2499267578125],
+        ];
+        let faces = [
+            [1u32, 0, 5],
+            [1, 6, 0],
+            [9, 5, 3],
+            [1, 5, 6],
+            [4, 6, 7],
+            [2, 8, 3],
+            [7, 9, 3],
+            [7, 3, 8],
+            [5, 0, 3],
+            [8, 4, 7],
+            [4, 8, 6],
+            [9, 7, 5],
+            [2, 3, 0],
+            [0, 6, 8],
+            [2, 0, 8],
+            [5, 7, 6],
+        ];
+        let soup = PolygonSoup::from_faces(positions.iter().map(|&p| DVec3::from(p)).collect(), faces);
+        let rules = LoopOptions { weights: VertexWeights::Warren, keep_corners: false };
+        let pyramid = decompose(&mesh(&soup), &max_levels(rules)).unwrap();
+        assert_eq!(pyramid.level_count(), 1);
+        assert_eq!((pyramid.base.vertex_count(), pyramid.base.face_count()), (4, 4));
+        let rebuilt = pyramid.reconstruct(1).unwrap();
+        assert_eq!(rebuilt.indices, soup.indices);
+        for (p, q) in rebuilt.positions.iter().zip(&soup.positions) {
+            assert!(p.distance(*q) < 1e-12);
+        }
+        let tetrahedron = HalfedgeMesh::from_soup(&shapes::tetrahedron()).unwrap();
+        assert!(matches!(
+            reverse(&tetrahedron, &ReverseOptions::default()),
+            Err(LoopError::NotLoopConnectivity { at: crate::detect::FineElement::Vertex(_), .. })
+        ));
+    }
+
     #[test]
     fn smooth_pyramid_is_reference_subdivision() {
         for rules in [LoopOptions::default(), LoopOptions { weights: VertexWeights::Warren, keep_corners: true }] {

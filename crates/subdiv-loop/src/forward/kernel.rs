@@ -116,6 +116,26 @@ fn second_half(h: u32) -> u32 {
     4 * (h - (h & 3) + NEXT[(h & 3) as usize] as u32) + 2
 }
 
+/// A value that carries nothing: a step on it computes only the connectivity.
+#[derive(Debug, Clone, Copy)]
+struct NoValue;
+
+impl Attribute for NoValue {
+    #[inline(always)]
+    fn scaled(&self, _weight: f64) -> Self {
+        NoValue
+    }
+    #[inline(always)]
+    fn add_scaled(&mut self, _other: &Self, _weight: f64) {}
+}
+
+/// The next level's connectivity alone: the crate's one refinement rule, also used by
+/// the corner tables of detection, reversal and pyramids.
+pub(crate) fn refine_topology(topo: &Topology) -> Topology {
+    let rules = Rules::new(&LoopOptions::default());
+    step(topo, &vec![NoValue; topo.vertex_count], &rules, true).topology
+}
+
 /// One Loop step of `values` on `topo`. With `refine_topology` the fine links and
 /// vertex starts are produced too (needed for a further step).
 pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, refine_topology: bool) -> Step<T> {

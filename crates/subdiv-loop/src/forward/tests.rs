@@ -346,3 +346,48 @@ fn fine_topology_equals_the_topology_of_the_output() {
         }
     }
 }
+
+/// Any soup: random positions (some not finite), random faces of 0 to 5 corners with
+/// indices that may be out of range or repeated.
+fn arb_any_soup() -> impl Strategy<Value = PolygonSoup> {
+    let coordinate = prop_oneof![8 => -10.0..10.0f64, 1 => Just(f64::NAN), 1 => Just(f64::INFINITY)];
+    (
+        prop::collection::vec(prop::array::uniform3(coordinate), 0..9),
+        prop::collection::vec(prop::collection::vec(0u32..10, 0..6), 0..12),
+    )
+        .prop_map(|(positions, faces)| PolygonSoup::from_faces(positions.into_iter().map(DVec3::from).collect(), faces))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    #[test]
+    fn arbitrary_soups_never_panic(soup in arb_any_soup(), levels in 0u32..3) {
+        let options = LoopOptions { keep_corners: levels == 1, ..LoopOptions::default() };
+        let result = subdivide_soup(&soup, levels, &options);
+        if let Ok(fine) = &result {
+            prop_assert!(fine.positions.iter().all(|p| p.is_finite()));
+        }
+        if let Ok(mesh) = HalfedgeMesh::from_soup(&soup) {
+            let ternary = crate::mband::ternary_subdivide(&mesh, 1, &crate::mband::TernaryOptions::default());
+            let limit = crate::limit::limit_normals(&mesh, &options);
+            let one = subdivide(&mesh, 1, &options).is_ok();
+            prop_assert_eq!(ternary.is_ok(), one);
+            prop_assert_eq!(limit.is_ok(), one);
+            prop_assert_eq!(result.is_ok(), one);
+        }
+    }
+
+    #[test]
+    fn polygon_meshes_are_rejected_at_their_first_non_triangle(soup in mesh_topo::testing::arb_mesh()) {
+        let first = soup.faces().position(|f| f.len() != 3);
+        match (subdivide_soup(&soup, 1, &LoopOptions::default()), first) {
+            (Ok(fine), None) => prop_assert_eq!(fine.face_count(), 4 * soup.face_count()),
+            (Err(LoopError::NotTriangle { face, corners }), Some(f)) => {
+                prop_assert_eq!(face, f);
+                prop_assert_eq!(corners, soup.face(f).len());
+            }
+            (other, _) => prop_assert!(false, "unexpected {:?}", other.map(|m| m.face_count())),
+        }
+    }
+}

@@ -266,6 +266,111 @@ fn regular_meshes_reproduce_the_box_spline_for_m_2_3_4() {
     assert_matches_lattice(&fine.positions, &quarter_coords, &lattice, (4 * size.0, 4 * size.1));
 }
 
+/// Direct evaluation of the three-direction box spline `N(2,2,2)`, independent of any
+/// subdivision mask: the hat function `M(1,1,1)` (the Courant element, piecewise linear
+/// on the three-direction mesh, peak 1 at `(1, 1)`) integrated once more along each of
+/// `e1`, `e2`, `e3`: `M(X + xi)(x) = int_0^1 M(X)(x - t xi) dt`. Every intermediate box
+/// spline is a polynomial between the lines `x1`, `x2`, `x1 - x2` in `Z`, so each
+/// integral is split where `x - t xi` crosses such a line and done by 3-point
+/// Gauss-Legendre (exact for the cubic integrands). Support `(0, 4)^2`, centre `(2, 2)`.
+fn box_spline_222(x: (f64, f64)) -> f64 {
+    fn hat(x: (f64, f64)) -> f64 {
+        let (u1, u2) = (x.0 - 1.0, x.1 - 1.0);
+        (1.0 - u1.abs().max(u2.abs()).max((u1 - u2).abs())).max(0.0)
+    }
+    fn smoothed(x: (f64, f64), directions: &[(f64, f64)]) -> f64 {
+        let Some((&xi, rest)) = directions.split_first() else { return hat(x) };
+        // Values of t in (0, 1) where x - t xi crosses a mesh line.
+        let mut breaks = vec![0.0, 1.0];
+        for (value, rate) in [(x.0, xi.0), (x.1, xi.1), (x.0 - x.1, xi.0 - xi.1)] {
+            if rate != 0.0 {
+                let t = (value / rate).rem_euclid(1.0);
+                if t > 0.0 && t < 1.0 {
+                    breaks.push(t);
+                }
+            }
+        }
+        breaks.sort_by(f64::total_cmp);
+        let nodes = [(-(0.6f64).sqrt(), 5.0 / 9.0), (0.0, 8.0 / 9.0), ((0.6f64).sqrt(), 5.0 / 9.0)];
+        let mut sum = 0.0;
+        for pair in breaks.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            for (node, weight) in nodes {
+                let t = 0.5 * (a + b) + 0.5 * (b - a) * node;
+                sum += 0.5 * (b - a) * weight * smoothed((x.0 - t * xi.0, x.1 - t * xi.1), rest);
+            }
+        }
+        sum
+    }
+    smoothed(x, &[(1.0, 0.0), (0.0, 1.0), (1.0, 1.0)])
+}
+
+/// `sum_p c(p) N(y - p + (2, 2))` on a periodic lattice of `w x h` values.
+fn box_spline_surface(values: &[f64], w: usize, h: usize, y: (f64, f64)) -> f64 {
+    let (i0, j0) = (y.0.floor() as i64, y.1.floor() as i64);
+    let mut sum = 0.0;
+    for j in j0 - 2..=j0 + 2 {
+        for i in i0 - 2..=i0 + 2 {
+            let c = values[(i.rem_euclid(w as i64) + w as i64 * j.rem_euclid(h as i64)) as usize];
+            sum += c * box_spline_222((y.0 - i as f64 + 2.0, y.1 - j as f64 + 2.0));
+        }
+    }
+    sum
+}
+
+#[test]
+fn the_direct_box_spline_evaluation_is_sound() {
+    // Lattice values 1/2 and 1/12 (the limit mask), partition of unity, symmetry.
+    assert!((box_spline_222((2.0, 2.0)) - 0.5).abs() < 1e-14);
+    for (dx, dy) in [(1.0, 0.0), (0.0, 1.0), (1.0, 1.0), (-1.0, 0.0), (0.0, -1.0), (-1.0, -1.0)] {
+        assert!((box_spline_222((2.0 + dx, 2.0 + dy)) - 1.0 / 12.0).abs() < 1e-14);
+    }
+    assert!(box_spline_222((3.0, 1.0)).abs() < 1e-14 && box_spline_222((4.1, 2.0)) == 0.0);
+    for (x, y) in [(0.3, 0.7), (0.55, 0.1), (0.91, 0.42)] {
+        let total: f64 = (-3..=3)
+            .flat_map(|j| (-3..=3).map(move |i| (i, j)))
+            .map(|(i, j)| box_spline_222((x + i as f64, y + j as f64)))
+            .sum();
+        assert!((total - 1.0).abs() < 1e-13, "partition of unity at ({x}, {y}): {total}");
+        let a = box_spline_222((2.0 + x, 2.0 + y));
+        assert!((a - box_spline_222((2.0 - x, 2.0 - y))).abs() < 1e-14);
+        assert!((a - box_spline_222((2.0 + y, 2.0 + x))).abs() < 1e-14);
+    }
+}
+
+#[test]
+fn regular_patches_converge_to_the_directly_evaluated_box_spline() {
+    // After one ternary or quaternary step, two Loop steps, or none, the limit mask of
+    // every fine vertex (library code) gives the box spline evaluated directly at the
+    // vertex's lattice position (independent code): all three schemes refine N(2,2,2).
+    let (w, h) = (6usize, 5usize);
+    let size = (w as i64, h as i64);
+    let (mesh, coords) = lattice_torus(w, h, 11);
+    let coarse: Vec<[f64; 3]> = mesh.positions().iter().map(|p| p.to_array()).collect();
+    let check = |fine: &HalfedgeMesh, fine_coords: &[(i64, i64)], scale: f64, scheme: &str| {
+        let limit = crate::limit::limit_positions(fine, &LoopOptions::default()).unwrap();
+        let mut worst = 0.0f64;
+        for (p, c) in limit.iter().zip(fine_coords) {
+            let y = (c.0 as f64 / scale, c.1 as f64 / scale);
+            for axis in 0..3 {
+                let channel: Vec<f64> = coarse.iter().map(|v| v[axis]).collect();
+                worst = worst.max((box_spline_surface(&channel, w, h, y) - p[axis]).abs());
+            }
+        }
+        assert!(worst < 1e-13, "{scheme}: largest difference {worst:e}");
+    };
+    check(&mesh, &coords, 1.0, "no step");
+    let half_coords = loop_coords(&mesh, &coords, size);
+    let half = subdivide(&mesh, 1, &LoopOptions::default()).unwrap().to_halfedge_mesh().unwrap();
+    let quarter_coords = loop_coords(&half, &half_coords, (2 * size.0, 2 * size.1));
+    let two_loop = subdivide(&mesh, 2, &LoopOptions::default()).unwrap().to_halfedge_mesh().unwrap();
+    check(&two_loop, &quarter_coords, 4.0, "two Loop steps");
+    let quaternary = quaternary_subdivide(&mesh, 1, &LoopOptions::default()).unwrap().to_halfedge_mesh().unwrap();
+    check(&quaternary, &quarter_coords, 4.0, "quaternary");
+    let ternary = ternary_subdivide(&mesh, 1, &TernaryOptions::default()).unwrap().to_halfedge_mesh().unwrap();
+    check(&ternary, &ternary_coords(&mesh, &coords, size), 3.0, "ternary");
+}
+
 #[test]
 fn every_arity_refines_the_same_box_spline() {
     // The limit at a lattice point is c/2 + (sum of the six neighbours)/12 (the values
