@@ -1,23 +1,86 @@
 //! `multires`: subdivision-based geometry in one crate.
 //!
-//! This facade re-exports the member crates of the workspace, one module each; it
-//! defines no algorithm of its own.
+//! This facade re-exports the member crates of the workspace, one module each, and adds
+//! the few types that span them: [`SurfaceScheme`] (every surface scheme behind one name,
+//! so a comparison over schemes is a loop), [`Pyramid`] and [`decompose`]
+//! (multiresolution by reverse Loop or reverse Doo-Sabin, one file format), and one
+//! [`Error`]. It defines no algorithm of its own. Depend on a member crate alone when you
+//! need only one job; none of them pulls in the command-line dependencies.
 //!
 //! | module | crate | what |
 //! |---|---|---|
 //! | [`mesh`] | `mesh-topo` | half-edge meshes, validation, traversal, mesh files |
-//! | [`loop_subdiv`] | `subdiv-loop` | Loop subdivision, reverse Loop, M-band Loop, analysis |
+//! | [`curve`] | `subdiv-curve` | Chaikin and reverse Chaikin, four-point, cubic B-spline, the interpolatory-approximating framework, smoothness analysis, SVG |
+//! | [`loop_subdiv`] | `subdiv-loop` | Loop subdivision, limit positions, reverse Loop, M-band Loop, analysis |
 //! | [`doo`] | `subdiv-doo` | Doo-Sabin subdivision, reverse Doo-Sabin, pyramids, analysis |
+//! | [`spline`] | `tri-spline` | triangular Bézier, B-patch and DMS splines; PIA / LSPIA fitting |
 //! | [`ifs`] | `ifs-nonlinear` | subdivision as IFS, complex-parameter and nonlinear subdivision, fractal rendering |
 //!
+//! # Subdivide with every scheme
 //! ```
-//! use multires::mesh::{HalfedgeMesh, shapes};
+//! use multires::prelude::*;
+//!
+//! let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+//! for scheme in SurfaceScheme::ALL {
+//!     let fine = scheme.subdivide(&octahedron, 2)?;
+//!     let stats = HalfedgeMesh::from_soup(&fine)?.topology_stats();
+//!     assert_eq!(stats.euler, 2, "{scheme} keeps the topology");
+//! }
+//! # Ok::<(), multires::Error>(())
+//! ```
+//!
+//! # Decompose, compress, reconstruct
+//! ```
+//! use multires::prelude::*;
+//!
 //! let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
-//! assert_eq!(cube.topology_stats().genus, 0);
-//! # Ok::<(), multires::mesh::MeshError>(())
+//! let fine = HalfedgeMesh::from_soup(&SurfaceScheme::DooSabin.subdivide(&cube, 3)?)?;
+//! let pyramid = decompose(&fine, SurfaceScheme::DooSabin, Depth::Max)?;
+//! assert_eq!(pyramid.level_count(), 3);
+//! assert_eq!(pyramid.base().face_count(), 6); // the cube again, all details zero
+//! let half = pyramid.reconstruct_keeping(3, 0.5)?;
+//! assert_eq!(half.face_count(), fine.face_count());
+//! # Ok::<(), multires::Error>(())
 //! ```
+//!
+//! # Refine a curve
+//! ```
+//! use multires::curve::{CurveScheme, Topology};
+//!
+//! let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+//! let smooth = CurveScheme::chaikin().refine(&square, Topology::Closed, 3)?;
+//! assert_eq!(smooth.len(), 4 << 3);
+//! # Ok::<(), multires::curve::CurveError>(())
+//! ```
+//!
+//! # Render a fractal
+//! ```
+//! use multires::ifs::{ChaosGame, Projection, ToneMap, chaos_points, preset, render_points};
+//!
+//! let scene = preset("levy")?;
+//! let points = chaos_points(scene.ifs.as_ref(), &ChaosGame { points: 10_000, seed: 7, ..ChaosGame::default() })?;
+//! let png = render_points(&points, 64, 48, Projection::Xy, ToneMap::Log)?.encode_png()?;
+//! assert_eq!(&png[1..4], b"PNG");
+//! # Ok::<(), multires::ifs::IfsError>(())
+//! ```
+
+mod error;
+mod pyramid;
+mod scheme;
+
+pub use error::Error;
+pub use pyramid::{Depth, Pyramid, RateDistortion, decompose};
+pub use scheme::SurfaceScheme;
 
 pub use ifs_nonlinear as ifs;
 pub use mesh_topo as mesh;
+pub use subdiv_curve as curve;
 pub use subdiv_doo as doo;
 pub use subdiv_loop as loop_subdiv;
+pub use tri_spline as spline;
+
+/// The names most programs need: `use multires::prelude::*;`.
+pub mod prelude {
+    pub use crate::mesh::{HalfedgeMesh, MeshError, PolygonSoup, shapes};
+    pub use crate::{Depth, Error, Pyramid, RateDistortion, SurfaceScheme, decompose};
+}

@@ -2,16 +2,16 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use mesh_topo::graph::UnionFind;
-use mesh_topo::io::{self, Format, PlyEncoding, ReadReport, WriteOptions};
+use mesh_topo::io::{Format, PlyEncoding, ReadReport, WriteOptions};
 use mesh_topo::{DVec3, HalfedgeMesh, PolygonSoup};
 use serde_json::{Value, json};
 
-use super::common::{build_mesh, io_error, note_dropped, print_out, read_soup, write_mesh, write_soup};
+use super::common::{io_error, note_dropped, print_out, read_soup, write_soup};
 use super::{CliError, CliResult, input_error};
 
 /// Options of `info`.
@@ -81,20 +81,6 @@ pub struct RenderArgs {
     /// Further meshes rendered side by side with the first.
     #[arg(long, num_args = 1..)]
     pub side_by_side: Vec<PathBuf>,
-}
-
-/// Options of `demo`.
-#[derive(Debug, Args)]
-pub struct DemoArgs {
-    /// Output directory.
-    #[arg(long, default_value = "multires-out")]
-    pub out: PathBuf,
-}
-
-impl Default for DemoArgs {
-    fn default() -> Self {
-        Self { out: PathBuf::from("multires-out") }
-    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -464,56 +450,4 @@ pub fn convert(args: &ConvertArgs) -> CliResult {
 /// `multires render`.
 pub fn render(args: &RenderArgs) -> CliResult {
     super::render::run(args)
-}
-
-// ---------------------------------------------------------------------------------------
-// demo
-
-/// The mesh embedded in the binary for the demo: the Stanford bunny (1839 vertices,
-/// 3674 triangles; origin in `tests/data/README.md`).
-const DEMO_MESH_NAME: &str = "bunny";
-const DEMO_MESH_OBJ: &str = include_str!("../../tests/data/bunny.obj");
-
-/// State passed from one demo step to the next.
-pub struct DemoContext {
-    /// Output directory.
-    pub out: PathBuf,
-    /// Short name of the input mesh, used in file names.
-    pub name: &'static str,
-    /// The input mesh.
-    pub mesh: HalfedgeMesh,
-    /// What reading the input mesh did not keep.
-    pub report: ReadReport,
-}
-
-/// One step of the demo: prints what it does and writes its files into `context.out`.
-pub type DemoStep = fn(&mut DemoContext) -> CliResult;
-
-/// The demo, in order. Each issue adds its steps (subdivision, reversal, fitting...).
-const DEMO_STEPS: &[(&str, DemoStep)] = &[("the input mesh", demo_input_mesh)];
-
-fn demo_input_mesh(context: &mut DemoContext) -> CliResult {
-    let file = format!("{}.obj", context.name);
-    let info = mesh_info(&format!("{file} (embedded)"), &context.mesh.to_soup(), &context.report);
-    print_out(&mesh_info_text(&info))?;
-    let path = context.out.join(&file);
-    write_mesh(&path, &context.mesh)?;
-    let info_path = context.out.join(format!("{}-info.json", context.name));
-    let json = serde_json::to_string_pretty(&info).expect("internal: JSON of plain values");
-    std::fs::write(&info_path, json + "\n").map_err(|source| CliError::Io { path: info_path.clone(), source })?;
-    print_out(&format!("wrote {} and {}\n", path.display(), info_path.display()))
-}
-
-/// `multires demo` and `multires` without arguments.
-pub fn demo(args: &DemoArgs) -> CliResult {
-    std::fs::create_dir_all(&args.out).map_err(|source| CliError::Io { path: args.out.clone(), source })?;
-    let (soup, report) =
-        io::read_bytes(DEMO_MESH_OBJ.as_bytes(), Format::Obj).map_err(|e| input_error("embedded mesh", e))?;
-    let mesh = build_mesh(Path::new("embedded mesh"), &soup)?;
-    let mut context = DemoContext { out: args.out.clone(), name: DEMO_MESH_NAME, mesh, report };
-    for (i, (title, step)) in DEMO_STEPS.iter().enumerate() {
-        print_out(&format!("== {}. {title}\n", i + 1))?;
-        step(&mut context)?;
-    }
-    Ok(())
 }

@@ -11,6 +11,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 mod common;
 mod curve_cmds;
+mod demo;
 mod doo_cmds;
 mod ifs_cmds;
 mod loop_cmds;
@@ -84,7 +85,7 @@ pub enum Command {
     /// Render a mesh to PNG with a small software rasterizer.
     Render(mesh_cmds::RenderArgs),
     /// Run the demo into a directory.
-    Demo(mesh_cmds::DemoArgs),
+    Demo(demo::DemoArgs),
 }
 
 /// Surface subdivision schemes.
@@ -243,12 +244,12 @@ pub struct AnalyzeArgs {
 /// Runs one command (the demo when none is given).
 pub fn run(cli: Cli) -> CliResult {
     match cli.command {
-        None => mesh_cmds::demo(&mesh_cmds::DemoArgs::default()),
+        None => demo::demo(&demo::DemoArgs::default()),
         Some(Command::Info(args)) => mesh_cmds::info(&args),
         Some(Command::Compare(args)) => mesh_cmds::compare(&args),
         Some(Command::Convert(args)) => mesh_cmds::convert(&args),
         Some(Command::Render(args)) => mesh_cmds::render(&args),
-        Some(Command::Demo(args)) => mesh_cmds::demo(&args),
+        Some(Command::Demo(args)) => demo::demo(&args),
         Some(Command::Subdivide(args)) => match args.scheme {
             SurfaceScheme::Loop
             | SurfaceScheme::LoopWarren

@@ -3,8 +3,11 @@
 //! - `ci`: everything CI checks, in order, stopping at the first failure: formatting,
 //!   clippy with warnings denied, the layering rules, the dependency diet of each library
 //!   crate, all tests and doctests, docs with warnings denied, and that benches compile.
-//! - `bench [crate]`: runs the criterion benches and prints a compact table (also written
-//!   to `target/bench-summary.md`).
+//! - `bench [crate]`: runs the criterion benches and prints a compact table, then compares
+//!   the `subdivide-*` benchmarks with the peer libraries found on the machine (see
+//!   `peers.rs`; `MULTIRES_PEERS_DIR`); both are written to `target/bench-summary.md`.
+//! - `html`: runs the demo and opens its `index.html` in headless Chromium, checking that
+//!   every picture on the page loads (part of `ci` when a browser is installed).
 //! - `golden [--bless]`: checks the golden files under `tests/golden/`, or re-blesses them
 //!   and shows the diff for review.
 
@@ -14,6 +17,8 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 use std::time::Instant;
+
+mod peers;
 
 /// Project crates each crate may depend on (normal dependencies). The facade may use
 /// all of them; a crate missing from this table is an error, so new crates must state
@@ -39,8 +44,11 @@ fn main() -> ExitCode {
         Some("bench") => bench(args.get(1).map(String::as_str)),
         Some("golden") => golden(args.iter().any(|a| a == "--bless")),
         Some("layering") => layering(),
+        Some("html") => browser()
+            .ok_or_else(|| "html: no `chromium` or `chromium-browser` on the PATH".to_string())
+            .and_then(|b| html(&b)),
         _ => {
-            eprintln!("usage: cargo xtask ci | bench [crate] | golden [--bless] | layering");
+            eprintln!("usage: cargo xtask ci | bench [crate] | golden [--bless] | layering | html");
             return ExitCode::from(2);
         }
     };
@@ -79,6 +87,10 @@ fn ci() -> Result<(), String> {
     run("test", cargo().args(["test", "--workspace"]))?;
     run("doc", cargo().args(["doc", "--workspace", "--no-deps"]).env("RUSTDOCFLAGS", "-D warnings"))?;
     run("bench --no-run", cargo().args(["bench", "--workspace", "--no-run"]))?;
+    match browser() {
+        Some(browser) => html(&browser)?,
+        None => eprintln!("==> html: skipped, no headless browser (install Debian's `chromium`)"),
+    }
     eprintln!("==> ci passed in {:.0} s", total.elapsed().as_secs_f64());
     Ok(())
 }
@@ -163,20 +175,29 @@ fn bench(krate: Option<&str>) -> Result<(), String> {
     let mut rows = BTreeMap::new();
     collect_estimates(&criterion_dir, &criterion_dir, &mut rows);
     let mut table = String::from("| benchmark | mean | throughput |\n|---|---:|---:|\n");
-    for (name, (mean_ns, throughput)) in &rows {
-        table.push_str(&format!("| {name} | {} | {} |\n", format_time(*mean_ns), throughput));
+    for (name, measurement) in &rows {
+        let throughput = measurement.elements.map(|n| format_throughput(n, measurement.mean_ns)).unwrap_or_default();
+        table.push_str(&format!("| {name} | {} | {throughput} |\n", format_time(measurement.mean_ns)));
     }
     println!("{table}");
+    let mesh_file = |mesh: &str| {
+        ["obj", "off", "ply"]
+            .iter()
+            .map(|ext| workspace_root().join("tests/data").join(format!("{mesh}.{ext}")))
+            .find(|p| p.is_file())
+    };
+    let comparison = peers::comparison(&rows, mesh_file);
+    println!("{comparison}");
     let summary = workspace_root().join("target/bench-summary.md");
-    fs::write(&summary, format!("# Benchmark summary\n\n{table}"))
+    fs::write(&summary, format!("# Benchmark summary\n\n{table}\n{comparison}"))
         .map_err(|e| format!("{}: {e}", summary.display()))?;
     eprintln!("    written to {}", summary.display());
     Ok(())
 }
 
 /// Finds `<id>/new/estimates.json` under the criterion directory: mean time and, when
-/// the benchmark declared one, its throughput.
-fn collect_estimates(root: &Path, dir: &Path, rows: &mut BTreeMap<String, (f64, String)>) {
+/// the benchmark declared one, its throughput in elements.
+fn collect_estimates(root: &Path, dir: &Path, rows: &mut BTreeMap<String, peers::Measurement>) {
     let Ok(entries) = fs::read_dir(dir) else { return };
     for entry in entries.flatten() {
         let path = entry.path();
@@ -184,33 +205,25 @@ fn collect_estimates(root: &Path, dir: &Path, rows: &mut BTreeMap<String, (f64, 
             continue;
         }
         if path.file_name().is_some_and(|n| n == "new") {
-            let estimates = fs::read_to_string(path.join("estimates.json")).ok();
-            let benchmark = fs::read_to_string(path.join("benchmark.json")).ok();
-            let mean = estimates
-                .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
-                .and_then(|v| v["mean"]["point_estimate"].as_f64());
-            let Some(mean_ns) = mean else { continue };
-            let throughput = benchmark
-                .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
-                .map(|v| format_throughput(&v["throughput"], mean_ns))
-                .unwrap_or_default();
+            let read_json = |name: &str| {
+                fs::read_to_string(path.join(name))
+                    .ok()
+                    .and_then(|s| serde_json::from_str::<serde_json::Value>(&s).ok())
+            };
+            let Some(mean_ns) = read_json("estimates.json").and_then(|v| v["mean"]["point_estimate"].as_f64()) else {
+                continue;
+            };
+            let elements = read_json("benchmark.json").and_then(|v| v["throughput"]["Elements"].as_f64());
             let id = dir.strip_prefix(root).unwrap_or(dir).display().to_string();
-            rows.insert(id, (mean_ns, throughput));
+            rows.insert(id, peers::Measurement { mean_ns, elements });
         } else if path.file_name().is_some_and(|n| n != "report") {
             collect_estimates(root, &path, rows);
         }
     }
 }
 
-fn format_throughput(throughput: &serde_json::Value, mean_ns: f64) -> String {
-    let per_second = |count: f64| count / (mean_ns * 1e-9);
-    if let Some(elements) = throughput["Elements"].as_f64() {
-        format!("{:.2} M elem/s", per_second(elements) / 1e6)
-    } else if let Some(bytes) = throughput["Bytes"].as_f64() {
-        format!("{:.2} GB/s", per_second(bytes) / 1e9)
-    } else {
-        String::new()
-    }
+fn format_throughput(elements: f64, mean_ns: f64) -> String {
+    format!("{:.2} M elem/s", elements / (mean_ns * 1e-9) / 1e6)
 }
 
 fn format_time(ns: f64) -> String {
@@ -224,7 +237,8 @@ fn format_time(ns: f64) -> String {
 
 fn golden(bless: bool) -> Result<(), String> {
     let mut command = cargo();
-    command.args(["test", "--workspace", "--test", "golden"]);
+    // Every `tests/golden*.rs` target of the facade.
+    command.args(["test", "-p", "multires", "--test", "golden*"]);
     if bless {
         command.env("MULTIRES_BLESS", "1");
     }
@@ -235,5 +249,49 @@ fn golden(bless: bool) -> Result<(), String> {
             Command::new("git").current_dir(workspace_root()).args(["diff", "--stat", "--", "tests/golden"]).status();
         eprintln!("    review the changes with: git diff tests/golden");
     }
+    Ok(())
+}
+
+/// The headless browser used by [`html`], if one is installed.
+fn browser() -> Option<PathBuf> {
+    let path = env::var_os("PATH")?;
+    env::split_paths(&path)
+        .flat_map(|dir| ["chromium", "chromium-browser"].map(|name| dir.join(name)))
+        .find(|candidate| candidate.is_file())
+}
+
+/// Runs the demo into `target/demo-html` and loads its page in headless Chromium. The page
+/// marks its `<body>` with the number of images and the broken ones once loaded.
+fn html(browser: &Path) -> Result<(), String> {
+    let out = workspace_root().join("target/demo-html");
+    let _ = fs::remove_dir_all(&out);
+    run("html: demo", cargo().args(["run", "--quiet", "--", "demo", "--out"]).arg(&out))?;
+    let page = out.join("index.html");
+    let source = fs::read_to_string(&page).map_err(|e| format!("{}: {e}", page.display()))?;
+    let expected_images = source.matches("<img ").count();
+    eprintln!("==> html: {} in {}", page.display(), browser.display());
+    let output = Command::new(browser)
+        .args(["--headless", "--no-sandbox", "--disable-gpu", "--allow-file-access-from-files"])
+        .args(["--virtual-time-budget=10000", "--dump-dom"])
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .map_err(|e| format!("html: cannot start {}: {e}", browser.display()))?;
+    let dom = String::from_utf8_lossy(&output.stdout);
+    let attribute = |name: &str| {
+        let key = format!("data-{name}=\"");
+        dom.find(&key).map(|start| {
+            let rest = &dom[start + key.len()..];
+            rest[..rest.find('"').unwrap_or(0)].to_string()
+        })
+    };
+    if attribute("checked").as_deref() != Some("yes") {
+        return Err(format!("html: the page did not finish loading in the browser: {}", output.status));
+    }
+    let images: usize = attribute("images").and_then(|n| n.parse().ok()).unwrap_or(0);
+    let broken = attribute("broken").unwrap_or_default();
+    if images != expected_images || !broken.is_empty() {
+        return Err(format!("html: {images} of {expected_images} images found; broken: [{broken}]"));
+    }
+    eprintln!("    html: all {images} pictures load in the browser");
     Ok(())
 }

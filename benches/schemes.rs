@@ -1,0 +1,52 @@
+//! Every surface scheme on the same meshes: one loop over [`SurfaceScheme::ALL`].
+//!
+//! Benchmark ids are `subdivide-<mesh>/<scheme>-<threads>t/<level>` with the output face
+//! count as throughput; `cargo xtask bench` reads them back to print faces per second and
+//! the ratio against the peer libraries it finds on the machine. Outputs above
+//! [`MAX_OUTPUT_FACES`] are skipped. The Loop and Doo-Sabin defaults also run on two
+//! threads; results are bit-identical for any thread count, only the time changes.
+
+use std::hint::black_box;
+use std::path::Path;
+use std::time::Duration;
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use multires::prelude::*;
+
+/// Largest output (faces) a benchmark is run for: level 4 of the 75k-face bunny.
+const MAX_OUTPUT_FACES: usize = 20_000_000;
+
+/// The meshes, from `tests/data/` (origins in its README).
+const MESHES: [(&str, &str); 2] = [("bunny", "bunny.obj"), ("bunny00", "bunny00.off")];
+
+fn subdivide_all_schemes(c: &mut Criterion) {
+    for (name, file) in MESHES {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(file);
+        let (mesh, _) = multires::mesh::io::read_mesh(&path).expect("benchmark mesh");
+        let mut group = c.benchmark_group(format!("subdivide-{name}"));
+        group.sample_size(10).warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(3));
+        for scheme in SurfaceScheme::ALL {
+            let thread_counts: &[usize] =
+                if matches!(scheme, SurfaceScheme::Loop | SurfaceScheme::DooSabin) { &[1, 2] } else { &[1] };
+            for &threads in thread_counts {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
+                for level in 1..=4u32 {
+                    let faces =
+                        scheme.closed_face_count(mesh.vertex_count(), mesh.edge_count(), mesh.face_count(), level);
+                    if faces > MAX_OUTPUT_FACES {
+                        break;
+                    }
+                    group.throughput(Throughput::Elements(faces as u64));
+                    let id = BenchmarkId::new(format!("{scheme}-{threads}t"), level);
+                    group.bench_function(id, |b| {
+                        pool.install(|| b.iter(|| scheme.subdivide(black_box(&mesh), level).expect("subdivision")))
+                    });
+                }
+            }
+        }
+        group.finish();
+    }
+}
+
+criterion_group!(benches, subdivide_all_schemes);
+criterion_main!(benches);

@@ -1,0 +1,262 @@
+//! Multiresolution in one type: a base mesh plus per-level details, from reverse Loop or
+//! reverse Doo-Sabin, with one file format (the member crates' versioned encodings,
+//! told apart by their magic numbers).
+
+use mesh_topo::{HalfedgeMesh, PolygonSoup};
+use serde::{Deserialize, Serialize};
+use subdiv_doo::DooPyramid;
+use subdiv_loop::pyramid::LoopPyramid;
+
+use crate::{Error, SurfaceScheme};
+
+/// How many levels [`decompose`] reverses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Depth {
+    /// Exactly this many (an error if the connectivity allows fewer).
+    Levels(u32),
+    /// As many as the connectivity allows (at least one).
+    Max,
+}
+
+/// A multiresolution pyramid of either family.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Pyramid {
+    /// From reverse Loop.
+    Loop(LoopPyramid),
+    /// From reverse Doo-Sabin.
+    Doo(DooPyramid),
+}
+
+/// One row of [`Pyramid::rate_distortion`]: errors relative to the bounding-box
+/// diagonal of the exact finest mesh.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RateDistortion {
+    /// Fraction of the detail vectors kept (the largest ones).
+    pub fraction: f64,
+    /// Number of detail vectors kept.
+    pub kept: usize,
+    /// Largest vertex distance to the exact finest mesh / bounding-box diagonal.
+    pub max_error: f64,
+    /// Root-mean-square vertex distance / bounding-box diagonal.
+    pub rms_error: f64,
+}
+
+/// Decomposes `mesh` into a base mesh and details by repeated reverse subdivision of
+/// `scheme`.
+///
+/// ```
+/// use multires::prelude::*;
+///
+/// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+/// let fine = HalfedgeMesh::from_soup(&SurfaceScheme::Loop.subdivide(&octahedron, 2)?)?;
+/// let pyramid = decompose(&fine, SurfaceScheme::Loop, Depth::Max)?;
+/// assert_eq!(pyramid.level_count(), 2);
+/// assert_eq!(pyramid.base().face_count(), 8);
+/// let rebuilt = pyramid.reconstruct(2)?;
+/// let worst = rebuilt.positions.iter().zip(fine.positions()).map(|(p, q)| p.distance(*q)).fold(0.0, f64::max);
+/// assert!(worst < 1e-12);
+/// # Ok::<(), multires::Error>(())
+/// ```
+///
+/// # Errors
+/// [`Error::NotReversible`] for the M-band Loop schemes; otherwise the member crate's
+/// error, e.g. when the mesh does not have the scheme's subdivision connectivity (it
+/// names where the structure breaks).
+pub fn decompose(mesh: &HalfedgeMesh, scheme: SurfaceScheme, depth: Depth) -> Result<Pyramid, Error> {
+    if let Some(rules) = scheme.loop_options() {
+        let levels = match depth {
+            Depth::Levels(n) => subdiv_loop::pyramid::Levels::Count(n as usize),
+            Depth::Max => subdiv_loop::pyramid::Levels::Max,
+        };
+        let options = subdiv_loop::pyramid::DecomposeOptions { rules, levels, seed_vertex: None };
+        return Ok(Pyramid::Loop(subdiv_loop::pyramid::decompose(mesh, &options)?));
+    }
+    if let Some(rule) = scheme.doo_rule() {
+        let options = match depth {
+            Depth::Levels(n) => subdiv_doo::DecomposeOptions::levels(rule, n),
+            Depth::Max => subdiv_doo::DecomposeOptions::max(rule),
+        };
+        return Ok(Pyramid::Doo(subdiv_doo::decompose(mesh, &options)?.pyramid));
+    }
+    Err(Error::NotReversible { scheme })
+}
+
+impl Pyramid {
+    /// The scheme whose reverse made the pyramid.
+    pub fn scheme(&self) -> SurfaceScheme {
+        match self {
+            Pyramid::Loop(p) => match p.rules.weights {
+                subdiv_loop::forward::VertexWeights::Loop => SurfaceScheme::Loop,
+                subdiv_loop::forward::VertexWeights::Warren => SurfaceScheme::LoopWarren,
+            },
+            Pyramid::Doo(p) => match p.rule {
+                subdiv_doo::FaceRule::DooSabin => SurfaceScheme::DooSabin,
+                subdiv_doo::FaceRule::Simple => SurfaceScheme::DooSimple,
+                _ => SurfaceScheme::DooCentroid,
+            },
+        }
+    }
+
+    /// Number of refinement levels above the base mesh.
+    pub fn level_count(&self) -> usize {
+        match self {
+            Pyramid::Loop(p) => p.level_count(),
+            Pyramid::Doo(p) => p.level_count(),
+        }
+    }
+
+    /// Total number of detail vectors.
+    pub fn detail_count(&self) -> usize {
+        match self {
+            Pyramid::Loop(p) => p.detail_count(),
+            Pyramid::Doo(p) => p.detail_count(),
+        }
+    }
+
+    /// The coarsest mesh.
+    pub fn base(&self) -> &PolygonSoup {
+        match self {
+            Pyramid::Loop(p) => &p.base,
+            Pyramid::Doo(p) => &p.base,
+        }
+    }
+
+    /// Rebuilds level `level` (0 = the base mesh) with every detail: exact.
+    ///
+    /// # Errors
+    /// The member crate's error if `level` is beyond [`level_count`](Self::level_count) or
+    /// the pyramid is inconsistent (e.g. read from a damaged file).
+    pub fn reconstruct(&self, level: usize) -> Result<PolygonSoup, Error> {
+        Ok(match self {
+            Pyramid::Loop(p) => p.reconstruct(level)?,
+            Pyramid::Doo(p) => p.reconstruct(level, None)?,
+        })
+    }
+
+    /// Rebuilds level `level` keeping only the largest `fraction` of the details: the
+    /// compression use.
+    ///
+    /// # Errors
+    /// As [`reconstruct`](Self::reconstruct), and when `fraction` is not in `[0, 1]`.
+    pub fn reconstruct_keeping(&self, level: usize, fraction: f64) -> Result<PolygonSoup, Error> {
+        Ok(match self {
+            Pyramid::Loop(p) => p.compressed(fraction)?.reconstruct(level)?,
+            Pyramid::Doo(p) => p.reconstruct(level, Some(fraction))?,
+        })
+    }
+
+    /// Errors of [`reconstruct_keeping`](Self::reconstruct_keeping) at the finest level
+    /// for each fraction.
+    ///
+    /// # Errors
+    /// As [`reconstruct_keeping`](Self::reconstruct_keeping).
+    pub fn rate_distortion(&self, fractions: &[f64]) -> Result<Vec<RateDistortion>, Error> {
+        Ok(match self {
+            Pyramid::Loop(p) => p
+                .rate_distortion(fractions)?
+                .into_iter()
+                .map(|r| RateDistortion {
+                    fraction: r.fraction,
+                    kept: r.kept,
+                    max_error: r.max_error,
+                    rms_error: r.rms_error,
+                })
+                .collect(),
+            Pyramid::Doo(p) => p
+                .rate_distortion(fractions)?
+                .into_iter()
+                .map(|r| RateDistortion {
+                    fraction: r.fraction,
+                    kept: r.kept,
+                    max_error: r.max_error,
+                    rms_error: r.rms_error,
+                })
+                .collect(),
+        })
+    }
+
+    /// The `.mres` file contents (the member crate's versioned encoding).
+    ///
+    /// # Errors
+    /// The member crate's encoding error.
+    pub fn to_bytes(&self) -> Result<Vec<u8>, Error> {
+        Ok(match self {
+            Pyramid::Loop(p) => p.to_bytes()?,
+            Pyramid::Doo(p) => p.to_bytes()?,
+        })
+    }
+
+    /// Reads a `.mres` file of either family.
+    ///
+    /// ```
+    /// use multires::prelude::*;
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = HalfedgeMesh::from_soup(&SurfaceScheme::DooSabin.subdivide(&cube, 1)?)?;
+    /// let pyramid = decompose(&fine, SurfaceScheme::DooSabin, Depth::Levels(1))?;
+    /// let bytes = pyramid.to_bytes()?;
+    /// assert_eq!(Pyramid::from_bytes(&bytes)?, pyramid);
+    /// assert!(Pyramid::from_bytes(&bytes[..bytes.len() / 2]).is_err()); // truncated
+    /// # Ok::<(), multires::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`Error::NotAPyramid`] if neither magic number matches; the member crate's error
+    /// for a truncated, corrupted or newer-version file.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, Error> {
+        if LoopPyramid::is_loop_pyramid(bytes) {
+            Ok(Pyramid::Loop(LoopPyramid::from_bytes(bytes)?))
+        } else if subdiv_doo::is_doo_pyramid(bytes) {
+            Ok(Pyramid::Doo(DooPyramid::from_bytes(bytes)?))
+        } else {
+            Err(Error::NotAPyramid)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mesh_topo::shapes;
+
+    /// Moves every vertex a little so that the details are not zero.
+    fn perturbed(soup: &PolygonSoup) -> HalfedgeMesh {
+        let mut soup = soup.clone();
+        for (i, p) in soup.positions.iter_mut().enumerate() {
+            let t = i as f64;
+            *p += glam::DVec3::new((t * 0.37).sin(), (t * 0.71).cos(), (t * 1.13).sin()) * 0.01;
+        }
+        HalfedgeMesh::from_soup(&soup).unwrap()
+    }
+
+    #[test]
+    fn every_reversible_scheme_reconstructs_exactly() {
+        let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron()).unwrap();
+        let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
+        for scheme in SurfaceScheme::ALL.into_iter().filter(|s| s.is_reversible()) {
+            let coarse = if scheme.accepts_polygons() { &cube } else { &octahedron };
+            let fine = perturbed(&scheme.subdivide(coarse, 2).unwrap());
+            let pyramid = decompose(&fine, scheme, Depth::Levels(2)).unwrap();
+            assert_eq!(pyramid.scheme(), scheme);
+            let rebuilt = Pyramid::from_bytes(&pyramid.to_bytes().unwrap()).unwrap().reconstruct(2).unwrap();
+            assert_eq!(rebuilt.indices, fine.to_soup().indices, "{scheme}");
+            let worst = rebuilt.positions.iter().zip(fine.positions()).map(|(p, q)| p.distance(*q)).fold(0.0, f64::max);
+            assert!(worst < 1e-12, "{scheme}: {worst}");
+            let table = pyramid.rate_distortion(&[0.0, 1.0]).unwrap();
+            assert!(table[1].max_error < 1e-12 && table[0].max_error > 0.0, "{scheme}: {table:?}");
+        }
+    }
+
+    #[test]
+    fn m_band_schemes_are_not_reversible() {
+        let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron()).unwrap();
+        let error = decompose(&octahedron, SurfaceScheme::TernaryLoop, Depth::Max).unwrap_err();
+        assert!(matches!(error, Error::NotReversible { .. }), "{error}");
+    }
+
+    #[test]
+    fn unknown_bytes_are_not_a_pyramid() {
+        assert!(matches!(Pyramid::from_bytes(b"not a pyramid"), Err(Error::NotAPyramid)));
+        assert!(matches!(Pyramid::from_bytes(&[]), Err(Error::NotAPyramid)));
+    }
+}

@@ -1,0 +1,210 @@
+//! One name for every surface subdivision scheme of the workspace, so that a comparison
+//! over all schemes is a loop rather than a `match` at every call site.
+
+use std::fmt;
+use std::str::FromStr;
+
+use mesh_topo::{HalfedgeMesh, PolygonSoup};
+use subdiv_doo::{DooOptions, FaceRule};
+use subdiv_loop::forward::{LoopOptions, VertexWeights};
+use subdiv_loop::mband::TernaryOptions;
+
+use crate::Error;
+
+/// A surface subdivision scheme with its default parameters.
+///
+/// ```
+/// use multires::prelude::*;
+///
+/// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+/// for scheme in SurfaceScheme::ALL.into_iter().filter(|s| s.accepts_polygons()) {
+///     let fine = scheme.subdivide(&cube, 2)?;
+///     println!("{scheme}: {} faces", fine.face_count());
+/// }
+/// # Ok::<(), multires::Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum SurfaceScheme {
+    /// Loop subdivision with Loop's original vertex weights (OpenSubdiv's, CGAL's and
+    /// OpenMesh's choice).
+    Loop,
+    /// Loop subdivision with Warren's simplified weights (libigl's choice).
+    LoopWarren,
+    /// Ternary (1-to-9) Loop subdivision.
+    TernaryLoop,
+    /// Quaternary (1-to-16) Loop subdivision.
+    QuaternaryLoop,
+    /// Doo-Sabin subdivision with the original weights.
+    DooSabin,
+    /// Doo-Sabin's "simple" variant (vertex, edge midpoints and centroid averaged).
+    DooSimple,
+    /// The centroid contraction `a d + (1 - a) v`, `a = 1/2`, of the reverse Doo-Sabin
+    /// paper (not C1 on faces of four or more sides).
+    DooCentroid,
+}
+
+impl SurfaceScheme {
+    /// Every scheme, in a fixed order.
+    pub const ALL: [SurfaceScheme; 7] = [
+        SurfaceScheme::Loop,
+        SurfaceScheme::LoopWarren,
+        SurfaceScheme::TernaryLoop,
+        SurfaceScheme::QuaternaryLoop,
+        SurfaceScheme::DooSabin,
+        SurfaceScheme::DooSimple,
+        SurfaceScheme::DooCentroid,
+    ];
+
+    /// The name used on the command line (`loop`, `doo-sabin`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            SurfaceScheme::Loop => "loop",
+            SurfaceScheme::LoopWarren => "loop-warren",
+            SurfaceScheme::TernaryLoop => "ternary-loop",
+            SurfaceScheme::QuaternaryLoop => "quaternary-loop",
+            SurfaceScheme::DooSabin => "doo-sabin",
+            SurfaceScheme::DooSimple => "doo-simple",
+            SurfaceScheme::DooCentroid => "doo-centroid",
+        }
+    }
+
+    /// True for the schemes that take polygons of any size; the Loop family takes
+    /// triangles only.
+    pub fn accepts_polygons(self) -> bool {
+        matches!(self, SurfaceScheme::DooSabin | SurfaceScheme::DooSimple | SurfaceScheme::DooCentroid)
+    }
+
+    /// True if [`decompose`](crate::decompose) can reverse this scheme (Loop with either
+    /// weights and the three Doo-Sabin rules; M-band Loop has no reverse yet).
+    pub fn is_reversible(self) -> bool {
+        !matches!(self, SurfaceScheme::TernaryLoop | SurfaceScheme::QuaternaryLoop)
+    }
+
+    /// Number of output faces of `levels` steps on a closed mesh with `vertices`,
+    /// `edges` and `faces`: `4^k F`, `9^k F`, `16^k F` for the Loop family; for
+    /// Doo-Sabin one face per face, edge and vertex at each step (`F' = F + E + V`,
+    /// `V' = 2E`, `E' = 4E`), so benchmarks can state throughput before running.
+    pub fn closed_face_count(self, vertices: usize, edges: usize, faces: usize, levels: u32) -> usize {
+        match self {
+            SurfaceScheme::Loop | SurfaceScheme::LoopWarren => faces * 4usize.pow(levels),
+            SurfaceScheme::TernaryLoop => faces * 9usize.pow(levels),
+            SurfaceScheme::QuaternaryLoop => faces * 16usize.pow(levels),
+            SurfaceScheme::DooSabin | SurfaceScheme::DooSimple | SurfaceScheme::DooCentroid => {
+                // Each step makes one face per face, edge and vertex; every corner becomes a
+                // vertex (V' = 2E) of valence 4 (E' = 2V' = 4E).
+                let (mut v, mut e, mut f) = (vertices, edges, faces);
+                for _ in 0..levels {
+                    (v, e, f) = (2 * e, 4 * e, f + e + v);
+                }
+                f
+            }
+        }
+    }
+
+    /// `levels` steps of this scheme on `mesh`, with default parameters.
+    ///
+    /// # Errors
+    /// The member crate's error ([`Error::Loop`] or [`Error::Doo`]): a non-triangle face
+    /// for the Loop family, non-finite positions, a mesh without faces.
+    pub fn subdivide(self, mesh: &HalfedgeMesh, levels: u32) -> Result<PolygonSoup, Error> {
+        let soup = match self {
+            SurfaceScheme::Loop => subdiv_loop::forward::subdivide(mesh, levels, &LoopOptions::default())?.into_soup(),
+            SurfaceScheme::LoopWarren => {
+                let options = LoopOptions { weights: VertexWeights::Warren, ..LoopOptions::default() };
+                subdiv_loop::forward::subdivide(mesh, levels, &options)?.into_soup()
+            }
+            SurfaceScheme::TernaryLoop => {
+                subdiv_loop::mband::ternary_subdivide(mesh, levels, &TernaryOptions::default())?.into_soup()
+            }
+            SurfaceScheme::QuaternaryLoop => {
+                subdiv_loop::mband::quaternary_subdivide(mesh, levels, &LoopOptions::default())?.into_soup()
+            }
+            SurfaceScheme::DooSabin | SurfaceScheme::DooSimple | SurfaceScheme::DooCentroid => {
+                let rule = self.doo_rule().expect("internal: Doo-Sabin family");
+                subdiv_doo::subdivide(mesh, &DooOptions::new(rule, levels))?.into_soup()
+            }
+        };
+        Ok(soup)
+    }
+
+    /// The per-face rule of a Doo-Sabin-family scheme, `None` for the Loop family.
+    pub fn doo_rule(self) -> Option<FaceRule> {
+        match self {
+            SurfaceScheme::DooSabin => Some(FaceRule::DooSabin),
+            SurfaceScheme::DooSimple => Some(FaceRule::Simple),
+            SurfaceScheme::DooCentroid => Some(FaceRule::CENTROID_HALF),
+            _ => None,
+        }
+    }
+
+    /// The Loop rules of a reversible Loop-family scheme, `None` otherwise.
+    pub fn loop_options(self) -> Option<LoopOptions> {
+        match self {
+            SurfaceScheme::Loop => Some(LoopOptions::default()),
+            SurfaceScheme::LoopWarren => Some(LoopOptions { weights: VertexWeights::Warren, ..LoopOptions::default() }),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for SurfaceScheme {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for SurfaceScheme {
+    type Err = Error;
+
+    /// Parses a command-line name (`loop`, `loop-warren`, `ternary-loop`,
+    /// `quaternary-loop`, `doo-sabin`, `doo-simple`, `doo-centroid`).
+    fn from_str(name: &str) -> Result<Self, Error> {
+        SurfaceScheme::ALL.into_iter().find(|s| s.name() == name).ok_or_else(|| Error::UnknownScheme {
+            name: name.to_owned(),
+            known: SurfaceScheme::ALL.map(SurfaceScheme::name).join(", "),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mesh_topo::shapes;
+
+    #[test]
+    fn names_round_trip() {
+        for scheme in SurfaceScheme::ALL {
+            assert_eq!(scheme.name().parse::<SurfaceScheme>().unwrap(), scheme);
+        }
+        let error = "catmull-clark".parse::<SurfaceScheme>().unwrap_err().to_string();
+        assert!(error.contains("catmull-clark") && error.contains("doo-sabin"), "{error}");
+    }
+
+    #[test]
+    fn predicted_face_counts_match_subdivision() {
+        let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron()).unwrap();
+        let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
+        for scheme in SurfaceScheme::ALL {
+            let mesh = if scheme.accepts_polygons() { &cube } else { &octahedron };
+            for levels in 0..3 {
+                let fine = scheme.subdivide(mesh, levels).unwrap();
+                let expected =
+                    scheme.closed_face_count(mesh.vertex_count(), mesh.edge_count(), mesh.face_count(), levels);
+                assert_eq!(fine.face_count(), expected, "{scheme} level {levels}");
+                // Closed output: Euler characteristic 2 is kept.
+                let fine_mesh = HalfedgeMesh::from_soup(&fine).unwrap();
+                assert_eq!(fine_mesh.topology_stats().euler, 2, "{scheme} level {levels}");
+            }
+        }
+    }
+
+    #[test]
+    fn loop_family_rejects_quads_naming_the_face() {
+        let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
+        for scheme in SurfaceScheme::ALL.into_iter().filter(|s| !s.accepts_polygons()) {
+            let error = scheme.subdivide(&cube, 1).unwrap_err();
+            assert!(error.to_string().contains("face"), "{scheme}: {error}");
+        }
+    }
+}

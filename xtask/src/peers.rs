@@ -1,0 +1,160 @@
+//! Same-run comparison of the `subdivide-*` benchmarks with peer libraries.
+//!
+//! The peers are small command-line drivers around OpenSubdiv, CGAL and OpenMesh that
+//! follow one protocol: `<driver> <scheme> <in> <out|-> <level> [repeats] [budget_s]`
+//! prints one JSON line whose `t_sub_best_s` is the best time of the subdivision call
+//! alone (reading and writing excluded), like our criterion benchmarks. The drivers are
+//! looked up in `$MULTIRES_PEERS_DIR`, `$MULTIRES_PEERS_DIR/build` and the `PATH`; a
+//! missing driver is skipped with a note, so the command works on a bare machine too.
+
+use std::collections::BTreeMap;
+use std::env;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// A peer driver: the library, the program name, and which of our schemes it runs under
+/// which of its own scheme names.
+struct Driver {
+    library: &'static str,
+    program: &'static str,
+    schemes: &'static [(&'static str, &'static str)],
+}
+
+const DRIVERS: &[Driver] = &[
+    Driver { library: "OpenSubdiv", program: "osd_subdiv", schemes: &[("loop", "loop")] },
+    Driver { library: "CGAL", program: "cgal_subdiv", schemes: &[("loop", "loop"), ("doo-sabin", "doosabin")] },
+    Driver { library: "OpenMesh", program: "openmesh_subdiv", schemes: &[("loop", "loop")] },
+];
+
+/// One of our measurements: mean time and output faces.
+pub struct Measurement {
+    pub mean_ns: f64,
+    pub elements: Option<f64>,
+}
+
+/// Our time for one (mesh, scheme, level), per thread count.
+#[derive(Default)]
+struct Ours {
+    faces: Option<f64>,
+    seconds_by_threads: BTreeMap<usize, f64>,
+}
+
+/// Markdown section comparing the `subdivide-<mesh>/<scheme>-<n>t/<level>` rows with the
+/// peers found on the machine. `mesh_file` maps a benchmark mesh name to its file.
+pub fn comparison(rows: &BTreeMap<String, Measurement>, mesh_file: impl Fn(&str) -> Option<PathBuf>) -> String {
+    let mut ours: BTreeMap<(String, String, u32), Ours> = BTreeMap::new();
+    for (id, measurement) in rows {
+        let Some((mesh, scheme, threads, level)) = parse_id(id) else { continue };
+        let entry = ours.entry((mesh, scheme, level)).or_default();
+        entry.faces = measurement.elements.or(entry.faces);
+        entry.seconds_by_threads.insert(threads, measurement.mean_ns * 1e-9);
+    }
+    if ours.is_empty() {
+        return String::from("No `subdivide-*` benchmarks were run: nothing to compare with peers.\n");
+    }
+    let peers_dir = env::var_os("MULTIRES_PEERS_DIR").map(PathBuf::from);
+    let found: Vec<(&Driver, PathBuf)> =
+        DRIVERS.iter().filter_map(|d| find_program(d.program, peers_dir.as_deref()).map(|p| (d, p))).collect();
+    let mut text = String::from(
+        "## Subdivision against peer libraries (same run)\n\n\
+         Times of the subdivision call alone, best of up to 3 runs for the peers, criterion mean for \
+         ours; `ratio` = fastest peer time / our time (above 1: we are faster).\n\n",
+    );
+    let missing: Vec<&str> =
+        DRIVERS.iter().filter(|d| !found.iter().any(|(f, _)| f.program == d.program)).map(|d| d.library).collect();
+    if !missing.is_empty() {
+        text.push_str(&format!(
+            "Not found (skipped): {}. Set `MULTIRES_PEERS_DIR` to the folder holding the peer drivers \
+             (`osd_subdiv`, `cgal_subdiv`, `openmesh_subdiv`).\n\n",
+            missing.join(", ")
+        ));
+    }
+    text.push_str("| mesh | scheme | level | faces | ours 1 thread | ours 2 threads | peers | ratio 1t | ratio 2t |\n");
+    text.push_str("|---|---|---:|---:|---:|---:|---|---:|---:|\n");
+    for ((mesh, scheme, level), measured) in &ours {
+        let one = measured.seconds_by_threads.get(&1).copied();
+        let two = measured.seconds_by_threads.get(&2).copied();
+        let mut peer_times = Vec::new();
+        if let Some(input) = mesh_file(mesh) {
+            for (driver, program) in &found {
+                let Some((_, their_scheme)) = driver.schemes.iter().find(|(our, _)| our == scheme) else { continue };
+                eprintln!("    {} {their_scheme} {} level {level}", driver.library, input.display());
+                match run_driver(program, their_scheme, &input, *level) {
+                    Ok(seconds) => peer_times.push((driver.library, seconds)),
+                    Err(message) => eprintln!("    {}: {message}", driver.library),
+                }
+            }
+        }
+        let fastest = peer_times.iter().map(|&(_, t)| t).fold(f64::INFINITY, f64::min);
+        let ratio = |ours: Option<f64>| match ours {
+            Some(t) if fastest.is_finite() => format!("{:.2}", fastest / t),
+            _ => "–".into(),
+        };
+        let rate = |seconds: Option<f64>| match (seconds, measured.faces) {
+            (Some(t), Some(f)) => format!("{} ({:.1} Mf/s)", format_seconds(t), f / t / 1e6),
+            (Some(t), None) => format_seconds(t),
+            _ => "–".into(),
+        };
+        let peers = if peer_times.is_empty() {
+            "–".to_string()
+        } else {
+            peer_times.iter().map(|(name, t)| format!("{name} {}", format_seconds(*t))).collect::<Vec<_>>().join(", ")
+        };
+        text.push_str(&format!(
+            "| {mesh} | {scheme} | {level} | {} | {} | {} | {peers} | {} | {} |\n",
+            measured.faces.map_or("–".into(), |f| format!("{f:.0}")),
+            rate(one),
+            rate(two),
+            ratio(one),
+            ratio(two),
+        ));
+    }
+    text
+}
+
+/// `subdivide-<mesh>/<scheme>-<threads>t/<level>` → its parts.
+fn parse_id(id: &str) -> Option<(String, String, usize, u32)> {
+    let mut parts = id.split('/');
+    let mesh = parts.next()?.strip_prefix("subdivide-")?;
+    let (scheme, threads) = parts.next()?.rsplit_once('-')?;
+    let threads = threads.strip_suffix('t')?.parse().ok()?;
+    let level = parts.next()?.parse().ok()?;
+    parts.next().is_none().then(|| (mesh.to_string(), scheme.to_string(), threads, level))
+}
+
+fn find_program(program: &str, peers_dir: Option<&Path>) -> Option<PathBuf> {
+    let from_dir = peers_dir.into_iter().flat_map(|d| [d.join(program), d.join("build").join(program)]);
+    let from_path = env::var_os("PATH").into_iter().flat_map(|p| env::split_paths(&p).collect::<Vec<_>>());
+    from_dir.chain(from_path.map(|d| d.join(program))).find(|candidate| candidate.is_file())
+}
+
+fn run_driver(program: &Path, scheme: &str, input: &Path, level: u32) -> Result<f64, String> {
+    let output = Command::new(program)
+        .args([scheme, &input.display().to_string(), "-", &level.to_string(), "3", "20"])
+        .output()
+        .map_err(|e| format!("cannot start {}: {e}", program.display()))?;
+    if !output.status.success() {
+        return Err(format!("exit {}: {}", output.status, String::from_utf8_lossy(&output.stderr).trim()));
+    }
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let line = stdout.lines().rev().find(|l| l.trim_start().starts_with('{')).ok_or("no JSON line in the output")?;
+    let value: serde_json::Value = serde_json::from_str(line).map_err(|e| format!("bad JSON: {e}"))?;
+    value["t_sub_best_s"].as_f64().ok_or_else(|| "no t_sub_best_s in the output".into())
+}
+
+fn format_seconds(t: f64) -> String {
+    if t < 1.0 { format!("{:.1} ms", t * 1e3) } else { format!("{t:.2} s") }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn benchmark_ids_parse() {
+        assert_eq!(parse_id("subdivide-bunny00/doo-sabin-2t/3"), Some(("bunny00".into(), "doo-sabin".into(), 2, 3)));
+        assert_eq!(parse_id("subdivide-bunny/loop-warren-1t/4").unwrap().1, "loop-warren");
+        assert_eq!(parse_id("build/bunny"), None);
+        assert_eq!(parse_id("subdivide-bunny/loop/4"), None);
+    }
+}
