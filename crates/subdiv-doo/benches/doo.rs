@@ -1,6 +1,11 @@
 //! Doo-Sabin benches: forward subdivision (levels 1-3) on the bunny and on a mesh of more
 //! than a million faces, single-threaded and with all threads.
 //!
+//! `doo_multires` times one reverse step (`decompose`, one level) and its reconstruction
+//! at four sizes, next to the forward step that makes the same fine mesh from the same
+//! coarse mesh; the throughput is in fine vertices, so a flat elements-per-second figure
+//! across sizes is linear time.
+//!
 //! Run with `cargo bench -p subdiv-doo --bench doo`. The inputs are built before timing;
 //! the timed call is `subdivide` on an already built half-edge mesh (the counterpart of
 //! CGAL's `DooSabin_subdivision` on a `Surface_mesh`).
@@ -8,9 +13,13 @@
 use std::hint::black_box;
 use std::time::Duration;
 
+use criterion::Throughput;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use mesh_topo::shapes::{self, CellKind};
 use mesh_topo::{DVec3, HalfedgeMesh, PolygonSoup};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use subdiv_doo::pyramid::{DecomposeOptions, decompose};
 use subdiv_doo::{DooOptions, FaceRule, subdivide};
 
 /// The bunny of `tests/data` (a minimal OBJ reader: positions and faces only).
@@ -69,5 +78,52 @@ fn forward(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, forward);
+/// A triangulated torus of `n x m x 2` faces with every vertex moved at random (fixed
+/// seed), and its Doo-Sabin refinement with every fine vertex moved too: a fine mesh with
+/// non-zero details at every vertex.
+fn multires_pair(n: u32, m: u32) -> (HalfedgeMesh, HalfedgeMesh) {
+    let mut rng = ChaCha8Rng::seed_from_u64(0x0d00_5ab1 + n as u64);
+    let mut jitter = |positions: &mut [DVec3], amount: f64| {
+        for p in positions {
+            *p += amount * DVec3::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5);
+        }
+    };
+    let mut coarse = HalfedgeMesh::from_soup(&shapes::torus(n, m, CellKind::Triangles)).unwrap();
+    jitter(coarse.positions_mut(), 0.2 / n as f64);
+    let mut fine = subdivide(&coarse, &DooOptions::new(FaceRule::DooSabin, 1)).unwrap().to_mesh().unwrap();
+    jitter(fine.positions_mut(), 0.05 / n as f64);
+    (coarse, fine)
+}
+
+fn multires(c: &mut Criterion) {
+    let one = single_thread();
+    let mut group = c.benchmark_group("doo_multires");
+    group.sample_size(10).measurement_time(Duration::from_secs(3)).warm_up_time(Duration::from_secs(1));
+    for (n, m) in [(64u32, 32u32), (128, 64), (256, 128), (512, 256)] {
+        let (coarse, fine) = multires_pair(n, m);
+        let fine_vertices = fine.vertex_count();
+        group.throughput(Throughput::Elements(fine_vertices as u64));
+        let forward_options = DooOptions::new(FaceRule::DooSabin, 1);
+        let options = DecomposeOptions::levels(FaceRule::DooSabin, 1);
+        let pyramid = decompose(&fine, &options).unwrap().pyramid;
+        group.bench_with_input(BenchmarkId::new("forward_1thread", fine_vertices), &coarse, |b, coarse| {
+            b.iter(|| one.install(|| subdivide(black_box(coarse), &forward_options).unwrap()))
+        });
+        group.bench_with_input(BenchmarkId::new("decompose_1thread", fine_vertices), &fine, |b, fine| {
+            b.iter(|| one.install(|| decompose(black_box(fine), &options).unwrap()))
+        });
+        group.bench_with_input(BenchmarkId::new("reconstruct_1thread", fine_vertices), &pyramid, |b, pyramid| {
+            b.iter(|| one.install(|| black_box(pyramid).reconstruct(1, None).unwrap()))
+        });
+        group.bench_with_input(BenchmarkId::new("decompose", fine_vertices), &fine, |b, fine| {
+            b.iter(|| decompose(black_box(fine), &options).unwrap())
+        });
+        group.bench_with_input(BenchmarkId::new("reconstruct", fine_vertices), &pyramid, |b, pyramid| {
+            b.iter(|| black_box(pyramid).reconstruct(1, None).unwrap())
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, forward, multires);
 criterion_main!(benches);
