@@ -6,6 +6,7 @@
 //! | module | crate | what |
 //! |---|---|---|
 //! | [`mesh`] | `mesh-topo` | half-edge meshes, validation, traversal, mesh files |
+//! | [`curve`] | `subdiv-curve` | curve subdivision by masks, the interpolatory-approximating framework, reverse Chaikin, analysis, SVG |
 //! | [`loop_subdiv`] | `subdiv-loop` | Loop subdivision, reverse Loop, M-band Loop, analysis |
 //! | [`doo`] | `subdiv-doo` | Doo-Sabin subdivision, reverse Doo-Sabin, pyramids, analysis |
 //! | [`ifs`] | `ifs-nonlinear` | subdivision as IFS, complex-parameter and nonlinear subdivision, fractal rendering |
@@ -19,5 +20,6 @@
 
 pub use ifs_nonlinear as ifs;
 pub use mesh_topo as mesh;
+pub use subdiv_curve as curve;
 pub use subdiv_doo as doo;
 pub use subdiv_loop as loop_subdiv;
