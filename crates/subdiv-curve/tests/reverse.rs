@@ -120,3 +120,41 @@ proptest! {
         prop_assert!(max_difference(&translated_split.details, &split.details) < 1e-12);
     }
 }
+
+#[test]
+fn open_end_rule_keeps_the_end_points_and_records_the_end_details() {
+    // Forward: the endpoint-keeping variant, 2n points for n coarse points.
+    let coarse = [DVec3::new(0.0, 0.0, 0.0), DVec3::new(4.0, 0.0, 1.0), DVec3::new(4.0, 8.0, 2.0)];
+    let fine = CurveScheme::chaikin().refine(&coarse, Topology::open(), 1).unwrap();
+    let expected = [
+        coarse[0],
+        0.75 * coarse[0] + 0.25 * coarse[1],
+        0.25 * coarse[0] + 0.75 * coarse[1],
+        0.75 * coarse[1] + 0.25 * coarse[2],
+        0.25 * coarse[1] + 0.75 * coarse[2],
+        coarse[2],
+    ];
+    assert_eq!(fine, expected.to_vec());
+
+    // Reverse of an arbitrary open polygon: the end coarse points are the fine end points,
+    // their details the offset of the single candidate from them (spec §3.2).
+    let moved: Vec<DVec3> = (0..8).map(|k| DVec3::new(k as f64, ((k * 7) % 5) as f64, (k % 3) as f64)).collect();
+    let split = reverse_chaikin(&moved, Topology::open()).unwrap();
+    let (n, last) = (split.coarse.len(), moved.len() - 1);
+    assert_eq!(n, 4);
+    assert_eq!((split.coarse[0], split.coarse[n - 1]), (moved[0], moved[last]));
+    let first_candidate = 1.5 * moved[1] - 0.5 * moved[2];
+    let last_candidate = 1.5 * moved[last - 1] - 0.5 * moved[last - 2];
+    assert!((split.details[0] - (first_candidate - moved[0])).length() < 1e-15);
+    assert!((split.details[n - 1] - (last_candidate - moved[last])).length() < 1e-15);
+    // Interior points: the mean of the two candidates, half their difference as detail.
+    let (a1, b1) = (1.5 * moved[3] - 0.5 * moved[4], 1.5 * moved[2] - 0.5 * moved[1]);
+    assert!((split.coarse[1] - 0.5 * (a1 + b1)).length() < 1e-15);
+    assert!((split.details[1] - 0.5 * (a1 - b1)).length() < 1e-15);
+    let back = reconstruct_chaikin(&split.coarse, &split.details, Topology::open()).unwrap();
+    assert!(max_difference(&back, &moved) < 1e-14);
+    // A Chaikin refinement reverses to its coarse polygon with zero details, ends included.
+    let split = reverse_chaikin(&fine, Topology::open()).unwrap();
+    assert!(max_difference(&split.coarse, &coarse) < 1e-15);
+    assert!(split.details.iter().all(|d| d.length() < 1e-15));
+}
