@@ -75,7 +75,7 @@
 use nalgebra::DMatrix;
 
 use crate::analysis::{self, Analysis, EigenChecks, LocalMatrix};
-use crate::refine::{fill_halo, halo, step};
+use crate::refine::{Refiner, fill_halo, halo, step};
 use crate::scheme::{CurveScheme, EndRule, Rule, Topology, check_four_point_tension};
 use crate::{CurveError, CurvePoint};
 
@@ -273,19 +273,49 @@ impl Framework {
         topology: Topology,
         levels: u32,
     ) -> Result<Vec<P>, CurveError> {
+        let mut out = Vec::new();
+        self.refine_into(&mut Refiner::new(), points, flags, topology, levels, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`Framework::refine`] into `out` (cleared first), with the work buffers of
+    /// `refiner`: refining again allocates nothing once the buffers have their size.
+    ///
+    /// # Errors
+    /// As [`Framework::refine`].
+    ///
+    /// ```
+    /// use subdiv_curve::{Framework, Refiner, Topology};
+    /// let (mut refiner, mut out) = (Refiner::new(), Vec::new());
+    /// let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    /// Framework::published().refine_into(&mut refiner, &square, &[true, false, false, false], Topology::Closed, 4, &mut out)?;
+    /// assert_eq!((out.len(), out[0]), (64, square[0]));
+    /// # Ok::<(), subdiv_curve::CurveError>(())
+    /// ```
+    pub fn refine_into<P: CurvePoint>(
+        &self,
+        refiner: &mut Refiner<P>,
+        points: &[P],
+        flags: &[bool],
+        topology: Topology,
+        levels: u32,
+        out: &mut Vec<P>,
+    ) -> Result<(), CurveError> {
         self.check_input(points, flags, topology)?;
         let interpolated: Vec<usize> = (0..points.len()).filter(|&i| flags[i]).collect();
         match self.mode {
-            VirtualPoints::SeedCompatible => Ok(self.refine_seed(points, &interpolated, topology, levels)),
+            VirtualPoints::SeedCompatible => {
+                self.refine_seed(refiner, points, &interpolated, topology, levels, out);
+            }
             VirtualPoints::ExactGlobal => {
                 let virtual_polygon = self.solve_virtual(points, &interpolated, topology)?;
-                let mut fine = self.approximating.refine(&virtual_polygon, topology, levels)?;
+                refiner.refine_into(&self.approximating, &virtual_polygon, topology, levels, out)?;
                 for &i in &interpolated {
-                    fine[i << levels] = points[i];
+                    out[i << levels] = points[i];
                 }
-                Ok(fine)
             }
         }
+        Ok(())
     }
 
     /// The virtual polygon `G` of `points` for the current mode: `q_i` at I-points
@@ -355,38 +385,45 @@ impl Framework {
 
     fn refine_seed<P: CurvePoint>(
         &self,
+        refiner: &mut Refiner<P>,
         points: &[P],
         interpolated: &[usize],
         topology: Topology,
         levels: u32,
-    ) -> Vec<P> {
+        out: &mut Vec<P>,
+    ) {
         let scheme = &self.approximating;
+        out.clear();
         if levels == 0 {
-            return points.to_vec();
+            out.extend_from_slice(points);
+            return;
         }
         let (left, right) = self.halo(points.len(), topology);
         let capacity = scheme.refined_len(points.len(), topology, levels - 1) + left + right;
-        let mut front = vec![P::zero(); capacity];
-        let mut back = vec![P::zero(); capacity];
-        let mut out = Vec::new();
+        for buffer in [&mut refiner.front, &mut refiner.back] {
+            if buffer.len() < capacity {
+                buffer.resize(capacity, P::zero());
+            }
+        }
+        let (mut front, mut back) = (&mut refiner.front, &mut refiner.back);
         let mut n = points.len();
         front[left..left + n].copy_from_slice(points);
         let mut interpolated = interpolated.to_vec();
         let mut virtual_points = Vec::with_capacity(interpolated.len());
         for level in 0..levels {
-            fill_halo(&mut front, left, n, right, topology);
+            fill_halo(front, left, n, right, topology);
             let next = scheme.next_len(n, topology);
             let target: &mut [P] = if level + 1 == levels {
                 out.resize(next, P::zero());
-                &mut out
+                out.as_mut_slice()
             } else {
                 &mut back[left..left + next]
             };
-            step(scheme, &front, left, n, topology, target);
+            step(scheme, front, left, n, topology, target);
             virtual_points.clear();
-            virtual_points.extend(interpolated.iter().map(|&i| self.virtual_point(&front, left, n, topology, i)));
+            virtual_points.extend(interpolated.iter().map(|&i| self.virtual_point(front, left, n, topology, i)));
             let level_view = Level {
-                extended: &front,
+                extended: front,
                 left,
                 n,
                 topology,
@@ -402,7 +439,6 @@ impl Framework {
             }
             n = next;
         }
-        out
     }
 
     /// Recomputes the new points that read a virtual point (see the module docs).

@@ -26,8 +26,8 @@ use crate::{CurveError, CurvePoint};
 /// ```
 #[derive(Debug, Clone)]
 pub struct Refiner<P> {
-    front: Vec<P>,
-    back: Vec<P>,
+    pub(crate) front: Vec<P>,
+    pub(crate) back: Vec<P>,
 }
 
 impl<P: CurvePoint> Default for Refiner<P> {
