@@ -278,7 +278,7 @@ impl Framework {
         Ok(out)
     }
 
-    /// [`Framework::refine`] into `out` (cleared first), with the work buffers of
+    /// [`Framework::refine`] into `out` (replaced entirely), with the work buffers of
     /// `refiner`: refining again allocates nothing once the buffers have their size.
     ///
     /// # Errors
@@ -393,8 +393,8 @@ impl Framework {
         out: &mut Vec<P>,
     ) {
         let scheme = &self.approximating;
-        out.clear();
         if levels == 0 {
+            out.clear();
             out.extend_from_slice(points);
             return;
         }
@@ -414,6 +414,9 @@ impl Framework {
             fill_halo(front, left, n, right, topology);
             let next = scheme.next_len(n, topology);
             let target: &mut [P] = if level + 1 == levels {
+                // Every entry is overwritten by the step: keep the old ones instead of
+                // zeroing (a reused output of the same length costs no extra pass).
+                out.truncate(next);
                 out.resize(next, P::zero());
                 out.as_mut_slice()
             } else {
