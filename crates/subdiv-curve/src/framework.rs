@@ -51,10 +51,14 @@
 //!
 //! # Open polygons
 //!
-//! Phantom points follow [`EndRule`], recomputed from the current polygon
-//! at every level (spec §16.4); in the exact-global mode the phantoms of `G` are made from
-//! `G` itself. Every I-point, end points included, keeps its position at every level, so
-//! the limit passes through it: `result[i << levels] == points[i]` bit for bit.
+//! Phantom points follow [`EndRule`], recomputed at every level (spec
+//! §16.4). Since every non-I rule is `A` applied to `G`, the phantoms these rules read are
+//! those of the virtual polygon (`2 g_0 - g_1` or `g_0`), and a virtual point next to an
+//! end folds the phantom into its equation (an I end point under "reflect" gets `q = p`,
+//! consistent with the cubic B-spline keeping reflected end points). Both modes therefore
+//! agree whenever the I-points are isolated, ends included. Every I-point, end points
+//! included, keeps its position at every level, so the limit passes through it:
+//! `result[i << levels] == points[i]` bit for bit.
 //!
 //! ```
 //! use subdiv_curve::{Framework, Topology};
@@ -71,7 +75,7 @@
 use nalgebra::DMatrix;
 
 use crate::analysis::{self, Analysis, EigenChecks, LocalMatrix};
-use crate::refine::{fill_halo, halo, step};
+use crate::refine::{Refiner, fill_halo, halo, step};
 use crate::scheme::{CurveScheme, EndRule, Rule, Topology, check_four_point_tension};
 use crate::{CurveError, CurvePoint};
 
@@ -269,19 +273,49 @@ impl Framework {
         topology: Topology,
         levels: u32,
     ) -> Result<Vec<P>, CurveError> {
+        let mut out = Vec::new();
+        self.refine_into(&mut Refiner::new(), points, flags, topology, levels, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`Framework::refine`] into `out` (replaced entirely), with the work buffers of
+    /// `refiner`: refining again allocates nothing once the buffers have their size.
+    ///
+    /// # Errors
+    /// As [`Framework::refine`].
+    ///
+    /// ```
+    /// use subdiv_curve::{Framework, Refiner, Topology};
+    /// let (mut refiner, mut out) = (Refiner::new(), Vec::new());
+    /// let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+    /// Framework::published().refine_into(&mut refiner, &square, &[true, false, false, false], Topology::Closed, 4, &mut out)?;
+    /// assert_eq!((out.len(), out[0]), (64, square[0]));
+    /// # Ok::<(), subdiv_curve::CurveError>(())
+    /// ```
+    pub fn refine_into<P: CurvePoint>(
+        &self,
+        refiner: &mut Refiner<P>,
+        points: &[P],
+        flags: &[bool],
+        topology: Topology,
+        levels: u32,
+        out: &mut Vec<P>,
+    ) -> Result<(), CurveError> {
         self.check_input(points, flags, topology)?;
         let interpolated: Vec<usize> = (0..points.len()).filter(|&i| flags[i]).collect();
         match self.mode {
-            VirtualPoints::SeedCompatible => Ok(self.refine_seed(points, &interpolated, topology, levels)),
+            VirtualPoints::SeedCompatible => {
+                self.refine_seed(refiner, points, &interpolated, topology, levels, out);
+            }
             VirtualPoints::ExactGlobal => {
                 let virtual_polygon = self.solve_virtual(points, &interpolated, topology)?;
-                let mut fine = self.approximating.refine(&virtual_polygon, topology, levels)?;
+                refiner.refine_into(&self.approximating, &virtual_polygon, topology, levels, out)?;
                 for &i in &interpolated {
-                    fine[i << levels] = points[i];
+                    out[i << levels] = points[i];
                 }
-                Ok(fine)
             }
         }
+        Ok(())
     }
 
     /// The virtual polygon `G` of `points` for the current mode: `q_i` at I-points
@@ -314,7 +348,7 @@ impl Framework {
                 fill_halo(&mut extended, left, points.len(), right, topology);
                 let mut polygon = points.to_vec();
                 for &i in &interpolated {
-                    polygon[i] = self.virtual_point(&extended, left, i);
+                    polygon[i] = self.virtual_point(&extended, left, points.len(), topology, i);
                 }
                 Ok(polygon)
             }
@@ -330,53 +364,69 @@ impl Framework {
         (left.max(1), right.max(2))
     }
 
-    /// `q_i` from the actual (extended) neighbours.
-    fn virtual_point<P: CurvePoint>(&self, extended: &[P], left: usize, i: usize) -> P {
-        let centre = (-self.limit_offset) as usize;
+    /// `q_i` from the actual neighbours: the row `ℓ(G around i) = p_i` with every other
+    /// entry taken from the current polygon, phantom points of `G` folded in (so an I end
+    /// point under "reflect" gets `q = p`).
+    fn virtual_point<P: CurvePoint>(&self, extended: &[P], left: usize, n: usize, topology: Topology, i: usize) -> P {
+        let mut diagonal = 0.0;
         let mut sum = extended[left + i];
         for (k, &w) in self.limit_weights.iter().enumerate() {
-            if k != centre {
-                let index = (left + i) as i64 + self.limit_offset as i64 + k as i64;
-                sum = sum.minus(extended[index as usize].scale(w));
+            let index = i as i64 + self.limit_offset as i64 + k as i64;
+            for (real, factor) in phantom_combination(index, n, topology) {
+                if real == i {
+                    diagonal += w * factor;
+                } else {
+                    sum = sum.minus(extended[left + real].scale(w * factor));
+                }
             }
         }
-        sum.scale(1.0 / self.limit_weights[centre])
+        sum.scale(1.0 / diagonal)
     }
 
     fn refine_seed<P: CurvePoint>(
         &self,
+        refiner: &mut Refiner<P>,
         points: &[P],
         interpolated: &[usize],
         topology: Topology,
         levels: u32,
-    ) -> Vec<P> {
+        out: &mut Vec<P>,
+    ) {
         let scheme = &self.approximating;
         if levels == 0 {
-            return points.to_vec();
+            out.clear();
+            out.extend_from_slice(points);
+            return;
         }
         let (left, right) = self.halo(points.len(), topology);
         let capacity = scheme.refined_len(points.len(), topology, levels - 1) + left + right;
-        let mut front = vec![P::zero(); capacity];
-        let mut back = vec![P::zero(); capacity];
-        let mut out = Vec::new();
+        for buffer in [&mut refiner.front, &mut refiner.back] {
+            if buffer.len() < capacity {
+                buffer.resize(capacity, P::zero());
+            }
+        }
+        let (mut front, mut back) = (&mut refiner.front, &mut refiner.back);
         let mut n = points.len();
         front[left..left + n].copy_from_slice(points);
         let mut interpolated = interpolated.to_vec();
         let mut virtual_points = Vec::with_capacity(interpolated.len());
         for level in 0..levels {
-            fill_halo(&mut front, left, n, right, topology);
+            fill_halo(front, left, n, right, topology);
             let next = scheme.next_len(n, topology);
             let target: &mut [P] = if level + 1 == levels {
+                // Every entry is overwritten by the step: keep the old ones instead of
+                // zeroing (a reused output of the same length costs no extra pass).
+                out.truncate(next);
                 out.resize(next, P::zero());
-                &mut out
+                out.as_mut_slice()
             } else {
                 &mut back[left..left + next]
             };
-            step(scheme, &front, left, n, topology, target);
+            step(scheme, front, left, n, topology, target);
             virtual_points.clear();
-            virtual_points.extend(interpolated.iter().map(|&i| self.virtual_point(&front, left, i)));
+            virtual_points.extend(interpolated.iter().map(|&i| self.virtual_point(front, left, n, topology, i)));
             let level_view = Level {
-                extended: &front,
+                extended: front,
                 left,
                 n,
                 topology,
@@ -392,7 +442,6 @@ impl Framework {
             }
             n = next;
         }
-        out
     }
 
     /// Recomputes the new points that read a virtual point (see the module docs).
@@ -403,30 +452,40 @@ impl Framework {
         let (odd_lo, odd_hi) = odd.reach();
         let n = level.n as i64;
         let fine_len = target.len() as i64;
-        for &i in level.interpolated {
-            let i = i as i64;
-            let candidates = (i - even_hi as i64..=i - even_lo as i64)
-                .map(|j| 2 * j)
-                .chain((i - odd_hi as i64..=i - odd_lo as i64).map(|j| 2 * j + 1));
-            for fine in candidates {
-                let fine_index = match level.topology {
-                    Topology::Closed => fine.rem_euclid(2 * n),
-                    Topology::Open(_) if (0..fine_len).contains(&fine) => fine,
-                    Topology::Open(_) => continue,
-                };
-                let j = fine_index.div_euclid(2);
-                target[fine_index as usize] = if fine_index % 2 == 0 {
-                    if level.is_interpolated(j) {
-                        level.actual(j)
-                    } else {
-                        even.apply(j, |k| level.virtual_or_actual(k))
-                    }
-                } else if seed_mode && level.is_interpolated(j) && level.is_interpolated(j + 1) {
-                    self.interpolating_edge.apply(j, |k| level.actual(k))
-                } else {
-                    odd.apply(j, |k| level.virtual_or_actual(k))
-                };
+        // Outputs reading a phantom point must be redone when an I-point feeds the phantom
+        // (phantoms of the virtual polygon, see `Level::virtual_or_actual`).
+        let reach = [-even_lo, -odd_lo, even_hi, odd_hi, 1].into_iter().max().unwrap_or(1) as i64 + 1;
+        let mut end_windows: Vec<i64> = Vec::new();
+        if let Topology::Open(_) = level.topology {
+            let near_start = level.interpolated.first().is_some_and(|&i| (i as i64) <= reach);
+            let near_end = level.interpolated.last().is_some_and(|&i| (i as i64) >= n - 1 - reach);
+            if near_start {
+                end_windows.extend(0..(2 * reach + 2).min(fine_len));
             }
+            if near_end {
+                end_windows.extend((fine_len - 2 * reach - 2).max(0)..fine_len);
+            }
+        }
+        let around_interpolated = level.interpolated.iter().flat_map(|&i| {
+            let i = i as i64;
+            (i - even_hi as i64..=i - even_lo as i64)
+                .map(|j| 2 * j)
+                .chain((i - odd_hi as i64..=i - odd_lo as i64).map(|j| 2 * j + 1))
+        });
+        for fine in around_interpolated.chain(end_windows) {
+            let fine_index = match level.topology {
+                Topology::Closed => fine.rem_euclid(2 * n),
+                Topology::Open(_) if (0..fine_len).contains(&fine) => fine,
+                Topology::Open(_) => continue,
+            };
+            let j = fine_index.div_euclid(2);
+            target[fine_index as usize] = if fine_index % 2 == 0 {
+                if level.is_interpolated(j) { level.actual(j) } else { even.apply(j, |k| level.virtual_or_actual(k)) }
+            } else if seed_mode && level.is_interpolated(j) && level.is_interpolated(j + 1) {
+                self.interpolating_edge.apply(j, |k| level.actual(k))
+            } else {
+                odd.apply(j, |k| level.virtual_or_actual(k))
+            };
         }
     }
 
@@ -698,7 +757,16 @@ impl<P: CurvePoint> Level<'_, P> {
         self.extended[index as usize]
     }
 
+    /// Entry `j` of the virtual polygon; past the ends of an open polygon, the phantom
+    /// point of the virtual polygon.
     fn virtual_or_actual(&self, j: i64) -> P {
+        if let Topology::Open(_) = self.topology
+            && !(0..self.n as i64).contains(&j)
+        {
+            return phantom_combination(j, self.n, self.topology)
+                .into_iter()
+                .fold(P::zero(), |sum, (real, factor)| sum.plus(self.virtual_or_actual(real as i64).scale(factor)));
+        }
         match self.interpolated_slot(j) {
             Some(slot) => self.virtual_points[slot],
             None => self.actual(j),

@@ -26,8 +26,8 @@ use crate::{CurveError, CurvePoint};
 /// ```
 #[derive(Debug, Clone)]
 pub struct Refiner<P> {
-    front: Vec<P>,
-    back: Vec<P>,
+    pub(crate) front: Vec<P>,
+    pub(crate) back: Vec<P>,
 }
 
 impl<P: CurvePoint> Default for Refiner<P> {
@@ -201,7 +201,7 @@ impl<P: CurvePoint> Refiner<P> {
     }
 
     /// Refines `points` `levels` times with `scheme`, writing the result into `out`
-    /// (cleared first; its allocation is reused).
+    /// (replaced entirely; its allocation is reused).
     ///
     /// # Errors
     /// [`CurveError::TooFewPoints`] (see [`CurveScheme::min_points`]),
@@ -225,8 +225,8 @@ impl<P: CurvePoint> Refiner<P> {
         out: &mut Vec<P>,
     ) -> Result<(), CurveError> {
         scheme.validate(points, topology)?;
-        out.clear();
         if levels == 0 {
+            out.clear();
             out.extend_from_slice(points);
             return Ok(());
         }
@@ -244,6 +244,9 @@ impl<P: CurvePoint> Refiner<P> {
             fill_halo(&mut self.front, left, n, right, topology);
             let next = scheme.next_len(n, topology);
             if level + 1 == levels {
+                // Every entry is overwritten by the step: keep the old ones instead of
+                // zeroing (a reused output of the same length costs no extra pass).
+                out.truncate(next);
                 out.resize(next, P::zero());
                 step(scheme, &self.front, left, n, topology, out);
             } else {
