@@ -214,6 +214,16 @@ fn nonlinear_means_reproduce_exponentials_and_circles() {
     let points = read("c.txt");
     assert_eq!(points.len(), 2 * 16 + 1);
     assert!(points.iter().all(|p| ((p[0] - 1.0).hypot(p[1] + 1.0) - 2.0).abs() < 1e-13));
+    // The three-point weights reach from the first to the third point of a piece: the arc
+    // must span less than half a turn (0, π/4, π/2 here).
+    let mut three = args.to_vec();
+    three[7] = "3,-1 2.414213562373095,0.41421356237309515 1,1";
+    three.extend(["--scheme", "three-point"]);
+    let output = run(dir.path(), &three);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let points = read("c.txt");
+    assert_eq!(points.len(), 2 * 16 + 1); // 2n + 1 -> 4n + 1 is again 2 (count) - 1
+    assert!(points.iter().all(|p| ((p[0] - 1.0).hypot(p[1] + 1.0) - 2.0).abs() < 1e-13));
 }
 
 /// The contractivity report is printed; the Bézier split parameter is honoured.

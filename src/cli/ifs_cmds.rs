@@ -255,12 +255,14 @@ fn nonlinear_subdivision(args: &IfsArgs, mean_name: &str, width: u32, height: u3
     if mean_name == "circle" {
         let c = parse_pair(&args.center, "--center")?;
         let circle = CircleMean::new(Complex64::new(c[0], c[1]));
-        if args.scheme != "two-point" {
-            return Err(CliError::Input(format!("--mean circle supports --scheme two-point, not {}", args.scheme)));
-        }
         let mut z: Vec<Complex64> = points.iter().map(|p| Complex64::new(p[0], p[1])).collect();
         for _ in 0..levels {
-            z = circle.two_point_subdivide(&z).map_err(fail)?;
+            z = match args.scheme.as_str() {
+                "two-point" => circle.two_point_subdivide(&z),
+                "three-point" => circle.three_point_subdivide(&z),
+                other => return Err(CliError::Input(format!("--scheme {other}: use two-point or three-point"))),
+            }
+            .map_err(fail)?;
         }
         points = z.iter().map(|q| [q.re, q.im]).collect();
     } else {
