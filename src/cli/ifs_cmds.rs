@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 use multires::ifs::{
-    self as ifs, AffineIfs, BarycentricIfs, Canvas, ChaosGame, Complex64, ComplexBezierIfs, Density, ExpY, Ifs,
-    NonlinearIfs, Polar, Projection, SquareY, ToneMap, View,
+    self as ifs, AffineIfs, BarycentricIfs, Canvas, ChaosGame, CircleMean, Complex64, ComplexBezierIfs,
+    ContractivityReport, Density, ExpY, Ifs, Mean, MeanMode, NonlinearIfs, Polar, Projection, SquareY, ToneMap, View,
 };
 
 use super::{CliError, CliResult, input_error};
@@ -30,6 +30,24 @@ pub struct IfsArgs {
     /// Coordinate transform F of kind nonlinear: square (F(x,w) = (x,w²)), exp or polar.
     #[arg(long, default_value = "square")]
     pub transform: String,
+    /// Kind nonlinear: subdivide the control points (data) with this mean instead of
+    /// rendering an IFS: arithmetic, geometric, harmonic, cosine, power:P, or circle (the
+    /// circle-preserving mean about --center).
+    #[arg(long)]
+    pub mean: Option<String>,
+    /// With --mean: two-point (insert the mean of each neighbour pair) or three-point
+    /// (quadratic pieces; needs an odd number of points).
+    #[arg(long, default_value = "two-point")]
+    pub scheme: String,
+    /// With --mean: average x as well as y through the mean (default: y only, x linear).
+    #[arg(long)]
+    pub per_coordinate: bool,
+    /// Centre of the circle-preserving mean as x,y.
+    #[arg(long, allow_hyphen_values = true, default_value = "0,0")]
+    pub center: String,
+    /// Kind bezier: de Casteljau split parameter t in (0, 1).
+    #[arg(long, default_value_t = 0.5)]
+    pub split: f64,
     /// Output PNG.
     #[arg(long)]
     pub out: PathBuf,
@@ -64,6 +82,12 @@ struct Job {
 /// `multires ifs`.
 pub fn ifs(args: &IfsArgs) -> CliResult {
     let (width, height) = parse_size(&args.size)?;
+    if let Some(mean) = &args.mean {
+        if args.kind.as_deref() != Some("nonlinear") {
+            return Err(CliError::Input("--mean applies to --kind nonlinear".into()));
+        }
+        return nonlinear_subdivision(args, mean, width, height);
+    }
     let job = match (&args.preset, &args.kind) {
         (Some(name), _) => {
             let scene = ifs::preset(name).map_err(|e| CliError::Input(e.to_string()))?;
@@ -77,6 +101,9 @@ pub fn ifs(args: &IfsArgs) -> CliResult {
         }
     };
     let ifs = &job.ifs;
+    if let Some(report) = ifs.contractivity_report() {
+        println!("{}", describe_contractivity(&report));
+    }
     let (image, points) = match args.points {
         Some(n) => {
             let game = ChaosGame { points: n, seed: args.seed, ..ChaosGame::default() };
@@ -126,11 +153,11 @@ fn build_kind(kind: &str, args: &IfsArgs) -> CliResult<Job> {
     match kind {
         "bezier" => match parse_points(args.control.as_deref().ok_or_else(|| needs("bezier", "--control"))?)? {
             Points::Planar(p) => {
-                let rule = ifs::bezier_split(p.len().saturating_sub(1).max(1), 0.5).map_err(fail)?;
+                let rule = ifs::bezier_split(p.len().saturating_sub(1).max(1), args.split).map_err(fail)?;
                 Ok(job(Box::new(BarycentricIfs::new(&rule, &p).map_err(fail)?), 12))
             }
             Points::Spatial(p) => {
-                let rule = ifs::bezier_split(p.len().saturating_sub(1).max(1), 0.5).map_err(fail)?;
+                let rule = ifs::bezier_split(p.len().saturating_sub(1).max(1), args.split).map_err(fail)?;
                 Ok(Job { projection: orbit, ..job(Box::new(BarycentricIfs::new(&rule, &p).map_err(fail)?), 12) })
             }
         },
@@ -189,6 +216,95 @@ fn build_kind(kind: &str, args: &IfsArgs) -> CliResult<Job> {
         }
         other => Err(CliError::Input(format!("--kind {other}: use bezier, patch, complex, nonlinear or sierpinski"))),
     }
+}
+
+/// One line: the largest singular value of the linear parts and the joint-spectral-radius
+/// bounds on the difference space.
+fn describe_contractivity(report: &ContractivityReport) -> String {
+    format!(
+        "contractivity: largest singular value {:.6}, joint spectral radius in [{:.6}, {:.6}] (word length {})",
+        report.max_singular_value, report.jsr_lower, report.jsr_upper, report.word_length
+    )
+}
+
+/// `--kind nonlinear --mean NAME`: nonlinear subdivision of the control points (data
+/// values) by a nonlinear mean, `--levels` times (default 6).
+fn nonlinear_subdivision(args: &IfsArgs, mean_name: &str, width: u32, height: u32) -> CliResult {
+    if args.points.is_some() {
+        return Err(CliError::Input("--mean subdivides deterministically: use --levels, not --points".into()));
+    }
+    let text = args.control.as_deref().ok_or_else(|| needs("nonlinear --mean", "--control"))?;
+    let control = match parse_points(text)? {
+        Points::Planar(p) => p,
+        Points::Spatial(_) => return Err(CliError::Input("--mean: control points must be planar (x,y)".into())),
+    };
+    let levels = args.levels.unwrap_or(6);
+    // Each level roughly doubles the points; cap like the deterministic algorithm.
+    let final_count = (0..levels).try_fold(control.len() as u128, |n, _| {
+        let next = 2 * n - 1;
+        (next <= POINT_BUDGET as u128).then_some(next)
+    });
+    if final_count.is_none() {
+        return Err(CliError::Input(format!(
+            "--levels {levels}: {} points would exceed the budget of {POINT_BUDGET}",
+            if levels >= 128 { "too many".to_string() } else { format!("about {}", (control.len() as u128) << levels) }
+        )));
+    }
+    let fail = |e: ifs::IfsError| CliError::Input(format!("--mean {mean_name}: {e}"));
+    let mut points = control;
+    if mean_name == "circle" {
+        let c = parse_pair(&args.center, "--center")?;
+        let circle = CircleMean::new(Complex64::new(c[0], c[1]));
+        let mut z: Vec<Complex64> = points.iter().map(|p| Complex64::new(p[0], p[1])).collect();
+        for _ in 0..levels {
+            z = match args.scheme.as_str() {
+                "two-point" => circle.two_point_subdivide(&z),
+                "three-point" => circle.three_point_subdivide(&z),
+                other => return Err(CliError::Input(format!("--scheme {other}: use two-point or three-point"))),
+            }
+            .map_err(fail)?;
+        }
+        points = z.iter().map(|q| [q.re, q.im]).collect();
+    } else {
+        let mean = parse_mean(mean_name)?;
+        let mode = if args.per_coordinate { MeanMode::PerCoordinate } else { MeanMode::YOnly };
+        for _ in 0..levels {
+            points = match args.scheme.as_str() {
+                "two-point" => ifs::two_point_subdivide(&points, mean, mode),
+                "three-point" => ifs::three_point_subdivide(&points, mean, mode),
+                other => {
+                    return Err(CliError::Input(format!("--scheme {other}: use two-point or three-point")));
+                }
+            }
+            .map_err(fail)?;
+        }
+    }
+    let points: Vec<[f64; 3]> = points.iter().map(|p| [p[0], p[1], 0.0]).collect();
+    let image = ifs::render_points(&points, width, height, Projection::Xy, ToneMap::Coverage)
+        .map_err(|e| input_error("render", e))?;
+    image.write_png(&args.out).map_err(|e| CliError::Input(e.to_string()))?;
+    if let Some(path) = &args.out_points {
+        write_points(path, &points, 2)?;
+    }
+    println!("{} points -> {}", points.len(), args.out.display());
+    Ok(())
+}
+
+fn parse_mean(name: &str) -> CliResult<Mean> {
+    Ok(match name {
+        "arithmetic" => Mean::Arithmetic,
+        "geometric" => Mean::Geometric,
+        "harmonic" => Mean::Harmonic,
+        "cosine" => Mean::Cosine,
+        other => match other.strip_prefix("power:").map(|p| p.parse::<f64>()) {
+            Some(Ok(p)) if p.is_finite() => Mean::Power(p),
+            _ => {
+                return Err(CliError::Input(format!(
+                    "--mean {other}: use arithmetic, geometric, harmonic, cosine, power:P or circle"
+                )));
+            }
+        },
+    })
 }
 
 fn needs(kind: &str, option: &str) -> CliError {

@@ -41,6 +41,12 @@ pub trait Ifs: Sync {
     fn domain(&self) -> &'static str {
         ""
     }
+    /// The contractivity report of the maps' linear parts (largest singular value and
+    /// joint-spectral-radius bounds), when the system knows it; for a nonlinear IFS, that of
+    /// the linear IFS it conjugates.
+    fn contractivity_report(&self) -> Option<ContractivityReport> {
+        None
+    }
 }
 
 impl<I: Ifs + ?Sized> Ifs for &I {
@@ -68,6 +74,9 @@ impl<I: Ifs + ?Sized> Ifs for &I {
     fn domain(&self) -> &'static str {
         (**self).domain()
     }
+    fn contractivity_report(&self) -> Option<ContractivityReport> {
+        (**self).contractivity_report()
+    }
 }
 
 impl<I: Ifs + ?Sized> Ifs for Box<I> {
@@ -94,6 +103,9 @@ impl<I: Ifs + ?Sized> Ifs for Box<I> {
     }
     fn domain(&self) -> &'static str {
         (**self).domain()
+    }
+    fn contractivity_report(&self) -> Option<ContractivityReport> {
+        (**self).contractivity_report()
     }
 }
 
@@ -328,6 +340,9 @@ impl Ifs for AffineIfs {
     fn determinants(&self) -> Vec<f64> {
         self.maps.iter().map(|m| m.linear_part(self.dim).determinant().abs()).collect()
     }
+    fn contractivity_report(&self) -> Option<ContractivityReport> {
+        Some(self.contractivity())
+    }
 }
 
 /// Fixed point of an affine map (`(I - M)^{-1} t`), or the translation if `I - M` is singular.
@@ -439,6 +454,9 @@ impl Ifs for BarycentricIfs {
     }
     fn determinants(&self) -> Vec<f64> {
         self.determinants.clone()
+    }
+    fn contractivity_report(&self) -> Option<ContractivityReport> {
+        Some(self.report)
     }
 }
 
@@ -572,6 +590,9 @@ impl Ifs for ComplexBezierIfs {
         // for higher degrees the same weights (the first difference eigenvalues).
         let w = Complex64::new(1.0, 0.0) - self.z;
         vec![self.z.norm_sqr(), w.norm_sqr()]
+    }
+    fn contractivity_report(&self) -> Option<ContractivityReport> {
+        Some(self.report)
     }
 }
 

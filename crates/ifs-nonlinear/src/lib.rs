@@ -8,7 +8,7 @@
 //!
 //! | piece | entry points | spec |
 //! |---|---|---|
-//! | subdivision matrices | [`bezier_split`], [`tensor_patch_split`], [`triangle_patch_split`], [`sierpinski`], [`complex_bezier_split`], [`uniform_scheme_split`] (any uniform binary curve scheme from its mask) | §13, §15.1, §9, §1.1 |
+//! | subdivision matrices | [`bezier_split`], [`tensor_patch_split`], [`triangle_patch_split`], [`sierpinski`], [`complex_bezier_split`], [`uniform_scheme_split`] (any uniform binary curve scheme from its mask), [`curve_scheme_split`] (any `subdiv-curve` scheme) | §13, §15.1, §9, §1.1 |
 //! | linear IFS | [`AffineIfs::from_rule`] (seed form `P̂^{-1} S_i P̂`), [`BarycentricIfs`] (any number of points), [`ComplexBezierIfs`] | §15.1, §13 |
 //! | contractivity | [`SubdivisionRule::contractivity`], [`ContractivityReport`] (largest singular value, joint-spectral-radius bounds) | §13, §15.1 |
 //! | rendering | [`deterministic_points`], [`chaos_points`], [`chaos_density`], [`Density`], [`Image::encode_png`] | §15.2 |
@@ -89,8 +89,8 @@ pub mod render;
 pub use error::{IfsError, Result};
 pub use ifs::{AffineIfs, AffineMap, BarycentricIfs, ComplexBezierIfs, Ifs};
 pub use matrices::{
-    ContractivityReport, SubdivisionRule, bezier_split, complex_bezier_split, sierpinski, tensor_patch_split,
-    triangle_multi_indices, triangle_patch_split, uniform_scheme_split,
+    ContractivityReport, SubdivisionRule, bezier_split, complex_bezier_split, curve_scheme_split, sierpinski,
+    tensor_patch_split, triangle_multi_indices, triangle_patch_split, uniform_scheme_split,
 };
 pub use mean::{CircleMean, Mean, MeanMode, subdivide_with_rule, three_point_subdivide, two_point_subdivide};
 pub use nonlinear::{CoordinateTransform, ExpY, FnTransform, NonlinearIfs, Polar, SquareY, triangle_samples};

@@ -391,6 +391,28 @@ pub fn uniform_scheme_split(mask_offset: i32, mask: &[f64]) -> Result<Subdivisio
     SubdivisionRule::new(vec![half(0), half(1)])
 }
 
+/// The two local matrices (left and right half of one segment) of a curve scheme of the
+/// `subdiv-curve` crate, from its symbol (mask): [`uniform_scheme_split`] applied to
+/// `scheme.symbol()`. Every uniform binary scheme there (Chaikin, cubic B-spline,
+/// four-point, the combined two-parameter family, user rules) has such finite matrices;
+/// the attractor of the resulting IFS is one segment of the limit curve.
+///
+/// # Errors
+/// As [`uniform_scheme_split`] (e.g. a rule that is not affine invariant).
+///
+/// ```
+/// use ifs_nonlinear::curve_scheme_split;
+/// use subdiv_curve::CurveScheme;
+/// let rule = curve_scheme_split(&CurveScheme::cubic_bspline())?;
+/// assert_eq!((rule.map_count(), rule.size()), (2, 4)); // four control points per cubic segment
+/// assert!(rule.contractivity().is_contractive());
+/// # Ok::<(), ifs_nonlinear::IfsError>(())
+/// ```
+pub fn curve_scheme_split(scheme: &subdiv_curve::CurveScheme) -> Result<SubdivisionRule<f64>> {
+    let symbol = scheme.symbol();
+    uniform_scheme_split(symbol.lowest_power(), symbol.coefficients())
+}
+
 /// The four quadrant matrices of a tensor-product Bézier patch of degrees (n_u, n_v), split
 /// at u = 1/2 and v = 1/2: `S = S_u ⊗ S_v` in the order (u low, v low), (u low, v high),
 /// (u high, v low), (u high, v high). Bilinear: (1, 1), biquadratic: (2, 2), bicubic: (3, 3).
@@ -666,6 +688,26 @@ mod tests {
             let t: f64 = (0..levels).map(|i| ((word >> i) & 1) as f64 * 0.5f64.powi(i as i32 + 1)).sum();
             let c = curve(t);
             assert!((c[0] - q[0]).abs() < 1e-12 && (c[1] - q[1]).abs() < 1e-12, "t = {t}");
+        }
+    }
+
+    /// Our matrices from the mask agree with `subdiv-curve`'s own segment matrices (an
+    /// independent construction), for every scheme it ships.
+    #[test]
+    fn curve_scheme_matrices_agree_with_subdiv_curve() {
+        use subdiv_curve::CurveScheme;
+        let schemes = [
+            CurveScheme::chaikin(),
+            CurveScheme::cubic_bspline(),
+            CurveScheme::four_point(1.0 / 16.0).unwrap(),
+            CurveScheme::combined(-1.0 / 64.0, 3.0 / 32.0).unwrap(),
+        ];
+        for scheme in schemes {
+            let ours = curve_scheme_split(&scheme).unwrap();
+            let theirs = subdiv_curve::analysis::ifs_matrices(&scheme);
+            assert_eq!(ours.matrices()[0], theirs.left, "{}", scheme.name());
+            assert_eq!(ours.matrices()[1], theirs.right, "{}", scheme.name());
+            assert!(ours.contractivity().is_contractive(), "{}", scheme.name());
         }
     }
 

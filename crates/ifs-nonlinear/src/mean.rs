@@ -421,6 +421,47 @@ impl CircleMean {
         out.push(points[points.len() - 1]);
         Ok(out)
     }
+
+    /// The three-point (quadratic) scheme with this mean: as [`three_point_subdivide`], the
+    /// polyline `p_0 … p_{2n}` is read as quadratic pieces split at 1/2, every de Casteljau
+    /// average replaced by the circle-preserving mean (`2n + 1` → `4n + 1` points).
+    ///
+    /// # Errors
+    /// [`IfsError::TooFewPoints`] below 3 points; [`IfsError::ParameterOutOfRange`] for an
+    /// even number of points; as [`weighted`](Self::weighted) (indices are input positions).
+    ///
+    /// ```
+    /// use ifs_nonlinear::CircleMean;
+    /// use num_complex::Complex64;
+    /// let mean = CircleMean::new(Complex64::new(0.0, 0.0));
+    /// let arc: Vec<Complex64> = [0.0, 0.5, 1.0].iter().map(|&a| Complex64::from_polar(2.0, a)).collect();
+    /// let fine = mean.three_point_subdivide(&arc)?;
+    /// assert!(fine.iter().all(|p| (p.norm() - 2.0).abs() < 1e-14));
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
+    pub fn three_point_subdivide(&self, points: &[Complex64]) -> Result<Vec<Complex64>> {
+        if points.len() < 3 {
+            return Err(IfsError::TooFewPoints { what: "the three-point scheme", needed: 3, got: points.len() });
+        }
+        if points.len().is_multiple_of(2) {
+            return Err(IfsError::ParameterOutOfRange {
+                name: "points",
+                value: points.len().to_string(),
+                reason: "the three-point scheme needs an odd number of points (quadratic pieces sharing ends)",
+            });
+        }
+        let mut out = Vec::with_capacity(2 * points.len() - 1);
+        for piece in 0..points.len() / 2 {
+            let i = 2 * piece;
+            let (a, b, c) = (points[i], points[i + 1], points[i + 2]);
+            out.push(a);
+            out.push(self.mean(a, b, 0.5).map_err(|e| shift_index(e, i))?);
+            out.push(self.weighted(&[a, b, c], &[0.25, 0.5, 0.25]).map_err(|e| shift_index(e, i))?);
+            out.push(self.mean(b, c, 0.5).map_err(|e| shift_index(e, i + 1))?);
+        }
+        out.push(points[points.len() - 1]);
+        Ok(out)
+    }
 }
 
 fn shift_index(error: IfsError, by: usize) -> IfsError {
@@ -565,6 +606,29 @@ mod tests {
         assert!(matches!(at_centre, IfsError::Domain { index: 1, .. }));
         let opposite = mean.mean(c + 1.0, c - 1.0, 0.5).unwrap_err();
         assert!(matches!(opposite, IfsError::Domain { index: 1, .. }));
+    }
+
+    /// The three-point scheme with the circle mean: points on a circle at angles
+    /// θ_0, θ_1, θ_2 stay on the circle, at the angles of the linear quadratic scheme applied
+    /// to the angles (the mean is linear in log-polar coordinates).
+    #[test]
+    fn circle_mean_three_point_scheme_keeps_arcs() {
+        let c = Complex64::new(-0.5, 2.0);
+        let mean = CircleMean::new(c);
+        let angles = [0.2, 0.9, 1.3, 2.0, 2.4];
+        let mut points: Vec<Complex64> = angles.iter().map(|&a| c + Complex64::from_polar(3.0, a)).collect();
+        let mut linear: Vec<[f64; 2]> = angles.iter().map(|&a| [a, a]).collect();
+        for _ in 0..4 {
+            points = mean.three_point_subdivide(&points).unwrap();
+            linear = three_point_subdivide(&linear, Mean::Arithmetic, MeanMode::YOnly).unwrap();
+        }
+        assert_eq!(points.len(), linear.len());
+        for (p, l) in points.iter().zip(&linear) {
+            assert!(((p - c).norm() - 3.0).abs() < 1e-13 && ((p - c).arg() - l[1]).abs() < 1e-13);
+        }
+        assert!(matches!(mean.three_point_subdivide(&points[..4]), Err(IfsError::ParameterOutOfRange { .. })));
+        let through_centre = [c + 1.0, c, c - 1.0];
+        assert!(matches!(mean.three_point_subdivide(&through_centre), Err(IfsError::Domain { index: 1, .. })));
     }
 
     #[test]

@@ -205,6 +205,9 @@ impl<F: CoordinateTransform> Ifs for NonlinearIfs<F> {
     fn domain(&self) -> &'static str {
         self.transform.domain()
     }
+    fn contractivity_report(&self) -> Option<crate::ContractivityReport> {
+        Some(self.linear.contractivity())
+    }
 }
 
 /// Samples of a filled triangle: `n + 1` points per side, all lattice points
@@ -280,6 +283,30 @@ mod tests {
         for (p, q) in a.iter().zip(&b) {
             let f = Polar.forward(*p);
             assert!((f[0] - q[0]).abs() < 1e-12 && (f[1] - q[1]).abs() < 1e-12);
+        }
+    }
+
+    /// A user-supplied pair (F, F^{-1}) gives the same system as the built-in transform.
+    #[test]
+    fn user_supplied_transform_pairs_work_like_the_built_in_ones() {
+        let user = FnTransform::new(
+            |p: [f64; 3]| [p[0], p[1] * p[1], p[2]],
+            |p: [f64; 3]| (p[1] >= 0.0).then(|| [p[0], p[1].sqrt(), p[2]]),
+        );
+        let linear = quartic().linear().clone();
+        let ours = deterministic_points(&NonlinearIfs::new(linear, user), None, 8, 1 << 16).unwrap();
+        let built_in = deterministic_points(&quartic(), None, 8, 1 << 16).unwrap();
+        assert_eq!(ours, built_in);
+        // exp/log as a user pair: the attractor is exp of the linear attractor in y.
+        let log_pair = FnTransform::new(
+            |p: [f64; 3]| [p[0], p[1].exp(), p[2]],
+            |p: [f64; 3]| (p[1] > 0.0).then(|| [p[0], p[1].ln(), p[2]]),
+        );
+        let linear = AffineIfs::from_rule(&sierpinski(), &[[0.0, -1.0], [1.0, 0.5], [0.0, 1.0]]).unwrap();
+        let bent = deterministic_points(&NonlinearIfs::new(linear.clone(), log_pair), None, 5, 1 << 16).unwrap();
+        let straight = deterministic_points(&linear, None, 5, 1 << 16).unwrap();
+        for (p, q) in bent.iter().zip(&straight) {
+            assert!((p[0] - q[0]).abs() < 1e-12 && (p[1] - q[1].exp()).abs() < 1e-12 * q[1].exp().max(1.0));
         }
     }
 

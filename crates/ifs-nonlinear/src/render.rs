@@ -153,8 +153,8 @@ pub fn deterministic_points<I: Ifs + ?Sized>(
     Ok(points)
 }
 
-/// [`deterministic_points`] writing into a reusable buffer (cleared first); returns the
-/// number of map applications performed.
+/// [`deterministic_points`] writing into a reusable buffer (resized to the output, every
+/// entry overwritten); returns the number of map applications performed.
 ///
 /// # Errors
 /// As [`deterministic_points`].
@@ -195,48 +195,70 @@ pub fn deterministic_into<I: Ifs + ?Sized>(
     }
     let rest = levels - split;
     let leaves = k.pow(rest);
-    points.clear();
-    points.resize(total, [0.0; 3]);
+    // Every entry is overwritten below: a reused buffer of the right length is not re-zeroed.
+    if points.len() != total {
+        points.clear();
+        points.resize(total, [0.0; 3]);
+    }
     let prefixes = k.pow(split);
     let results: Vec<Result<u64>> = points
         .par_chunks_mut(leaves)
         .enumerate()
         .map(|(task, out)| {
             let (start_index, mut prefix) = (task / prefixes, task % prefixes);
-            // Stack of states: depth 0 = start, depth d = after d maps.
-            let depth = levels as usize;
-            let mut stack = vec![0.0; (depth + 1) * n];
-            stack[..n].copy_from_slice(&start[start_index * n..(start_index + 1) * n]);
+            let first_index = task * leaves;
             let mut applications = 0u64;
-            // Prefix letters, most significant first = first applied.
-            let mut letters = vec![0usize; depth];
+            // The task's prefix: `split` letters, most significant first = first applied.
+            let mut letters = vec![0usize; split as usize];
             for d in (0..split as usize).rev() {
                 letters[d] = prefix % k;
                 prefix /= k;
             }
-            let first_index = task * leaves;
-            let mut valid_from = 0; // stack[0..=valid_from] is up to date
-            for (leaf, slot) in out.iter_mut().enumerate() {
-                for d in valid_from..depth {
-                    let (done, next) = stack.split_at_mut((d + 1) * n);
-                    if !ifs.apply(letters[d], &done[d * n..], &mut next[..n]) {
-                        return Err(domain_error(ifs, first_index + leaf, letters[d], &done[d * n..(d + 1) * n]));
-                    }
-                    applications += 1;
+            let capacity = (leaves / k).max(1) * n;
+            let mut current = Vec::with_capacity(capacity);
+            let mut next = Vec::with_capacity(capacity);
+            let mut scratch = vec![0.0; n];
+            current.extend_from_slice(&start[start_index * n..(start_index + 1) * n]);
+            for &letter in &letters {
+                if !ifs.apply(letter, &current, &mut scratch) {
+                    return Err(domain_error(ifs, first_index, letter, &current));
                 }
-                *slot = ifs.point(&stack[depth * n..]);
-                // Odometer over the last `rest` letters.
-                let mut d = depth;
-                while d > split as usize {
-                    d -= 1;
-                    if letters[d] + 1 < k {
-                        letters[d] += 1;
-                        break;
-                    }
-                    letters[d] = 0;
-                }
-                valid_from = d;
+                current.copy_from_slice(&scratch);
+                applications += 1;
             }
+            if rest == 0 {
+                out[0] = ifs.point(&current);
+                return Ok(applications);
+            }
+            // The remaining levels breadth first: level l holds its k^l states in word order
+            // (first letter most significant), so child i k + j of state i is f_j(state i),
+            // which is already the output order. Each point is computed by the same map
+            // applications as depth first, so the results do not depend on this layout.
+            for level in 1..rest {
+                let below = k.pow(rest - level); // output points under each state of this level
+                let parents = current.len() / n;
+                next.clear();
+                next.resize(parents * k * n, 0.0);
+                for (i, (parent, children)) in current.chunks_exact(n).zip(next.chunks_exact_mut(k * n)).enumerate() {
+                    for (map, child) in children.chunks_exact_mut(n).enumerate() {
+                        if !ifs.apply(map, parent, child) {
+                            return Err(domain_error(ifs, first_index + (i * k + map) * below, map, parent));
+                        }
+                    }
+                }
+                applications += (parents * k) as u64;
+                std::mem::swap(&mut current, &mut next);
+            }
+            // The last level straight into the output.
+            for (i, (parent, slots)) in current.chunks_exact(n).zip(out.chunks_exact_mut(k)).enumerate() {
+                for (map, slot) in slots.iter_mut().enumerate() {
+                    if !ifs.apply(map, parent, &mut scratch) {
+                        return Err(domain_error(ifs, first_index + i * k + map, map, parent));
+                    }
+                    *slot = ifs.point(&scratch);
+                }
+            }
+            applications += out.len() as u64;
             Ok(applications)
         })
         .collect();
