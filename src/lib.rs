@@ -9,6 +9,7 @@
 //! | [`loop_subdiv`] | `subdiv-loop` | Loop subdivision, reverse Loop, M-band Loop, analysis |
 //! | [`doo`] | `subdiv-doo` | Doo-Sabin subdivision, reverse Doo-Sabin, pyramids, analysis |
 //! | [`ifs`] | `ifs-nonlinear` | subdivision as IFS, complex-parameter and nonlinear subdivision, fractal rendering |
+//! | [`spline`] | `tri-spline` | triangular Bézier, B-patch and DMS splines; PIA / LSPIA fitting |
 //!
 //! ```
 //! use multires::mesh::{HalfedgeMesh, shapes};
@@ -21,3 +22,4 @@ pub use ifs_nonlinear as ifs;
 pub use mesh_topo as mesh;
 pub use subdiv_doo as doo;
 pub use subdiv_loop as loop_subdiv;
+pub use tri_spline as spline;
