@@ -1,17 +1,19 @@
 //! Reference results in the form of seed paper 001's Table 2 (ALGORITHMS.md §12.6):
-//! reverse-Loop levels i = 2, k = 10 iterations, on
+//! reverse-Loop levels i = 2, k = 10 iterations, for the three surface kinds on
 //!
-//! * a Bézier row: a regular triangular grid of 4753 points (N = 96) sampled from the
-//!   smooth test surface of ALGORITHMS.md §12.4 (degree 24, 325 control points);
-//! * a B-patch row: the same surface on 91 points (N = 12; degree 3, 10 control points);
-//! * a triangular B-spline row: a disk of 52 faces cut from the Stanford bunny
-//!   (`tests/data/bunny.obj`, scaled to unit size), refined twice by Loop subdivision
-//!   (453 points when the cut has 36 vertices and 18 boundary edges, as in the paper).
+//! * `smooth`: a regular triangular grid of 4753 points (N = 96) sampled from the smooth
+//!   test surface of ALGORITHMS.md §12.4 (Bézier and B-patch: degree 24, 325 control
+//!   points; triangular B-spline: quadratic DMS over the 576-triangle net);
+//! * `bunny`: a disk of the Stanford bunny (`tests/data/bunny.obj`, 6 rings around a
+//!   vertex, scaled to unit size) resampled on the same grid through its mean-value
+//!   parameterization;
+//! * `paper-bspline`: the paper's triangular B-spline setting, a bunny disk of about 52
+//!   faces refined twice by Loop subdivision.
 //!
 //! For each row the three iterations (the seed loop, LSPIA, classical PIA) are run and
 //! their tables printed with the spectral radius and the least-squares baseline.
 //!
-//! Run: `cargo run --release -p tri-spline --example reference`
+//! Run: `cargo run --release -p tri-spline --example reference [smooth|bunny|paper-bspline]`
 
 use std::path::Path;
 
@@ -19,7 +21,7 @@ use mesh_topo::HalfedgeMesh;
 use subdiv_loop::forward::{LoopOptions, subdivide};
 use tri_spline::SurfaceKind;
 use tri_spline::pipeline::{FitOptions, FitReport, Method, fit_mesh};
-use tri_spline::samples::{disk_patch, smooth_surface, triangle_grid};
+use tri_spline::samples::{disk_patch, resample_on_grid, smooth_surface, triangle_grid};
 
 fn print_report(title: &str, report: &FitReport) {
     println!(
@@ -56,46 +58,63 @@ fn print_report(title: &str, report: &FitReport) {
     }
 }
 
-fn run(title: &str, mesh: &HalfedgeMesh, surface: SurfaceKind) -> Result<(), Box<dyn std::error::Error>> {
-    for method in [Method::Seed, Method::Lspia, Method::Pia] {
+fn run(
+    title: &str,
+    mesh: &HalfedgeMesh,
+    surface: SurfaceKind,
+    methods: &[Method],
+) -> Result<(), Box<dyn std::error::Error>> {
+    for &method in methods {
         let options = FitOptions { surface, method, reverse_levels: 2, iterations: 10, ..FitOptions::default() };
         print_report(title, &fit_mesh(mesh, &options)?);
     }
     Ok(())
 }
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let bezier = HalfedgeMesh::from_soup(&triangle_grid(96, smooth_surface))?;
-    run(
-        "Bezier row (paper: 4753 points, eps_avg 5.4e-3 -> 1.3e-3, N_eps 69 -> 98 %, < 1 s)",
-        &bezier,
-        SurfaceKind::Bezier,
-    )?;
+const ALL: [Method; 3] = [Method::Seed, Method::Lspia, Method::Pia];
 
-    let bpatch = HalfedgeMesh::from_soup(&triangle_grid(12, smooth_surface))?;
-    run(
-        "B-patch row (paper: 91 points, eps_avg 7.7e-3 -> 3.2e-3, N_eps 41 -> 94 %, 12 s)",
-        &bpatch,
-        SurfaceKind::Bpatch,
-    )?;
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let only = std::env::args().nth(1).unwrap_or_default();
+    let smooth = HalfedgeMesh::from_soup(&triangle_grid(96, smooth_surface))?;
+    if only.is_empty() || only == "smooth" {
+        let note = "smooth grid, 4753 points (paper, k = 1 -> 10: Bezier eps_avg 5.4e-3 -> 1.3e-3, N_eps 69 -> 98 %, < 1 s; B-patch 7.7e-3 -> 3.2e-3, 41 -> 94 %, 12 s; tri B-spline 8.6e-3 -> 3.5e-3, 55 -> 92 %, 68 s)";
+        for surface in [SurfaceKind::Bezier, SurfaceKind::Bpatch, SurfaceKind::TriBspline] {
+            run(note, &smooth, surface, &ALL)?;
+        }
+    }
 
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/bunny.obj");
     let (bunny, _) = mesh_topo::io::read_mesh(&data)?;
-    let patch = disk_patch(&bunny, 100, 2).ok_or("no disk patch found")?;
-    let coarse = HalfedgeMesh::from_soup(&patch)?;
-    let stats = coarse.topology_stats();
-    println!(
-        "\nbunny patch: {} vertices, {} faces, {} boundary edges",
-        stats.vertices,
-        stats.faces,
-        coarse.halfedges().filter(|&h| coarse.is_boundary_halfedge(h)).count()
-    );
-    let fine =
-        subdivide(&coarse, 2, &LoopOptions { keep_corners: true, ..LoopOptions::default() })?.to_halfedge_mesh()?;
-    run(
-        "Triangular B-spline row (paper: 453 points, eps_avg 8.6e-3 -> 3.5e-3, N_eps 55 -> 92 %, 68 s)",
-        &fine,
-        SurfaceKind::TriBspline,
-    )?;
+    if only.is_empty() || only == "bunny" {
+        // A disk of the bunny's surface (6 rings around vertex 100, scaled to unit size),
+        // resampled on the regular grid of 4753 points by its mean-value parameterization.
+        let region = HalfedgeMesh::from_soup(&disk_patch(&bunny, 100, 6).ok_or("no disk patch found")?)?;
+        let stats = region.topology_stats();
+        let grid = HalfedgeMesh::from_soup(&resample_on_grid(&region, 96)?)?;
+        let note = format!(
+            "bunny region ({} vertices, {} faces) resampled on the 4753-point grid",
+            stats.vertices, stats.faces
+        );
+        for surface in [SurfaceKind::Bezier, SurfaceKind::Bpatch, SurfaceKind::TriBspline] {
+            run(&note, &grid, surface, &ALL)?;
+        }
+    }
+
+    if only.is_empty() || only == "paper-bspline" {
+        // The paper's triangular B-spline setting: a coarse disk of about 52 faces refined
+        // twice by Loop subdivision, so that two reverse-Loop levels give it back.
+        let patch = disk_patch(&bunny, 100, 2).ok_or("no disk patch found")?;
+        let coarse = HalfedgeMesh::from_soup(&patch)?;
+        let stats = coarse.topology_stats();
+        let fine =
+            subdivide(&coarse, 2, &LoopOptions { keep_corners: true, ..LoopOptions::default() })?.to_halfedge_mesh()?;
+        let note = format!(
+            "bunny disk ({} vertices, {} faces) refined twice by Loop, {} points (paper: 453 points, eps_avg 8.6e-3 -> 3.5e-3, N_eps 55 -> 92 %, 68 s)",
+            stats.vertices,
+            stats.faces,
+            fine.vertex_count()
+        );
+        run(&note, &fine, SurfaceKind::TriBspline, &ALL)?;
+    }
     Ok(())
 }

@@ -507,10 +507,16 @@ mod tests {
             let s: DVec3 = n.row(i).0.iter().zip(n.row(i).1).map(|(&c, &v)| targets[c as usize] * v).sum();
             (targets[i] - s)[j]
         });
-        for record in &out.records {
-            let predicted = (0..targets.len()).map(|i| DVec3::new(e[(i, 0)], e[(i, 1)], e[(i, 2)]).length());
-            let predicted_max = predicted.fold(0.0, f64::max);
+        for (record, &norm) in out.records.iter().zip(&out.residual_norms) {
+            // Every data point's error length, hence max, mean and 2-norm, as predicted.
+            let predicted: Vec<f64> =
+                (0..targets.len()).map(|i| DVec3::new(e[(i, 0)], e[(i, 1)], e[(i, 2)]).length()).collect();
+            let predicted_max = predicted.iter().copied().fold(0.0, f64::max);
+            let predicted_avg = predicted.iter().sum::<f64>() / predicted.len() as f64;
+            let predicted_norm = predicted.iter().map(|x| x * x).sum::<f64>().sqrt();
             assert!((predicted_max - record.eps_max).abs() < 1e-14, "k = {}", record.k);
+            assert!((predicted_avg - record.eps_avg).abs() < 1e-14, "k = {}", record.k);
+            assert!((predicted_norm - norm).abs() < 1e-13, "k = {}", record.k);
             e = &step * &e;
         }
     }
