@@ -256,3 +256,39 @@ fn non_grid_disk_needs_the_triangular_bspline() {
     let records = json["iterations"].as_array().unwrap();
     assert!(records[9]["eps_avg"].as_f64().unwrap() < records[0]["eps_avg"].as_f64().unwrap());
 }
+
+#[test]
+fn divergent_iterations_are_reported_and_refused_with_strict() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = write(dir.path(), "grid.off", &triangle_grid(16, smooth_surface));
+    // The seed loop with a quadratic triangular B-spline: rho(I - R N) > 1 here.
+    let out = multires(&["fit", path(&mesh), "--surface", "tri-bspline", "--method", "seed", "--json"]);
+    assert!(out.status.success());
+    let json: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rho = json["spectral_radius"].as_f64().unwrap();
+    assert!(rho > 1.0, "{rho}");
+    let warnings = json["warnings"].as_array().unwrap();
+    assert!(warnings.iter().any(|w| w.as_str().unwrap().contains("does not converge")), "{warnings:?}");
+    // The table form warns on stderr.
+    let out = multires(&["fit", path(&mesh), "--surface", "tri-bspline", "--method", "seed"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("warning: spectral radius"));
+    // --strict refuses before iterating, naming the spectral radius.
+    let surface = dir.path().join("surface.obj");
+    let line = fails(&[
+        "fit",
+        path(&mesh),
+        "--surface",
+        "tri-bspline",
+        "--method",
+        "seed",
+        "--strict",
+        "--out",
+        path(&surface),
+    ]);
+    assert!(line.contains("seed does not converge"), "{line}");
+    let named: f64 = line.split_whitespace().rev().nth(2).unwrap().parse().unwrap();
+    assert!((named - rho).abs() <= 4.0 * f64::EPSILON * rho, "{line}");
+    assert!(!surface.exists());
+    // LSPIA on the same problem converges (its radius is below one) and is accepted.
+    ok(&["fit", path(&mesh), "--surface", "tri-bspline", "--method", "lspia", "--strict"]);
+}

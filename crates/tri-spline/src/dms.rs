@@ -666,6 +666,25 @@ mod tests {
         }
     }
 
+    #[test]
+    fn affine_invariance_and_convex_hull() {
+        let b = basis(2, 5);
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut random =
+            || DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+        let control: Vec<DVec3> = (0..b.basis_count()).map(|_| random()).collect();
+        let (m, shift) = (glam::DMat3::from_cols(random(), random(), random()), random());
+        let spline = DmsSpline::new(b.clone(), control.clone()).unwrap();
+        let mapped = DmsSpline::new(b, control.iter().map(|&c| m * c + shift).collect()).unwrap();
+        let (lo, hi) = control.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), &c| (l.min(c), h.max(c)));
+        for u in interior_points(30, 12) {
+            let p = spline.eval(u);
+            assert!((mapped.eval(u) - (m * p + shift)).length() < 1e-12, "{u}");
+            // A convex combination of the control points: inside their bounding box.
+            assert!(p.cmpge(lo - 1e-12).all() && p.cmple(hi + 1e-12).all(), "{u}: {p}");
+        }
+    }
+
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
         /// Random knot clouds (any seed, radius up to 0.2 edge) and random interior points:
