@@ -15,6 +15,7 @@
 //! | [`doo`] | `subdiv-doo` | Doo-Sabin subdivision, reverse Doo-Sabin, pyramids, analysis |
 //! | [`spline`] | `tri-spline` | triangular Bézier, B-patch and DMS splines; PIA / LSPIA fitting |
 //! | [`ifs`] | `ifs-nonlinear` | subdivision as IFS, complex-parameter and nonlinear subdivision, fractal rendering |
+//! | [`spline`] | `tri-spline` | triangular Bézier, B-patch and DMS splines; PIA / LSPIA fitting |
 //!
 //! # Subdivide with every scheme
 //! ```

@@ -667,6 +667,52 @@ mod tests {
     }
 
     #[test]
+    fn affine_invariance_and_convex_hull() {
+        let b = basis(2, 5);
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut random =
+            || DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+        let control: Vec<DVec3> = (0..b.basis_count()).map(|_| random()).collect();
+        let (m, shift) = (glam::DMat3::from_cols(random(), random(), random()), random());
+        let spline = DmsSpline::new(b.clone(), control.clone()).unwrap();
+        let mapped = DmsSpline::new(b, control.iter().map(|&c| m * c + shift).collect()).unwrap();
+        let (lo, hi) = control.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), &c| (l.min(c), h.max(c)));
+        for u in interior_points(30, 12) {
+            let p = spline.eval(u);
+            assert!((mapped.eval(u) - (m * p + shift)).length() < 1e-12, "{u}");
+            // A convex combination of the control points: inside their bounding box.
+            assert!(p.cmpge(lo - 1e-12).all() && p.cmple(hi + 1e-12).all(), "{u}: {p}");
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+        /// Random knot clouds (any seed, radius up to 0.2 edge) and random interior points:
+        /// every basis function is non-negative and they sum to one.
+        #[test]
+        fn basis_is_a_non_negative_partition_of_unity(
+            degree in 1usize..=3,
+            seed in 0u64..1_000_000,
+            radius in 0.02f64..0.2,
+            x in 1.0f64..3.0,
+            y in 1.0f64..3.0,
+        ) {
+            let (v, t) = square_grid(4);
+            let placement = KnotPlacement { radius, seed, boundary_outward: true };
+            let b = match DmsBasis::with_generated_knots(degree, v, t, placement) {
+                Ok(b) => b,
+                // A random cloud may violate the knot conditions: a typed error, not a basis.
+                Err(SplineError::DmsKnotOrientation { .. } | SplineError::CollinearKnots { .. }) => return Ok(()),
+                Err(other) => panic!("{other}"),
+            };
+            let values = b.eval_basis(DVec2::new(x, y));
+            let sum: f64 = values.iter().map(|v| v.1).sum();
+            proptest::prop_assert!((sum - 1.0).abs() < 1e-11, "sum {}", sum);
+            proptest::prop_assert!(values.iter().all(|v| v.1 >= 0.0));
+        }
+    }
+
+    #[test]
     fn partition_of_unity_on_knot_lines() {
         // Grid vertices are knots and edges are knot lines; dyadic points on them make
         // the half-open rule decide exactly.

@@ -137,7 +137,7 @@ pub enum SplineError {
     },
     /// The mesh is not a topological disk.
     #[error(
-        "the mesh is not a disk: {components} component(s), {boundary_loops} boundary loop(s), Euler characteristic {euler}{hint}"
+        "the mesh is not a disk: {components} component(s), {boundary_loops} boundary loop(s), Euler characteristic {euler}; {hint}"
     )]
     NotDisk {
         /// Connected components.
@@ -146,7 +146,7 @@ pub enum SplineError {
         boundary_loops: usize,
         /// Euler characteristic.
         euler: i64,
-        /// Extra explanation (e.g. "closed meshes need to be cut into charts").
+        /// What to do about it (e.g. "closed meshes need to be cut into charts").
         hint: &'static str,
     },
     /// A vertex is used by no face.

@@ -15,9 +15,9 @@
 //! * **LSPIA** (Deng & Lin 2014): `C ← C + μ Nᵀ (D - N C)`. For `0 < μ <= 2/λ_max(NᵀN)`
 //!   the residual 2-norm never increases, and for `μ < 2/λ_max` with `N` of full column
 //!   rank it converges to the least-squares fit, at rate `ρ(I - μ NᵀN)`. The default
-//!   step is `μ = 1/c` with `c` a rigorous upper bound of `λ_max(NᵀN)` that is tight for
-//!   non-negative bases ([`gram_lambda_max_bound`]): no oscillating mode, monotone
-//!   residual, within a factor two of the optimal stationary step on the slow modes.
+//!   step is `μ = 1.5/c` with `c` a rigorous upper bound of `λ_max(NᵀN)` that is tight for
+//!   non-negative bases ([`gram_lambda_max_bound`]), so the residual is monotone
+//!   ([`default_lspia_step`] says why 1.5).
 //! * **Seed loop** (seed 001 §III, ALGORITHMS.md §12.4): `P* := D`; repeat
 //!   `C := R(P*)`, `E := D - N C`, `P* := P* + E`, with `R` the linear map from data to
 //!   control points (i-fold reverse Loop). In control-point form `C ← C + R (D - N C)`: a
@@ -272,9 +272,15 @@ pub fn lspia(
     })
 }
 
-/// The default LSPIA step `1 / c`, `c >= λ_max(NᵀN)` ([`gram_lambda_max_bound`]).
+/// The default LSPIA step `1.5 / c`, `c >= λ_max(NᵀN)` ([`gram_lambda_max_bound`]).
+///
+/// Any `μ <= 2/λ_max` keeps the residual 2-norm monotone; `μ = 1/λ_max` removes the
+/// top eigencomponent in one step but is slowest on the small eigenvalues, `μ → 2/λ_max`
+/// is fastest there but barely damps the top one (it flips sign each step). On the
+/// reference problems (Bézier degrees 3 to 24, B-patch degree 3) the factor 1.5 gave the
+/// lowest `ε_avg` over the first ten iterations among 1, 1.5, 1.9 and 1.99.
 pub fn default_lspia_step(n: &SparseMatrix) -> f64 {
-    1.0 / gram_lambda_max_bound(n, 50)
+    1.5 / gram_lambda_max_bound(n, 50)
 }
 
 /// Classical PIA towards `targets` (one per control point) at the parameters whose
@@ -350,7 +356,9 @@ pub struct LspiaSpectrum {
 /// # Errors
 /// [`SplineError::Singular`] if the eigenvalue computation fails.
 pub fn lspia_spectrum(n: &SparseMatrix, mu: f64) -> Result<LspiaSpectrum, SplineError> {
-    let gram = n.transpose().mul(n).to_dense();
+    // Dense product: N is often dense (Bézier rows) and m_c is small enough here.
+    let dense = n.to_dense();
+    let gram = dense.transpose() * &dense;
     let values = symmetric_eigenvalues(&gram)?;
     let (lambda_min, lambda_max) = (values[0], *values.last().expect("internal: non-empty"));
     let spectral_radius = (1.0 - mu * lambda_min).abs().max((1.0 - mu * lambda_max).abs());
@@ -499,10 +507,16 @@ mod tests {
             let s: DVec3 = n.row(i).0.iter().zip(n.row(i).1).map(|(&c, &v)| targets[c as usize] * v).sum();
             (targets[i] - s)[j]
         });
-        for record in &out.records {
-            let predicted = (0..targets.len()).map(|i| DVec3::new(e[(i, 0)], e[(i, 1)], e[(i, 2)]).length());
-            let predicted_max = predicted.fold(0.0, f64::max);
+        for (record, &norm) in out.records.iter().zip(&out.residual_norms) {
+            // Every data point's error length, hence max, mean and 2-norm, as predicted.
+            let predicted: Vec<f64> =
+                (0..targets.len()).map(|i| DVec3::new(e[(i, 0)], e[(i, 1)], e[(i, 2)]).length()).collect();
+            let predicted_max = predicted.iter().copied().fold(0.0, f64::max);
+            let predicted_avg = predicted.iter().sum::<f64>() / predicted.len() as f64;
+            let predicted_norm = predicted.iter().map(|x| x * x).sum::<f64>().sqrt();
             assert!((predicted_max - record.eps_max).abs() < 1e-14, "k = {}", record.k);
+            assert!((predicted_avg - record.eps_avg).abs() < 1e-14, "k = {}", record.k);
+            assert!((predicted_norm - norm).abs() < 1e-13, "k = {}", record.k);
             e = &step * &e;
         }
     }
@@ -543,7 +557,7 @@ mod tests {
         let data = random_points(80, 6);
         let mu = default_lspia_step(&n);
         let spectrum = lspia_spectrum(&n, mu).unwrap();
-        assert!(mu * spectrum.lambda_max <= 1.0 + 1e-12, "the step bound is an upper bound");
+        assert!(mu * spectrum.lambda_max <= 1.5 * (1.0 + 1e-12), "the step bound is an upper bound");
         assert!(spectrum.spectral_radius < 1.0);
         let out = lspia(&n, &data, vec![DVec3::ZERO; n.cols()], mu, &options(400)).unwrap();
         for pair in out.residual_norms.windows(2) {
