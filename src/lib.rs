@@ -54,6 +54,26 @@
 //! # Ok::<(), multires::curve::CurveError>(())
 //! ```
 //!
+//! # Fit a triangular spline
+//! ```
+//! use multires::mesh::HalfedgeMesh;
+//! use multires::spline::pipeline::{FitOptions, fit_mesh};
+//! use multires::spline::{SurfaceKind, index::multi_indices, surface::grid_triangles};
+//! use glam::DVec3;
+//!
+//! // A smooth height field on a regular triangular grid, 8 segments per side.
+//! let points = multi_indices(8).map(|[_, j, k]| {
+//!     let (u, v) = (j as f64 / 8.0, k as f64 / 8.0);
+//!     DVec3::new(u, v, (2.0 * u).sin() * v)
+//! });
+//! let mesh = HalfedgeMesh::from_faces(points.collect(), grid_triangles(8, true))?;
+//! // Control net from one reverse-Loop level, ten LSPIA iterations.
+//! let options = FitOptions { surface: SurfaceKind::Bezier, reverse_levels: 1, ..FitOptions::default() };
+//! let report = fit_mesh(&mesh, &options)?;
+//! assert!(report.iterations.last().unwrap().eps_avg < report.iterations[0].eps_avg);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
 //! # Render a fractal
 //! ```
 //! use multires::ifs::{ChaosGame, Projection, ToneMap, chaos_points, preset, render_points};

@@ -23,6 +23,7 @@ const PROMISED: &[&str] = &[
     "curve-combined.svg",
     "fractal-levy.png",
     "fractal-complex-spiral.png",
+    "fit-bezier.png",
 ];
 
 #[test]
@@ -53,7 +54,8 @@ fn demo_writes_every_output_and_reconstructs_exactly() {
 
     // The closing summary names every step.
     let summary = &stdout[stdout.find("== summary").expect("summary table")..];
-    for step in ["Loop subdivision", "Doo-Sabin subdivision", "compression", "a curve", "a fractal", "total"] {
+    for step in ["Loop subdivision", "Doo-Sabin subdivision", "compression", "fitting", "a curve", "a fractal", "total"]
+    {
         assert!(summary.contains(step), "{step} missing from the summary:\n{summary}");
     }
 

@@ -4,7 +4,8 @@
 //!
 //! Steps: the input mesh; Loop and Doo-Sabin subdivision to level 3; decomposition of
 //! bumpy level-3 meshes back to the base mesh with details and exact reconstruction;
-//! compression by keeping the largest details; one curve; one fractal; a closing summary.
+//! compression by keeping the largest details; triangular splines fitted by LSPIA over
+//! reverse-Loop control nets; curves; fractals; a closing summary.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -75,6 +76,7 @@ const STEPS: &[(&str, Step)] = &[
     ("Doo-Sabin subdivision", doo_subdivision),
     ("decomposition and exact reconstruction", multiresolution),
     ("compression: keeping the largest details", compression),
+    ("fitting triangular splines", spline_fit),
     ("a curve", curve),
     ("a fractal", fractal),
 ];
@@ -253,6 +255,74 @@ fn compression(demo: &mut Demo) -> CliResult<String> {
     Ok(line.trim_end_matches("; ").to_string())
 }
 
+/// The seed paper's fitting loop on a smooth height field sampled on a regular triangular
+/// grid: control nets from two reverse-Loop levels, ten LSPIA iterations, for the three
+/// surface kinds; the convergence table and a picture of data and fitted surface.
+fn spline_fit(demo: &mut Demo) -> CliResult<String> {
+    use multires::spline::SurfaceKind;
+    use multires::spline::index::multi_indices;
+    use multires::spline::pipeline::{FitOptions, Method, fit_mesh};
+    use multires::spline::surface::grid_triangles;
+    let segments = 32;
+    let positions: Vec<DVec3> = multi_indices(segments)
+        .map(|[_, j, k]| {
+            let (u, v) = (j as f64 / segments as f64, k as f64 / segments as f64);
+            DVec3::new(u + 0.5 * v, 0.866 * v, 0.25 * (3.0 * u).sin() * (2.5 * v).cos() + 0.1 * (u * v * 6.0).cos())
+        })
+        .collect();
+    let data = HalfedgeMesh::from_faces(positions, grid_triangles(segments, true))
+        .map_err(|e| input_error("fitting data", e))?;
+    let mut text = format!(
+        "data: {} points on a regular triangular grid ({segments} segments per side); control nets from 2 \
+         reverse-Loop levels; LSPIA; errors relative to the bounding-box diagonal\n\n",
+        data.vertex_count()
+    );
+    text.push_str("surface      degree  control  k   eps_max     eps_avg     N_eps   least squares eps_avg\n");
+    let mut surfaces = Vec::new();
+    let mut line = String::new();
+    for kind in [SurfaceKind::Bezier, SurfaceKind::Bpatch, SurfaceKind::TriBspline] {
+        let options = FitOptions { surface: kind, method: Method::Lspia, reverse_levels: 2, ..FitOptions::default() };
+        let report = fit_mesh(&data, &options).map_err(|e| input_error(kind.name(), e))?;
+        let diagonal = report.bbox_diag;
+        for record in report.iterations.iter().filter(|r| r.k == 1 || r.k == report.iterations.len()) {
+            writeln!(
+                text,
+                "{:<12} {:>6} {:>8} {:>2} {:>10.3e} {:>11.3e} {:>6.1}%  {}",
+                kind.name(),
+                report.degree,
+                report.control_points,
+                record.k,
+                record.eps_max / diagonal,
+                record.eps_avg / diagonal,
+                record.n_eps,
+                report.least_squares.map_or("-".to_string(), |l| format!("{:.3e}", l.eps_avg / diagonal)),
+            )
+            .expect("string");
+        }
+        let last = report.iterations.last().expect("internal: ten iterations");
+        write!(line, "{} {:.1}%; ", kind.name(), last.n_eps).expect("string");
+        if kind == SurfaceKind::Bezier {
+            let (points, triangles) = report.surface.sample(&report.domain, 48);
+            surfaces.push(PolygonSoup::from_faces(points, triangles));
+        }
+    }
+    print_out(&text)?;
+    let picture = "fit-bezier.png";
+    let data_soup = data.to_soup();
+    write_picture_view(&demo.out.join(picture), &[&data_soup, &surfaces[0]], (20.0, 55.0))?;
+    section(
+        demo,
+        "Fitting triangular splines",
+        "Progressive iterative approximation (LSPIA) of a smooth height field by a triangular Bézier patch, a \
+         B-patch and a DMS triangular B-spline whose control nets come from two levels of reverse Loop \
+         subdivision of the data mesh; the first and tenth iteration of each, next to the direct least-squares \
+         fit. Left: the data mesh; right: the fitted Bézier patch.",
+        &[picture],
+        &text,
+    );
+    Ok(format!("N_eps after 10 iterations: {}", line.trim_end_matches("; ")))
+}
+
 /// A closed polygon refined by four curve schemes, drawn as SVG.
 fn curve(demo: &mut Demo) -> CliResult<String> {
     use multires::curve::select::{SelectionOptions, select_interpolation_points};
@@ -374,18 +444,23 @@ fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
     a.iter().zip(b).map(|(p, q)| p.distance(*q)).fold(0.0, f64::max)
 }
 
-/// Renders meshes side by side with one shared camera.
+/// Renders meshes side by side with one shared camera, from the bunny's viewpoint.
 fn write_picture(path: &Path, soups: &[&PolygonSoup]) -> CliResult {
+    write_picture_view(path, soups, VIEW)
+}
+
+/// Renders meshes side by side with one shared camera from `view` (azimuth, elevation).
+fn write_picture_view(path: &Path, soups: &[&PolygonSoup], view: (f64, f64)) -> CliResult {
     let options = RenderOptions {
         width: PANEL.0,
         height: PANEL.1,
-        azimuth: VIEW.0,
-        elevation: VIEW.1,
+        azimuth: view.0,
+        elevation: view.1,
         wireframe: soups.iter().all(|s| s.face_count() < 20_000),
         ..RenderOptions::default()
     };
     let all: Vec<DVec3> = soups.iter().flat_map(|s| s.positions.iter().copied()).collect();
-    let camera = Camera::framing(&all, VIEW.0, VIEW.1, f64::from(PANEL.0), f64::from(PANEL.1));
+    let camera = Camera::framing(&all, view.0, view.1, f64::from(PANEL.0), f64::from(PANEL.1));
     let panels: Vec<Image> = soups
         .iter()
         .map(|soup| {

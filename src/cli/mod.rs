@@ -33,9 +33,6 @@ pub enum CliError {
     /// The input was rejected (bad mesh, bad parameters, ...), with the reason.
     #[error("{0}")]
     Input(String),
-    /// The command or option is not available in this build.
-    #[error("{0} is not available yet")]
-    Unavailable(&'static str),
 }
 
 /// Result type of the CLI.
