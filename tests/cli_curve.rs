@@ -1,33 +1,14 @@
 //! `multires curve` and `multires analyze` for the curve schemes.
 
+mod common;
+
 use std::path::Path;
-use std::process::{Command, Output};
+
+use common::cli::{fails, ok, path};
 
 use multires::curve::io::{PointSet, parse_points};
 use multires::curve::{CurveScheme, Framework, Topology};
 use serde_json::Value;
-
-fn multires(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_multires")).args(args).output().expect("run multires")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = multires(args);
-    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
-
-fn fails(args: &[&str]) -> String {
-    let out = multires(args);
-    assert!(!out.status.success(), "{args:?} should fail");
-    let stderr = String::from_utf8(out.stderr).unwrap();
-    assert_eq!(stderr.lines().count(), 1, "one line: {stderr}");
-    stderr
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 fn analyze_json(args: &[&str]) -> Value {
     let mut all = vec!["analyze"];

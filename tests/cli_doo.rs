@@ -3,35 +3,16 @@
 //! move a vertex, decompose, reconstruct exactly), seeds, compression, the Reif check,
 //! and one clear error line (with nothing written) for bad input.
 
+mod common;
+
 use std::path::Path;
-use std::process::{Command, Output};
+
+use common::cli::{fails_in as fails, ok_in as ok};
 
 use glam::DVec3;
 use multires::mesh::PolygonSoup;
 use multires::mesh::io::{self, WriteOptions};
 use multires::mesh::shapes;
-
-fn multires(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_multires")).args(args).current_dir(dir).output().expect("run multires")
-}
-
-fn ok(args: &[&str], dir: &Path) -> String {
-    let out = multires(args, dir);
-    assert!(out.status.success(), "{args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
-
-/// Runs a command that must fail with one `multires: ...` line and write no `out` file.
-fn fails(args: &[&str], dir: &Path, out: &str) -> String {
-    let output = multires(args, dir);
-    let stderr = String::from_utf8(output.stderr).unwrap();
-    assert!(!output.status.success(), "{args:?} succeeded");
-    assert_eq!(stderr.lines().count(), 1, "{args:?}: not one line:\n{stderr}");
-    assert!(stderr.starts_with("multires: "), "{stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    assert!(!dir.join(out).exists(), "{args:?} wrote {out}");
-    stderr
-}
 
 fn read(path: &Path) -> PolygonSoup {
     io::read_soup(path).unwrap().0

@@ -2,36 +2,13 @@
 
 mod common;
 
-use std::path::Path;
-use std::process::{Command, Output};
+use common::cli::{fails, ok, path};
 
 use multires::loop_subdiv::forward::{LoopOptions, subdivide};
 use multires::mesh::HalfedgeMesh;
 use multires::mesh::io::{WriteOptions, read_soup, write_soup};
 use multires::mesh::shapes::{self, CellKind};
 use serde_json::Value;
-
-fn multires(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_multires")).args(args).output().expect("run multires")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = multires(args);
-    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
-    String::from_utf8(out.stdout).unwrap()
-}
-
-fn fails(args: &[&str]) -> String {
-    let out = multires(args);
-    assert!(!out.status.success(), "{args:?} should fail");
-    let stderr = String::from_utf8(out.stderr).unwrap();
-    assert_eq!(stderr.lines().count(), 1, "one line: {stderr}");
-    stderr
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 #[test]
 fn subdivide_writes_every_loop_scheme() {
