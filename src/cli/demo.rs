@@ -15,6 +15,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use mesh_topo::io::{self, Format, PlyEncoding, ReadReport, WriteOptions};
 use mesh_topo::{DVec3, HalfedgeMesh, PolygonSoup};
+use multires::loop_subdiv::pyramid::bounding_box_diagonal;
 use multires::{Depth, Pyramid, SurfaceScheme, decompose};
 
 use super::common::{build_mesh, print_out, write_mesh, write_soup};
@@ -179,7 +180,7 @@ fn multiresolution(demo: &mut Demo) -> CliResult<String> {
         if rebuilt.indices != bumpy.indices {
             return Err(CliError::Input(format!("{scheme}: the reconstruction changed the faces")));
         }
-        let worst = max_distance(&rebuilt.positions, &bumpy.positions) / bbox_diagonal(&bumpy.positions);
+        let worst = max_distance(&rebuilt.positions, &bumpy.positions) / bounding_box_diagonal(&bumpy.positions);
         worst_overall = worst_overall.max(worst);
         writeln!(
             table,
@@ -425,7 +426,7 @@ fn fractal(demo: &mut Demo) -> CliResult<String> {
 /// Deterministic bumps: amplitude 0.3% of the bounding-box diagonal, wavelength about
 /// 3% of it, finer than the base mesh can represent, so every level carries details.
 fn with_bumps(soup: &PolygonSoup) -> PolygonSoup {
-    let diagonal = bbox_diagonal(&soup.positions);
+    let diagonal = bounding_box_diagonal(&soup.positions);
     let (amplitude, frequency) = (0.003 * diagonal, std::f64::consts::TAU / (0.03 * diagonal));
     let mut bumpy = soup.clone();
     for p in &mut bumpy.positions {
@@ -433,11 +434,6 @@ fn with_bumps(soup: &PolygonSoup) -> PolygonSoup {
         *p += DVec3::new((q.y + 0.3).sin(), (q.z + 1.1).sin(), (q.x + 2.3).sin()) * amplitude;
     }
     bumpy
-}
-
-fn bbox_diagonal(points: &[DVec3]) -> f64 {
-    let (min, max) = points.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
-    (max - min).length()
 }
 
 fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
