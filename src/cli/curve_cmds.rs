@@ -75,18 +75,9 @@ pub struct CurveArgs {
     /// Automatic choice: inflections need |K| below this factor times the median |K|.
     #[arg(long, default_value_t = 0.1)]
     pub inflection_factor: f64,
-    /// Tension w of the four-point scheme.
-    #[arg(long, allow_hyphen_values = true)]
-    pub tension: Option<f64>,
-    /// Parameter omega1 of the combined scheme (interpolated pairs; default -1/16).
-    #[arg(long, allow_hyphen_values = true)]
-    pub omega1: Option<f64>,
-    /// Parameter omega2 of the combined scheme (approximated pairs; default 0).
-    #[arg(long, allow_hyphen_values = true)]
-    pub omega2: Option<f64>,
-    /// Parameter gamma of the combined scheme (vertex displacement; default 1/8).
-    #[arg(long, allow_hyphen_values = true)]
-    pub gamma: Option<f64>,
+    /// Curve-scheme parameters.
+    #[command(flatten)]
+    pub curve: super::CurveParameters,
     /// Also write the refined points to this file (same format as the input).
     #[arg(long)]
     pub out_points: Option<PathBuf>,
@@ -125,7 +116,7 @@ pub fn curve(args: &CurveArgs) -> CliResult {
 }
 
 fn plan(args: &CurveArgs) -> CliResult<Plan> {
-    let framework_options = args.omega1.is_some() || args.omega2.is_some() || args.gamma.is_some();
+    let framework_options = args.curve.framework_given();
     let choosing = args.auto_interpolate || !args.interpolate.is_empty();
     let name = args.scheme.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_default();
     if args.scheme != CurveSchemeName::Combined && (framework_options || choosing) {
@@ -134,7 +125,7 @@ fn plan(args: &CurveArgs) -> CliResult<Plan> {
              combined"
         )));
     }
-    if args.scheme != CurveSchemeName::FourPoint && args.tension.is_some() {
+    if args.scheme != CurveSchemeName::FourPoint && args.curve.tension.is_some() {
         return Err(CliError::Input(format!("curve --scheme {name}: --tension applies to --scheme four-point only")));
     }
     let context = format!("curve --scheme {name}");
@@ -142,9 +133,11 @@ fn plan(args: &CurveArgs) -> CliResult<Plan> {
         CurveSchemeName::Chaikin => Plan::Uniform(CurveScheme::chaikin()),
         CurveSchemeName::CubicBspline => Plan::Uniform(CurveScheme::cubic_bspline()),
         CurveSchemeName::FourPoint => Plan::Uniform(
-            CurveScheme::four_point(args.tension.unwrap_or(1.0 / 16.0)).map_err(|e| input_error(&context, e))?,
+            CurveScheme::four_point(args.curve.tension.unwrap_or(1.0 / 16.0)).map_err(|e| input_error(&context, e))?,
         ),
-        CurveSchemeName::Combined => Plan::Framework(framework(args.omega1, args.omega2, args.gamma, &context)?),
+        CurveSchemeName::Combined => {
+            Plan::Framework(framework(args.curve.omega1, args.curve.omega2, args.curve.gamma, &context)?)
+        }
     })
 }
 
@@ -262,22 +255,24 @@ pub fn analyze(args: &AnalyzeArgs) -> CliResult {
     if args.valence.is_some() {
         return Err(CliError::Input(format!("{context}: --valence applies to surface schemes only")));
     }
-    let framework_options = args.omega1.is_some() || args.omega2.is_some() || args.gamma.is_some();
+    let framework_options = args.curve.framework_given();
     if args.scheme != AnalyzeScheme::Combined && framework_options {
         return Err(CliError::Input(format!("{context}: --omega1, --omega2 and --gamma need --scheme combined")));
     }
-    if args.scheme != AnalyzeScheme::FourPoint && args.tension.is_some() {
+    if args.scheme != AnalyzeScheme::FourPoint && args.curve.tension.is_some() {
         return Err(CliError::Input(format!("{context}: --tension applies to --scheme four-point only")));
     }
     let (text, json) = match args.scheme {
         AnalyzeScheme::Chaikin => uniform_report(&analysis::analyze(&CurveScheme::chaikin())),
         AnalyzeScheme::CubicBspline => uniform_report(&analysis::analyze(&CurveScheme::cubic_bspline())),
         AnalyzeScheme::FourPoint => {
-            let scheme =
-                CurveScheme::four_point(args.tension.unwrap_or(1.0 / 16.0)).map_err(|e| input_error(&context, e))?;
+            let scheme = CurveScheme::four_point(args.curve.tension.unwrap_or(1.0 / 16.0))
+                .map_err(|e| input_error(&context, e))?;
             uniform_report(&analysis::analyze(&scheme))
         }
-        AnalyzeScheme::Combined => framework_report(&framework(args.omega1, args.omega2, args.gamma, &context)?),
+        AnalyzeScheme::Combined => {
+            framework_report(&framework(args.curve.omega1, args.curve.omega2, args.curve.gamma, &context)?)
+        }
         other => return Err(CliError::Input(format!("{other:?} is not a curve scheme"))),
     };
     if args.json { print_out(&format!("{json}\n")) } else { print_out(&text) }

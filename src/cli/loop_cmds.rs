@@ -178,7 +178,7 @@ pub fn analyze(args: &AnalyzeArgs) -> CliResult {
         AnalyzeScheme::QuaternaryLoop => Scheme::QuaternaryLoop,
         other => return Err(CliError::Input(format!("{other:?} is not a Loop scheme"))),
     };
-    if args.omega1.is_some() || args.omega2.is_some() || args.gamma.is_some() || args.tension.is_some() {
+    if args.curve.any_given() {
         return Err(CliError::Input("--omega1, --omega2, --gamma and --tension apply to curve schemes only".into()));
     }
     let valence =

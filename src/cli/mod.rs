@@ -35,6 +35,35 @@ pub enum CliError {
     Input(String),
 }
 
+/// Parameters of the curve schemes, shared by `curve` and `analyze`.
+#[derive(Debug, Clone, Copy, Default, Args)]
+pub struct CurveParameters {
+    /// Tension w of the four-point scheme (default 1/16).
+    #[arg(long, allow_hyphen_values = true)]
+    pub tension: Option<f64>,
+    /// Parameter omega1 of the combined scheme (interpolated pairs; default -1/16).
+    #[arg(long, allow_hyphen_values = true)]
+    pub omega1: Option<f64>,
+    /// Parameter omega2 of the combined scheme (approximated pairs; default 0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub omega2: Option<f64>,
+    /// Parameter gamma of the combined scheme (vertex displacement; default 1/8).
+    #[arg(long, allow_hyphen_values = true)]
+    pub gamma: Option<f64>,
+}
+
+impl CurveParameters {
+    /// True if any parameter of the combined scheme was given.
+    pub fn framework_given(&self) -> bool {
+        self.omega1.is_some() || self.omega2.is_some() || self.gamma.is_some()
+    }
+
+    /// True if any curve parameter was given.
+    pub fn any_given(&self) -> bool {
+        self.framework_given() || self.tension.is_some()
+    }
+}
+
 /// Result type of the CLI.
 pub type CliResult<T = ()> = Result<T, CliError>;
 
@@ -221,18 +250,9 @@ pub struct AnalyzeArgs {
     /// Valence of the extraordinary vertex (or face size for Doo-Sabin); surfaces only.
     #[arg(long)]
     pub valence: Option<u32>,
-    /// Parameter omega1 of the combined curve framework (interpolated pairs).
-    #[arg(long, allow_hyphen_values = true)]
-    pub omega1: Option<f64>,
-    /// Parameter omega2 of the combined curve framework (approximated pairs).
-    #[arg(long, allow_hyphen_values = true)]
-    pub omega2: Option<f64>,
-    /// Parameter gamma of the combined curve framework.
-    #[arg(long, allow_hyphen_values = true)]
-    pub gamma: Option<f64>,
-    /// Tension w of the four-point scheme.
-    #[arg(long, allow_hyphen_values = true)]
-    pub tension: Option<f64>,
+    /// Curve-scheme parameters (curves only).
+    #[command(flatten)]
+    pub curve: CurveParameters,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
