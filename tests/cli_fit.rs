@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use glam::DVec3;
 use multires::mesh::io::{WriteOptions, read_soup, write_soup};
 use multires::mesh::{HalfedgeMesh, PolygonSoup, shapes};
 use multires::spline::SurfaceKind;
@@ -204,6 +205,15 @@ fn bad_input_gives_one_clear_line_and_no_output_file() {
     let grid10 = write(dir.path(), "grid10.off", &triangle_grid(10, smooth_surface));
     let quads = write(dir.path(), "quads.off", &shapes::grid(3, 3, shapes::CellKind::Quads).unwrap());
     let missing = dir.path().join("missing.off");
+    // A square with an ear triangle on each side: four boundary vertices with one face
+    // each, so some ear's three vertices end up on one side of the parameter triangle.
+    let ears = PolygonSoup::from_faces(
+        [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.5, -0.5], [1.5, 0.5], [0.5, 1.5], [-0.5, 0.5]]
+            .map(|[x, y]| DVec3::new(x, y, 0.0))
+            .to_vec(),
+        [[0u32, 1, 2], [0, 2, 3], [0, 4, 1], [1, 5, 2], [2, 6, 3], [3, 7, 0]],
+    );
+    let ears = write(dir.path(), "ears.off", &ears);
     let cases: Vec<(Vec<&str>, &[&str])> = vec![
         (vec!["fit", path(&closed)], &["ico.off", "not a disk", "0 boundary loop", "closed"]),
         (vec!["fit", path(&closed), "--surface", "tri-bspline"], &["not a disk"]),
@@ -213,6 +223,10 @@ fn bad_input_gives_one_clear_line_and_no_output_file() {
         (vec!["fit", path(&ring), "--surface", "bezier"], &["not a disk"]),
         (vec!["fit", path(&quads)], &["face", "triangle"]),
         (vec!["fit", path(&missing)], &["missing.off"]),
+        (
+            vec!["fit", path(&ears), "--surface", "tri-bspline", "--reverse-levels", "0"],
+            &["ears.off", "face 2", "degenerate", "ear"],
+        ),
         (vec!["fit", path(&grid12), "--iterations", "0"], &["iterations"]),
         (vec!["fit", path(&grid12), "--tolerance=-1"], &["tolerance", "positive"]),
         (vec!["fit", path(&grid12), "--hit-tol", "nan"], &["hit-tol"]),

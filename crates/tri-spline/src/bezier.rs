@@ -439,15 +439,12 @@ mod tests {
         }
 
         #[test]
-        fn convex_hull(n in 1usize..8, seed in 0u64..1000, a in 0.0..1.0f64, b in 0.0..1.0f64) {
-            // Inside the domain the surface lies in the bounding box of its control points
-            // (a consequence of non-negative weights summing to one).
+        fn convex_hull(n in 2usize..8, seed in 0u64..1000, a in 0.0..1.0f64, b in 0.0..1.0f64) {
+            // Inside the domain the surface lies in the convex hull of its control points
+            // (the hull itself, not only its bounding box; degree 1 has a flat hull).
             let p = patch(n, seed);
             let u = p.domain().point([a * (1.0 - b), b, (1.0 - a) * (1.0 - b)]);
-            let s = p.eval(u);
-            let lo = p.control_points().iter().fold(DVec3::INFINITY, |m, &q| m.min(q));
-            let hi = p.control_points().iter().fold(DVec3::NEG_INFINITY, |m, &q| m.max(q));
-            prop_assert!(s.cmpge(lo - 1e-14).all() && s.cmple(hi + 1e-14).all());
+            prop_assert!(crate::hull_check::in_convex_hull(p.eval(u), p.control_points(), 1e-13));
         }
     }
 }

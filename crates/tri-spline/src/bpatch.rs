@@ -437,6 +437,24 @@ mod tests {
     }
 
     #[test]
+    fn patch_lies_in_the_convex_hull_of_its_control_points() {
+        let mut rng = Lcg(5);
+        for n in 2..6 {
+            let knots = perturbed_knots(n, 0.08, &mut rng);
+            let control: Vec<DVec3> =
+                (0..tri_count(n)).map(|_| DVec3::new(rng.next(), rng.next(), rng.next())).collect();
+            let patch = BPatch::new(n, knots, control.clone()).unwrap();
+            for _ in 0..20 {
+                // Where the basis is non-negative (well inside every knot triangle).
+                let l = [0.2 + 0.6 * (rng.next() + 0.5), 0.2 + 0.3 * (rng.next() + 0.5), 0.2];
+                let s: f64 = l.iter().sum();
+                let u = DomainTriangle::reference().point([l[0] / s, l[1] / s, l[2] / s]);
+                assert!(crate::hull_check::in_convex_hull(patch.eval(u), &control, 1e-13), "n = {n}, u = {u}");
+            }
+        }
+    }
+
+    #[test]
     fn derivatives_match_finite_differences() {
         let mut rng = Lcg(4);
         let n = 3;

@@ -47,6 +47,8 @@ pub mod dms;
 pub mod dms_net;
 pub mod domain;
 pub mod fit;
+#[cfg(test)]
+mod hull_check;
 pub mod index;
 pub mod linalg;
 pub mod param;
