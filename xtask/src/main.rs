@@ -41,14 +41,18 @@ fn main() -> ExitCode {
     let args: Vec<String> = env::args().skip(1).collect();
     let result = match args.first().map(String::as_str) {
         Some("ci") => ci(),
-        Some("bench") => bench(args.get(1).map(String::as_str)),
+        Some("bench") => {
+            // `bench [crate] [-- criterion arguments]`, e.g. `bench multires -- subdivide-bunny00/loop`.
+            let (ours, passed) = args[1..].split_at(args[1..].iter().position(|a| a == "--").unwrap_or(args.len() - 1));
+            bench(ours.first().map(String::as_str), passed)
+        }
         Some("golden") => golden(args.iter().any(|a| a == "--bless")),
         Some("layering") => layering(),
         Some("html") => browser()
             .ok_or_else(|| "html: no `chromium` or `chromium-browser` on the PATH".to_string())
             .and_then(|b| html(&b)),
         _ => {
-            eprintln!("usage: cargo xtask ci | bench [crate] | golden [--bless] | layering | html");
+            eprintln!("usage: cargo xtask ci | bench [crate] [-- filter] | golden [--bless] | layering | html");
             return ExitCode::from(2);
         }
     };
@@ -168,13 +172,16 @@ fn layering() -> Result<(), String> {
     }
 }
 
-fn bench(krate: Option<&str>) -> Result<(), String> {
+/// Runs the criterion benches (`passed` starts with `--` and goes to criterion, e.g. a
+/// filter) and summarises every result under `target/criterion`, including earlier runs'.
+fn bench(krate: Option<&str>, passed: &[String]) -> Result<(), String> {
     let mut command = cargo();
     command.arg("bench");
     match krate {
         Some(name) => command.args(["-p", name]),
         None => command.arg("--workspace"),
     };
+    command.args(passed);
     run("bench", &mut command)?;
     let criterion_dir = target_dir().join("criterion");
     let mut rows = BTreeMap::new();
