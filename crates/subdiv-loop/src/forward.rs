@@ -61,6 +61,7 @@
 //! subdivision*, HPG 2021 (index-arithmetic refinement).
 
 mod attribute;
+mod buffer;
 pub(crate) mod kernel;
 mod matrix;
 pub(crate) mod topology;
