@@ -25,6 +25,8 @@
 use std::mem::MaybeUninit;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use rayon::prelude::*;
+
 /// Buffers smaller than this keep the allocator's defaults: they rarely hold a whole
 /// aligned huge page, and small allocations come from memory the allocator reuses.
 const HUGE_PAGE_MIN_BYTES: usize = 4 << 20;
@@ -116,6 +118,23 @@ impl<T> Drop for Slots<'_, T> {
             self.filled.fetch_add(self.written, Ordering::Relaxed);
         }
     }
+}
+
+/// The vector `[value(0), value(1), ..., value(len - 1)]`, computed in parallel.
+pub(crate) fn par_fill<T: Send>(len: usize, value: impl Fn(usize) -> T + Sync) -> Vec<T> {
+    const CHUNK: usize = 1 << 16;
+    let mut output = Output::new(len);
+    {
+        let mut slots = output.slots();
+        let pieces: Vec<(usize, Slots<'_, T>)> =
+            (0..len).step_by(CHUNK).map(|start| (start, slots.take_front(CHUNK.min(len - start)))).collect();
+        pieces.into_par_iter().for_each(|(start, mut piece)| {
+            for i in start..start + piece.len() {
+                piece.push(value(i));
+            }
+        });
+    }
+    output.into_vec()
 }
 
 /// Asks the kernel to back the huge-page-aligned part of `bytes` bytes at `start` with
@@ -216,5 +235,14 @@ mod tests {
         let values = output.into_vec();
         assert!(values.iter().enumerate().all(|(i, &v)| v == i as u64));
         assert!(Output::<u8>::new(0).into_vec().is_empty());
+    }
+
+    #[test]
+    fn parallel_fill_covers_every_index() {
+        let len = 3 * (1 << 16) + 5;
+        let filled = par_fill(len, |i| 3 * i as u64);
+        assert_eq!(filled.len(), len);
+        assert!(filled.iter().enumerate().all(|(i, &v)| v == 3 * i as u64));
+        assert!(par_fill(0, |i| i).is_empty());
     }
 }
