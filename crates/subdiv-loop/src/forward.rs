@@ -48,10 +48,16 @@
 //! (Dupuy and Vanhoey 2021), without hashing. Faces, edges and vertices are processed in
 //! parallel with `rayon`, each output written by exactly one task with a fixed formula,
 //! so results are bit-identical for any number of threads. The last level computes only
-//! positions and triangles. Peak memory beyond the output is the previous level: about
-//! 40% of the output size. The result is flat arrays; building a [`HalfedgeMesh`] from
-//! them ([`LoopMesh::to_halfedge_mesh`]) validates and sorts, and costs more than the
-//! subdivision itself at large sizes.
+//! positions and triangles. Outputs are written once, without a zero or placeholder pass
+//! first, and on Linux the large ones are backed by transparent huge pages: the first
+//! touch of fresh memory (a page fault per 4 KiB page, and the kernel zeroing it) is the
+//! largest single cost at millions of triangles. At level 4 of a 75k-triangle mesh,
+//! huge pages and the missing fill pass cut the CPU time by about 30%, and releasing
+//! the result from about 50 ms to 2 ms. Peak memory beyond the output is the previous level: about 40% of the output size
+//! (level 4 of a 75k-triangle mesh: peak resident memory 1.42 times the output).
+//! [`LoopMesh::into_soup`] reuses the triangles' memory. The result is flat arrays;
+//! building a [`HalfedgeMesh`] from them ([`LoopMesh::to_halfedge_mesh`]) validates and
+//! sorts, and costs more than the subdivision itself at large sizes.
 //!
 //! # References
 //! C. Loop, *Smooth subdivision surfaces based on triangles*, MS thesis, Utah, 1987.
