@@ -27,10 +27,6 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use rayon::prelude::*;
 
-/// Buffers smaller than this keep the allocator's defaults: they rarely hold a whole
-/// aligned huge page, and small allocations come from memory the allocator reuses.
-const HUGE_PAGE_MIN_BYTES: usize = 4 << 20;
-
 /// An array of `len` elements under construction.
 pub(crate) struct Output<T> {
     vec: Vec<T>,
@@ -138,17 +134,19 @@ pub(crate) fn par_fill<T: Send>(len: usize, value: impl Fn(usize) -> T + Sync) -
 }
 
 /// Asks the kernel to back the huge-page-aligned part of `bytes` bytes at `start` with
-/// transparent huge pages, before anything touches them.
+/// transparent huge pages, before anything touches them. A buffer of a few huge pages
+/// gains already: at level 1 of a 75k-triangle mesh (3.6 MB arrays) the step is ~5% faster.
 ///
 /// Works when the system's THP mode is `always` or `madvise`; when it is `never`, the
 /// kernel lacks THP, or the range holds no whole huge page, nothing changes. Errors are
 /// ignored: the hint is an optimisation only.
 #[cfg(target_os = "linux")]
 fn advise_huge_pages(start: *const u8, bytes: usize) {
-    if bytes < HUGE_PAGE_MIN_BYTES {
+    let huge = huge_page_size();
+    if bytes < huge {
+        // No whole huge page fits: leave the buffer to the allocator's defaults.
         return;
     }
-    let huge = huge_page_size();
     let begin = (start as usize).next_multiple_of(huge);
     let end = (start as usize + bytes) / huge * huge;
     if end > begin {
