@@ -69,7 +69,8 @@ fn main() {
     println!("best {best:.4} s");
     if let Some(fine) = &fine {
         let output = (fine.positions.len() * 24 + fine.triangles.len() * 12) as f64 / 1e6;
-        let (peak, before) = (memory_kib("VmHWM") as f64 / 1e3, resident_before as f64 / 1e3);
+        // KiB to MB (10^6 bytes), the unit of the output size.
+        let (peak, before) = (memory_kib("VmHWM") as f64 * 1.024e-3, resident_before as f64 * 1.024e-3);
         println!(
             "memory: peak {peak:.1} MB, before subdividing {before:.1} MB, output {output:.1} MB, \
              (peak - before) / output {:.2}, peak / output {:.2}",

@@ -9,6 +9,7 @@
 use rayon::prelude::*;
 
 use super::attribute::Attribute;
+use super::buffer::{Output, Slots};
 use super::topology::{BASE_BITS, INVALID, NEXT, PREV, Topology, edge_at, edge_base, is_first};
 use super::{LoopOptions, VertexWeights};
 
@@ -85,23 +86,25 @@ pub(crate) struct Step<T> {
 struct FaceWork<'a, T> {
     faces: std::ops::Range<usize>,
     first_edge: usize,
-    edge_values: &'a mut [T],
+    edge_values: Slots<'a, T>,
     first_odd: usize,
-    odd_values: &'a mut [T],
-    odd_starts: &'a mut [u32],
-    triangles: &'a mut [[u32; 3]],
-    links: &'a mut [[u32; 4]],
+    odd_values: Slots<'a, T>,
+    odd_starts: Slots<'a, u32>,
+    triangles: Slots<'a, [u32; 3]>,
+    links: Slots<'a, [u32; 4]>,
 }
 
-/// Splits `n` elements off the front of `slice` (nothing if `slice` is empty: outputs
-/// that are not computed).
-fn take_front<'a, T>(slice: &mut &'a mut [T], n: usize) -> &'a mut [T] {
-    if slice.is_empty() {
-        return &mut [];
-    }
-    let (front, back) = std::mem::take(slice).split_at_mut(n);
-    *slice = back;
-    front
+/// A chunk of even vertices and the disjoint output ranges it writes.
+struct VertexWork<'a, T> {
+    first: usize,
+    values: Slots<'a, T>,
+    starts: Slots<'a, u32>,
+}
+
+/// The parallel tasks of one step.
+enum Work<'a, T> {
+    Faces(FaceWork<'a, T>),
+    Vertices(VertexWork<'a, T>),
 }
 
 /// The first half of half-edge `h = 4f + k`: half-edge 0 of child `4f + k`.
@@ -147,25 +150,23 @@ pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, r
     debug_assert!(even == nv || nf.is_multiple_of(4), "internal: a refined level has whole groups");
     let fine_vertex_count = nv + ne;
 
-    let mut fine_values: Vec<T> = Vec::with_capacity(fine_vertex_count);
-    if let Some(placeholder) = values.first() {
-        // Parallel first touch: page faults of a large output are the biggest fixed
-        // cost on many machines, and they scale with threads when spread like this.
-        fine_values.par_extend(rayon::iter::repeat_n(placeholder.clone(), fine_vertex_count));
-    }
-    let mut fine_triangles = vec![[0u32; 3]; 4 * nf];
-    let (mut fine_links, mut fine_starts) =
-        if refine_topology { (vec![[0u32; 4]; 4 * nf], vec![0u32; nv]) } else { (Vec::new(), Vec::new()) };
+    // Every output element is written exactly once below, by one task.
+    let optional = |n: usize| if refine_topology { n } else { 0 };
+    let mut fine_values = Output::<T>::new(fine_vertex_count);
+    let mut fine_triangles = Output::<[u32; 3]>::new(4 * nf);
+    let mut fine_links = Output::<[u32; 4]>::new(optional(4 * nf));
+    let mut fine_starts = Output::<u32>::new(optional(nv));
 
-    let (vertex_values, edge_values) = fine_values.split_at_mut(nv.min(fine_vertex_count));
-    let (even_values, odd_values) = vertex_values.split_at_mut(even.min(vertex_values.len()));
-    let (even_starts, odd_starts) = fine_starts.split_at_mut(if refine_topology { even } else { 0 });
-
-    // Face chunks: edge points, odd vertex points, fine faces and fine links.
-    let mut work = Vec::with_capacity(nf.div_ceil(FACE_CHUNK));
+    let mut work = Vec::with_capacity(nf.div_ceil(FACE_CHUNK) + even.div_ceil(VERTEX_CHUNK));
     {
-        let (mut ev, mut ov, mut os, mut tr, mut li) =
-            (edge_values, odd_values, odd_starts, &mut fine_triangles[..], &mut fine_links[..]);
+        let mut values = fine_values.slots();
+        let mut starts = fine_starts.slots();
+        let mut even_values = values.take_front(even);
+        let mut even_starts = starts.take_front(optional(even));
+        let (mut ov, mut os) = (values.take_front(nv - even), starts.take_front(optional(nv - even)));
+        let mut ev = values.take_front(ne);
+        let (mut tr, mut li) = (fine_triangles.slots(), fine_links.slots());
+        // Face chunks: edge points, odd vertex points, fine faces and fine links.
         let edges_before = |f: usize| if f == nf { ne } else { edge_base(topo.links[f][3]) as usize };
         // Odd vertices are the edge points of the level before, numbered by its edges:
         // group g has 3g + 2 e_g edges before it, e_g of the level before.
@@ -183,53 +184,48 @@ pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, r
             let f1 = (f0 + FACE_CHUNK).min(nf);
             let edges = edges_before(f1) - edges_before(f0);
             let odd = odd_before(f1) - odd_before(f0);
-            work.push(FaceWork {
+            work.push(Work::Faces(FaceWork {
                 faces: f0..f1,
                 first_edge: edges_before(f0),
-                edge_values: take_front(&mut ev, edges),
+                edge_values: ev.take_front(edges),
                 first_odd: even + odd_before(f0),
-                odd_values: take_front(&mut ov, odd),
-                odd_starts: take_front(&mut os, odd),
-                triangles: take_front(&mut tr, 4 * (f1 - f0)),
-                links: take_front(&mut li, 4 * (f1 - f0)),
-            });
+                odd_values: ov.take_front(odd),
+                odd_starts: os.take_front(optional(odd)),
+                triangles: tr.take_front(4 * (f1 - f0)),
+                links: li.take_front(optional(4 * (f1 - f0))),
+            }));
             f0 = f1;
         }
+        // Vertex chunks: vertex points (and starts) of even vertices.
+        let mut v0 = 0;
+        while v0 < even {
+            let v1 = (v0 + VERTEX_CHUNK).min(even);
+            work.push(Work::Vertices(VertexWork {
+                first: v0,
+                values: even_values.take_front(v1 - v0),
+                starts: even_starts.take_front(optional(v1 - v0)),
+            }));
+            v0 = v1;
+        }
     }
-    work.into_par_iter().for_each(|mut w| {
-        if even < nv {
-            odd_chunk(topo, values, rules, &mut w, refine_topology);
-        }
-        face_chunk(topo, values, w, refine_topology);
-    });
-
-    // Vertex chunks: vertex points of even vertices.
-    even_values.par_chunks_mut(VERTEX_CHUNK).enumerate().for_each(|(chunk, out)| {
-        let first = chunk * VERTEX_CHUNK;
-        for (i, slot) in out.iter_mut().enumerate() {
-            *slot = vertex_point(topo, values, rules, (first + i) as u32);
-        }
-    });
-    if refine_topology {
-        // Corner k of face f becomes corner 0 of child 4f + k: the outgoing half-edge
-        // becomes its first half, with the same boundary status.
-        even_starts.par_chunks_mut(VERTEX_CHUNK).enumerate().for_each(|(chunk, out)| {
-            let first = chunk * VERTEX_CHUNK;
-            for (i, slot) in out.iter_mut().enumerate() {
-                let h = topo.vertex_halfedge[first + i];
-                *slot = if h == INVALID { INVALID } else { first_half(h) };
+    work.into_par_iter().for_each(|work| match work {
+        Work::Faces(mut w) => {
+            if even < nv {
+                odd_chunk(topo, values, rules, &mut w, refine_topology);
             }
-        });
-    }
+            face_chunk(topo, values, w, refine_topology);
+        }
+        Work::Vertices(w) => vertex_chunk(topo, values, rules, w, refine_topology),
+    });
 
     let topology = Topology {
-        triangles: fine_triangles,
-        links: fine_links,
-        vertex_halfedge: fine_starts,
+        triangles: fine_triangles.into_vec(),
+        links: fine_links.into_vec(),
+        vertex_halfedge: fine_starts.into_vec(),
         vertex_count: fine_vertex_count,
         edge_count: 2 * ne + 3 * nf,
     };
-    Step { values: fine_values, topology }
+    Step { values: fine_values.into_vec(), topology }
 }
 
 /// Vertex points of the odd vertices owned by a chunk of groups.
@@ -253,7 +249,7 @@ fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut
                 continue;
             }
             let m = centre[k];
-            let slot = m as usize - w.first_odd;
+            debug_assert_eq!(m as usize - w.first_odd, w.odd_values.written(), "internal: odd vertex order");
             let p = &values[m as usize];
             let mut ends = values[tri[corner_face][0] as usize].clone();
             ends.add(&values[tri[4 * g + NEXT[k]][0] as usize]);
@@ -261,9 +257,9 @@ fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut
             if across == INVALID {
                 let mut point = p.scaled(0.75);
                 point.add_scaled(&ends, 0.125);
-                w.odd_values[slot] = point;
+                w.odd_values.push(point);
                 if refine {
-                    w.odd_starts[slot] = first_half(second_half(corner_face as u32));
+                    w.odd_starts.push(first_half(second_half(corner_face as u32)));
                 }
             } else {
                 // `across` is the second half of the twin edge: half-edge 2 of face
@@ -279,9 +275,9 @@ fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut
                 sum.add(&values[other[NEXT[j]] as usize]);
                 let mut point = p.scaled(alpha);
                 point.add_scaled(&sum, beta);
-                w.odd_values[slot] = point;
+                w.odd_values.push(point);
                 if refine {
-                    w.odd_starts[slot] = first_half((4 * corner_face + 1) as u32);
+                    w.odd_starts.push(first_half((4 * corner_face + 1) as u32));
                 }
             }
         }
@@ -296,13 +292,11 @@ fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut
 /// `4f + k`, `(4f + k, 1)` runs `m_k -> m_{k-1}`, `(4f + k, 2)` is the second half of
 /// `4f + k - 1`, `(4f + 3, j)` runs `m_j -> m_{j+1}`.
 #[inline(never)]
-fn face_chunk<T: Attribute>(topo: &Topology, values: &[T], w: FaceWork<'_, T>, refine_topology: bool) {
+fn face_chunk<T: Attribute>(topo: &Topology, values: &[T], mut w: FaceWork<'_, T>, refine_topology: bool) {
     let nv = topo.vertex_count as u32;
     let tri = &topo.triangles[..];
     let links = &topo.links[..];
-    let first_face = w.faces.start;
-    for f in w.faces {
-        let local = f - first_face;
+    for f in w.faces.clone() {
         let c = tri[f];
         let link = links[f];
         let h0 = 4 * f as u32;
@@ -319,7 +313,8 @@ fn face_chunk<T: Attribute>(topo: &Topology, values: &[T], w: FaceWork<'_, T>, r
                 let b = &values[c[NEXT[k]] as usize];
                 let mut point = a.clone();
                 point.add(b);
-                w.edge_values[e as usize - w.first_edge] = if t == INVALID {
+                debug_assert_eq!(e as usize - w.first_edge, w.edge_values.written(), "internal: edge order");
+                w.edge_values.push(if t == INVALID {
                     point.scaled(0.5)
                 } else {
                     let d = tri[(t >> 2) as usize][PREV[(t & 3) as usize]];
@@ -328,16 +323,15 @@ fn face_chunk<T: Attribute>(topo: &Topology, values: &[T], w: FaceWork<'_, T>, r
                     let mut point = point.scaled(0.375);
                     point.add_scaled(&wings, 0.125);
                     point
-                };
+                });
             } else {
                 m[k] = nv + edge_at(links[(t >> 2) as usize][3], t & 3);
             }
         }
-        let out = &mut w.triangles[4 * local..4 * local + 4];
-        out[0] = [c[0], m[0], m[2]];
-        out[1] = [c[1], m[1], m[0]];
-        out[2] = [c[2], m[2], m[1]];
-        out[3] = [m[0], m[1], m[2]];
+        w.triangles.push([c[0], m[0], m[2]]);
+        w.triangles.push([c[1], m[1], m[0]]);
+        w.triangles.push([c[2], m[2], m[1]]);
+        w.triangles.push([m[0], m[1], m[2]]);
         if refine_topology {
             let base = 16 * f as u32;
             // Fine first-masks: child k holds the first half of 4f + k (bit 0), an
@@ -346,20 +340,34 @@ fn face_chunk<T: Attribute>(topo: &Topology, values: &[T], w: FaceWork<'_, T>, r
             let first = (info >> BASE_BITS) & 7;
             let bit = |k: usize| (first >> k) & 1;
             let mut edges = 3 * f as u32 + 2 * edge_base(info);
-            let out = &mut w.links[4 * local..4 * local + 4];
             for k in 0..3usize {
                 let outer = link[k];
                 let inner = link[PREV[k]];
                 let mask = bit(k) | 2 | (bit(PREV[k]) << 2);
-                out[k] = [
+                w.links.push([
                     if outer == INVALID { INVALID } else { second_half(outer) },
                     base + 12 + PREV[k] as u32,
                     if inner == INVALID { INVALID } else { first_half(inner) },
                     edges | (mask << BASE_BITS),
-                ];
+                ]);
                 edges += mask.count_ones();
             }
-            out[3] = [base + 5, base + 9, base + 1, edges];
+            w.links.push([base + 5, base + 9, base + 1, edges]);
+        }
+    }
+}
+
+/// Vertex points (and, with `refine_topology`, start half-edges) of a chunk of even
+/// vertices.
+#[inline(never)]
+fn vertex_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, mut w: VertexWork<'_, T>, refine: bool) {
+    for v in w.first..w.first + w.values.len() {
+        w.values.push(vertex_point(topo, values, rules, v as u32));
+        if refine {
+            // Corner k of face f becomes corner 0 of child 4f + k: the outgoing half-edge
+            // becomes its first half, with the same boundary status.
+            let h = topo.vertex_halfedge[v];
+            w.starts.push(if h == INVALID { INVALID } else { first_half(h) });
         }
     }
 }

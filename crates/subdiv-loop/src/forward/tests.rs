@@ -147,6 +147,22 @@ fn zero_levels_returns_the_input() {
 }
 
 #[test]
+fn soups_hold_the_triangles_in_order() {
+    let fine = subdivide(&mesh(&shapes::octahedron()), 2, &LoopOptions::default()).unwrap();
+    let expected = PolygonSoup::from_faces(fine.positions.clone(), &fine.triangles);
+    assert_eq!(fine.to_soup(), expected);
+    let indices = fine.triangles.as_ptr().cast::<u32>();
+    let soup = fine.into_soup();
+    assert_eq!(soup, expected);
+    assert_eq!(soup.offsets.len(), soup.face_count() + 1);
+    // The indices reuse the triangles' memory.
+    assert_eq!(soup.indices.as_ptr(), indices);
+    let empty = LoopMesh { positions: vec![DVec3::ZERO], triangles: Vec::new() };
+    assert_eq!(empty.clone().into_soup(), empty.to_soup());
+    assert_eq!(empty.into_soup().face_count(), 0);
+}
+
+#[test]
 fn results_do_not_depend_on_the_number_of_threads() {
     // 20 * 4^4 = 5120 faces at the last input level: several face and vertex chunks.
     let m = mesh(&mesh_topo::testing::scramble(shapes::icosahedron(), 11, 0.2));

@@ -1,0 +1,246 @@
+//! Output arrays of a refinement step: written once, in parallel, without being
+//! initialised first, and backed by transparent huge pages on Linux.
+//!
+//! A step writes every element of its outputs exactly once, so filling them with
+//! placeholders first would only add a pass over hundreds of megabytes. [`Output`] hands
+//! out the uninitialised slots as disjoint [`Slots`] pieces that are written front to
+//! back; a piece counts as filled once its last slot is written, and
+//! [`Output::into_vec`] checks that the filled pieces cover the whole array before it
+//! exposes the elements. That check is what makes the single `unsafe` call of the
+//! module ([`Vec::set_len`]) sound whatever the callers do: slots are only reachable
+//! through [`Slots::push`], each piece is a distinct sub-slice, so "filled lengths add up
+//! to the length" means every slot was written. A piece dropped half-written (a panic
+//! in a task, or a bug) never counts, `into_vec` then panics, and the written values
+//! leak instead of being read uninitialised.
+//!
+//! Large outputs are fresh memory that nothing has touched yet. With 4 KiB pages the
+//! kernel takes one page fault per 4 KiB on first touch, which costs about as much as
+//! the subdivision itself at a few million triangles. [`advise_huge_pages`] asks Linux
+//! to back the buffer with transparent huge pages (2 MiB on x86-64): one fault per huge
+//! page, fewer TLB misses, and a cheaper release. This only changes how the kernel backs
+//! the pages, never their contents; on other systems it does nothing.
+
+#![allow(unsafe_code)]
+
+use std::mem::MaybeUninit;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use rayon::prelude::*;
+
+/// An array of `len` elements under construction.
+pub(crate) struct Output<T> {
+    vec: Vec<T>,
+    len: usize,
+    /// Elements in pieces that were written completely.
+    filled: AtomicUsize,
+}
+
+impl<T> Output<T> {
+    /// Allocates room for `len` elements (uninitialised; huge pages where possible).
+    pub(crate) fn new(len: usize) -> Self {
+        let vec: Vec<T> = Vec::with_capacity(len);
+        advise_huge_pages(vec.as_ptr().cast(), len * size_of::<T>());
+        Self { vec, len, filled: AtomicUsize::new(0) }
+    }
+
+    /// All slots, to be split into the pieces that the tasks write.
+    pub(crate) fn slots(&mut self) -> Slots<'_, T> {
+        let Self { vec, len, filled } = self;
+        Slots { slots: &mut vec.spare_capacity_mut()[..*len], written: 0, filled }
+    }
+
+    /// The finished array.
+    ///
+    /// # Panics
+    /// If some slot was not written (an internal error).
+    pub(crate) fn into_vec(self) -> Vec<T> {
+        let Self { mut vec, len, filled } = self;
+        assert_eq!(filled.into_inner(), len, "internal: an output slot was not written");
+        // SAFETY: `len <= capacity` (allocated with `Vec::with_capacity(len)`), and the
+        // first `len` slots are initialised: the only way to reach them is
+        // `Slots::push`, which writes them in order; pieces are disjoint sub-slices and
+        // add their length to `filled` only once all of their slots are written, so
+        // `filled == len` means that every slot was written exactly once.
+        unsafe { vec.set_len(len) };
+        vec
+    }
+}
+
+/// A piece of an [`Output`]'s slots, written front to back by one task.
+pub(crate) struct Slots<'a, T> {
+    slots: &'a mut [MaybeUninit<T>],
+    written: usize,
+    filled: &'a AtomicUsize,
+}
+
+impl<'a, T> Slots<'a, T> {
+    /// Splits the first `n` slots off into their own piece (nothing written yet).
+    ///
+    /// # Panics
+    /// If `n` exceeds the slots left or if slots were already written.
+    pub(crate) fn take_front(&mut self, n: usize) -> Slots<'a, T> {
+        assert_eq!(self.written, 0, "internal: split a piece that is being written");
+        let (front, back) = std::mem::take(&mut self.slots).split_at_mut(n);
+        self.slots = back;
+        Slots { slots: front, written: 0, filled: self.filled }
+    }
+
+    /// Writes the next slot.
+    ///
+    /// # Panics
+    /// If the piece is full.
+    #[inline(always)]
+    pub(crate) fn push(&mut self, value: T) {
+        self.slots[self.written].write(value);
+        self.written += 1;
+    }
+
+    /// Number of slots written so far: the index of the next one within the piece.
+    #[inline(always)]
+    pub(crate) fn written(&self) -> usize {
+        self.written
+    }
+
+    /// Number of slots of the piece.
+    #[inline(always)]
+    pub(crate) fn len(&self) -> usize {
+        self.slots.len()
+    }
+}
+
+impl<T> Drop for Slots<'_, T> {
+    fn drop(&mut self) {
+        if self.written == self.slots.len() {
+            self.filled.fetch_add(self.written, Ordering::Relaxed);
+        }
+    }
+}
+
+/// The vector `[value(0), value(1), ..., value(len - 1)]`, computed in parallel.
+pub(crate) fn par_fill<T: Send>(len: usize, value: impl Fn(usize) -> T + Sync) -> Vec<T> {
+    const CHUNK: usize = 1 << 16;
+    let mut output = Output::new(len);
+    {
+        let mut slots = output.slots();
+        let pieces: Vec<(usize, Slots<'_, T>)> =
+            (0..len).step_by(CHUNK).map(|start| (start, slots.take_front(CHUNK.min(len - start)))).collect();
+        pieces.into_par_iter().for_each(|(start, mut piece)| {
+            for i in start..start + piece.len() {
+                piece.push(value(i));
+            }
+        });
+    }
+    output.into_vec()
+}
+
+/// Asks the kernel to back the huge-page-aligned part of `bytes` bytes at `start` with
+/// transparent huge pages, before anything touches them. A buffer of a few huge pages
+/// gains already: at level 1 of a 75k-triangle mesh (3.6 MB arrays) the step is ~5% faster.
+///
+/// Works when the system's THP mode is `always` or `madvise`; when it is `never`, the
+/// kernel lacks THP, or the range holds no whole huge page, nothing changes. Errors are
+/// ignored: the hint is an optimisation only.
+#[cfg(target_os = "linux")]
+fn advise_huge_pages(start: *const u8, bytes: usize) {
+    let huge = huge_page_size();
+    if bytes < huge {
+        // No whole huge page fits: leave the buffer to the allocator's defaults.
+        return;
+    }
+    let begin = (start as usize).next_multiple_of(huge);
+    let end = (start as usize + bytes) / huge * huge;
+    if end > begin {
+        // SAFETY: `[begin, end)` lies inside one live allocation that we own and that is
+        // page-aligned at both ends (huge pages are multiples of the base page). The
+        // advice MADV_HUGEPAGE only sets how the kernel backs these pages (the VMA flag
+        // for huge pages): it never changes or frees memory, so no Rust object, ours or
+        // another, can observe it.
+        unsafe { libc::madvise(begin as *mut libc::c_void, end - begin, libc::MADV_HUGEPAGE) };
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn advise_huge_pages(_start: *const u8, _bytes: usize) {}
+
+/// The transparent huge page size (2 MiB on x86-64, read once from sysfs).
+#[cfg(target_os = "linux")]
+fn huge_page_size() -> usize {
+    static SIZE: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *SIZE.get_or_init(|| {
+        std::fs::read_to_string("/sys/kernel/mm/transparent_hugepage/hpage_pmd_size")
+            .ok()
+            .and_then(|s| s.trim().parse().ok())
+            .filter(|&size: &usize| size.is_power_of_two() && size >= 4096)
+            .unwrap_or(2 << 20)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pieces_written_in_full_make_the_array() {
+        let mut output = Output::new(5);
+        {
+            let mut all = output.slots();
+            let mut front = all.take_front(2);
+            let mut back = all.take_front(3);
+            assert_eq!((front.len(), back.len()), (2, 3));
+            for i in 0..3 {
+                back.push(format!("b{i}"));
+            }
+            front.push("a0".to_string());
+            assert_eq!(front.written(), 1);
+            front.push("a1".to_string());
+        }
+        assert_eq!(output.into_vec(), ["a0", "a1", "b0", "b1", "b2"]);
+    }
+
+    #[test]
+    #[should_panic(expected = "internal: an output slot was not written")]
+    fn a_piece_left_half_written_is_caught() {
+        let mut output = Output::new(3);
+        {
+            let mut all = output.slots();
+            all.push(vec![1u8]);
+            all.push(vec![2u8]);
+        }
+        output.into_vec();
+    }
+
+    #[test]
+    #[should_panic]
+    fn writing_past_a_piece_panics() {
+        let mut output = Output::<u32>::new(4);
+        let mut all = output.slots();
+        let mut front = all.take_front(1);
+        front.push(1);
+        front.push(2);
+    }
+
+    #[test]
+    fn large_buffers_get_huge_pages_and_small_ones_are_left_alone() {
+        // Large, untouched buffers go through the hint; it must not disturb anything.
+        let len = (16 << 20) / 8;
+        let mut output = Output::<u64>::new(len);
+        {
+            let mut all = output.slots();
+            for i in 0..len as u64 {
+                all.push(i);
+            }
+        }
+        let values = output.into_vec();
+        assert!(values.iter().enumerate().all(|(i, &v)| v == i as u64));
+        assert!(Output::<u8>::new(0).into_vec().is_empty());
+    }
+
+    #[test]
+    fn parallel_fill_covers_every_index() {
+        let len = 3 * (1 << 16) + 5;
+        let filled = par_fill(len, |i| 3 * i as u64);
+        assert_eq!(filled.len(), len);
+        assert!(filled.iter().enumerate().all(|(i, &v)| v == 3 * i as u64));
+        assert!(par_fill(0, |i| i).is_empty());
+    }
+}
