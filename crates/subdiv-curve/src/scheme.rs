@@ -103,11 +103,16 @@ impl Rule {
     }
 
     /// Applies the rule at index `i` to a point lookup.
+    ///
+    /// The sum starts with the first term (not with zero) and adds the others in order,
+    /// exactly as the specialised loops of the refinement engine do, so that every path
+    /// computes every point bit for bit alike (signed zeros included).
     #[inline]
     pub(crate) fn apply<P: crate::CurvePoint>(&self, i: i64, point: impl Fn(i64) -> P) -> P {
-        let mut sum = P::zero();
-        for (j, &w) in self.weights.iter().enumerate() {
-            sum = sum.plus(point(i + self.offset as i64 + j as i64).scale(w));
+        let first = i + self.offset as i64;
+        let mut sum = point(first).scale(self.weights[0]);
+        for (j, &w) in self.weights.iter().enumerate().skip(1) {
+            sum = sum.plus(point(first + j as i64).scale(w));
         }
         sum
     }
