@@ -1023,8 +1023,11 @@ mod tests {
             let (mut fused, mut reference) = (Vec::new(), Vec::new());
             framework.refine_into(&mut refiner, &points, &flags, topology, 6, &mut fused).expect("valid input");
             framework.refine_seed_levelwise(&mut refiner, &points, &flags, topology, 6, &mut reference);
-            assert!(fused.len() > 8 * crate::refine::block_len::<[f64; 2]>());
+            assert!(fused.len() > 2 * crate::refine::block_len::<[f64; 2]>());
             assert_eq!(bits(&fused), bits(&reference), "{topology:?}");
+            let interpolated: Vec<usize> = (0..700).filter(|&i| flags[i]).collect();
+            framework.refine_seed(&mut refiner, &points, &interpolated, topology, 6, &mut fused, 999);
+            assert_eq!(bits(&fused), bits(&reference), "{topology:?}, 999-point blocks");
         }
     }
 }

@@ -27,9 +27,9 @@
 use crate::scheme::{CurveScheme, EndRule, Layout, Rule, Topology};
 use crate::{CurveError, CurvePoint};
 
-/// Reusable refinement context: keeps its two work buffers between calls, so refining
-/// many polygons (or the same one many times, as in a benchmark) allocates nothing after
-/// the first call.
+/// Reusable refinement context: keeps its work buffers (the cache-sized scratch of the
+/// fused levels) between calls, so refining many polygons (or the same one many times,
+/// as in a benchmark) allocates nothing after the first call.
 ///
 /// ```
 /// use subdiv_curve::{CurveScheme, Refiner, Topology};
@@ -50,9 +50,12 @@ pub struct Refiner<P> {
     pub(crate) windows: Vec<Window>,
 }
 
-/// Target size of one output block of the fused path: the block and its two coarser
-/// levels (half and a quarter of it) stay in L2, the coarser ones in L1.
-pub(crate) const BLOCK_BYTES: usize = 32 * 1024;
+/// Target size of one output block of the fused path. The scratch levels of a block
+/// (half the block, a quarter, ...) then take at most 256 KiB together and stay in L2
+/// while the block streams out. Measured on 10 levels of 1,000 points (CPU time per
+/// refinement, 2D cubic B-spline): 32 KiB blocks 1.36 ms, 128 KiB 1.27 ms, 256 KiB to
+/// 2 MiB 1.23-1.29 ms: smaller blocks lose to the per-level overhead of tiny windows.
+pub(crate) const BLOCK_BYTES: usize = 256 * 1024;
 
 /// Output points per block for points of type `P`.
 pub(crate) fn block_len<P>() -> usize {
@@ -690,8 +693,10 @@ mod tests {
                 let mut refiner = Refiner::new();
                 refiner.refine_into(&scheme, &points, topology, 7, &mut fused).unwrap();
                 refiner.refine_levelwise(&scheme, &points, topology, 7, &mut reference);
-                assert!(fused.len() > 8 * block_len::<[f64; 2]>());
+                assert!(fused.len() > 2 * block_len::<[f64; 2]>());
                 assert_eq!(bits(&fused), bits(&reference), "{} {topology:?}", scheme.name());
+                refiner.refine_fused(&scheme, &points, topology, 7, &mut fused, 999);
+                assert_eq!(bits(&fused), bits(&reference), "{} {topology:?}, 999-point blocks", scheme.name());
             }
         }
     }
