@@ -420,7 +420,7 @@ impl Framework {
         }
         // The I-points of each level, and the virtual points of those near the block.
         let per_level: Vec<Vec<usize>> = (0..levels).map(|k| interpolated.iter().map(|&i| i << k).collect()).collect();
-        let mut virtual_points = vec![P::zero(); interpolated.len()];
+        let mut virtual_points: Vec<P> = Vec::new();
         let mut near: Vec<i64> = Vec::new();
         let radius = self.limit_radius() as i64;
         // Rule (5) reads one point further than an odd rule of `A` may.
@@ -443,11 +443,10 @@ impl Framework {
                 window_end - radius,
                 &mut near,
             );
-            for &i in &near {
-                let slot = level.interpolated_slot(i).expect("internal: an I-point");
-                virtual_points[slot] = self.virtual_point(&level, i);
-            }
-            let level = Level { virtual_points: &virtual_points, ..level };
+            virtual_points.clear();
+            virtual_points.extend(near.iter().map(|&i| self.virtual_point(&level, i)));
+            // Look-ups by (unwrapped) index among the few I-points near the block only.
+            let level = Level { near: Some(&near), virtual_points: &virtual_points, ..level };
             self.fix_up(&level, &near, block.target, block.target_first, block.fine_len, true);
         };
         for (index, target) in out.chunks_mut(block).enumerate() {
@@ -546,6 +545,9 @@ impl Framework {
         let n = level.n as i64;
         let fine_len = fine_len as i64;
         let target_end = target_first + target.len() as i64;
+        // End vertices kept exactly (`CurveScheme::reflect_keeps_ends`; the virtual polygon
+        // has `g = p` at a non-I end point, and reflects its own phantoms).
+        let keeps_ends = level.topology == Topology::Open(EndRule::Reflect) && self.approximating.reflect_keeps_ends();
         // Outputs reading a phantom point must be redone when an I-point feeds the phantom
         // (phantoms of the virtual polygon, see `Level::virtual_or_actual`).
         let reach = [-even_lo, -odd_lo, even_hi, odd_hi, 1].into_iter().max().unwrap_or(1) as i64 + 1;
@@ -577,7 +579,7 @@ impl Framework {
             while copy < target_end {
                 let j = copy.div_euclid(2);
                 target[(copy - target_first) as usize] = if copy.rem_euclid(2) == 0 {
-                    if level.is_interpolated(j) {
+                    if level.is_interpolated(j) || (keeps_ends && (j == 0 || j == n - 1)) {
                         level.actual(j)
                     } else {
                         even.apply(j, |k| level.virtual_or_actual(k))
@@ -836,17 +838,25 @@ struct Level<'a, P> {
     topology: Topology,
     /// Sorted indices of the I-points.
     interpolated: &'a [usize],
-    /// Virtual points by slot in `interpolated` (those the caller needs).
+    /// If set: the sorted unwrapped indices of the I-points of a block's window that the
+    /// fix-ups may look up (all it reads), and the slots of `virtual_points` refer to
+    /// them; else the slots refer to `interpolated`.
+    near: Option<&'a [i64]>,
+    /// Virtual points by slot.
     virtual_points: &'a [P],
 }
 
 impl<'a, P: CurvePoint> Level<'a, P> {
     fn new(window: &'a [P], first: i64, n: usize, topology: Topology, interpolated: &'a [usize]) -> Self {
-        Level { window, first, n, topology, interpolated, virtual_points: &[] }
+        Level { window, first, n, topology, interpolated, near: None, virtual_points: &[] }
     }
 
-    /// Index into `interpolated` of coarse index `j`, if it is an I-point.
+    /// Slot (in `near` if set, else in `interpolated`) of coarse index `j`, if it is an
+    /// I-point.
     fn interpolated_slot(&self, j: i64) -> Option<usize> {
+        if let Some(near) = self.near {
+            return near.binary_search(&j).ok();
+        }
         let j = match self.topology {
             Topology::Closed => j.rem_euclid(self.n as i64),
             Topology::Open(_) if (0..self.n as i64).contains(&j) => j,

@@ -125,6 +125,9 @@ pub(crate) fn step<P: CurvePoint>(
             let (pairs_part, last) = target.split_at_mut(2 * (n - 1));
             pairs(even, odd, source, base(even, 0), base(odd, 0), pairs_part);
             last[0] = even.apply((left + n - 1) as i64, |j| source[j as usize]);
+            if topology == Topology::Open(EndRule::Reflect) && scheme.reflect_keeps_ends() {
+                (pairs_part[0], last[0]) = (source[left], source[left + n - 1]);
+            }
         }
         (Topology::Open(_), Layout::Dual) => {
             let end = target.len() - 1;
@@ -559,6 +562,17 @@ pub(crate) fn fine_points<P: CurvePoint>(
             }
             by_rules(even, odd, source, source_first, fine_first + lo as i64 - 1, &mut target[lo..hi]);
         }
+        (Topology::Open(EndRule::Reflect), Layout::Primal) if scheme.reflect_keeps_ends() => {
+            by_rules(even, odd, source, source_first, fine_first, target);
+            // The end points are kept exactly (see `CurveScheme::reflect_keeps_ends`).
+            let fine_end = fine_first + target.len() as i64;
+            if fine_first == 0 && !target.is_empty() {
+                target[0] = source[(0 - source_first) as usize];
+            }
+            if fine_end == fine_len as i64 && !target.is_empty() {
+                target[target.len() - 1] = source[(coarse_len as i64 - 1 - source_first) as usize];
+            }
+        }
         _ => by_rules(even, odd, source, source_first, fine_first, target),
     }
 }
@@ -681,6 +695,38 @@ mod tests {
             refiner3.refine_into(&scheme, &spatial, topology, levels, &mut fused3).expect("valid input");
             refiner3.refine_levelwise(&scheme, &spatial, topology, levels, &mut reference3);
             prop_assert_eq!(bits(&fused3), bits(&reference3));
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Symmetric vertex rules keep reflected end points bit for bit, at every level
+        /// (the framework too, whatever its flags).
+        #[test]
+        fn reflected_end_points_are_kept_exactly(
+            raw in prop::collection::vec((-10.0f64..10.0, -10.0f64..10.0, any::<bool>()), 4..20),
+            levels in 1u32..7,
+            gamma in 0.0f64..0.2,
+        ) {
+            let points: Vec<[f64; 2]> = raw.iter().map(|&(x, y, _)| [x, y]).collect();
+            let flags: Vec<bool> = raw.iter().map(|&(_, _, flag)| flag).collect();
+            let topology = Topology::Open(EndRule::Reflect);
+            let (first, last) = (points[0], points[points.len() - 1]);
+            for scheme in [
+                CurveScheme::cubic_bspline(),
+                CurveScheme::combined(gamma / 2.0 - 1.0 / 16.0, gamma).expect("C2 line converges"),
+            ] {
+                prop_assert!(scheme.reflect_keeps_ends());
+                let fine = scheme.refine(&points, topology, levels).expect("valid input");
+                prop_assert_eq!(bits(&[fine[0], fine[fine.len() - 1]]), bits(&[first, last]));
+            }
+            for mode in [crate::VirtualPoints::SeedCompatible, crate::VirtualPoints::ExactGlobal] {
+                let framework = crate::Framework::published().with_mode(mode);
+                if let Ok(fine) = framework.refine(&points, &flags, topology, levels) {
+                    prop_assert_eq!(bits(&[fine[0], fine[fine.len() - 1]]), bits(&[first, last]));
+                }
+            }
         }
     }
 

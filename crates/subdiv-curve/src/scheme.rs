@@ -392,6 +392,19 @@ impl CurveScheme {
         }
     }
 
+    /// Whether, on an open polygon with [`EndRule::Reflect`], the new end points equal the
+    /// old ones exactly: a primal scheme whose vertex rule is symmetric about its centre
+    /// (`w_{-k} = w_k`) maps the end point `P_0` with phantoms `P_{-k} = 2 P_0 - P_k` to
+    /// `w_0 P_0 + sum_k w_k (P_k + 2 P_0 - P_k) = P_0` (the weights sum to 1). Such end
+    /// points are copied instead of summed, so that they stay bit for bit (the sum would
+    /// only be within a rounding error or two of `P_0`).
+    pub(crate) fn reflect_keeps_ends(&self) -> bool {
+        let weights = self.even.weights();
+        self.layout == Layout::Primal
+            && 2 * self.even.offset() + weights.len() as i32 - 1 == 0
+            && weights.iter().eq(weights.iter().rev())
+    }
+
     /// Phantom points needed past each end of an open polygon of `n` points.
     pub(crate) fn open_halo(&self, n: usize) -> (usize, usize) {
         let (even_lo, even_hi) = self.even.reach();
