@@ -133,8 +133,9 @@ pub enum Layout {
 /// the same rule extends: `P_{-k} = 2 P_0 - P_k` (reflect) or `P_{-k} = P_0` (repeat).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum EndRule {
-    /// `P_{-1} = 2 P_0 - P_1` (point reflection). With the cubic B-spline the end points
-    /// stay fixed and the limit interpolates them.
+    /// `P_{-1} = 2 P_0 - P_1` (point reflection). With the cubic B-spline (any primal
+    /// scheme with a symmetric vertex rule) the end points stay fixed, bit for bit at every
+    /// level, and the limit interpolates them.
     #[default]
     Reflect,
     /// `P_{-1} = P_0`. The cubic B-spline then does not interpolate the end points.
