@@ -75,7 +75,7 @@
 use nalgebra::DMatrix;
 
 use crate::analysis::{self, Analysis, EigenChecks, LocalMatrix};
-use crate::refine::{Refiner, fill_halo, halo, step};
+use crate::refine::{BlockLevel, Refiner, block_len, fill_halo, halo, refine_block};
 use crate::scheme::{CurveScheme, EndRule, Rule, Topology, check_four_point_tension};
 use crate::{CurveError, CurvePoint};
 
@@ -305,7 +305,7 @@ impl Framework {
         let interpolated: Vec<usize> = (0..points.len()).filter(|&i| flags[i]).collect();
         match self.mode {
             VirtualPoints::SeedCompatible => {
-                self.refine_seed(refiner, points, &interpolated, topology, levels, out);
+                self.refine_seed(refiner, points, &interpolated, topology, levels, out, block_len::<P>());
             }
             VirtualPoints::ExactGlobal => {
                 let virtual_polygon = self.solve_virtual(points, &interpolated, topology)?;
@@ -346,9 +346,10 @@ impl Framework {
                 let mut extended = vec![P::zero(); left + points.len() + right];
                 extended[left..left + points.len()].copy_from_slice(points);
                 fill_halo(&mut extended, left, points.len(), right, topology);
+                let level = Level::new(&extended, -(left as i64), points.len(), topology, &interpolated);
                 let mut polygon = points.to_vec();
                 for &i in &interpolated {
-                    polygon[i] = self.virtual_point(&extended, left, points.len(), topology, i);
+                    polygon[i] = self.virtual_point(&level, i as i64);
                 }
                 Ok(polygon)
             }
@@ -366,24 +367,34 @@ impl Framework {
 
     /// `q_i` from the actual neighbours: the row `ℓ(G around i) = p_i` with every other
     /// entry taken from the current polygon, phantom points of `G` folded in (so an I end
-    /// point under "reflect" gets `q = p`).
-    fn virtual_point<P: CurvePoint>(&self, extended: &[P], left: usize, n: usize, topology: Topology, i: usize) -> P {
+    /// point under "reflect" gets `q = p`). `i` may be an unwrapped index of a closed
+    /// polygon (any copy inside the level's window).
+    fn virtual_point<P: CurvePoint>(&self, level: &Level<'_, P>, i: i64) -> P {
+        let n = level.n as i64;
         let mut diagonal = 0.0;
-        let mut sum = extended[left + i];
+        let mut sum = level.actual(i);
         for (k, &w) in self.limit_weights.iter().enumerate() {
-            let index = i as i64 + self.limit_offset as i64 + k as i64;
-            for (real, factor) in phantom_combination(index, n, topology) {
-                if real == i {
+            let index = i + self.limit_offset as i64 + k as i64;
+            for (real, factor) in phantom_combination(index, level.n, level.topology) {
+                // A closed polygon reads the copy next to `i`, which has the same value.
+                let at = if level.topology.is_closed() { index } else { real as i64 };
+                if real as i64 == i.rem_euclid(n) {
                     diagonal += w * factor;
                 } else {
-                    sum = sum.minus(extended[left + real].scale(w * factor));
+                    sum = sum.minus(level.actual(at).scale(w * factor));
                 }
             }
         }
         sum.scale(1.0 / diagonal)
     }
 
-    fn refine_seed<P: CurvePoint>(
+    /// The seed-compatible refinement, fused like [`Refiner::refine_into`]: each output
+    /// block is refined depth-first from its support, and after the rules of each level the
+    /// points reading a virtual point are redone from the block's window (which is widened
+    /// by the virtual points' reach). Equal bit for bit to the level-by-level path.
+    /// `block` is the number of output points per block.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn refine_seed<P: CurvePoint>(
         &self,
         refiner: &mut Refiner<P>,
         points: &[P],
@@ -391,7 +402,84 @@ impl Framework {
         topology: Topology,
         levels: u32,
         out: &mut Vec<P>,
+        block: usize,
     ) {
+        let scheme = &self.approximating;
+        refiner.lens.clear();
+        refiner.lens.push(points.len());
+        for _ in 0..levels {
+            let n = *refiner.lens.last().expect("internal: level 0 is present");
+            refiner.lens.push(scheme.next_len(n, topology));
+        }
+        let total = *refiner.lens.last().expect("internal: level 0 is present");
+        out.truncate(total);
+        out.resize(total, P::zero());
+        if levels == 0 {
+            out.copy_from_slice(points);
+            return;
+        }
+        // The I-points of each level, and the virtual points of those near the block.
+        let per_level: Vec<Vec<usize>> = (0..levels).map(|k| interpolated.iter().map(|&i| i << k).collect()).collect();
+        let mut virtual_points: Vec<P> = Vec::new();
+        let mut near: Vec<i64> = Vec::new();
+        let radius = self.limit_radius() as i64;
+        // Rule (5) reads one point further than an odd rule of `A` may.
+        let margin = radius + 1;
+        let mut fix_up_level = |block: BlockLevel<'_, P>| {
+            let interpolated = &per_level[block.level];
+            if interpolated.is_empty() {
+                return;
+            }
+            let level = Level::new(block.source, block.source_first, block.coarse_len, topology, interpolated);
+            let window_end = block.source_first + block.source.len() as i64;
+            // I-points whose virtual point the window holds (all those the rules of the
+            // block's target read, thanks to the margin).
+            near.clear();
+            unwrapped_positions(
+                interpolated,
+                block.coarse_len,
+                topology,
+                block.source_first + radius,
+                window_end - radius,
+                &mut near,
+            );
+            virtual_points.clear();
+            virtual_points.extend(near.iter().map(|&i| self.virtual_point(&level, i)));
+            // Look-ups by (unwrapped) index among the few I-points near the block only.
+            let level = Level { near: Some(&near), virtual_points: &virtual_points, ..level };
+            self.fix_up(&level, &near, block.target, block.target_first, block.fine_len, true);
+        };
+        for (index, target) in out.chunks_mut(block).enumerate() {
+            let first = (index * block) as i64;
+            let range = (first, first + target.len() as i64);
+            let buffers = [&mut refiner.front, &mut refiner.back];
+            refine_block(
+                scheme,
+                topology,
+                points,
+                &refiner.lens,
+                &mut refiner.windows,
+                range,
+                buffers,
+                target,
+                margin,
+                &mut fix_up_level,
+            );
+        }
+    }
+
+    /// The level-by-level seed-compatible refinement: the reference for the fused one.
+    #[cfg(test)]
+    pub(crate) fn refine_seed_levelwise<P: CurvePoint>(
+        &self,
+        refiner: &mut Refiner<P>,
+        points: &[P],
+        flags: &[bool],
+        topology: Topology,
+        levels: u32,
+        out: &mut Vec<P>,
+    ) {
+        use crate::refine::step;
         let scheme = &self.approximating;
         if levels == 0 {
             out.clear();
@@ -408,14 +496,12 @@ impl Framework {
         let (mut front, mut back) = (&mut refiner.front, &mut refiner.back);
         let mut n = points.len();
         front[left..left + n].copy_from_slice(points);
-        let mut interpolated = interpolated.to_vec();
+        let mut interpolated: Vec<usize> = (0..points.len()).filter(|&i| flags[i]).collect();
         let mut virtual_points = Vec::with_capacity(interpolated.len());
         for level in 0..levels {
             fill_halo(front, left, n, right, topology);
             let next = scheme.next_len(n, topology);
             let target: &mut [P] = if level + 1 == levels {
-                // Every entry is overwritten by the step: keep the old ones instead of
-                // zeroing (a reused output of the same length costs no extra pass).
                 out.truncate(next);
                 out.resize(next, P::zero());
                 out.as_mut_slice()
@@ -423,17 +509,12 @@ impl Framework {
                 &mut back[left..left + next]
             };
             step(scheme, front, left, n, topology, target);
+            let level_view = Level::new(front, -(left as i64), n, topology, &interpolated);
             virtual_points.clear();
-            virtual_points.extend(interpolated.iter().map(|&i| self.virtual_point(front, left, n, topology, i)));
-            let level_view = Level {
-                extended: front,
-                left,
-                n,
-                topology,
-                interpolated: &interpolated,
-                virtual_points: &virtual_points,
-            };
-            self.fix_up(&level_view, target, true);
+            virtual_points.extend(interpolated.iter().map(|&i| self.virtual_point(&level_view, i as i64)));
+            let level_view = Level { virtual_points: &virtual_points, ..level_view };
+            let all: Vec<i64> = interpolated.iter().map(|&i| i as i64).collect();
+            self.fix_up(&level_view, &all, target, 0, next, true);
             for i in &mut interpolated {
                 *i *= 2;
             }
@@ -444,48 +525,72 @@ impl Framework {
         }
     }
 
-    /// Recomputes the new points that read a virtual point (see the module docs).
-    fn fix_up<P: CurvePoint>(&self, level: &Level<'_, P>, target: &mut [P], seed_mode: bool) {
+    /// Recomputes the new points that read a virtual point (see the module docs): those
+    /// around the I-points at (unwrapped) indices `around`, and near the ends of an open
+    /// polygon, as far as they fall into `target` (fine indices `target_first..`, real ones
+    /// for an open polygon, unwrapped ones for a closed polygon of `fine_len` points).
+    fn fix_up<P: CurvePoint>(
+        &self,
+        level: &Level<'_, P>,
+        around: &[i64],
+        target: &mut [P],
+        target_first: i64,
+        fine_len: usize,
+        seed_mode: bool,
+    ) {
         let even = self.approximating.even_rule();
         let odd = self.approximating.odd_rule();
         let (even_lo, even_hi) = even.reach();
         let (odd_lo, odd_hi) = odd.reach();
         let n = level.n as i64;
-        let fine_len = target.len() as i64;
+        let fine_len = fine_len as i64;
+        let target_end = target_first + target.len() as i64;
+        // End vertices kept exactly (`CurveScheme::reflect_keeps_ends`; the virtual polygon
+        // has `g = p` at a non-I end point, and reflects its own phantoms).
+        let keeps_ends = level.topology == Topology::Open(EndRule::Reflect) && self.approximating.reflect_keeps_ends();
         // Outputs reading a phantom point must be redone when an I-point feeds the phantom
         // (phantoms of the virtual polygon, see `Level::virtual_or_actual`).
         let reach = [-even_lo, -odd_lo, even_hi, odd_hi, 1].into_iter().max().unwrap_or(1) as i64 + 1;
-        let mut end_windows: Vec<i64> = Vec::new();
+        let mut end_windows = 0..0;
+        let mut end_windows_right = 0..0;
         if let Topology::Open(_) = level.topology {
             let near_start = level.interpolated.first().is_some_and(|&i| (i as i64) <= reach);
             let near_end = level.interpolated.last().is_some_and(|&i| (i as i64) >= n - 1 - reach);
             if near_start {
-                end_windows.extend(0..(2 * reach + 2).min(fine_len));
+                end_windows = 0..(2 * reach + 2).min(fine_len);
             }
             if near_end {
-                end_windows.extend((fine_len - 2 * reach - 2).max(0)..fine_len);
+                end_windows_right = (fine_len - 2 * reach - 2).max(0)..fine_len;
             }
         }
-        let around_interpolated = level.interpolated.iter().flat_map(|&i| {
-            let i = i as i64;
+        let around_interpolated = around.iter().flat_map(|&i| {
             (i - even_hi as i64..=i - even_lo as i64)
                 .map(|j| 2 * j)
                 .chain((i - odd_hi as i64..=i - odd_lo as i64).map(|j| 2 * j + 1))
         });
-        for fine in around_interpolated.chain(end_windows) {
-            let fine_index = match level.topology {
-                Topology::Closed => fine.rem_euclid(2 * n),
-                Topology::Open(_) if (0..fine_len).contains(&fine) => fine,
+        for fine in around_interpolated.chain(end_windows).chain(end_windows_right) {
+            // Every copy of `fine` inside the target (a closed polygon's target may be
+            // longer than one period).
+            let (mut copy, period) = match level.topology {
+                Topology::Closed => (target_first + (fine - target_first).rem_euclid(2 * n), 2 * n),
+                Topology::Open(_) if (0..fine_len).contains(&fine) && fine >= target_first => (fine, fine_len),
                 Topology::Open(_) => continue,
             };
-            let j = fine_index.div_euclid(2);
-            target[fine_index as usize] = if fine_index % 2 == 0 {
-                if level.is_interpolated(j) { level.actual(j) } else { even.apply(j, |k| level.virtual_or_actual(k)) }
-            } else if seed_mode && level.is_interpolated(j) && level.is_interpolated(j + 1) {
-                self.interpolating_edge.apply(j, |k| level.actual(k))
-            } else {
-                odd.apply(j, |k| level.virtual_or_actual(k))
-            };
+            while copy < target_end {
+                let j = copy.div_euclid(2);
+                target[(copy - target_first) as usize] = if copy.rem_euclid(2) == 0 {
+                    if level.is_interpolated(j) || (keeps_ends && (j == 0 || j == n - 1)) {
+                        level.actual(j)
+                    } else {
+                        even.apply(j, |k| level.virtual_or_actual(k))
+                    }
+                } else if seed_mode && level.is_interpolated(j) && level.is_interpolated(j + 1) {
+                    self.interpolating_edge.apply(j, |k| level.actual(k))
+                } else {
+                    odd.apply(j, |k| level.virtual_or_actual(k))
+                };
+                copy += period;
+            }
         }
     }
 
@@ -722,20 +827,36 @@ pub struct FrameworkAnalysis {
     pub smoothness: Option<usize>,
 }
 
-/// One level of the seed-compatible refinement, for the fix-ups.
+/// One level of the seed-compatible refinement, for the fix-ups: a window of its points
+/// (the whole level with its halo, or the part a block needs).
 struct Level<'a, P> {
-    extended: &'a [P],
-    left: usize,
+    /// Points at extended indices `first..` (wrapped copies or phantom points outside
+    /// `0..n`).
+    window: &'a [P],
+    first: i64,
     n: usize,
     topology: Topology,
     /// Sorted indices of the I-points.
     interpolated: &'a [usize],
+    /// If set: the sorted unwrapped indices of the I-points of a block's window that the
+    /// fix-ups may look up (all it reads), and the slots of `virtual_points` refer to
+    /// them; else the slots refer to `interpolated`.
+    near: Option<&'a [i64]>,
+    /// Virtual points by slot.
     virtual_points: &'a [P],
 }
 
-impl<P: CurvePoint> Level<'_, P> {
-    /// Index into `interpolated` of coarse index `j`, if it is an I-point.
+impl<'a, P: CurvePoint> Level<'a, P> {
+    fn new(window: &'a [P], first: i64, n: usize, topology: Topology, interpolated: &'a [usize]) -> Self {
+        Level { window, first, n, topology, interpolated, near: None, virtual_points: &[] }
+    }
+
+    /// Slot (in `near` if set, else in `interpolated`) of coarse index `j`, if it is an
+    /// I-point.
     fn interpolated_slot(&self, j: i64) -> Option<usize> {
+        if let Some(near) = self.near {
+            return near.binary_search(&j).ok();
+        }
         let j = match self.topology {
             Topology::Closed => j.rem_euclid(self.n as i64),
             Topology::Open(_) if (0..self.n as i64).contains(&j) => j,
@@ -748,13 +869,14 @@ impl<P: CurvePoint> Level<'_, P> {
         self.interpolated_slot(j).is_some()
     }
 
-    /// The current point `j` (wrapped, or a phantom point of an open polygon).
+    /// The current point `j` (a copy of a closed polygon's point inside the window, or a
+    /// phantom point of an open polygon).
     fn actual(&self, j: i64) -> P {
         let index = match self.topology {
-            Topology::Closed => self.left as i64 + j.rem_euclid(self.n as i64),
-            Topology::Open(_) => self.left as i64 + j,
+            Topology::Closed => (j - self.first).rem_euclid(self.n as i64),
+            Topology::Open(_) => j - self.first,
         };
-        self.extended[index as usize]
+        self.window[index as usize]
     }
 
     /// Entry `j` of the virtual polygon; past the ends of an open polygon, the phantom
@@ -764,7 +886,6 @@ impl<P: CurvePoint> Level<'_, P> {
             && !(0..self.n as i64).contains(&j)
         {
             return phantom_combination(j, self.n, self.topology)
-                .into_iter()
                 .fold(P::zero(), |sum, (real, factor)| sum.plus(self.virtual_or_actual(real as i64).scale(factor)));
         }
         match self.interpolated_slot(j) {
@@ -776,19 +897,38 @@ impl<P: CurvePoint> Level<'_, P> {
 
 /// A possibly out-of-range index of an open polygon as a combination of real indices
 /// (phantom rule), or wrapped for a closed one.
-fn phantom_combination(index: i64, n: usize, topology: Topology) -> Vec<(usize, f64)> {
+fn phantom_combination(index: i64, n: usize, topology: Topology) -> impl Iterator<Item = (usize, f64)> {
     let n = n as i64;
-    match topology {
-        Topology::Closed => vec![(index.rem_euclid(n) as usize, 1.0)],
-        Topology::Open(_) if (0..n).contains(&index) => vec![(index as usize, 1.0)],
+    let (terms, count) = match topology {
+        Topology::Closed => ([(index.rem_euclid(n) as usize, 1.0), (0, 0.0)], 1),
+        Topology::Open(_) if (0..n).contains(&index) => ([(index as usize, 1.0), (0, 0.0)], 1),
         Topology::Open(rule) => {
             let (end, beyond) = if index < 0 { (0, -index) } else { (n - 1, index - (n - 1)) };
             let mirror = if index < 0 { beyond.min(n - 1) } else { n - 1 - beyond.min(n - 1) };
             match rule {
-                EndRule::Reflect => vec![(end as usize, 2.0), (mirror as usize, -1.0)],
-                EndRule::Repeat => vec![(end as usize, 1.0)],
+                EndRule::Reflect => ([(end as usize, 2.0), (mirror as usize, -1.0)], 2),
+                EndRule::Repeat => ([(end as usize, 1.0), (0, 0.0)], 1),
             }
         }
+    };
+    terms.into_iter().take(count)
+}
+
+/// Appends to `out` every index in `lo..hi` that is (a copy of) an entry of `sorted`
+/// (indices of a polygon of `n` points; copies only for a closed one).
+fn unwrapped_positions(sorted: &[usize], n: usize, topology: Topology, lo: i64, hi: i64, out: &mut Vec<i64>) {
+    let n = n as i64;
+    let (lo, hi) = match topology {
+        Topology::Closed => (lo, hi),
+        Topology::Open(_) => (lo.max(0), hi.min(n)),
+    };
+    if lo >= hi {
+        return;
+    }
+    for copy in lo.div_euclid(n)..=(hi - 1).div_euclid(n) {
+        let base = copy * n;
+        let start = sorted.partition_point(|&i| (i as i64) < lo - base);
+        out.extend(sorted[start..].iter().map(|&i| base + i as i64).take_while(|&i| i < hi));
     }
 }
 
@@ -809,4 +949,95 @@ pub fn flags_from_indices(n: usize, indices: &[usize]) -> Result<Vec<bool>, Curv
         *flags.get_mut(index).ok_or(CurveError::IndexOutOfRange { index, len: n })? = true;
     }
     Ok(flags)
+}
+
+#[cfg(test)]
+mod tests {
+    use proptest::prelude::*;
+
+    use super::*;
+
+    fn bits(points: &[[f64; 2]]) -> Vec<u64> {
+        points.iter().flat_map(|p| p.map(f64::to_bits)).collect()
+    }
+
+    fn arb_framework() -> impl Strategy<Value = Framework> {
+        prop_oneof![
+            Just(Framework::published()),
+            (-0.1f64..0.0, 0.0f64..0.2).prop_map(|(omega1, gamma)| {
+                Framework::new(omega1, gamma / 2.0 - 1.0 / 16.0, gamma).expect("parameters on the C2 line")
+            }),
+            (-0.1f64..0.0, 0.0f64..0.2).prop_map(|(omega1, gamma)| {
+                Framework::new(omega1, 0.0, gamma).expect("parameters with omega2 = 0")
+            }),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(128))]
+
+        /// The fused framework equals its level-by-level path bit for bit, in both modes.
+        #[test]
+        fn fused_framework_equals_level_by_level(
+            framework in arb_framework(),
+            closed in any::<bool>(),
+            reflect in any::<bool>(),
+            raw in prop::collection::vec((-10.0f64..10.0, -10.0f64..10.0, any::<bool>()), 4..30),
+            levels in 0u32..6,
+            exact in any::<bool>(),
+            block in 1usize..40,
+        ) {
+            let topology = match (closed, reflect) {
+                (true, _) => Topology::Closed,
+                (false, true) => Topology::Open(EndRule::Reflect),
+                (false, false) => Topology::Open(EndRule::Repeat),
+            };
+            let points: Vec<[f64; 2]> = raw.iter().map(|&(x, y, _)| [x, y]).collect();
+            let flags: Vec<bool> = raw.iter().map(|&(_, _, flag)| flag).collect();
+            let mode = if exact { VirtualPoints::ExactGlobal } else { VirtualPoints::SeedCompatible };
+            let framework = framework.with_mode(mode);
+            let mut refiner = Refiner::new();
+            let mut fused = Vec::new();
+            let result = framework.refine_into(&mut refiner, &points, &flags, topology, levels, &mut fused);
+            prop_assume!(result.is_ok());
+            let mut reference = Vec::new();
+            match mode {
+                VirtualPoints::SeedCompatible => {
+                    // Also with small blocks: many block borders and I-points near them.
+                    let interpolated: Vec<usize> = (0..points.len()).filter(|&i| flags[i]).collect();
+                    let mut small_blocks = Vec::new();
+                    framework.refine_seed(&mut refiner, &points, &interpolated, topology, levels, &mut small_blocks, block);
+                    framework.refine_seed_levelwise(&mut refiner, &points, &flags, topology, levels, &mut reference);
+                    prop_assert_eq!(bits(&small_blocks), bits(&reference));
+                }
+                VirtualPoints::ExactGlobal => {
+                    let virtual_polygon = framework.virtual_polygon(&points, &flags, topology).expect("solvable");
+                    refiner.refine_levelwise(framework.approximating_scheme(), &virtual_polygon, topology, levels, &mut reference);
+                    for i in (0..points.len()).filter(|&i| flags[i]) {
+                        reference[i << levels] = points[i];
+                    }
+                }
+            }
+            prop_assert_eq!(bits(&fused), bits(&reference));
+        }
+    }
+
+    /// Small blocks: a long polygon with I-points everywhere, also next to block borders.
+    #[test]
+    fn fused_framework_across_many_blocks() {
+        let points: Vec<[f64; 2]> = (0..700).map(|k| [(k as f64 * 0.37).sin(), (k as f64 * 0.11).cos()]).collect();
+        let flags: Vec<bool> = (0..700).map(|k| k % 7 == 0 || k % 11 == 3 || k == 699).collect();
+        for topology in [Topology::Closed, Topology::Open(EndRule::Reflect), Topology::Open(EndRule::Repeat)] {
+            let framework = Framework::published();
+            let mut refiner = Refiner::new();
+            let (mut fused, mut reference) = (Vec::new(), Vec::new());
+            framework.refine_into(&mut refiner, &points, &flags, topology, 6, &mut fused).expect("valid input");
+            framework.refine_seed_levelwise(&mut refiner, &points, &flags, topology, 6, &mut reference);
+            assert!(fused.len() > 2 * crate::refine::block_len::<[f64; 2]>());
+            assert_eq!(bits(&fused), bits(&reference), "{topology:?}");
+            let interpolated: Vec<usize> = (0..700).filter(|&i| flags[i]).collect();
+            framework.refine_seed(&mut refiner, &points, &interpolated, topology, 6, &mut fused, 999);
+            assert_eq!(bits(&fused), bits(&reference), "{topology:?}, 999-point blocks");
+        }
+    }
 }

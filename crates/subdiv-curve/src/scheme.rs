@@ -103,11 +103,16 @@ impl Rule {
     }
 
     /// Applies the rule at index `i` to a point lookup.
+    ///
+    /// The sum starts with the first term (not with zero) and adds the others in order,
+    /// exactly as the specialised loops of the refinement engine do, so that every path
+    /// computes every point bit for bit alike (signed zeros included).
     #[inline]
     pub(crate) fn apply<P: crate::CurvePoint>(&self, i: i64, point: impl Fn(i64) -> P) -> P {
-        let mut sum = P::zero();
-        for (j, &w) in self.weights.iter().enumerate() {
-            sum = sum.plus(point(i + self.offset as i64 + j as i64).scale(w));
+        let first = i + self.offset as i64;
+        let mut sum = point(first).scale(self.weights[0]);
+        for (j, &w) in self.weights.iter().enumerate().skip(1) {
+            sum = sum.plus(point(first + j as i64).scale(w));
         }
         sum
     }
@@ -128,8 +133,9 @@ pub enum Layout {
 /// the same rule extends: `P_{-k} = 2 P_0 - P_k` (reflect) or `P_{-k} = P_0` (repeat).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum EndRule {
-    /// `P_{-1} = 2 P_0 - P_1` (point reflection). With the cubic B-spline the end points
-    /// stay fixed and the limit interpolates them.
+    /// `P_{-1} = 2 P_0 - P_1` (point reflection). With the cubic B-spline (any primal
+    /// scheme with a symmetric vertex rule) the end points stay fixed, bit for bit at every
+    /// level, and the limit interpolates them.
     #[default]
     Reflect,
     /// `P_{-1} = P_0`. The cubic B-spline then does not interpolate the end points.
@@ -385,6 +391,19 @@ impl CurveScheme {
             (Topology::Open(_), Layout::Primal) => 2 * n - 1,
             (Topology::Open(_), Layout::Dual) => 2 * n,
         }
+    }
+
+    /// Whether, on an open polygon with [`EndRule::Reflect`], the new end points equal the
+    /// old ones exactly: a primal scheme whose vertex rule is symmetric about its centre
+    /// (`w_{-k} = w_k`) maps the end point `P_0` with phantoms `P_{-k} = 2 P_0 - P_k` to
+    /// `w_0 P_0 + sum_k w_k (P_k + 2 P_0 - P_k) = P_0` (the weights sum to 1). Such end
+    /// points are copied instead of summed, so that they stay bit for bit (the sum would
+    /// only be within a rounding error or two of `P_0`).
+    pub(crate) fn reflect_keeps_ends(&self) -> bool {
+        let weights = self.even.weights();
+        self.layout == Layout::Primal
+            && 2 * self.even.offset() + weights.len() as i32 - 1 == 0
+            && weights.iter().eq(weights.iter().rev())
     }
 
     /// Phantom points needed past each end of an open polygon of `n` points.
