@@ -105,6 +105,8 @@ fn multires(c: &mut Criterion) {
         group.throughput(Throughput::Elements(fine_vertices as u64));
         let forward_options = DooOptions::new(FaceRule::DooSabin, 1);
         let options = DecomposeOptions::levels(FaceRule::DooSabin, 1);
+        // Face 0 of a mesh written by `subdivide` is the F_F face of coarse face 0.
+        let seeded = DecomposeOptions { seeds: vec![0], ..options.clone() };
         let pyramid = decompose(&fine, &options).unwrap().pyramid;
         group.bench_with_input(BenchmarkId::new("forward_1thread", fine_vertices), &coarse, |b, coarse| {
             b.iter(|| one.install(|| subdivide(black_box(coarse), &forward_options).unwrap()))
@@ -112,11 +114,20 @@ fn multires(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("decompose_1thread", fine_vertices), &fine, |b, fine| {
             b.iter(|| one.install(|| decompose(black_box(fine), &options).unwrap()))
         });
+        group.bench_with_input(BenchmarkId::new("decompose_seed_1thread", fine_vertices), &fine, |b, fine| {
+            b.iter(|| one.install(|| decompose(black_box(fine), &seeded).unwrap()))
+        });
         group.bench_with_input(BenchmarkId::new("reconstruct_1thread", fine_vertices), &pyramid, |b, pyramid| {
             b.iter(|| one.install(|| black_box(pyramid).reconstruct(1, None).unwrap()))
         });
         group.bench_with_input(BenchmarkId::new("decompose", fine_vertices), &fine, |b, fine| {
             b.iter(|| decompose(black_box(fine), &options).unwrap())
+        });
+        group.bench_with_input(BenchmarkId::new("forward", fine_vertices), &coarse, |b, coarse| {
+            b.iter(|| subdivide(black_box(coarse), &forward_options).unwrap())
+        });
+        group.bench_with_input(BenchmarkId::new("decompose_seed", fine_vertices), &fine, |b, fine| {
+            b.iter(|| decompose(black_box(fine), &seeded).unwrap())
         });
         group.bench_with_input(BenchmarkId::new("reconstruct", fine_vertices), &pyramid, |b, pyramid| {
             b.iter(|| black_box(pyramid).reconstruct(1, None).unwrap())
