@@ -1,10 +1,17 @@
 //! Doo-Sabin benches: forward subdivision (levels 1-3) on the bunny and on a mesh of more
 //! than a million faces, single-threaded and with all threads.
 //!
-//! `doo_multires` times one reverse step (`decompose`, one level) and its reconstruction
-//! at four sizes, next to the forward step that makes the same fine mesh from the same
-//! coarse mesh; the throughput is in fine vertices, so a flat elements-per-second figure
-//! across sizes is linear time.
+//! `doo_multires` times one reverse step (`decompose`, one level; automatic choice of the
+//! reading, and with a given seed face) and its reconstruction at four sizes, next to the
+//! forward step of the same size; the throughput is in fine vertices, so a flat
+//! elements-per-second figure across sizes is linear time.
+//!
+//! "The forward Doo-Sabin step of the same size" is `subdivide(coarse, 1 level)`: from the
+//! coarse mesh to the very fine mesh (connectivity and positions) that `decompose` takes
+//! apart and `reconstruct` rebuilds, each starting from what its user holds: the forward
+//! step and `decompose` from a built `HalfedgeMesh`, `reconstruct` from the `DooPyramid`
+//! (whose base mesh is a polygon soup). Compare each with `forward` in the same run and
+//! with the same number of threads (`*_1thread` against `forward_1thread`).
 //!
 //! Run with `cargo bench -p subdiv-doo --bench doo`. The inputs are built before timing;
 //! the timed call is `subdivide` on an already built half-edge mesh (the counterpart of

@@ -864,13 +864,11 @@ impl<'a> Search<'a> {
         // Coarse faces: the F_F faces in increasing order.
         let mut coarse_offsets = vec![0u32];
         let mut fine_corner_of = Vec::with_capacity(fine.vertex_count);
-        let mut coarse_of_fine_corner = vec![NONE; fine.corner_count()];
         let mut ff_faces = Vec::new();
         for f in 0..faces {
             if self.role[f] == FF {
                 ff_faces.push(f as u32);
                 for fc in fine.offsets[f]..fine.offsets[f + 1] {
-                    coarse_of_fine_corner[fc as usize] = fine_corner_of.len() as u32;
                     fine_corner_of.push(fc);
                 }
                 coarse_offsets.push(fine_corner_of.len() as u32);
@@ -899,9 +897,10 @@ impl<'a> Search<'a> {
         for (c, &fc) in fine_corner_of.iter().enumerate() {
             let f = self.corner_face[fc as usize] as usize;
             if let Some(gt) = self.across(f, fc)? {
-                twins[c] = coarse_of_fine_corner[gt as usize];
+                // Every fine vertex is on one F_F face: its coarse corner is that of `gt`.
+                twins[c] = canonical_of_vertex[fine.corner_vertex[gt as usize] as usize];
                 quad_face[c] = self.corner_face[fine.corner_twin[fc as usize] as usize];
-                debug_assert!(twins[c] != NONE, "internal: the search made the far face F_F");
+                debug_assert_eq!(fine_corner_of[twins[c] as usize], gt, "internal: the far face is F_F");
             }
         }
         for c in 0..coarse_corners {
