@@ -961,16 +961,19 @@ impl<'a> Search<'a> {
         // Candidates, means and details.
         let candidates = expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize]);
         let by_vertex = corners_by_vertex(&coarse);
-        let (coarse_positions, details) = means_and_details(&by_vertex, &candidates);
+        let (coarse_positions, details, vertex_energy) = means_and_details(&by_vertex, &candidates);
         debug_assert_eq!(coarse_positions.len() + details.len(), fine.vertex_count);
 
         let order =
             match_fine_faces(fine, &self.corner_face, &coarse, &vertex_of, &fine_corner_of, &quad_face, &vertex_face)?;
         let mut energies = vec![0.0; component_count];
-        for (v, corners) in by_vertex.iter().enumerate() {
-            let k = component_of_face[self.corner_face[fine_corner_of[corners[0] as usize] as usize] as usize];
-            energies[k as usize] +=
-                corners.iter().map(|&c| (candidates[c as usize] - coarse_positions[v]).length_squared()).sum::<f64>();
+        if component_count == 1 {
+            energies[0] = vertex_energy.iter().sum();
+        } else {
+            for (corners, energy) in by_vertex.iter().zip(&vertex_energy) {
+                let k = component_of_face[self.corner_face[fine_corner_of[corners[0] as usize] as usize] as usize];
+                energies[k as usize] += energy;
+            }
         }
         let mut stats = self.stats;
         stats.candidate_edges = candidate_edges;
@@ -1062,21 +1065,28 @@ fn detail_offsets_of(e: &[DVec3], r: usize) -> impl Iterator<Item = DVec3> + '_ 
     })
 }
 
-/// Coarse vertex = mean of its candidates; details = prefix sums of the offsets.
-fn means_and_details(by_vertex: &CornersByVertex, candidates: &[DVec3]) -> (Vec<DVec3>, Vec<DVec3>) {
+/// Coarse vertex = mean of its candidates; details = prefix sums of the offsets; and each
+/// vertex's squared detail norm `Σ |d_i|²` (one pass over the candidates).
+fn means_and_details(by_vertex: &CornersByVertex, candidates: &[DVec3]) -> (Vec<DVec3>, Vec<DVec3>, Vec<f64>) {
     let vertices = by_vertex.offsets.len() - 1;
     let mut means = Vec::with_capacity(vertices);
     let mut details = Vec::with_capacity(by_vertex.corners.len() - vertices);
+    let mut energies = Vec::with_capacity(vertices);
     for corners in by_vertex.iter() {
         let mean = corners.iter().map(|&c| candidates[c as usize]).sum::<DVec3>() / corners.len() as f64;
         means.push(mean);
         let mut prefix = DVec3::ZERO;
+        let mut energy = 0.0;
         for &c in &corners[..corners.len() - 1] {
-            prefix += candidates[c as usize] - mean;
+            let offset = candidates[c as usize] - mean;
+            energy += offset.length_squared();
+            prefix += offset;
             details.push(prefix);
         }
+        let last = candidates[corners[corners.len() - 1] as usize] - mean;
+        energies.push(energy + last.length_squared());
     }
-    (means, details)
+    (means, details, energies)
 }
 
 /// The coarse mesh must be a valid manifold mesh: no face visits a vertex twice, and no
