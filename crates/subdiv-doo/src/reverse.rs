@@ -342,6 +342,16 @@ impl<'a> Session<'a> {
         }
 
         // Per component: the readings to use, best first (a given seed: just that one).
+        // The number of vertices of each component (no vertex is isolated).
+        let mut vertices_by_component = vec![0usize; component_count];
+        if component_count == 1 {
+            vertices_by_component[0] = fine.vertex_count;
+        } else {
+            for v in 0..fine.vertex_count {
+                let f = search.corner_face[fine.first_corner(v) as usize];
+                vertices_by_component[component_of_face[f as usize] as usize] += 1;
+            }
+        }
         let mut readings: Vec<Vec<(usize, f64)>> = Vec::with_capacity(component_count);
         let mut choices = Vec::with_capacity(component_count);
         let mut best_ff_faces = Vec::with_capacity(component_count);
@@ -360,7 +370,7 @@ impl<'a> Session<'a> {
                 best_ff_faces.push(Vec::new());
             } else {
                 let faces = &faces_by_component[component_offsets[k] as usize..component_offsets[k + 1] as usize];
-                let (choice, ranked, best) = search.choose(k, faces)?;
+                let (choice, ranked, best) = search.choose(k, faces, vertices_by_component[k])?;
                 readings.push(ranked);
                 choices.push(choice);
                 best_ff_faces.push(best);
@@ -636,14 +646,19 @@ impl<'a> Search<'a> {
     /// by walking across the F_E quads around their coarse vertex. A reading that is not
     /// valid may get a meaningless energy here; the full check of [`Self::finish`]
     /// rejects it before it is used.
-    fn energy(&mut self, queue_start: usize, component_faces: &[u32]) -> Result<(f64, f64), DooError> {
+    fn energy(
+        &mut self,
+        queue_start: usize,
+        component_faces: &[u32],
+        component_vertices: usize,
+    ) -> Result<(f64, f64), DooError> {
         let fine = self.fine;
         if self.ff_corner_of_vertex.is_empty() {
             self.ff_corner_of_vertex = vec![NONE; fine.vertex_count];
             self.grouped = vec![false; fine.vertex_count];
             self.candidate = vec![DVec3::ZERO; fine.vertex_count];
         }
-        let result = self.energy_inner(queue_start, component_faces);
+        let result = self.energy_inner(queue_start, component_faces, component_vertices);
         for &f in &self.queue[queue_start..] {
             for fc in fine.offsets[f as usize]..fine.offsets[f as usize + 1] {
                 let v = fine.corner_vertex[fc as usize] as usize;
@@ -654,12 +669,19 @@ impl<'a> Search<'a> {
         result
     }
 
-    fn energy_inner(&mut self, queue_start: usize, component_faces: &[u32]) -> Result<(f64, f64), DooError> {
+    fn energy_inner(
+        &mut self,
+        queue_start: usize,
+        component_faces: &[u32],
+        component_vertices: usize,
+    ) -> Result<(f64, f64), DooError> {
         let fine = self.fine;
         let positions = self.positions;
         // Every vertex on one F_F face at most; candidates by expansion of each F_F face.
         let mut points = std::mem::take(&mut self.points);
         let mut expanded = std::mem::take(&mut self.expanded);
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        let mut ff_corners = 0;
         for &f in &self.queue[queue_start..] {
             let (b, e) = (fine.offsets[f as usize], fine.offsets[f as usize + 1]);
             points.clear();
@@ -674,8 +696,12 @@ impl<'a> Search<'a> {
                         format!("vertex {v} is a corner of two F_F faces ({} and {})", f.min(g), f.max(g)),
                     ));
                 }
-                points.push(positions[v]);
+                let p = positions[v];
+                lo = lo.min(p);
+                hi = hi.max(p);
+                points.push(p);
             }
+            ff_corners += points.len();
             expanded.resize(points.len(), DVec3::ZERO);
             self.maps.inverse(&points, &mut expanded);
             for (fc, &p) in (b..e).zip(&expanded) {
@@ -684,20 +710,21 @@ impl<'a> Search<'a> {
         }
         self.points = points;
         self.expanded = expanded;
-        // Every vertex on one F_F face at least; the size of the component.
-        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-        for &f in component_faces {
-            for c in fine.offsets[f as usize]..fine.offsets[f as usize + 1] {
-                let v = fine.corner_vertex[c as usize] as usize;
-                if self.ff_corner_of_vertex[v] == NONE {
-                    return Err(Self::broken(f as usize, format!("its corner vertex {v} is on no F_F face")));
+        // Every vertex on one F_F face at least: as no vertex is on two, the F_F faces
+        // have as many corners as the component has vertices. Else find the culprit.
+        if ff_corners != component_vertices {
+            for &f in component_faces {
+                for c in fine.offsets[f as usize]..fine.offsets[f as usize + 1] {
+                    let v = fine.corner_vertex[c as usize] as usize;
+                    if self.ff_corner_of_vertex[v] == NONE {
+                        return Err(Self::broken(f as usize, format!("its corner vertex {v} is on no F_F face")));
+                    }
                 }
-                lo = lo.min(positions[v]);
-                hi = hi.max(positions[v]);
             }
         }
         // Groups of interior coarse vertices: the corners of the other faces.
         let mut energy = 0.0;
+        let mut grouped = 0;
         for &f in component_faces {
             if self.role[f as usize] != UNKNOWN {
                 continue;
@@ -707,8 +734,13 @@ impl<'a> Search<'a> {
             let mean = vertices.iter().map(|&v| self.candidate[v as usize]).sum::<DVec3>() / vertices.len() as f64;
             for &v in vertices {
                 energy += (self.candidate[v as usize] - mean).length_squared();
-                self.grouped[v as usize] = true;
+                grouped += usize::from(!std::mem::replace(&mut self.grouped[v as usize], true));
             }
+        }
+        if grouped == ff_corners {
+            // No boundary: every candidate is in a group already.
+            self.stats.interpretations += 1;
+            return Ok((energy, (hi - lo).length()));
         }
         // Groups of boundary coarse vertices: walk both ways around the coarse vertex
         // (clockwise: across the quad, then the next corner; counter-clockwise: the
@@ -753,9 +785,9 @@ impl<'a> Search<'a> {
     }
 
     /// Automatic choice of the interpretation of component `k` (its faces `faces`, in
-    /// increasing order). Returns the choice, the valid readings ranked best first, and the
+    /// increasing order, and its number of vertices `vertices`). Returns the choice, the valid readings ranked best first, and the
     /// F_F faces of the best one.
-    fn choose(&mut self, k: usize, faces: &[u32]) -> Result<(SeedChoice, Ranked, Vec<u32>), DooError> {
+    fn choose(&mut self, k: usize, faces: &[u32], vertices: usize) -> Result<(SeedChoice, Ranked, Vec<u32>), DooError> {
         let lowest = faces[0] as usize;
         let queue_start = self.queue.len();
         let mut trials = Vec::new();
@@ -778,7 +810,7 @@ impl<'a> Search<'a> {
         let mut other_classes = Vec::new();
         let mut scale = 0.0;
         for (seed, class) in candidates {
-            let result = self.classify(seed).and_then(|()| self.energy(queue_start, faces));
+            let result = self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices));
             match result {
                 Ok((energy, size)) => {
                     scale = size;
@@ -809,7 +841,7 @@ impl<'a> Search<'a> {
         let zero = |energy: f64| energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * faces.len() as f64;
         if !zero(first.1) {
             for (seed, class) in other_classes {
-                let result = self.classify(seed).and_then(|()| self.energy(queue_start, faces));
+                let result = self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices));
                 match result {
                     Ok((energy, _)) => {
                         trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Ok(energy) });
