@@ -659,11 +659,18 @@ impl<'a> Search<'a> {
             self.candidate = vec![DVec3::ZERO; fine.vertex_count];
         }
         let result = self.energy_inner(queue_start, component_faces, component_vertices);
-        for &f in &self.queue[queue_start..] {
-            for fc in fine.offsets[f as usize]..fine.offsets[f as usize + 1] {
-                let v = fine.corner_vertex[fc as usize] as usize;
-                self.ff_corner_of_vertex[v] = NONE;
-                self.grouped[v] = false;
+        if 4 * component_vertices >= fine.vertex_count {
+            // A large component: clearing everything (sequential) is cheaper than visiting
+            // the F_F faces again (scattered).
+            self.ff_corner_of_vertex.fill(NONE);
+            self.grouped.fill(false);
+        } else {
+            for &f in &self.queue[queue_start..] {
+                for fc in fine.offsets[f as usize]..fine.offsets[f as usize + 1] {
+                    let v = fine.corner_vertex[fc as usize] as usize;
+                    self.ff_corner_of_vertex[v] = NONE;
+                    self.grouped[v] = false;
+                }
             }
         }
         result
@@ -988,16 +995,33 @@ impl<'a> Search<'a> {
         let old_corner = coarse.vertex_corner.take().expect("internal: vertex corners");
         coarse.vertex_corner = Some(new_order.iter().map(|&old| old_corner[old as usize]).collect());
         let vertex_face: Vec<u32> = new_order.iter().map(|&old| vertex_face[old as usize]).collect();
-        check_coarse_manifold(&coarse, &ff_faces)?;
-
-        // Candidates, means and details.
-        let candidates = expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize]);
-        let by_vertex = corners_by_vertex(&coarse);
-        let (coarse_positions, details, vertex_energy) = means_and_details(&by_vertex, &candidates);
+        // The remaining checks and the geometry are independent: with several threads they
+        // run side by side (each is computed by one task, so the results and the first
+        // error reported are those of the sequential order).
+        let (checked, geometry) = rayon::join(
+            || {
+                check_coarse_manifold(&coarse, &ff_faces)?;
+                match_fine_faces(
+                    fine,
+                    &self.corner_face,
+                    &coarse,
+                    &vertex_of,
+                    &fine_corner_of,
+                    &quad_face,
+                    &vertex_face,
+                )
+            },
+            || {
+                // Candidates, means and details.
+                let candidates = expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize]);
+                let by_vertex = corners_by_vertex(&coarse);
+                let (coarse_positions, details, vertex_energy) = means_and_details(&by_vertex, &candidates);
+                (by_vertex, coarse_positions, details, vertex_energy)
+            },
+        );
+        let order = checked?;
+        let (by_vertex, coarse_positions, details, vertex_energy) = geometry;
         debug_assert_eq!(coarse_positions.len() + details.len(), fine.vertex_count);
-
-        let order =
-            match_fine_faces(fine, &self.corner_face, &coarse, &vertex_of, &fine_corner_of, &quad_face, &vertex_face)?;
         let mut energies = vec![0.0; component_count];
         if component_count == 1 {
             energies[0] = vertex_energy.iter().sum();
