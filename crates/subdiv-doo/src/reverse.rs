@@ -51,7 +51,17 @@
 //! # Cost
 //! Linear in the size of the fine mesh: the search visits each F_F face once and looks
 //! across each of its edges once; the candidate graph has two edges per F_E quad, at
-//! most `|NV|` ([`ReverseStats`] counts both, so tests can assert the bound).
+//! most `|NV|` ([`ReverseStats`] counts both, so tests can assert the bound). Every pass
+//! works on flat `u32` arrays, without hashing and without per-face allocation:
+//! components are labelled by one traversal and listed by a counting sort; the detail
+//! energy of a reading is one streaming pass over its F_F faces (expansion) and its F_V
+//! faces (each F_V face holds exactly the candidates of one coarse vertex, so no
+//! union-find is needed), with scratch arrays reused from reading to reading; the vertex
+//! groups of the result are walks around the coarse vertices; the automatic mode keeps
+//! the F_F faces of its best reading instead of searching again, and the final checks run
+//! beside the geometry when rayon has more than one thread. The automatic mode evaluates
+//! every valid class (usually two readings, F_F and F_V), so it costs about twice a
+//! reversal with a given seed.
 //!
 //! # Boundaries and components
 //! Coarse boundary edges are the F_F edges on the fine boundary (the default boundary
