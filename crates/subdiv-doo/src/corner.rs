@@ -545,8 +545,8 @@ mod tests {
         for soup in [
             shapes::cube(),
             shapes::icosahedron(),
-            shapes::torus(5, 4, CellKind::Mixed),
-            shapes::grid(3, 4, CellKind::Mixed),
+            shapes::torus(5, 4, CellKind::Mixed).unwrap(),
+            shapes::grid(3, 4, CellKind::Mixed).unwrap(),
         ] {
             let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
             assert_eq!(CornerMesh::from_soup(&soup).unwrap(), CornerMesh::from_halfedge(&mesh));

@@ -247,7 +247,7 @@ fn isolated_vertex_and_nan_are_errors() {
 fn decomposition_is_bit_identical_for_any_thread_count() {
     use subdiv_doo::pyramid::{DecomposeOptions, decompose};
     // A torus with a hole cut out (a boundary), every fine vertex moved.
-    let mut soup = shapes::torus(24, 16, CellKind::Mixed);
+    let mut soup = shapes::torus(24, 16, CellKind::Mixed).unwrap();
     let faces: Vec<Vec<u32>> = soup.faces().skip(3).map(<[u32]>::to_vec).collect();
     soup = PolygonSoup::from_faces(std::mem::take(&mut soup.positions), faces);
     let mut fine = doo(&soup, FaceRule::DooSabin, 1);
