@@ -1,10 +1,17 @@
 //! Doo-Sabin benches: forward subdivision (levels 1-3) on the bunny and on a mesh of more
 //! than a million faces, single-threaded and with all threads.
 //!
-//! `doo_multires` times one reverse step (`decompose`, one level) and its reconstruction
-//! at four sizes, next to the forward step that makes the same fine mesh from the same
-//! coarse mesh; the throughput is in fine vertices, so a flat elements-per-second figure
-//! across sizes is linear time.
+//! `doo_multires` times one reverse step (`decompose`, one level; automatic choice of the
+//! reading, and with a given seed face) and its reconstruction at four sizes, next to the
+//! forward step of the same size; the throughput is in fine vertices, so a flat
+//! elements-per-second figure across sizes is linear time.
+//!
+//! "The forward Doo-Sabin step of the same size" is `subdivide(coarse, 1 level)`: from the
+//! coarse mesh to the very fine mesh (connectivity and positions) that `decompose` takes
+//! apart and `reconstruct` rebuilds, each starting from what its user holds: the forward
+//! step and `decompose` from a built `HalfedgeMesh`, `reconstruct` from the `DooPyramid`
+//! (whose base mesh is a polygon soup). Compare each with `forward` in the same run and
+//! with the same number of threads (`*_1thread` against `forward_1thread`).
 //!
 //! Run with `cargo bench -p subdiv-doo --bench doo`. The inputs are built before timing;
 //! the timed call is `subdivide` on an already built half-edge mesh (the counterpart of
@@ -105,6 +112,8 @@ fn multires(c: &mut Criterion) {
         group.throughput(Throughput::Elements(fine_vertices as u64));
         let forward_options = DooOptions::new(FaceRule::DooSabin, 1);
         let options = DecomposeOptions::levels(FaceRule::DooSabin, 1);
+        // Face 0 of a mesh written by `subdivide` is the F_F face of coarse face 0.
+        let seeded = DecomposeOptions { seeds: vec![0], ..options.clone() };
         let pyramid = decompose(&fine, &options).unwrap().pyramid;
         group.bench_with_input(BenchmarkId::new("forward_1thread", fine_vertices), &coarse, |b, coarse| {
             b.iter(|| one.install(|| subdivide(black_box(coarse), &forward_options).unwrap()))
@@ -112,11 +121,20 @@ fn multires(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("decompose_1thread", fine_vertices), &fine, |b, fine| {
             b.iter(|| one.install(|| decompose(black_box(fine), &options).unwrap()))
         });
+        group.bench_with_input(BenchmarkId::new("decompose_seed_1thread", fine_vertices), &fine, |b, fine| {
+            b.iter(|| one.install(|| decompose(black_box(fine), &seeded).unwrap()))
+        });
         group.bench_with_input(BenchmarkId::new("reconstruct_1thread", fine_vertices), &pyramid, |b, pyramid| {
             b.iter(|| one.install(|| black_box(pyramid).reconstruct(1, None).unwrap()))
         });
         group.bench_with_input(BenchmarkId::new("decompose", fine_vertices), &fine, |b, fine| {
             b.iter(|| decompose(black_box(fine), &options).unwrap())
+        });
+        group.bench_with_input(BenchmarkId::new("forward", fine_vertices), &coarse, |b, coarse| {
+            b.iter(|| subdivide(black_box(coarse), &forward_options).unwrap())
+        });
+        group.bench_with_input(BenchmarkId::new("decompose_seed", fine_vertices), &fine, |b, fine| {
+            b.iter(|| decompose(black_box(fine), &seeded).unwrap())
         });
         group.bench_with_input(BenchmarkId::new("reconstruct", fine_vertices), &pyramid, |b, pyramid| {
             b.iter(|| black_box(pyramid).reconstruct(1, None).unwrap())

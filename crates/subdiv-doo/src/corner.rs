@@ -9,7 +9,7 @@
 //! level after level, without ever rebuilding a half-edge structure.
 
 use glam::DVec3;
-use mesh_topo::HalfedgeMesh;
+use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use rayon::prelude::*;
 
 use crate::DooError;
@@ -98,6 +98,105 @@ impl CornerMesh {
             vertex_count: mesh.vertex_count(),
             vertex_corner: Some(vertex_corner),
         }
+    }
+
+    /// The corner arrays of a polygon soup, checked to be a manifold polygon mesh (faces of
+    /// at least three distinct vertices, each directed edge used once, each vertex's faces
+    /// one fan), without building a half-edge mesh: linear time. The error says what is
+    /// wrong and where.
+    pub fn from_soup(soup: &PolygonSoup) -> Result<Self, String> {
+        let vertex_count = soup.positions.len();
+        let indices = &soup.indices;
+        let offsets = if soup.offsets.is_empty() { vec![0] } else { soup.offsets.clone() };
+        if offsets[0] != 0 || offsets[offsets.len() - 1] as usize != indices.len() {
+            return Err("the face offsets do not cover the corner list".into());
+        }
+        for (f, w) in offsets.windows(2).enumerate() {
+            if w[1] < w[0] + 3 {
+                return Err(format!("face {f} has fewer than three corners"));
+            }
+        }
+        if let Some(c) = indices.iter().position(|&v| v as usize >= vertex_count) {
+            return Err(format!("corner {c} refers to vertex {} of {vertex_count}", indices[c]));
+        }
+        let corners = indices.len();
+        let next = next_of_corners(&offsets);
+        let mut prev = vec![0u32; corners];
+        for (c, &n) in next.iter().enumerate() {
+            prev[n as usize] = c as u32;
+        }
+        // Corners of each vertex (CSR, increasing corner order).
+        let mut start = vec![0u32; vertex_count + 1];
+        for &v in indices {
+            start[v as usize + 1] += 1;
+        }
+        for v in 0..vertex_count {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut corners_of = vec![0u32; corners];
+        for (c, &v) in indices.iter().enumerate() {
+            corners_of[fill[v as usize] as usize] = c as u32;
+            fill[v as usize] += 1;
+        }
+        let target = |c: u32| indices[next[c as usize] as usize];
+        // Each directed edge once (this also rejects a face visiting a vertex twice along
+        // one edge); the twin of `u -> w` is the corner of `w` whose edge goes to `u`.
+        let mut stamp = vec![NONE; vertex_count];
+        let mut corner_twin = vec![NONE; corners];
+        for u in 0..vertex_count {
+            let mine = &corners_of[start[u] as usize..start[u + 1] as usize];
+            for &c in mine {
+                let w = target(c);
+                if w as usize == u {
+                    return Err(format!("a face has two consecutive corners at vertex {u}"));
+                }
+                if stamp[w as usize] == u as u32 {
+                    return Err(format!("the edge {u} -> {w} is used twice in the same direction"));
+                }
+                stamp[w as usize] = u as u32;
+                let theirs = &corners_of[start[w as usize] as usize..start[w as usize + 1] as usize];
+                if let Some(&d) = theirs.iter().find(|&&d| target(d) as usize == u) {
+                    corner_twin[c as usize] = d;
+                }
+            }
+        }
+        // Each vertex one fan: walking around it from its first corner reaches all its corners.
+        let mut vertex_corner = vec![NONE; vertex_count];
+        for v in 0..vertex_count {
+            let mine = &corners_of[start[v] as usize..start[v + 1] as usize];
+            let Some(&first) = mine.first() else { continue };
+            vertex_corner[v] = first;
+            let mut reached = 1;
+            let mut c = first;
+            let mut closed = false;
+            while corner_twin[c as usize] != NONE && reached <= mine.len() {
+                c = next[corner_twin[c as usize] as usize];
+                if c == first {
+                    closed = true;
+                    break;
+                }
+                reached += 1;
+            }
+            if !closed {
+                let mut c = first;
+                while corner_twin[prev[c as usize] as usize] != NONE && reached <= mine.len() {
+                    c = corner_twin[prev[c as usize] as usize];
+                    reached += 1;
+                }
+            }
+            if reached != mine.len() {
+                return Err(format!("vertex {v} is not manifold (its faces do not form one fan)"));
+            }
+        }
+        Ok(Self {
+            offsets,
+            corner_vertex: indices.clone(),
+            corner_twin,
+            corner_next: next,
+            vertex_count,
+            vertex_corner: Some(vertex_corner),
+        })
     }
 
     /// Walks clockwise around the vertex of corner `start` (`c -> next(twin(c))`),
@@ -433,4 +532,42 @@ where
         face_chunks(offsets, &mut out, target).into_par_iter().for_each(|(first, end, slice)| work(first, end, slice));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+    use mesh_topo::shapes::{self, CellKind};
+
+    #[test]
+    fn from_soup_equals_from_halfedge() {
+        for soup in [
+            shapes::cube(),
+            shapes::icosahedron(),
+            shapes::torus(5, 4, CellKind::Mixed).unwrap(),
+            shapes::grid(3, 4, CellKind::Mixed).unwrap(),
+        ] {
+            let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+            assert_eq!(CornerMesh::from_soup(&soup).unwrap(), CornerMesh::from_halfedge(&mesh));
+        }
+    }
+
+    #[test]
+    fn from_soup_rejects_what_is_not_a_manifold_mesh() {
+        let square = |a: u32| [a, a + 1, a + 2];
+        let p = vec![DVec3::ZERO; 7];
+        // A triangle with a vertex out of range, a digon, an edge used twice in one direction.
+        let bad = [
+            PolygonSoup::from_faces(p.clone(), [[0u32, 1, 9]]),
+            PolygonSoup::from_faces(p.clone(), [vec![0u32, 1]]),
+            PolygonSoup::from_faces(p.clone(), [[0u32, 1, 2], [0, 1, 3]]),
+            // Two triangle fans sharing only vertex 0 (a bow tie).
+            PolygonSoup::from_faces(p.clone(), [[0u32, 1, 2], [0, 3, 4]]),
+        ];
+        for soup in &bad {
+            assert!(CornerMesh::from_soup(soup).is_err(), "{soup:?}");
+        }
+        assert!(CornerMesh::from_soup(&PolygonSoup::from_faces(p, [square(0), square(3)])).is_ok());
+    }
 }

@@ -176,14 +176,20 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
             }
         }
     }
-    let last = steps.last().expect("internal: at least one level");
+    // Move, do not copy: the base is the last step's coarse mesh.
+    let last = steps.last_mut().expect("internal: at least one level");
     let base = PolygonSoup {
-        positions: last.coarse_positions.clone(),
-        offsets: last.coarse.offsets.clone(),
-        indices: last.coarse.corner_vertex.clone(),
+        positions: std::mem::take(&mut last.coarse_positions),
+        offsets: std::mem::take(&mut last.coarse.offsets),
+        indices: std::mem::take(&mut last.coarse.corner_vertex),
     };
-    let choices = steps.iter().map(|s| s.choices.clone()).collect();
-    let levels = steps.into_iter().rev().map(|s| PyramidLevel { details: s.details, order: s.order }).collect();
+    let mut choices = Vec::with_capacity(steps.len());
+    let mut levels = Vec::with_capacity(steps.len());
+    for step in steps.into_iter().rev() {
+        choices.push(step.choices);
+        levels.push(PyramidLevel { details: step.details, order: step.order });
+    }
+    choices.reverse();
     Ok(Decomposition { pyramid: DooPyramid { rule: options.rule, base, levels }, choices, stopped })
 }
 
@@ -316,9 +322,8 @@ impl DooPyramid {
         };
         self.rule.validate()?;
         check_finite(&self.base.positions)?;
-        let base =
-            HalfedgeMesh::from_soup(&self.base).map_err(|e| DooError::InvalidPyramid(format!("base mesh: {e}")))?;
-        let mut mesh = CornerMesh::from_halfedge(&base);
+        let mut mesh =
+            CornerMesh::from_soup(&self.base).map_err(|e| DooError::InvalidPyramid(format!("base mesh: {e}")))?;
         let mut positions = self.base.positions.clone();
         for (k, data) in self.levels[..level].iter().enumerate() {
             self.check_level(k, &mesh, data)?;
@@ -480,9 +485,8 @@ impl DooPyramid {
     /// [`DooError::InvalidPyramid`] naming the first inconsistency.
     pub fn validate(&self) -> Result<(), DooError> {
         self.rule.validate()?;
-        let base =
-            HalfedgeMesh::from_soup(&self.base).map_err(|e| DooError::InvalidPyramid(format!("base mesh: {e}")))?;
-        let mut mesh = CornerMesh::from_halfedge(&base);
+        let mut mesh =
+            CornerMesh::from_soup(&self.base).map_err(|e| DooError::InvalidPyramid(format!("base mesh: {e}")))?;
         for (k, data) in self.levels.iter().enumerate() {
             self.check_level(k, &mesh, data)?;
             if k + 1 < self.levels.len() {

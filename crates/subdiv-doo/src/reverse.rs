@@ -51,7 +51,17 @@
 //! # Cost
 //! Linear in the size of the fine mesh: the search visits each F_F face once and looks
 //! across each of its edges once; the candidate graph has two edges per F_E quad, at
-//! most `|NV|` ([`ReverseStats`] counts both, so tests can assert the bound).
+//! most `|NV|` ([`ReverseStats`] counts both, so tests can assert the bound). Every pass
+//! works on flat `u32` arrays, without hashing and without per-face allocation:
+//! components are labelled by one traversal and listed by a counting sort; the detail
+//! energy of a reading is one streaming pass over its F_F faces (expansion) and its F_V
+//! faces (each F_V face holds exactly the candidates of one coarse vertex, so no
+//! union-find is needed), with scratch arrays reused from reading to reading; the vertex
+//! groups of the result are walks around the coarse vertices; the automatic mode keeps
+//! the F_F faces of its best reading instead of searching again, and the final checks run
+//! beside the geometry when rayon has more than one thread. The automatic mode evaluates
+//! every valid class (usually two readings, F_F and F_V), so it costs about twice a
+//! reversal with a given seed.
 //!
 //! # Boundaries and components
 //! Coarse boundary edges are the F_F edges on the fine boundary (the default boundary
@@ -66,7 +76,6 @@
 //! 26 faces and 24 vertices) but linearity holds since `|F_E| = |E_int| <= |NV| / 2`.
 
 use glam::DVec3;
-use mesh_topo::graph::UnionFind;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use serde::{Deserialize, Serialize};
 
@@ -292,6 +301,9 @@ pub(crate) struct Session<'a> {
     given: Vec<u32>,
     /// Per component: (seed face, detail energy), best first.
     readings: Vec<Vec<(usize, f64)>>,
+    /// Per component: the F_F faces of its best automatic reading, kept from the ranking
+    /// so that building it does not search again (empty for a given seed).
+    best_ff_faces: Vec<Vec<u32>>,
     choices: Vec<SeedChoice>,
 }
 
@@ -324,14 +336,35 @@ impl<'a> Session<'a> {
             }
             given[k] = s as u32;
         }
-        let mut lowest_face = vec![NONE; component_count];
-        for (f, &k) in component_of_face.iter().enumerate().rev() {
-            lowest_face[k as usize] = f as u32;
+        // The faces of each component in increasing order (a counting sort: linear).
+        let mut component_offsets = vec![0u32; component_count + 1];
+        for &k in &component_of_face {
+            component_offsets[k as usize + 1] += 1;
+        }
+        for k in 0..component_count {
+            component_offsets[k + 1] += component_offsets[k];
+        }
+        let mut fill = component_offsets.clone();
+        let mut faces_by_component = vec![0u32; face_count];
+        for (f, &k) in component_of_face.iter().enumerate() {
+            faces_by_component[fill[k as usize] as usize] = f as u32;
+            fill[k as usize] += 1;
         }
 
         // Per component: the readings to use, best first (a given seed: just that one).
+        // The number of vertices of each component (no vertex is isolated).
+        let mut vertices_by_component = vec![0usize; component_count];
+        if component_count == 1 {
+            vertices_by_component[0] = fine.vertex_count;
+        } else {
+            for v in 0..fine.vertex_count {
+                let f = search.corner_face[fine.first_corner(v) as usize];
+                vertices_by_component[component_of_face[f as usize] as usize] += 1;
+            }
+        }
         let mut readings: Vec<Vec<(usize, f64)>> = Vec::with_capacity(component_count);
         let mut choices = Vec::with_capacity(component_count);
+        let mut best_ff_faces = Vec::with_capacity(component_count);
         for k in 0..component_count {
             if given[k] != NONE {
                 let seed = given[k] as usize;
@@ -344,13 +377,16 @@ impl<'a> Session<'a> {
                     detail_energy: f64::NAN,
                     reason: "seed face given".into(),
                 });
+                best_ff_faces.push(Vec::new());
             } else {
-                let (choice, ranked) = search.choose(k, lowest_face[k] as usize)?;
+                let faces = &faces_by_component[component_offsets[k] as usize..component_offsets[k + 1] as usize];
+                let (choice, ranked, best) = search.choose(k, faces, vertices_by_component[k])?;
                 readings.push(ranked);
                 choices.push(choice);
+                best_ff_faces.push(best);
             }
         }
-        Ok(Self { search, rule: options.rule, component_of_face, given, readings, choices })
+        Ok(Self { search, rule: options.rule, component_of_face, given, readings, best_ff_faces, choices })
     }
 
     /// Alternative choices of readings, best first: all components at their best, then
@@ -377,8 +413,16 @@ impl<'a> Session<'a> {
         loop {
             search.role.fill(UNKNOWN);
             search.queue.clear();
-            for (ranked, &p) in self.readings.iter().zip(&pick) {
-                search.classify(ranked[p].0)?;
+            for ((ranked, &p), best) in self.readings.iter().zip(&pick).zip(&self.best_ff_faces) {
+                if p == 0 && !best.is_empty() {
+                    // The best automatic reading, as the ranking found it (only the F_F
+                    // roles matter from here on).
+                    for &f in best {
+                        search.role[f as usize] = FF;
+                    }
+                } else {
+                    search.classify(ranked[p].0)?;
+                }
             }
             match search.finish(self.rule, &self.component_of_face, component_count) {
                 Ok((mut reversal, energies)) => {
@@ -419,6 +463,9 @@ impl<'a> Session<'a> {
     }
 }
 
+/// Readings of one component: (seed face, detail energy), best first.
+type Ranked = Vec<(usize, f64)>;
+
 const UNKNOWN: u8 = 0;
 const FF: u8 = 1;
 const FE: u8 = 2;
@@ -433,9 +480,15 @@ struct Search<'a> {
     role: Vec<u8>,
     /// F_F faces of the current interpretation, in search order.
     queue: Vec<u32>,
-    /// Scratch: per face, per vertex (reset after each use).
-    face_mark: Vec<bool>,
-    local_of_vertex: Vec<u32>,
+    /// Scratch of [`Self::energy`], per vertex (reset after each use): the F_F corner at
+    /// the vertex, whether its group was summed, its candidate.
+    ff_corner_of_vertex: Vec<u32>,
+    grouped: Vec<bool>,
+    candidate: Vec<DVec3>,
+    /// Scratch of [`Self::energy`]: one face's points and their expansion, one group.
+    points: Vec<DVec3>,
+    expanded: Vec<DVec3>,
+    group: Vec<u32>,
     stats: ReverseStats,
 }
 
@@ -448,8 +501,12 @@ impl<'a> Search<'a> {
             corner_face: faces_of_corners(&fine.offsets),
             role: vec![UNKNOWN; fine.face_count()],
             queue: Vec::new(),
-            face_mark: Vec::new(),
-            local_of_vertex: Vec::new(),
+            ff_corner_of_vertex: Vec::new(),
+            grouped: Vec::new(),
+            candidate: Vec::new(),
+            points: Vec::new(),
+            expanded: Vec::new(),
+            group: Vec::new(),
             stats: ReverseStats::default(),
         }
     }
@@ -502,19 +559,29 @@ impl<'a> Search<'a> {
             return Ok(None);
         }
         let g = self.corner_face[ft as usize] as usize;
-        let m = self.face_size(g);
-        if m != 4 {
-            return Err(Self::broken(g, format!("it lies across an edge of F_F face {f} but has {m} sides, not 4")));
+        let first = fine.offsets[g];
+        if fine.offsets[g + 1] - first != 4 {
+            return Err(Self::not_a_quad(f, g, self.face_size(g)));
         }
-        let far = fine.next(fine.next(ft));
+        // The opposite corner of the quad, by index arithmetic (corners are face by face).
+        let far = first + ((ft - first + 2) & 3);
         let gt = fine.corner_twin[far as usize];
         if gt == NONE {
-            return Err(Self::broken(
-                g,
-                format!("this F_E quad (next to F_F face {f}) has its opposite edge on the boundary"),
-            ));
+            return Err(Self::quad_on_boundary(f, g));
         }
         Ok(Some(gt))
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn not_a_quad(f: usize, g: usize, m: usize) -> DooError {
+        Self::broken(g, format!("it lies across an edge of F_F face {f} but has {m} sides, not 4"))
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn quad_on_boundary(f: usize, g: usize) -> DooError {
+        Self::broken(g, format!("this F_E quad (next to F_F face {f}) has its opposite edge on the boundary"))
     }
 
     /// Breadth-first search from `seed` as an F_F face; marks the roles. On error the
@@ -560,7 +627,7 @@ impl<'a> Search<'a> {
         Ok(())
     }
 
-    /// Clears the roles of one component (all faces reachable from `face`) and drops the
+    /// Clears the roles of one component (its faces `component_faces`) and drops the
     /// queue entries from `queue_start`.
     fn reset(&mut self, component_faces: &[u32], queue_start: usize) {
         for &f in component_faces {
@@ -569,117 +636,176 @@ impl<'a> Search<'a> {
         self.queue.truncate(queue_start);
     }
 
-    /// The faces of the component of `face`, in increasing order.
-    fn component_faces(&mut self, face: usize) -> Vec<u32> {
-        if self.face_mark.is_empty() {
-            self.face_mark = vec![false; self.fine.face_count()];
-        }
-        let mut stack = vec![face as u32];
-        self.face_mark[face] = true;
-        let mut out = Vec::new();
-        while let Some(f) = stack.pop() {
-            out.push(f);
-            for c in self.fine.offsets[f as usize]..self.fine.offsets[f as usize + 1] {
-                let t = self.fine.corner_twin[c as usize];
-                if t != NONE {
-                    let g = self.corner_face[t as usize];
-                    if !std::mem::replace(&mut self.face_mark[g as usize], true) {
-                        stack.push(g);
-                    }
-                }
-            }
-        }
-        for &f in &out {
-            self.face_mark[f as usize] = false;
-        }
-        out.sort_unstable();
-        out
+    /// The F_F corner before `fc` in its face.
+    #[inline]
+    fn prev_in_face(&self, fc: u32) -> u32 {
+        let f = self.corner_face[fc as usize] as usize;
+        if fc == self.fine.offsets[f] { self.fine.offsets[f + 1] - 1 } else { fc - 1 }
     }
 
     /// Total squared detail norm of the current interpretation of a component (whose F_F
     /// faces are `self.queue[queue_start..]`), and the component's size (bounding-box
     /// diagonal) for the zero test. Also checks that every vertex of the component is a
     /// corner of exactly one F_F face.
-    fn energy(&mut self, queue_start: usize, component_faces: &[u32]) -> Result<(f64, f64), DooError> {
+    ///
+    /// One streaming pass, nothing materialised but per-vertex scratch arrays reused from
+    /// call to call: every F_F face is expanded into the candidates of its corners, and
+    /// the candidates are grouped by the faces that are neither F_F nor F_E (in a valid
+    /// reading these are the F_V faces, whose corners are exactly the candidates of one
+    /// coarse vertex). Candidates on no such face (coarse boundary vertices) are grouped
+    /// by walking across the F_E quads around their coarse vertex. A reading that is not
+    /// valid may get a meaningless energy here; the full check of [`Self::finish`]
+    /// rejects it before it is used.
+    fn energy(
+        &mut self,
+        queue_start: usize,
+        component_faces: &[u32],
+        component_vertices: usize,
+    ) -> Result<(f64, f64), DooError> {
         let fine = self.fine;
-        if self.local_of_vertex.is_empty() {
-            self.local_of_vertex = vec![NONE; fine.vertex_count];
+        if self.ff_corner_of_vertex.is_empty() {
+            self.ff_corner_of_vertex = vec![NONE; fine.vertex_count];
+            self.grouped = vec![false; fine.vertex_count];
+            self.candidate = vec![DVec3::ZERO; fine.vertex_count];
         }
-        // Local numbering of the F_F corners of this reading.
-        let mut offsets = Vec::with_capacity(self.queue.len() - queue_start + 1);
-        offsets.push(0u32);
-        let mut fine_corner = Vec::new();
-        for &f in &self.queue[queue_start..] {
-            fine_corner.extend(fine.offsets[f as usize]..fine.offsets[f as usize + 1]);
-            offsets.push(fine_corner.len() as u32);
-        }
-        let result = self.energy_inner(&offsets, &fine_corner, component_faces);
-        for &fc in &fine_corner {
-            self.local_of_vertex[fine.corner_vertex[fc as usize] as usize] = NONE;
+        let result = self.energy_inner(queue_start, component_faces, component_vertices);
+        if 4 * component_vertices >= fine.vertex_count {
+            // A large component: clearing everything (sequential) is cheaper than visiting
+            // the F_F faces again (scattered).
+            self.ff_corner_of_vertex.fill(NONE);
+            self.grouped.fill(false);
+        } else {
+            for &f in &self.queue[queue_start..] {
+                for fc in fine.offsets[f as usize]..fine.offsets[f as usize + 1] {
+                    let v = fine.corner_vertex[fc as usize] as usize;
+                    self.ff_corner_of_vertex[v] = NONE;
+                    self.grouped[v] = false;
+                }
+            }
         }
         result
     }
 
     fn energy_inner(
         &mut self,
-        offsets: &[u32],
-        fine_corner: &[u32],
+        queue_start: usize,
         component_faces: &[u32],
+        component_vertices: usize,
     ) -> Result<(f64, f64), DooError> {
         let fine = self.fine;
-        let vertex_of = |c: usize| fine.corner_vertex[fine_corner[c] as usize];
-        for c in 0..fine_corner.len() {
-            let v = vertex_of(c) as usize;
-            let other = std::mem::replace(&mut self.local_of_vertex[v], c as u32);
-            if other != NONE {
-                let f = self.corner_face[fine_corner[c] as usize] as usize;
-                let g = self.corner_face[fine_corner[other as usize] as usize] as usize;
-                return Err(Self::broken(
-                    f.max(g),
-                    format!("vertex {v} is a corner of two F_F faces ({} and {})", f.min(g), f.max(g)),
-                ));
-            }
-        }
+        let positions = self.positions;
+        // Every vertex on one F_F face at most; candidates by expansion of each F_F face.
+        let mut points = std::mem::take(&mut self.points);
+        let mut expanded = std::mem::take(&mut self.expanded);
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-        for &f in component_faces {
-            for c in fine.offsets[f as usize]..fine.offsets[f as usize + 1] {
-                let v = fine.corner_vertex[c as usize] as usize;
-                if self.local_of_vertex[v] == NONE {
-                    return Err(Self::broken(f as usize, format!("its corner vertex {v} is on no F_F face")));
+        let mut ff_corners = 0;
+        for &f in &self.queue[queue_start..] {
+            let (b, e) = (fine.offsets[f as usize], fine.offsets[f as usize + 1]);
+            points.clear();
+            for fc in b..e {
+                let v = fine.corner_vertex[fc as usize] as usize;
+                let other = std::mem::replace(&mut self.ff_corner_of_vertex[v], fc);
+                if other != NONE {
+                    let g = self.corner_face[other as usize] as usize;
+                    let f = f as usize;
+                    return Err(Self::broken(
+                        f.max(g),
+                        format!("vertex {v} is a corner of two F_F faces ({} and {})", f.min(g), f.max(g)),
+                    ));
                 }
-                lo = lo.min(self.positions[v]);
-                hi = hi.max(self.positions[v]);
+                let p = positions[v];
+                lo = lo.min(p);
+                hi = hi.max(p);
+                points.push(p);
+            }
+            ff_corners += points.len();
+            expanded.resize(points.len(), DVec3::ZERO);
+            self.maps.inverse(&points, &mut expanded);
+            for (fc, &p) in (b..e).zip(&expanded) {
+                self.candidate[fine.corner_vertex[fc as usize] as usize] = p;
             }
         }
-        let candidates = expand_faces(offsets, &self.maps, |c| self.positions[vertex_of(c) as usize]);
-        let mut groups = UnionFind::new(fine_corner.len());
-        for (c, &fc) in fine_corner.iter().enumerate() {
-            let f = self.corner_face[fc as usize] as usize;
-            if let Some(gt) = self.across(f, fc)? {
-                // The corner after the far corner is at the same coarse vertex.
-                let a_star = fine.corner_vertex[fine.next(gt) as usize];
-                groups.union(c as u32, self.local_of_vertex[a_star as usize]);
+        self.points = points;
+        self.expanded = expanded;
+        // Every vertex on one F_F face at least: as no vertex is on two, the F_F faces
+        // have as many corners as the component has vertices. Else find the culprit.
+        if ff_corners != component_vertices {
+            for &f in component_faces {
+                for c in fine.offsets[f as usize]..fine.offsets[f as usize + 1] {
+                    let v = fine.corner_vertex[c as usize] as usize;
+                    if self.ff_corner_of_vertex[v] == NONE {
+                        return Err(Self::broken(f as usize, format!("its corner vertex {v} is on no F_F face")));
+                    }
+                }
             }
         }
-        let (labels, count) = groups.labels();
-        let mut sums = vec![DVec3::ZERO; count];
-        let mut sizes = vec![0usize; count];
-        for (c, &l) in labels.iter().enumerate() {
-            sums[l as usize] += candidates[c];
-            sizes[l as usize] += 1;
+        // Groups of interior coarse vertices: the corners of the other faces.
+        let mut energy = 0.0;
+        let mut grouped = 0;
+        for &f in component_faces {
+            if self.role[f as usize] != UNKNOWN {
+                continue;
+            }
+            let corners = fine.offsets[f as usize] as usize..fine.offsets[f as usize + 1] as usize;
+            let vertices = &fine.corner_vertex[corners];
+            let mean = vertices.iter().map(|&v| self.candidate[v as usize]).sum::<DVec3>() / vertices.len() as f64;
+            for &v in vertices {
+                energy += (self.candidate[v as usize] - mean).length_squared();
+                grouped += usize::from(!std::mem::replace(&mut self.grouped[v as usize], true));
+            }
         }
-        let energy = labels
-            .iter()
-            .enumerate()
-            .map(|(c, &l)| (candidates[c] - sums[l as usize] / sizes[l as usize] as f64).length_squared())
-            .sum();
+        if grouped == ff_corners {
+            // No boundary: every candidate is in a group already.
+            self.stats.interpretations += 1;
+            return Ok((energy, (hi - lo).length()));
+        }
+        // Groups of boundary coarse vertices: walk both ways around the coarse vertex
+        // (clockwise: across the quad, then the next corner; counter-clockwise: the
+        // previous corner, then across), stopping at the boundary or at a grouped vertex.
+        let mut group = std::mem::take(&mut self.group);
+        for i in queue_start..self.queue.len() {
+            let f = self.queue[i] as usize;
+            for fc in fine.offsets[f]..fine.offsets[f + 1] {
+                if self.grouped[fine.corner_vertex[fc as usize] as usize] {
+                    continue;
+                }
+                group.clear();
+                group.push(fc);
+                self.grouped[fine.corner_vertex[fc as usize] as usize] = true;
+                for clockwise in [true, false] {
+                    let mut c = fc;
+                    loop {
+                        let step = if clockwise {
+                            self.across(self.corner_face[c as usize] as usize, c)?.map(|gt| fine.next(gt))
+                        } else {
+                            let p = self.prev_in_face(c);
+                            self.across(self.corner_face[p as usize] as usize, p)?
+                        };
+                        let Some(d) = step else { break };
+                        let w = fine.corner_vertex[d as usize] as usize;
+                        if self.grouped[w] {
+                            break;
+                        }
+                        self.grouped[w] = true;
+                        group.push(d);
+                        c = d;
+                    }
+                }
+                let candidate = |c: u32| self.candidate[fine.corner_vertex[c as usize] as usize];
+                let mean = group.iter().map(|&c| candidate(c)).sum::<DVec3>() / group.len() as f64;
+                energy += group.iter().map(|&c| (candidate(c) - mean).length_squared()).sum::<f64>();
+            }
+        }
+        self.group = group;
         self.stats.interpretations += 1;
         Ok((energy, (hi - lo).length()))
     }
 
-    /// Automatic choice of the interpretation of component `k` (lowest face `lowest`).
-    fn choose(&mut self, k: usize, lowest: usize) -> Result<(SeedChoice, Vec<(usize, f64)>), DooError> {
-        let faces = self.component_faces(lowest);
+    /// Automatic choice of the interpretation of component `k` (its faces `faces`, in
+    /// increasing order, and its number of vertices `vertices`). Returns the choice, the valid readings ranked best first, and the
+    /// F_F faces of the best one.
+    fn choose(&mut self, k: usize, faces: &[u32], vertices: usize) -> Result<(SeedChoice, Ranked, Vec<u32>), DooError> {
+        let lowest = faces[0] as usize;
         let queue_start = self.queue.len();
         let mut trials = Vec::new();
 
@@ -701,7 +827,7 @@ impl<'a> Search<'a> {
         let mut other_classes = Vec::new();
         let mut scale = 0.0;
         for (seed, class) in candidates {
-            let result = self.classify(seed).and_then(|()| self.energy(queue_start, &faces));
+            let result = self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices));
             match result {
                 Ok((energy, size)) => {
                     scale = size;
@@ -716,13 +842,13 @@ impl<'a> Search<'a> {
                         other_classes.push((f as usize, "F_E"));
                     }
                     found.push((seed, energy, self.queue[queue_start..].to_vec()));
-                    self.reset(&faces, queue_start);
+                    self.reset(faces, queue_start);
                     break;
                 }
                 Err(error) => {
                     trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Err(error.to_string()) });
                     first_error.get_or_insert(error);
-                    self.reset(&faces, queue_start);
+                    self.reset(faces, queue_start);
                 }
             }
         }
@@ -732,7 +858,7 @@ impl<'a> Search<'a> {
         let zero = |energy: f64| energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * faces.len() as f64;
         if !zero(first.1) {
             for (seed, class) in other_classes {
-                let result = self.classify(seed).and_then(|()| self.energy(queue_start, &faces));
+                let result = self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices));
                 match result {
                     Ok((energy, _)) => {
                         trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Ok(energy) });
@@ -742,7 +868,7 @@ impl<'a> Search<'a> {
                         trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Err(error.to_string()) })
                     }
                 }
-                self.reset(&faces, queue_start);
+                self.reset(faces, queue_start);
             }
         }
         // Smallest energy, earliest on ties (the sort below is stable).
@@ -752,7 +878,7 @@ impl<'a> Search<'a> {
                 best = i;
             }
         }
-        let (seed, energy, _) = found[best].clone();
+        let (seed, energy) = (found[best].0, found[best].1);
         let reason = if found.len() == 1 && zero(energy) {
             format!("face {seed} as F_F gives all details zero (exact Doo-Sabin refinement); no other reading tried")
         } else if found.len() == 1 {
@@ -766,9 +892,12 @@ impl<'a> Search<'a> {
                 others.join(", ")
             )
         };
-        let mut ranked: Vec<(usize, f64)> = found.iter().map(|f| (f.0, f.1)).collect();
-        ranked.sort_by(|a, b| a.1.total_cmp(&b.1));
-        Ok((SeedChoice { component: k, seed_face: seed, given: false, trials, detail_energy: energy, reason }, ranked))
+        let mut rank: Vec<usize> = (0..found.len()).collect();
+        rank.sort_by(|&a, &b| found[a].1.total_cmp(&found[b].1));
+        let ranked: Vec<(usize, f64)> = rank.iter().map(|&i| (found[i].0, found[i].1)).collect();
+        let best_ff_faces = std::mem::take(&mut found[rank[0]].2);
+        let choice = SeedChoice { component: k, seed_face: seed, given: false, trials, detail_energy: energy, reason };
+        Ok((choice, ranked, best_ff_faces))
     }
 
     /// Builds the coarse mesh, details and fine order from the roles of all components;
@@ -784,13 +913,11 @@ impl<'a> Search<'a> {
         // Coarse faces: the F_F faces in increasing order.
         let mut coarse_offsets = vec![0u32];
         let mut fine_corner_of = Vec::with_capacity(fine.vertex_count);
-        let mut coarse_of_fine_corner = vec![NONE; fine.corner_count()];
         let mut ff_faces = Vec::new();
         for f in 0..faces {
             if self.role[f] == FF {
                 ff_faces.push(f as u32);
                 for fc in fine.offsets[f]..fine.offsets[f + 1] {
-                    coarse_of_fine_corner[fc as usize] = fine_corner_of.len() as u32;
                     fine_corner_of.push(fc);
                 }
                 coarse_offsets.push(fine_corner_of.len() as u32);
@@ -819,9 +946,10 @@ impl<'a> Search<'a> {
         for (c, &fc) in fine_corner_of.iter().enumerate() {
             let f = self.corner_face[fc as usize] as usize;
             if let Some(gt) = self.across(f, fc)? {
-                twins[c] = coarse_of_fine_corner[gt as usize];
+                // Every fine vertex is on one F_F face: its coarse corner is that of `gt`.
+                twins[c] = canonical_of_vertex[fine.corner_vertex[gt as usize] as usize];
                 quad_face[c] = self.corner_face[fine.corner_twin[fc as usize] as usize];
-                debug_assert!(twins[c] != NONE, "internal: the search made the far face F_F");
+                debug_assert_eq!(fine_corner_of[twins[c] as usize], gt, "internal: the far face is F_F");
             }
         }
         for c in 0..coarse_corners {
@@ -838,17 +966,11 @@ impl<'a> Search<'a> {
         }
         let coarse_next = next_of_corners(&coarse_offsets);
 
-        // Candidate groups = coarse vertices: union across each coarse edge (the corner
-        // after the twin is at the same coarse vertex).
-        let mut groups = UnionFind::new(coarse_corners);
-        let mut candidate_edges = 0;
-        for (c, &t) in twins.iter().enumerate() {
-            if t != NONE {
-                groups.union(c as u32, coarse_next[t as usize]);
-                candidate_edges += 1;
-            }
-        }
-        let (labels, coarse_vertex_count) = groups.labels();
+        // Candidate groups = coarse vertices: the corner after the twin is at the same
+        // coarse vertex, so each group is one walk around its vertex (both ways on the
+        // boundary). Groups are numbered in order of their smallest corner.
+        let candidate_edges = twins.iter().filter(|&&t| t != NONE).count();
+        let (labels, coarse_vertex_count) = corner_groups(&coarse_offsets, &coarse_next, &twins);
         let mut vertex_corner = vec![NONE; coarse_vertex_count];
         for (c, &l) in labels.iter().enumerate() {
             if vertex_corner[l as usize] == NONE {
@@ -883,27 +1005,87 @@ impl<'a> Search<'a> {
         let old_corner = coarse.vertex_corner.take().expect("internal: vertex corners");
         coarse.vertex_corner = Some(new_order.iter().map(|&old| old_corner[old as usize]).collect());
         let vertex_face: Vec<u32> = new_order.iter().map(|&old| vertex_face[old as usize]).collect();
-        check_coarse_manifold(&coarse, &ff_faces)?;
-
-        // Candidates, means and details.
-        let candidates = expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize]);
-        let by_vertex = corners_by_vertex(&coarse);
-        let (coarse_positions, details) = means_and_details(&by_vertex, &candidates);
+        // The remaining checks and the geometry are independent: with several threads they
+        // run side by side (each is computed by one task, so the results and the first
+        // error reported are those of the sequential order).
+        let (checked, geometry) = rayon::join(
+            || {
+                check_coarse_manifold(&coarse, &ff_faces)?;
+                match_fine_faces(
+                    fine,
+                    &self.corner_face,
+                    &coarse,
+                    &vertex_of,
+                    &fine_corner_of,
+                    &quad_face,
+                    &vertex_face,
+                )
+            },
+            || {
+                // Candidates, means and details.
+                let candidates = expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize]);
+                let by_vertex = corners_by_vertex(&coarse);
+                let (coarse_positions, details, vertex_energy) = means_and_details(&by_vertex, &candidates);
+                (by_vertex, coarse_positions, details, vertex_energy)
+            },
+        );
+        let order = checked?;
+        let (by_vertex, coarse_positions, details, vertex_energy) = geometry;
         debug_assert_eq!(coarse_positions.len() + details.len(), fine.vertex_count);
-
-        let order =
-            match_fine_faces(fine, &self.corner_face, &coarse, &vertex_of, &fine_corner_of, &quad_face, &vertex_face)?;
         let mut energies = vec![0.0; component_count];
-        for (v, corners) in by_vertex.iter().enumerate() {
-            let k = component_of_face[self.corner_face[fine_corner_of[corners[0] as usize] as usize] as usize];
-            energies[k as usize] +=
-                corners.iter().map(|&c| (candidates[c as usize] - coarse_positions[v]).length_squared()).sum::<f64>();
+        if component_count == 1 {
+            energies[0] = vertex_energy.iter().sum();
+        } else {
+            for (corners, energy) in by_vertex.iter().zip(&vertex_energy) {
+                let k = component_of_face[self.corner_face[fine_corner_of[corners[0] as usize] as usize] as usize];
+                energies[k as usize] += energy;
+            }
         }
         let mut stats = self.stats;
         stats.candidate_edges = candidate_edges;
         let reversal = DooReversal { rule, coarse, coarse_positions, details, order, choices: Vec::new(), stats };
         Ok((reversal, energies))
     }
+}
+
+/// The vertex groups of corners given the next corners and the twins: the corners around
+/// one vertex, found by walking clockwise (`c -> next(twin(c))`) and, where that stops at
+/// the boundary, counter-clockwise (`c -> twin(prev(c))`). Twins must be an involution.
+/// Labels `0..count` in order of each group's smallest corner (as union-find would give).
+fn corner_groups(offsets: &[u32], next: &[u32], twins: &[u32]) -> (Vec<u32>, usize) {
+    let corners = next.len();
+    let mut prev = vec![0u32; corners];
+    for w in offsets.windows(2) {
+        for c in w[0]..w[1] {
+            prev[next[c as usize] as usize] = c;
+        }
+    }
+    let mut labels = vec![NONE; corners];
+    let mut count = 0u32;
+    for c in 0..corners as u32 {
+        if labels[c as usize] != NONE {
+            continue;
+        }
+        labels[c as usize] = count;
+        let mut x = c;
+        while twins[x as usize] != NONE {
+            x = next[twins[x as usize] as usize];
+            if labels[x as usize] != NONE {
+                break;
+            }
+            labels[x as usize] = count;
+        }
+        let mut x = c;
+        while twins[prev[x as usize] as usize] != NONE {
+            x = twins[prev[x as usize] as usize];
+            if labels[x as usize] != NONE {
+                break;
+            }
+            labels[x as usize] = count;
+        }
+        count += 1;
+    }
+    (labels, count as usize)
 }
 
 /// Corners of each coarse vertex, in increasing corner order (CSR).
@@ -949,21 +1131,28 @@ fn detail_offsets_of(e: &[DVec3], r: usize) -> impl Iterator<Item = DVec3> + '_ 
     })
 }
 
-/// Coarse vertex = mean of its candidates; details = prefix sums of the offsets.
-fn means_and_details(by_vertex: &CornersByVertex, candidates: &[DVec3]) -> (Vec<DVec3>, Vec<DVec3>) {
+/// Coarse vertex = mean of its candidates; details = prefix sums of the offsets; and each
+/// vertex's squared detail norm `Σ |d_i|²` (one pass over the candidates).
+fn means_and_details(by_vertex: &CornersByVertex, candidates: &[DVec3]) -> (Vec<DVec3>, Vec<DVec3>, Vec<f64>) {
     let vertices = by_vertex.offsets.len() - 1;
     let mut means = Vec::with_capacity(vertices);
     let mut details = Vec::with_capacity(by_vertex.corners.len() - vertices);
+    let mut energies = Vec::with_capacity(vertices);
     for corners in by_vertex.iter() {
         let mean = corners.iter().map(|&c| candidates[c as usize]).sum::<DVec3>() / corners.len() as f64;
         means.push(mean);
         let mut prefix = DVec3::ZERO;
+        let mut energy = 0.0;
         for &c in &corners[..corners.len() - 1] {
-            prefix += candidates[c as usize] - mean;
+            let offset = candidates[c as usize] - mean;
+            energy += offset.length_squared();
+            prefix += offset;
             details.push(prefix);
         }
+        let last = candidates[corners[corners.len() - 1] as usize] - mean;
+        energies.push(energy + last.length_squared());
     }
-    (means, details)
+    (means, details, energies)
 }
 
 /// The coarse mesh must be a valid manifold mesh: no face visits a vertex twice, and no
@@ -1124,10 +1313,9 @@ fn match_fine_faces(
     };
     // F_F faces: the coarse faces, same corners.
     for f in 0..coarse.face_count() {
-        let b = coarse.offsets[f] as usize;
+        let (b, e) = (coarse.offsets[f] as usize, coarse.offsets[f + 1] as usize);
         let g = corner_face[fine_corner_of[b] as usize] as usize;
-        let cycle: Vec<u32> = (b..coarse.offsets[f + 1] as usize).map(|c| vertex_of[c]).collect();
-        claim(g, &cycle, "F_F face")?;
+        claim(g, &vertex_of[b..e], "F_F face")?;
     }
     // F_E quads: (c, next(t), t, next(c)) for each interior coarse edge.
     for c in 0..coarse.corner_count() {

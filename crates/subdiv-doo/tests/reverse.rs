@@ -242,3 +242,32 @@ fn isolated_vertex_and_nan_are_errors() {
     mesh.positions_mut()[2].x = f64::INFINITY;
     assert!(matches!(reverse(&mesh, &ReverseOptions::default()), Err(DooError::NonFinite { vertex: 2, .. })));
 }
+
+#[test]
+fn decomposition_is_bit_identical_for_any_thread_count() {
+    use subdiv_doo::pyramid::{DecomposeOptions, decompose};
+    // A torus with a hole cut out (a boundary), every fine vertex moved.
+    let mut soup = shapes::torus(24, 16, CellKind::Mixed).unwrap();
+    let faces: Vec<Vec<u32>> = soup.faces().skip(3).map(<[u32]>::to_vec).collect();
+    soup = PolygonSoup::from_faces(std::mem::take(&mut soup.positions), faces);
+    let mut fine = doo(&soup, FaceRule::DooSabin, 1);
+    for (i, p) in fine.positions_mut().iter_mut().enumerate() {
+        *p += 1e-3 * DVec3::new((i as f64).sin(), (2.0 * i as f64).cos(), (3.0 * i as f64).sin());
+    }
+    let run = |threads: usize, seeds: Vec<usize>| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let options = DecomposeOptions { seeds, ..DecomposeOptions::levels(FaceRule::DooSabin, 1) };
+            let decomposition = decompose(&fine, &options).unwrap();
+            let rebuilt = decomposition.pyramid.reconstruct(1, None).unwrap();
+            (decomposition, rebuilt)
+        })
+    };
+    for seeds in [vec![], vec![0]] {
+        let (one, rebuilt_one) = run(1, seeds.clone());
+        let (two, rebuilt_two) = run(2, seeds);
+        assert_eq!(one, two);
+        assert_eq!(rebuilt_one, rebuilt_two);
+        assert!(max_distance(&rebuilt_one.positions, fine.positions()) < 1e-14 * diagonal(fine.positions()));
+    }
+}
