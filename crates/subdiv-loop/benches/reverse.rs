@@ -1,10 +1,24 @@
 //! Decomposition and reconstruction cost per fine vertex at four sizes: the Stanford
 //! bunny (`tests/data/bunny.obj`, slightly perturbed with a fixed seed) refined 1 to 4
 //! times. Each size `L` is timed for `decompose` down to the bunny (`L` levels), the
-//! full `reconstruct` back up, and Loop subdivision of the bunny to the same level
-//! (`forward_mesh` from a built mesh, like `decompose`; `forward_soup` from a soup it
-//! validates first, like `reconstruct`), so the ratios can be read off directly.
-//! Throughput is in fine vertices.
+//! full `reconstruct` back up, and Loop subdivision of the bunny to the same level, so
+//! the ratios can be read off directly. Throughput is in fine vertices.
+//!
+//! # What "the forward subdivision of the same size" is
+//! The goal (decompose and reconstruct cost at most 1.5 times the forward subdivision
+//! of the same size, flat per fine vertex) compares operations that produce or consume
+//! the same fine mesh (same fine vertex count) and start from the data structure the
+//! user holds:
+//! - `decompose` (fine `HalfedgeMesh` to a pyramid) against `forward_mesh` (Loop
+//!   subdivision of the coarse `HalfedgeMesh` to the fine mesh). Both read a built
+//!   half-edge mesh; the one of `decompose` is the fine mesh, whose structure it must
+//!   also detect, so it reads `4^L` times more input than `forward_mesh`.
+//! - `reconstruct` (pyramid, whose base is a soup, to the fine soup) against
+//!   `forward_soup` (Loop subdivision from the coarse soup, validated first as
+//!   `reconstruct` validates its base mesh).
+//!
+//! Ratios are only meaningful within one run (the machine is shared): compare
+//! `decompose/L` with `forward_mesh/L` and `reconstruct/L` with `forward_soup/L`.
 
 use std::hint::black_box;
 

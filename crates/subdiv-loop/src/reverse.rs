@@ -52,7 +52,7 @@ use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
-use crate::detect::{Coarsening, FineOrder, detect_table};
+use crate::detect::{Coarsening, FineOrder, detect_mesh};
 use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
 use crate::forward::topology::{BASE_MASK, INVALID as TOPOLOGY_INVALID, MAX_FACES, NEXT, Topology, is_first};
 use crate::forward::{LoopOptions, VertexWeights};
@@ -137,8 +137,7 @@ pub struct ReverseOptions {
 /// [`LoopError::SeedOutOfRange`] and [`LoopError::NotLoopConnectivity`] from detection.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<ReversedLevel, LoopError> {
     crate::pyramid::check_input_positions(fine.positions())?;
-    let table = CornerTable::from_mesh(fine)?;
-    let coarsening = detect_table(&table, options.seed_vertex)?;
+    let coarsening = detect_mesh(fine, options.seed_vertex)?;
     let (positions, details) = reverse_positions(&coarsening, fine.positions(), &options.rules);
     let order = coarsening.fine_order();
     let coarse = HalfedgeMesh::from_soup(&coarsening.coarse.to_soup(positions))
@@ -194,13 +193,17 @@ pub(crate) fn reconstruct_levels<'a>(
         }
         match order {
             None => {
-                let corrections = vertex_corrections(&topology, details, rules);
+                let corrections = VertexCorrections::new(&topology, details);
                 let step = kernel::step(&topology, &positions, &kernel_rules, level < count);
                 let nv = topology.vertex_count;
                 let mut fine = step.values;
                 let (vertex_points, edge_points) = fine.split_at_mut(nv);
-                vertex_points.par_iter_mut().zip(corrections.par_iter()).for_each(|(p, c)| *p += *c);
-                edge_points.par_iter_mut().zip(details.par_iter()).for_each(|(p, d)| *p += *d);
+                vertex_points
+                    .par_iter_mut()
+                    .with_min_len(4096)
+                    .enumerate()
+                    .for_each(|(v, p)| corrections.apply(v, p, &kernel_rules));
+                edge_points.par_iter_mut().with_min_len(4096).zip(details.par_iter()).for_each(|(p, d)| *p += *d);
                 positions = fine;
                 topology = step.topology;
             }
@@ -221,48 +224,63 @@ pub(crate) fn reconstruct_levels<'a>(
     })
 }
 
-/// What the details add to each vertex point (see [`reconstruct_levels`]), by one
-/// pass over the edges of the coarse topology.
-fn vertex_corrections(topology: &Topology, details: &[DVec3], rules: &LoopOptions) -> Vec<DVec3> {
+/// What the details add to each vertex point (see [`reconstruct_levels`]): the sums of
+/// the details around every vertex, by one pass over the edges of the coarse topology,
+/// applied in place to the vertex points (no array of corrections).
+struct VertexCorrections {
+    /// Sum of the details of all edges at each vertex.
+    all: Vec<DVec3>,
+    /// Sum of the details of the boundary edges at each vertex.
+    boundary: Vec<DVec3>,
+    /// Number of edges at each vertex, [`Self::BOUNDARY`] set on the boundary.
+    valence: Vec<u32>,
+}
+
+impl VertexCorrections {
     const BOUNDARY: u32 = 1 << 31;
-    let nv = topology.vertex_count;
-    let mut all = vec![DVec3::ZERO; nv];
-    let mut boundary = vec![DVec3::ZERO; nv];
-    let mut valence = vec![0u32; nv];
-    let mut e = 0usize;
-    for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
-        for k in 0..3 {
-            let twin = link[k];
-            if !is_first((4 * f + k) as u32, twin) {
-                continue;
-            }
-            let d = details[e];
-            e += 1;
-            for v in [corners[k], corners[NEXT[k]]] {
-                let v = v as usize;
-                all[v] += d;
-                valence[v] += 1;
-                if twin == TOPOLOGY_INVALID {
-                    boundary[v] += d;
-                    valence[v] |= BOUNDARY;
+
+    fn new(topology: &Topology, details: &[DVec3]) -> Self {
+        let nv = topology.vertex_count;
+        let mut all = vec![DVec3::ZERO; nv];
+        let mut boundary = vec![DVec3::ZERO; nv];
+        let mut valence = vec![0u32; nv];
+        let mut e = 0usize;
+        for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
+            for k in 0..3 {
+                let twin = link[k];
+                if !is_first((4 * f + k) as u32, twin) {
+                    continue;
+                }
+                let d = details[e];
+                e += 1;
+                for v in [corners[k], corners[NEXT[k]]] {
+                    let v = v as usize;
+                    all[v] += d;
+                    valence[v] += 1;
+                    if twin == TOPOLOGY_INVALID {
+                        boundary[v] += d;
+                        valence[v] |= Self::BOUNDARY;
+                    }
                 }
             }
         }
+        debug_assert_eq!(e, details.len());
+        Self { all, boundary, valence }
     }
-    debug_assert_eq!(e, details.len());
-    (0..nv)
-        .into_par_iter()
-        .map(|v| {
-            let n = (valence[v] & !BOUNDARY) as usize;
-            if valence[v] & BOUNDARY != 0 {
-                if rules.keep_corners && n == 2 { DVec3::ZERO } else { 0.25 * boundary[v] }
-            } else if n == 0 {
-                DVec3::ZERO
-            } else {
-                (1.6 * beta(rules.weights, n)) * all[v]
-            }
-        })
-        .collect()
+
+    /// Adds the correction of vertex `v` to its vertex point (`β` from the forward
+    /// kernel's table: the very numbers of the forward step).
+    #[inline]
+    fn apply(&self, v: usize, point: &mut DVec3, rules: &Rules) {
+        let n = (self.valence[v] & !Self::BOUNDARY) as usize;
+        *point += if self.valence[v] & Self::BOUNDARY != 0 {
+            if rules.is_fixed_corner(n) { DVec3::ZERO } else { 0.25 * self.boundary[v] }
+        } else if n == 0 {
+            DVec3::ZERO
+        } else {
+            (1.6 * rules.interior(n).1) * self.all[v]
+        };
+    }
 }
 
 /// Checks that `details` and `order` fit the coarse table (level numbers errors).
