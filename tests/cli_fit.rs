@@ -202,7 +202,7 @@ fn bad_input_gives_one_clear_line_and_no_output_file() {
     let ring = write(dir.path(), "annulus.off", &annulus());
     let grid12 = write(dir.path(), "grid12.off", &triangle_grid(12, smooth_surface));
     let grid10 = write(dir.path(), "grid10.off", &triangle_grid(10, smooth_surface));
-    let quads = write(dir.path(), "quads.off", &shapes::grid(3, 3, shapes::CellKind::Quads));
+    let quads = write(dir.path(), "quads.off", &shapes::grid(3, 3, shapes::CellKind::Quads).unwrap());
     let missing = dir.path().join("missing.off");
     let cases: Vec<(Vec<&str>, &[&str])> = vec![
         (vec!["fit", path(&closed)], &["ico.off", "not a disk", "0 boundary loop", "closed"]),

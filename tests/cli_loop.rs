@@ -38,7 +38,7 @@ fn subdivide_writes_every_loop_scheme() {
 fn keep_corners_changes_only_the_corners() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("grid.off");
-    let grid = shapes::grid(2, 1, CellKind::Triangles);
+    let grid = shapes::grid(2, 1, CellKind::Triangles).unwrap();
     write_soup(&input, &grid, &WriteOptions::default()).unwrap();
     let (plain, kept) = (dir.path().join("plain.obj"), dir.path().join("kept.obj"));
     ok(&["subdivide", path(&input), path(&plain), "--scheme", "loop"]);

@@ -15,8 +15,8 @@ fn topology_of_procedural_shapes() {
         ("tetrahedron", shapes::tetrahedron()),
         ("cube", shapes::cube()),
         ("icosahedron", shapes::icosahedron()),
-        ("grid-mixed-4x3", shapes::grid(4, 3, CellKind::Mixed)),
-        ("torus-quads-8x5", shapes::torus(8, 5, CellKind::Quads)),
+        ("grid-mixed-4x3", shapes::grid(4, 3, CellKind::Mixed).unwrap()),
+        ("torus-quads-8x5", shapes::torus(8, 5, CellKind::Quads).unwrap()),
     ] {
         let stats = HalfedgeMesh::from_soup(&soup).unwrap().topology_stats();
         text.push_str(&format!("{name} {}\n", serde_json::to_string(&stats).unwrap()));

@@ -85,6 +85,18 @@ pub enum MeshError {
         /// The value found.
         value: f64,
     },
+    /// A procedural shape was asked for with parameters it cannot be built from.
+    #[error("{shape} {width} x {height}: {requirement}")]
+    InvalidShape {
+        /// Which shape (`"grid"`, `"torus"`).
+        shape: &'static str,
+        /// The first size parameter given.
+        width: u32,
+        /// The second size parameter given.
+        height: u32,
+        /// What the parameters must satisfy.
+        requirement: &'static str,
+    },
     /// More elements than `u32` indices can address.
     #[error("too many {what}: {count} (at most {max} are supported)")]
     TooLarge {

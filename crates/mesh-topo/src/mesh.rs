@@ -614,17 +614,23 @@ fn for_each_side(soup: &PolygonSoup, mut visit: impl FnMut(usize, u32, u32)) {
     }
 }
 
+/// Refuses soups whose elements `u32` handles cannot address.
+fn check_capacity(vertices: usize, corners: usize) -> Result<(), MeshError> {
+    if vertices > MAX_ELEMENTS {
+        return Err(MeshError::TooLarge { what: "vertices", count: vertices, max: MAX_ELEMENTS });
+    }
+    // Every corner can create up to two half-edges.
+    if corners > MAX_ELEMENTS / 2 {
+        return Err(MeshError::TooLarge { what: "face corners", count: corners, max: MAX_ELEMENTS / 2 });
+    }
+    Ok(())
+}
+
 impl<'a> Builder<'a> {
     fn new(soup: &'a PolygonSoup) -> Result<Self, MeshError> {
         let nv = soup.positions.len();
         let corners = soup.indices.len();
-        if nv > MAX_ELEMENTS {
-            return Err(MeshError::TooLarge { what: "vertices", count: nv, max: MAX_ELEMENTS });
-        }
-        // Every corner can create up to two half-edges.
-        if corners > MAX_ELEMENTS / 2 {
-            return Err(MeshError::TooLarge { what: "face corners", count: corners, max: MAX_ELEMENTS / 2 });
-        }
+        check_capacity(nv, corners)?;
         check_finite(&soup.positions)?;
         let faces = soup.face_count();
         let valid_offsets = soup.offsets.first().is_none_or(|&o| o == 0)
@@ -876,5 +882,31 @@ impl HalfedgeMesh {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The limits themselves: a soup that big cannot be allocated in a test, so the guard
+    /// the builder calls first is checked on counts alone (`shapes` tests reach the same
+    /// error through a real call).
+    #[test]
+    fn counts_beyond_u32_handles_are_too_large() {
+        assert_eq!(check_capacity(MAX_ELEMENTS, MAX_ELEMENTS / 2), Ok(()));
+        assert_eq!(
+            check_capacity(MAX_ELEMENTS + 1, 0),
+            Err(MeshError::TooLarge { what: "vertices", count: MAX_ELEMENTS + 1, max: MAX_ELEMENTS })
+        );
+        let err = check_capacity(3, MAX_ELEMENTS / 2 + 1).unwrap_err();
+        assert_eq!(
+            err,
+            MeshError::TooLarge { what: "face corners", count: MAX_ELEMENTS / 2 + 1, max: MAX_ELEMENTS / 2 }
+        );
+        assert_eq!(
+            err.to_string(),
+            format!("too many face corners: {} (at most {} are supported)", MAX_ELEMENTS / 2 + 1, MAX_ELEMENTS / 2)
+        );
     }
 }

@@ -5,6 +5,8 @@
 
 use glam::DVec3;
 
+use crate::error::MeshError;
+use crate::ids::MAX_ELEMENTS;
 use crate::soup::PolygonSoup;
 
 /// How grid cells are split into faces.
@@ -112,12 +114,32 @@ fn push_cell(soup: &mut PolygonSoup, kind: CellKind, parity: bool, [a, b, c, d]:
 /// A planar `width x height` grid of cells over `[0, width] x [0, height]` in the plane
 /// z = 0: a disk with one boundary loop. Vertex `(i, j)` has index `j * (width + 1) + i`.
 ///
-/// # Panics
-/// If `width` or `height` is 0.
-pub fn grid(width: u32, height: u32, kind: CellKind) -> PolygonSoup {
-    assert!(width > 0 && height > 0, "grid needs at least one cell");
+/// ```
+/// use mesh_topo::shapes::{grid, CellKind};
+///
+/// let soup = grid(3, 2, CellKind::Quads)?;
+/// assert_eq!((soup.positions.len(), soup.face_count()), (12, 6));
+/// assert!(grid(0, 2, CellKind::Quads).is_err());
+/// # Ok::<(), mesh_topo::MeshError>(())
+/// ```
+///
+/// # Errors
+/// [`MeshError::InvalidShape`] if `width` or `height` is 0, and
+/// [`MeshError::TooLarge`] if the grid would need more vertices or face corners than
+/// `u32` indices address (checked before anything is allocated).
+pub fn grid(width: u32, height: u32, kind: CellKind) -> Result<PolygonSoup, MeshError> {
+    if width == 0 || height == 0 {
+        return Err(MeshError::InvalidShape {
+            shape: "grid",
+            width,
+            height,
+            requirement: "a grid needs at least one cell each way",
+        });
+    }
+    let vertices = (u128::from(width) + 1) * (u128::from(height) + 1);
+    check_size(vertices, u128::from(width) * u128::from(height), kind)?;
     let row = width + 1;
-    let mut soup = PolygonSoup::with_capacity(((width + 1) * (height + 1)) as usize, 0, 0);
+    let mut soup = PolygonSoup::with_capacity(vertices as usize, 0, 0);
     for j in 0..=height {
         for i in 0..=width {
             soup.positions.push(DVec3::new(i as f64, j as f64, 0.0));
@@ -129,16 +151,57 @@ pub fn grid(width: u32, height: u32, kind: CellKind) -> PolygonSoup {
             push_cell(&mut soup, kind, (i + j) % 2 == 0, [a, a + 1, a + row + 1, a + row]);
         }
     }
-    soup
+    Ok(soup)
+}
+
+/// Refuses shapes whose vertex or corner count does not fit the mesh's `u32` indices.
+/// Counts are `u128` so that no product of two `u32` sizes overflows.
+fn check_size(vertices: u128, cells: u128, kind: CellKind) -> Result<(), MeshError> {
+    let max = MAX_ELEMENTS as u128;
+    if vertices > max {
+        return Err(MeshError::TooLarge { what: "vertices", count: saturate(vertices), max: MAX_ELEMENTS });
+    }
+    // A triangulated cell has 6 corners, a quad 4; the builder allows MAX_ELEMENTS / 2 corners.
+    let corners_per_cell = if kind == CellKind::Quads { 4 } else { 6 };
+    let corners = cells * corners_per_cell;
+    if corners > max / 2 {
+        return Err(MeshError::TooLarge { what: "face corners", count: saturate(corners), max: MAX_ELEMENTS / 2 });
+    }
+    Ok(())
+}
+
+/// The count for the error message; saturates where `usize` cannot hold it.
+fn saturate(count: u128) -> usize {
+    usize::try_from(count).unwrap_or(usize::MAX)
 }
 
 /// A torus of `around x along` cells (radii 1 and 0.4): closed, genus 1.
-/// Triangulated tori need at least 3 cells each way to be simplicial.
 ///
-/// # Panics
-/// If either count is below 3.
-pub fn torus(around: u32, along: u32, kind: CellKind) -> PolygonSoup {
-    assert!(around >= 3 && along >= 3, "torus needs at least 3 x 3 cells");
+/// ```
+/// use mesh_topo::shapes::{torus, CellKind};
+///
+/// let soup = torus(8, 5, CellKind::Triangles)?;
+/// assert_eq!((soup.positions.len(), soup.face_count()), (40, 80));
+/// assert!(torus(2, 5, CellKind::Triangles).is_err());
+/// # Ok::<(), mesh_topo::MeshError>(())
+/// ```
+///
+/// # Errors
+/// [`MeshError::InvalidShape`] if either count is below 3: with fewer cells the
+/// triangulated torus is not simplicial (two triangles would share all three vertices)
+/// and the quad torus has repeated edges. [`MeshError::TooLarge`] if the torus would need
+/// more vertices or face corners than `u32` indices address.
+pub fn torus(around: u32, along: u32, kind: CellKind) -> Result<PolygonSoup, MeshError> {
+    if around < 3 || along < 3 {
+        return Err(MeshError::InvalidShape {
+            shape: "torus",
+            width: around,
+            height: along,
+            requirement: "a torus needs at least 3 x 3 cells",
+        });
+    }
+    let cells = u128::from(around) * u128::from(along);
+    check_size(cells, cells, kind)?;
     let (big, small) = (1.0, 0.4);
     let mut soup = PolygonSoup::with_capacity((around * along) as usize, 0, 0);
     for j in 0..along {
@@ -158,7 +221,7 @@ pub fn torus(around: u32, along: u32, kind: CellKind) -> PolygonSoup {
             push_cell(&mut soup, kind, (i + j) % 2 == 0, cell);
         }
     }
-    soup
+    Ok(soup)
 }
 
 #[cfg(test)]
@@ -175,10 +238,10 @@ mod tests {
             ("cube", cube(), (8, 12, 6), 0, 0),
             ("octahedron", octahedron(), (6, 12, 8), 0, 0),
             ("icosahedron", icosahedron(), (12, 30, 20), 0, 0),
-            ("grid", grid(3, 2, CellKind::Triangles), (12, 23, 12), 0, 1),
-            ("grid quads", grid(3, 2, CellKind::Quads), (12, 17, 6), 0, 1),
-            ("torus", torus(6, 4, CellKind::Triangles), (24, 72, 48), 1, 0),
-            ("torus mixed", torus(6, 4, CellKind::Mixed), (24, 60, 36), 1, 0),
+            ("grid", grid(3, 2, CellKind::Triangles).unwrap(), (12, 23, 12), 0, 1),
+            ("grid quads", grid(3, 2, CellKind::Quads).unwrap(), (12, 17, 6), 0, 1),
+            ("torus", torus(6, 4, CellKind::Triangles).unwrap(), (24, 72, 48), 1, 0),
+            ("torus mixed", torus(6, 4, CellKind::Mixed).unwrap(), (24, 60, 36), 1, 0),
         ];
         for (name, soup, counts, genus, loops) in cases {
             let mesh = HalfedgeMesh::from_soup(&soup).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -192,7 +255,7 @@ mod tests {
 
     #[test]
     fn closed_shapes_face_outward() {
-        for soup in [tetrahedron(), cube(), octahedron(), icosahedron(), torus(8, 5, CellKind::Quads)] {
+        for soup in [tetrahedron(), cube(), octahedron(), icosahedron(), torus(8, 5, CellKind::Quads).unwrap()] {
             let centre = soup.positions.iter().copied().sum::<DVec3>() / soup.positions.len() as f64;
             // Signed volume from the centre is positive for outward orientation.
             let mut volume = 0.0;
@@ -206,5 +269,37 @@ mod tests {
             }
             assert!(volume > 0.0);
         }
+    }
+
+    #[test]
+    fn parameters_that_cannot_make_a_shape_are_errors() {
+        for (around, along) in [(0, 5), (2, 5), (5, 2), (1, 1)] {
+            for kind in [CellKind::Quads, CellKind::Triangles, CellKind::Mixed] {
+                let err = torus(around, along, kind).unwrap_err();
+                assert!(matches!(err, MeshError::InvalidShape { shape: "torus", .. }), "{err}");
+                assert_eq!(err.to_string(), format!("torus {around} x {along}: a torus needs at least 3 x 3 cells"));
+            }
+        }
+        for (width, height) in [(0, 1), (1, 0), (0, 0)] {
+            let err = grid(width, height, CellKind::Quads).unwrap_err();
+            assert!(matches!(err, MeshError::InvalidShape { shape: "grid", .. }), "{err}");
+        }
+        // The smallest valid ones build.
+        assert!(HalfedgeMesh::from_soup(&torus(3, 3, CellKind::Triangles).unwrap()).is_ok());
+        assert!(HalfedgeMesh::from_soup(&grid(1, 1, CellKind::Triangles).unwrap()).is_ok());
+    }
+
+    #[test]
+    fn shapes_too_large_for_u32_indices_are_refused_before_allocating() {
+        // 65537^2 = 4,295,098,369 vertices: just past what u32 handles address.
+        let err = grid(1 << 16, 1 << 16, CellKind::Quads).unwrap_err();
+        assert_eq!(err, MeshError::TooLarge { what: "vertices", count: 4_295_098_369, max: MAX_ELEMENTS });
+        // The product of the largest sizes does not overflow the check itself.
+        let err = grid(u32::MAX, u32::MAX, CellKind::Mixed).unwrap_err();
+        assert!(matches!(err, MeshError::TooLarge { what: "vertices", .. }), "{err}");
+        // Few enough vertices but too many corners once triangulated (6 per cell).
+        let err = torus(1 << 16, 1 << 15, CellKind::Triangles).unwrap_err();
+        assert_eq!(err, MeshError::TooLarge { what: "face corners", count: 6 << 31, max: MAX_ELEMENTS / 2 });
+        assert!(err.to_string().starts_with("too many face corners: 12884901888"), "{err}");
     }
 }

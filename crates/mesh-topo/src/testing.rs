@@ -22,8 +22,8 @@ pub fn arb_shape() -> impl Strategy<Value = PolygonSoup> {
         Just(shapes::cube()),
         Just(shapes::octahedron()),
         Just(shapes::icosahedron()),
-        (1u32..6, 1u32..6, cell_kind()).prop_map(|(w, h, k)| shapes::grid(w, h, k)),
-        (3u32..7, 3u32..7, cell_kind()).prop_map(|(w, h, k)| shapes::torus(w, h, k)),
+        (1u32..6, 1u32..6, cell_kind()).prop_map(|(w, h, k)| shapes::grid(w, h, k).unwrap()),
+        (3u32..7, 3u32..7, cell_kind()).prop_map(|(w, h, k)| shapes::torus(w, h, k).unwrap()),
     ]
 }
 
@@ -33,8 +33,8 @@ pub fn arb_triangle_shape() -> impl Strategy<Value = PolygonSoup> {
         Just(shapes::tetrahedron()),
         Just(shapes::octahedron()),
         Just(shapes::icosahedron()),
-        (1u32..6, 1u32..6).prop_map(|(w, h)| shapes::grid(w, h, CellKind::Triangles)),
-        (3u32..7, 3u32..7).prop_map(|(w, h)| shapes::torus(w, h, CellKind::Triangles)),
+        (1u32..6, 1u32..6).prop_map(|(w, h)| shapes::grid(w, h, CellKind::Triangles).unwrap()),
+        (3u32..7, 3u32..7).prop_map(|(w, h)| shapes::torus(w, h, CellKind::Triangles).unwrap()),
     ]
 }
 

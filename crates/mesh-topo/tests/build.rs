@@ -136,7 +136,7 @@ fn circulation_order_is_counter_clockwise() {
 
 #[test]
 fn face_traversals_and_loops() {
-    let mesh = HalfedgeMesh::from_soup(&shapes::grid(3, 1, CellKind::Quads)).unwrap();
+    let mesh = HalfedgeMesh::from_soup(&shapes::grid(3, 1, CellKind::Quads).unwrap()).unwrap();
     let f0 = mesh.face(0).unwrap();
     let bfs: Vec<usize> = mesh.face_bfs(f0).iter().map(|f| f.index()).collect();
     assert_eq!(bfs, vec![0, 1, 2]);
@@ -152,7 +152,7 @@ fn face_traversals_and_loops() {
 
 #[test]
 fn several_components_and_genus() {
-    let torus = shapes::torus(6, 5, CellKind::Quads);
+    let torus = shapes::torus(6, 5, CellKind::Quads).unwrap();
     let cube = shapes::cube();
     let mut soup = torus.clone();
     let offset = torus.positions.len() as u32;

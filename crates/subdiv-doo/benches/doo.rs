@@ -44,7 +44,7 @@ fn bunny() -> HalfedgeMesh {
 
 /// A closed triangulated torus of 1024 x 512 x 2 = 1,048,576 faces.
 fn big_torus() -> HalfedgeMesh {
-    HalfedgeMesh::from_soup(&shapes::torus(1024, 512, CellKind::Triangles)).unwrap()
+    HalfedgeMesh::from_soup(&shapes::torus(1024, 512, CellKind::Triangles).unwrap()).unwrap()
 }
 
 fn single_thread() -> rayon::ThreadPool {
@@ -88,7 +88,7 @@ fn multires_pair(n: u32, m: u32) -> (HalfedgeMesh, HalfedgeMesh) {
             *p += amount * DVec3::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5);
         }
     };
-    let mut coarse = HalfedgeMesh::from_soup(&shapes::torus(n, m, CellKind::Triangles)).unwrap();
+    let mut coarse = HalfedgeMesh::from_soup(&shapes::torus(n, m, CellKind::Triangles).unwrap()).unwrap();
     jitter(coarse.positions_mut(), 0.2 / n as f64);
     let mut fine = subdivide(&coarse, &DooOptions::new(FaceRule::DooSabin, 1)).unwrap().to_mesh().unwrap();
     jitter(fine.positions_mut(), 0.05 / n as f64);

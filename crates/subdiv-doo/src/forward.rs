@@ -287,8 +287,8 @@ mod tests {
         // a half-edge mesh rebuilt from level 1's soup (faces, order, origins, positions).
         for soup in [
             shapes::cube(),
-            shapes::torus(5, 4, CellKind::Mixed),
-            shapes::grid(3, 4, CellKind::Mixed),
+            shapes::torus(5, 4, CellKind::Mixed).unwrap(),
+            shapes::grid(3, 4, CellKind::Mixed).unwrap(),
             shapes::icosahedron(),
         ] {
             for rule in [FaceRule::DooSabin, FaceRule::Simple, FaceRule::CENTROID_HALF] {
@@ -304,7 +304,7 @@ mod tests {
 
     #[test]
     fn boundary_gets_no_edge_or_vertex_faces() {
-        let grid = shapes::grid(3, 2, CellKind::Quads);
+        let grid = shapes::grid(3, 2, CellKind::Quads).unwrap();
         let fine = doo(&grid, FaceRule::DooSabin, 1);
         // 6 faces, 7 interior edges, 2 interior vertices.
         assert_eq!(fine.kind_counts(), [6, 7, 2]);

@@ -220,7 +220,7 @@ fn flipping_an_edge_breaks_the_structure() {
 #[test]
 fn regular_grid_is_tensor_chaikin() {
     let (w, h) = (5usize, 4usize);
-    let mut soup = shapes::grid(w as u32, h as u32, CellKind::Quads);
+    let mut soup = shapes::grid(w as u32, h as u32, CellKind::Quads).unwrap();
     for (k, p) in soup.positions.iter_mut().enumerate() {
         p.z = ((k * 7919) % 101) as f64 / 17.0 - 3.0;
     }
@@ -252,7 +252,7 @@ fn regular_grid_is_tensor_chaikin() {
 #[test]
 fn three_levels_one_moved_vertex() {
     for (rule, coarse) in [
-        (FaceRule::DooSabin, shapes::torus(4, 3, CellKind::Mixed)),
+        (FaceRule::DooSabin, shapes::torus(4, 3, CellKind::Mixed).unwrap()),
         (FaceRule::Simple, shapes::icosahedron()),
         (FaceRule::CENTROID_HALF, shapes::cube()),
     ] {
@@ -283,7 +283,7 @@ fn three_levels_one_moved_vertex() {
 
 #[test]
 fn max_depth_stops_at_the_original_and_compression_degrades_gracefully() {
-    let coarse = shapes::torus(5, 3, CellKind::Triangles);
+    let coarse = shapes::torus(5, 3, CellKind::Triangles).unwrap();
     let mut fine = subdivide_soup(&coarse, &DooOptions::new(FaceRule::DooSabin, 3)).unwrap().to_mesh().unwrap();
     let n = fine.vertex_count();
     for (i, p) in fine.positions_mut().iter_mut().enumerate() {

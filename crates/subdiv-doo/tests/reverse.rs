@@ -52,8 +52,8 @@ fn coarse_meshes() -> Vec<(&'static str, PolygonSoup)> {
         ("prism", prism()),
         ("pyramid", pyramid()),
         ("open box", open_box()),
-        ("grid", shapes::grid(3, 2, CellKind::Mixed)),
-        ("torus", shapes::torus(5, 4, CellKind::Mixed)),
+        ("grid", shapes::grid(3, 2, CellKind::Mixed).unwrap()),
+        ("torus", shapes::torus(5, 4, CellKind::Mixed).unwrap()),
     ]
 }
 
@@ -192,7 +192,7 @@ fn seeding_at_a_vertex_face_gives_the_dual() {
 fn several_components_and_genus() {
     // Two disjoint cubes and a torus in one mesh.
     let mut soup = shapes::cube();
-    for other in [shapes::cube(), shapes::torus(4, 3, CellKind::Quads)] {
+    for other in [shapes::cube(), shapes::torus(4, 3, CellKind::Quads).unwrap()] {
         let base = soup.vertex_count() as u32;
         soup.positions.extend(other.positions.iter().map(|&p| p + DVec3::splat(5.0 * base as f64)));
         for face in other.faces() {
@@ -214,7 +214,7 @@ fn several_components_and_genus() {
 
 #[test]
 fn not_doo_meshes_are_rejected_with_the_face() {
-    for soup in [shapes::cube(), shapes::icosahedron(), shapes::grid(3, 3, CellKind::Triangles)] {
+    for soup in [shapes::cube(), shapes::icosahedron(), shapes::grid(3, 3, CellKind::Triangles).unwrap()] {
         let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
         match reverse(&mesh, &ReverseOptions::default()) {
             Err(DooError::NotDooConnectivity { face, reason }) => {

@@ -458,8 +458,8 @@ mod tests {
             shapes::tetrahedron(),
             shapes::octahedron(),
             shapes::icosahedron(),
-            shapes::grid(3, 2, CellKind::Triangles),
-            shapes::torus(4, 3, CellKind::Triangles),
+            shapes::grid(3, 2, CellKind::Triangles).unwrap(),
+            shapes::torus(4, 3, CellKind::Triangles).unwrap(),
         ] {
             let table = CornerTable::from_soup(&soup).unwrap();
             check_against_mesh_topo(&table);
@@ -474,9 +474,11 @@ mod tests {
 
     #[test]
     fn topology_conversions_agree_with_the_forward_module() {
-        for soup in
-            [shapes::icosahedron(), shapes::grid(3, 2, CellKind::Triangles), shapes::torus(4, 3, CellKind::Triangles)]
-        {
+        for soup in [
+            shapes::icosahedron(),
+            shapes::grid(3, 2, CellKind::Triangles).unwrap(),
+            shapes::torus(4, 3, CellKind::Triangles).unwrap(),
+        ] {
             let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
             let table = CornerTable::from_mesh(&mesh).unwrap();
             let forward = Topology::from_mesh(&mesh).unwrap();

@@ -970,8 +970,8 @@ mod tests {
         let shapes = [
             shapes::tetrahedron(),
             shapes::icosahedron(),
-            shapes::grid(4, 3, CellKind::Triangles),
-            shapes::torus(4, 3, CellKind::Triangles),
+            shapes::grid(4, 3, CellKind::Triangles).unwrap(),
+            shapes::torus(4, 3, CellKind::Triangles).unwrap(),
             bipyramid(9),
             open_fan(3),
             cylinder(5, 2),
@@ -995,7 +995,7 @@ mod tests {
 
     #[test]
     fn detection_finds_the_vertex_points_of_a_renumbered_refinement() {
-        let soup = shapes::torus(5, 4, CellKind::Triangles);
+        let soup = shapes::torus(5, 4, CellKind::Triangles).unwrap();
         let fine = refined(&soup);
         let scrambled = scramble(&fine, 99);
         let structure = detect_soup(&scrambled, None).unwrap();
@@ -1025,8 +1025,8 @@ mod tests {
         for soup in [
             shapes::tetrahedron(),
             shapes::icosahedron(),
-            shapes::grid(4, 3, CellKind::Triangles),
-            shapes::torus(4, 4, CellKind::Triangles),
+            shapes::grid(4, 3, CellKind::Triangles).unwrap(),
+            shapes::torus(4, 4, CellKind::Triangles).unwrap(),
             bipyramid(11),
             open_fan(2),
             cylinder(5, 2),
@@ -1046,7 +1046,7 @@ mod tests {
 
     #[test]
     fn any_seed_of_a_regular_torus_gives_a_valid_labeling() {
-        let fine = refined(&shapes::torus(4, 4, CellKind::Triangles));
+        let fine = refined(&shapes::torus(4, 4, CellKind::Triangles).unwrap());
         for seed in 0..fine.vertex_count() as u32 {
             let structure = detect_soup(&fine, Some(seed)).unwrap();
             assert!(structure.vertex_points().contains(&seed));
@@ -1095,7 +1095,7 @@ mod tests {
         assert_not_loop(&shapes::icosahedron(), "icosahedron");
         assert_not_loop(&shapes::octahedron(), "octahedron");
         assert_not_loop(&shapes::tetrahedron(), "tetrahedron");
-        assert_not_loop(&shapes::grid(5, 5, CellKind::Triangles), "regular grid with odd sides");
+        assert_not_loop(&shapes::grid(5, 5, CellKind::Triangles).unwrap(), "regular grid with odd sides");
         for seed in 0..5 {
             assert_not_loop(&random_diagonal_grid(8, seed), "irregular triangulation");
         }

@@ -254,14 +254,14 @@ mod tests {
     fn test_meshes() -> Vec<HalfedgeMesh> {
         [
             scramble(shapes::icosahedron(), 1, 0.15),
-            scramble(shapes::grid(6, 5, CellKind::Triangles), 2, 0.2),
-            scramble(shapes::torus(8, 7, CellKind::Triangles), 3, 0.1),
+            scramble(shapes::grid(6, 5, CellKind::Triangles).unwrap(), 2, 0.2),
+            scramble(shapes::torus(8, 7, CellKind::Triangles).unwrap(), 3, 0.1),
             scramble(shapes::tetrahedron(), 4, 0.1),
         ]
         .iter()
         .chain(&[
             without_first_face(scramble(shapes::icosahedron(), 5, 0.1)),
-            without_first_face(scramble(shapes::torus(8, 7, CellKind::Triangles), 6, 0.1)),
+            without_first_face(scramble(shapes::torus(8, 7, CellKind::Triangles).unwrap(), 6, 0.1)),
         ])
         .map(|s| HalfedgeMesh::from_soup(s).unwrap())
         .collect()
@@ -359,7 +359,8 @@ mod tests {
     #[test]
     fn regular_limit_mask_and_boundary_masks() {
         // Regular interior: p/2 + sum/12 for both weight variants.
-        let mesh = HalfedgeMesh::from_soup(&scramble(shapes::torus(6, 6, CellKind::Triangles), 9, 0.1)).unwrap();
+        let mesh =
+            HalfedgeMesh::from_soup(&scramble(shapes::torus(6, 6, CellKind::Triangles).unwrap(), 9, 0.1)).unwrap();
         for options in [LoopOptions::default(), LoopOptions::warren_weights()] {
             let limit = limit_positions(&mesh, &options).unwrap();
             for v in mesh.vertices() {

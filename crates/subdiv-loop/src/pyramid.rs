@@ -414,7 +414,7 @@ mod tests {
             ("icosahedron", shapes::icosahedron()),
             ("open fan", open_fan(4)),
             ("cylinder", cylinder(5, 2)),
-            ("grid", shapes::grid(3, 3, CellKind::Triangles)),
+            ("grid", shapes::grid(3, 3, CellKind::Triangles).unwrap()),
         ] {
             // Perturb every level so that every level has details.
             let mut levels = vec![coarse.clone()];

@@ -534,8 +534,8 @@ mod tests {
             ("tetrahedron".to_string(), shapes::tetrahedron()),
             ("octahedron".to_string(), shapes::octahedron()),
             ("icosahedron".to_string(), shapes::icosahedron()),
-            ("grid 3x2".to_string(), shapes::grid(3, 2, CellKind::Triangles)),
-            ("torus 4x3".to_string(), shapes::torus(4, 3, CellKind::Triangles)),
+            ("grid 3x2".to_string(), shapes::grid(3, 2, CellKind::Triangles).unwrap()),
+            ("torus 4x3".to_string(), shapes::torus(4, 3, CellKind::Triangles).unwrap()),
             (
                 "single triangle".to_string(),
                 PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]]),

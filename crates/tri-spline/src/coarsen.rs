@@ -203,7 +203,7 @@ mod tests {
 
     #[test]
     fn probed_matrix_equals_the_reversal_on_random_positions() {
-        let base = HalfedgeMesh::from_soup(&shapes::grid(3, 2, shapes::CellKind::Triangles)).unwrap();
+        let base = HalfedgeMesh::from_soup(&shapes::grid(3, 2, shapes::CellKind::Triangles).unwrap()).unwrap();
         let fine = subdivide(&base, 2, &forward::LoopOptions { keep_corners: true, ..Default::default() })
             .unwrap()
             .to_halfedge_mesh()

@@ -254,7 +254,7 @@ pub fn detect_regular_grid(mesh: &HalfedgeMesh) -> Option<RegularGrid> {
 /// use mesh_topo::{HalfedgeMesh, shapes::{self, CellKind}};
 /// use tri_spline::param::{ParamKind, ParamOptions, parameterize};
 /// // A 4 x 3 planar grid is a disk but not a triangle grid: convex-combination map.
-/// let mesh = HalfedgeMesh::from_soup(&shapes::grid(4, 3, CellKind::Triangles))?;
+/// let mesh = HalfedgeMesh::from_soup(&shapes::grid(4, 3, CellKind::Triangles)?)?;
 /// let p = parameterize(&mesh, &ParamOptions::default())?;
 /// assert!(matches!(p.kind, ParamKind::ConvexCombination { .. }));
 /// assert_eq!(p.params.len(), mesh.vertex_count());
@@ -551,7 +551,7 @@ mod tests {
 
     #[test]
     fn tutte_maps_are_embeddings_with_boundary_on_the_triangle() {
-        let mesh = HalfedgeMesh::from_soup(&shapes::grid(6, 4, CellKind::Triangles)).unwrap();
+        let mesh = HalfedgeMesh::from_soup(&shapes::grid(6, 4, CellKind::Triangles).unwrap()).unwrap();
         for weights in [TutteWeights::Uniform, TutteWeights::MeanValue] {
             let options = ParamOptions { weights, ..ParamOptions::default() };
             let p = parameterize(&mesh, &options).unwrap();
@@ -590,12 +590,12 @@ mod tests {
             parameterize(&closed, &ParamOptions::default()),
             Err(SplineError::NotDisk { boundary_loops: 0, .. })
         ));
-        let torus = HalfedgeMesh::from_soup(&shapes::torus(6, 4, CellKind::Triangles)).unwrap();
+        let torus = HalfedgeMesh::from_soup(&shapes::torus(6, 4, CellKind::Triangles).unwrap()).unwrap();
         assert!(matches!(parameterize(&torus, &ParamOptions::default()), Err(SplineError::NotDisk { .. })));
-        let quads = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads)).unwrap();
+        let quads = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads).unwrap()).unwrap();
         assert!(matches!(parameterize(&quads, &ParamOptions::default()), Err(SplineError::NotTriangle { .. })));
         // An annulus: a grid with its middle face removed.
-        let mut soup = shapes::grid(3, 3, CellKind::Triangles);
+        let mut soup = shapes::grid(3, 3, CellKind::Triangles).unwrap();
         let faces: Vec<Vec<u32>> = soup.faces().map(|f| f.to_vec()).collect();
         let mut holed = PolygonSoup::with_capacity(soup.vertex_count(), 0, 0);
         holed.positions = std::mem::take(&mut soup.positions);
@@ -620,7 +620,7 @@ mod tests {
             Err(SplineError::NotDisk { components: 2, .. })
         ));
         // Corners that are not boundary vertices, or out of order.
-        let mesh = HalfedgeMesh::from_soup(&shapes::grid(3, 3, CellKind::Triangles)).unwrap();
+        let mesh = HalfedgeMesh::from_soup(&shapes::grid(3, 3, CellKind::Triangles).unwrap()).unwrap();
         let interior = mesh.vertices().find(|&v| !mesh.is_boundary_vertex(v)).map(VertexId::index).unwrap();
         let options = ParamOptions { corners: Some([0, 3, interior]), ..ParamOptions::default() };
         assert!(matches!(parameterize(&mesh, &options), Err(SplineError::BadCorner { .. })));

@@ -107,7 +107,7 @@ pub fn disk_patch(mesh: &HalfedgeMesh, seed_vertex: usize, rings: usize) -> Opti
 /// ```
 /// use mesh_topo::{HalfedgeMesh, shapes::{self, CellKind}};
 /// use tri_spline::samples::resample_on_grid;
-/// let square = HalfedgeMesh::from_soup(&shapes::grid(4, 4, CellKind::Triangles))?;
+/// let square = HalfedgeMesh::from_soup(&shapes::grid(4, 4, CellKind::Triangles)?)?;
 /// let grid = resample_on_grid(&square, 8)?;
 /// assert_eq!((grid.vertex_count(), grid.face_count()), (45, 64));
 /// // The samples lie on the (planar) mesh.

@@ -27,8 +27,8 @@ fn base_shape(u: &mut Unstructured<'_>) -> arbitrary::Result<PolygonSoup> {
         0 => shapes::tetrahedron(),
         1 => shapes::octahedron(),
         2 => shapes::icosahedron(),
-        3 => shapes::grid(u.int_in_range(1..=5)?, u.int_in_range(1..=5)?, CellKind::Triangles),
-        4 => shapes::torus(u.int_in_range(3..=6)?, u.int_in_range(3..=6)?, CellKind::Triangles),
+        3 => shapes::grid(u.int_in_range(1..=5)?, u.int_in_range(1..=5)?, CellKind::Triangles).unwrap(),
+        4 => shapes::torus(u.int_in_range(3..=6)?, u.int_in_range(3..=6)?, CellKind::Triangles).unwrap(),
         _ => {
             // A raw soup: a few vertices and arbitrary triangles (often invalid).
             let n = u.int_in_range(3..=24u32)?;

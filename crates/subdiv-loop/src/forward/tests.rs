@@ -77,8 +77,8 @@ fn test_meshes() -> Vec<(&'static str, PolygonSoup)> {
         ("tetrahedron", shapes::tetrahedron()),
         ("icosahedron", shapes::icosahedron()),
         ("octahedron", shapes::octahedron()),
-        ("grid", mesh_topo::testing::scramble(shapes::grid(4, 3, CellKind::Triangles), 7, 0.1)),
-        ("torus", mesh_topo::testing::scramble(shapes::torus(5, 4, CellKind::Triangles), 3, 0.1)),
+        ("grid", mesh_topo::testing::scramble(shapes::grid(4, 3, CellKind::Triangles).unwrap(), 7, 0.1)),
+        ("torus", mesh_topo::testing::scramble(shapes::torus(5, 4, CellKind::Triangles).unwrap(), 3, 0.1)),
         ("single triangle", PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])),
     ]
 }
@@ -163,7 +163,7 @@ fn results_do_not_depend_on_the_number_of_threads() {
 fn regular_rules_are_the_box_spline_masks() {
     // Every vertex of this torus has valence 6: vertex rows 5/8 + 6 x 1/16, edge rows
     // 3/8, 3/8, 1/8, 1/8 (the M = 2 masks of the three-direction box spline).
-    let m = mesh(&shapes::torus(6, 6, CellKind::Triangles));
+    let m = mesh(&shapes::torus(6, 6, CellKind::Triangles).unwrap());
     assert!(m.vertices().all(|v| m.valence(v) == 6));
     for options in [LoopOptions::default(), LoopOptions::warren_weights()] {
         let s = subdivision_matrix(&m, 1, &options).unwrap();
@@ -187,7 +187,7 @@ fn regular_rules_are_the_box_spline_masks() {
 #[test]
 fn boundary_rules_and_fixed_corners() {
     // A 2 x 1 grid: corners (0,0) and (2,1) have valence 2 (one face).
-    let soup = shapes::grid(2, 1, CellKind::Triangles);
+    let soup = shapes::grid(2, 1, CellKind::Triangles).unwrap();
     let m = mesh(&soup);
     let corners: Vec<usize> = m.vertices().filter(|&v| m.valence(v) == 2).map(|v| v.index()).collect();
     assert!(!corners.is_empty());
@@ -220,7 +220,7 @@ fn bad_input_gives_typed_errors() {
         subdivide_soup(&quads, 1, &LoopOptions::default()).unwrap_err(),
         LoopError::NotTriangle { face: 0, corners: 4 }
     );
-    let mixed = shapes::grid(2, 2, CellKind::Mixed);
+    let mixed = shapes::grid(2, 2, CellKind::Mixed).unwrap();
     assert!(matches!(subdivide_soup(&mixed, 1, &LoopOptions::default()), Err(LoopError::NotTriangle { .. })));
     // Three triangles on one edge.
     let fin = PolygonSoup::from_faces(
@@ -247,7 +247,7 @@ fn bad_input_gives_typed_errors() {
 
 #[test]
 fn matrix_matches_positions_over_several_levels() {
-    let m = mesh(&mesh_topo::testing::scramble(shapes::grid(3, 3, CellKind::Triangles), 5, 0.2));
+    let m = mesh(&mesh_topo::testing::scramble(shapes::grid(3, 3, CellKind::Triangles).unwrap(), 5, 0.2));
     let options = LoopOptions::default();
     let s2 = subdivision_matrix(&m, 2, &options).unwrap();
     let s1 = subdivision_matrix(&m, 1, &options).unwrap();

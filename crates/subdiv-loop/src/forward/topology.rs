@@ -202,7 +202,7 @@ mod tests {
 
     #[test]
     fn edge_numbering_matches_the_halfedge_mesh() {
-        for soup in [shapes::icosahedron(), shapes::grid(3, 2, CellKind::Triangles), shapes::tetrahedron()] {
+        for soup in [shapes::icosahedron(), shapes::grid(3, 2, CellKind::Triangles).unwrap(), shapes::tetrahedron()] {
             let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
             let topo = Topology::from_mesh(&mesh).unwrap();
             for f in mesh.faces() {
@@ -215,7 +215,7 @@ mod tests {
 
     #[test]
     fn rings_match_the_halfedge_mesh() {
-        let mesh = HalfedgeMesh::from_soup(&shapes::grid(3, 3, CellKind::Triangles)).unwrap();
+        let mesh = HalfedgeMesh::from_soup(&shapes::grid(3, 3, CellKind::Triangles).unwrap()).unwrap();
         let topo = Topology::from_mesh(&mesh).unwrap();
         for v in mesh.vertices() {
             let (ring, boundary) = topo.ring(v.raw());

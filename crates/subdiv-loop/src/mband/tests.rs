@@ -413,9 +413,11 @@ fn ternary_weights_at_valence_six_are_the_regular_ones() {
 
 #[test]
 fn counts_for_ternary_and_quaternary() {
-    for soup in
-        [shapes::icosahedron(), shapes::grid(3, 2, CellKind::Triangles), shapes::torus(4, 3, CellKind::Triangles)]
-    {
+    for soup in [
+        shapes::icosahedron(),
+        shapes::grid(3, 2, CellKind::Triangles).unwrap(),
+        shapes::torus(4, 3, CellKind::Triangles).unwrap(),
+    ] {
         let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
         let (v, e, f) = (mesh.vertex_count(), mesh.edge_count(), mesh.face_count());
         for (m, fine) in [
@@ -434,7 +436,7 @@ fn counts_for_ternary_and_quaternary() {
 
 #[test]
 fn ternary_matrix_applies_the_same_stencils() {
-    let mesh = HalfedgeMesh::from_soup(&scramble(shapes::grid(3, 3, CellKind::Triangles), 4, 0.2)).unwrap();
+    let mesh = HalfedgeMesh::from_soup(&scramble(shapes::grid(3, 3, CellKind::Triangles).unwrap(), 4, 0.2)).unwrap();
     let options = TernaryOptions::default();
     let s = ternary_matrix(&mesh, 2, &options).unwrap();
     let fine = ternary_subdivide(&mesh, 2, &options).unwrap();
