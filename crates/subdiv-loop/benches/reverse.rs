@@ -1,14 +1,29 @@
 //! Decomposition and reconstruction cost per fine vertex at four sizes: the Stanford
 //! bunny (`tests/data/bunny.obj`, slightly perturbed with a fixed seed) refined 1 to 4
 //! times. Each size `L` is timed for `decompose` down to the bunny (`L` levels), the
-//! full `reconstruct` back up, and Loop subdivision of the bunny to the same level
-//! (`forward_mesh` from a built mesh, like `decompose`; `forward_soup` from a soup it
-//! validates first, like `reconstruct`), so the ratios can be read off directly.
-//! Throughput is in fine vertices.
+//! full `reconstruct` back up, and Loop subdivision of the bunny to the same level, so
+//! the ratios can be read off directly. Throughput is in fine vertices.
+//!
+//! # What "the forward subdivision of the same size" is
+//! The goal (decompose and reconstruct cost at most 1.5 times the forward subdivision
+//! of the same size, flat per fine vertex) compares operations that produce or consume
+//! the same fine mesh (same fine vertex count) and start from the data structure the
+//! user holds:
+//! - `decompose` (fine `HalfedgeMesh` to a pyramid) against `forward_mesh` (Loop
+//!   subdivision of the coarse `HalfedgeMesh` to the fine mesh). Both read a built
+//!   half-edge mesh; the one of `decompose` is the fine mesh, whose structure it must
+//!   also detect, so it reads `4^L` times more input than `forward_mesh`.
+//! - `reconstruct` (pyramid, whose base is a soup, to the fine soup) against
+//!   `forward_soup` (Loop subdivision from the coarse soup, validated first as
+//!   `reconstruct` validates its base mesh).
+//!
+//! Ratios are only meaningful within one run (the machine is shared): group `levelL`
+//! times the four operations of size `L` back to back; compare `levelL/decompose` with
+//! `levelL/forward_mesh` and `levelL/reconstruct` with `levelL/forward_soup`.
 
 use std::hint::black_box;
 
-use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use subdiv_loop::forward::{LoopOptions, subdivide, subdivide_soup};
@@ -56,52 +71,29 @@ fn bunny() -> PolygonSoup {
 fn benches(c: &mut Criterion) {
     let rules = LoopOptions::default();
     let base = bunny();
-    let smooth = LoopPyramid::smooth(base.clone(), rules, 4).expect("bunny is a triangle mesh");
-    // Level L: the bunny refined L times, decomposed back to the bunny (L levels).
-    let fixtures: Vec<(usize, HalfedgeMesh)> =
-        (1..=4).map(|level| (level, smooth.reconstruct_mesh(level).expect("refined bunny"))).collect();
-
-    let mut group = c.benchmark_group("decompose");
-    for (level, fine) in &fixtures {
-        let options = DecomposeOptions { rules, levels: Levels::Count(*level), seed_vertex: None };
-        group.throughput(Throughput::Elements(fine.vertex_count() as u64));
-        group.bench_with_input(BenchmarkId::from_parameter(level), fine, |b, fine| {
-            b.iter(|| decompose(black_box(fine), &options).expect("Loop mesh"))
-        });
-    }
-    group.finish();
-
-    let mut group = c.benchmark_group("reconstruct");
-    for (level, fine) in &fixtures {
-        let options = DecomposeOptions { rules, levels: Levels::Count(*level), seed_vertex: None };
-        let pyramid = decompose(fine, &options).expect("Loop mesh");
-        group.throughput(Throughput::Elements(fine.vertex_count() as u64));
-        group.bench_with_input(BenchmarkId::from_parameter(level), &pyramid, |b, pyramid| {
-            b.iter(|| black_box(pyramid).reconstruct(*level).expect("valid pyramid"))
-        });
-    }
-    group.finish();
-
-    // Loop subdivision of the bunny to the same level, by the forward module: from a
-    // built half-edge mesh (what `decompose` starts from) and from a soup, validated
-    // first (what `reconstruct` starts from: the base mesh of a pyramid).
-    let mut group = c.benchmark_group("forward_mesh");
     let bunny_mesh = HalfedgeMesh::from_soup(&base).expect("valid");
-    for (level, fine) in &fixtures {
+    let smooth = LoopPyramid::smooth(base.clone(), rules, 4).expect("bunny is a triangle mesh");
+    // Level L: the bunny refined L times, decomposed back to the bunny (L levels). The
+    // four operations of one size run back to back, so that the compared figures see
+    // the same load.
+    for level in 1..=4 {
+        let fine = smooth.reconstruct_mesh(level).expect("refined bunny");
+        let options = DecomposeOptions { rules, levels: Levels::Count(level), seed_vertex: None };
+        let pyramid = decompose(&fine, &options).expect("Loop mesh");
+        let mut group = c.benchmark_group(format!("level{level}"));
         group.throughput(Throughput::Elements(fine.vertex_count() as u64));
-        group.bench_with_input(BenchmarkId::from_parameter(level), &bunny_mesh, |b, bunny| {
-            b.iter(|| subdivide(black_box(bunny), *level as u32, &rules).expect("valid"))
+        group.bench_function("decompose", |b| b.iter(|| decompose(black_box(&fine), &options).expect("Loop mesh")));
+        group.bench_function("forward_mesh", |b| {
+            b.iter(|| subdivide(black_box(&bunny_mesh), level as u32, &rules).expect("valid"))
         });
-    }
-    group.finish();
-    let mut group = c.benchmark_group("forward_soup");
-    for (level, fine) in &fixtures {
-        group.throughput(Throughput::Elements(fine.vertex_count() as u64));
-        group.bench_with_input(BenchmarkId::from_parameter(level), &base, |b, bunny| {
-            b.iter(|| subdivide_soup(black_box(bunny), *level as u32, &rules).expect("valid"))
+        group.bench_function("reconstruct", |b| {
+            b.iter(|| black_box(&pyramid).reconstruct(level).expect("valid pyramid"))
         });
+        group.bench_function("forward_soup", |b| {
+            b.iter(|| subdivide_soup(black_box(&base), level as u32, &rules).expect("valid"))
+        });
+        group.finish();
     }
-    group.finish();
 }
 
 criterion_group! {

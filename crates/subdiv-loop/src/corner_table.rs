@@ -80,7 +80,6 @@ impl CornerTable {
         let corners = corner_vertex.len();
         let mut corner_edge = vec![NONE; corners];
         let mut edge_corner = Vec::with_capacity(corners / 2 + 1);
-        let mut vertex_corner = vec![NONE; vertex_count];
         for c in 0..corners as u32 {
             if corner_edge[c as usize] == NONE {
                 let e = edge_corner.len() as u32;
@@ -91,9 +90,25 @@ impl CornerTable {
                     corner_edge[t as usize] = e;
                 }
             }
-            let v = corner_vertex[c as usize] as usize;
-            if vertex_corner[v] == NONE || twin[c as usize] == NONE {
-                vertex_corner[v] = c;
+        }
+        Self::from_numbered_parts(vertex_count, corner_vertex, twin, corner_edge, edge_corner)
+    }
+
+    /// [`from_parts`](Self::from_parts) with the edges already numbered the same way
+    /// (first appearance in corner order): only the circulation starts are computed.
+    pub(crate) fn from_numbered_parts(
+        vertex_count: usize,
+        corner_vertex: Vec<u32>,
+        twin: Vec<u32>,
+        corner_edge: Vec<u32>,
+        edge_corner: Vec<u32>,
+    ) -> Self {
+        debug_assert_eq!(corner_edge.len(), corner_vertex.len());
+        let mut vertex_corner = vec![NONE; vertex_count];
+        for (c, (&v, &t)) in corner_vertex.iter().zip(&twin).enumerate() {
+            let start = &mut vertex_corner[v as usize];
+            if *start == NONE || t == NONE {
+                *start = c as u32;
             }
         }
         Self { vertex_count, corner_vertex, twin, corner_edge, edge_corner, vertex_corner }
@@ -210,6 +225,12 @@ impl CornerTable {
         self.edge_corner.len()
     }
 
+    /// The vertex of every corner (`3f + k`: corner `k` of face `f`).
+    #[inline]
+    pub(crate) fn corner_vertices(&self) -> &[u32] {
+        &self.corner_vertex
+    }
+
     /// Vertex of corner `c`.
     #[inline]
     pub(crate) fn vertex(&self, c: u32) -> u32 {
@@ -220,12 +241,6 @@ impl CornerTable {
     #[inline]
     pub(crate) fn twin(&self, c: u32) -> u32 {
         self.twin[c as usize]
-    }
-
-    /// Edge of corner `c`'s half-edge.
-    #[inline]
-    pub(crate) fn corner_edge(&self, c: u32) -> u32 {
-        self.corner_edge[c as usize]
     }
 
     /// First corner of edge `e`.

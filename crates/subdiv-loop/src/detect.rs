@@ -141,17 +141,41 @@ pub(crate) struct Coarsening {
     pub(crate) vertex_point: Vec<u32>,
     /// Fine vertex of each coarse edge.
     pub(crate) edge_point: Vec<u32>,
-    /// See [`FineOrder::face_of_canonical`].
+    /// See [`FineOrder::face_of_canonical`]; empty when `canonical` (the identity).
     pub(crate) face_of_canonical: Vec<u32>,
+    /// True if the fine mesh is in the canonical order.
+    canonical: bool,
 }
 
 impl Coarsening {
+    /// A coarsening whose fine mesh may be in any order (checked here, in one pass).
+    fn new(coarse: CornerTable, vertex_point: Vec<u32>, edge_point: Vec<u32>, face_of_canonical: Vec<u32>) -> Self {
+        let nv = vertex_point.len() as u32;
+        let canonical = vertex_point.iter().enumerate().all(|(i, &v)| v == i as u32)
+            && edge_point.iter().enumerate().all(|(e, &v)| v == nv + e as u32)
+            && face_of_canonical.iter().enumerate().all(|(k, &code)| code == 3 * k as u32);
+        if canonical {
+            Self::canonical(coarse)
+        } else {
+            Self { coarse, vertex_point, edge_point, face_of_canonical, canonical }
+        }
+    }
+
+    /// The coarsening of a fine mesh in the canonical order.
+    fn canonical(coarse: CornerTable) -> Self {
+        let (nv, ne) = (coarse.vertex_count() as u32, coarse.edge_count() as u32);
+        Self {
+            coarse,
+            vertex_point: (0..nv).collect(),
+            edge_point: (nv..nv + ne).collect(),
+            face_of_canonical: Vec::new(),
+            canonical: true,
+        }
+    }
+
     /// True if the fine mesh is in canonical order.
     pub(crate) fn is_canonical(&self) -> bool {
-        let nv = self.vertex_point.len() as u32;
-        self.vertex_point.iter().enumerate().all(|(i, &v)| v == i as u32)
-            && self.edge_point.iter().enumerate().all(|(e, &v)| v == nv + e as u32)
-            && self.face_of_canonical.iter().enumerate().all(|(k, &code)| code == 3 * k as u32)
+        self.canonical
     }
 
     /// The fine order, `None` when canonical.
@@ -244,8 +268,30 @@ impl LoopConnectivity {
 /// [`LoopError::NotLoopConnectivity`] naming the fine vertex or face where the Loop
 /// structure breaks.
 pub fn detect(fine: &HalfedgeMesh, options: &DetectOptions) -> Result<LoopConnectivity, LoopError> {
-    let table = CornerTable::from_mesh(fine)?;
-    Ok(LoopConnectivity { coarsening: detect_table(&table, options.seed_vertex)? })
+    Ok(LoopConnectivity { coarsening: detect_mesh(fine, options.seed_vertex)? })
+}
+
+/// [`detect_table`] on a validated half-edge mesh. A mesh in the canonical order (the
+/// output of Loop subdivision and of reconstruction) is recognised from its face
+/// corners alone, without building the fine corner table; anything else goes through
+/// the corner table and the general detection, which also reports every error.
+pub(crate) fn detect_mesh(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
+    let next_halfedge = fine.raw_halfedge_next();
+    let targets = fine.raw_halfedge_targets();
+    // The corners of face f from its first corner, `None` if it is not a triangle.
+    let face_corners = |f: usize| {
+        let h0 = fine.face_halfedge(fine.face(f)?).raw();
+        let h1 = next_halfedge[h0 as usize];
+        let h2 = next_halfedge[h1 as usize];
+        // Corner k is the origin of half-edge k: the target of half-edge k - 1.
+        (next_halfedge[h2 as usize] == h0).then(|| [targets[h2 as usize], targets[h0 as usize], targets[h1 as usize]])
+    };
+    if let Some(coarsening) = detect_canonical_faces(fine.face_count(), fine.vertex_count(), seed_vertex, face_corners)
+        && coarse_mesh_is_valid(&coarsening.coarse)
+    {
+        return Ok(coarsening);
+    }
+    detect_table(&CornerTable::from_mesh(fine)?, seed_vertex)
 }
 
 const UNKNOWN: u8 = 0;
@@ -289,6 +335,10 @@ pub(crate) fn detect_table(fine: &CornerTable, seed_vertex: Option<u32>) -> Resu
 /// vertices.
 fn check_coarse_mesh(coarsening: &Coarsening) -> Result<(), LoopError> {
     let coarse = &coarsening.coarse;
+    if coarse_mesh_is_valid(coarse) {
+        return Ok(());
+    }
+    // Something is wrong: find the first vertex point where it shows, and why.
     let bad = (0..coarse.vertex_count() as u32)
         .into_par_iter()
         .map_init(Vec::new, |neighbours: &mut Vec<u32>, v| {
@@ -318,6 +368,62 @@ fn check_coarse_mesh(coarsening: &Coarsening) -> Result<(), LoopError> {
     }
 }
 
+/// True if [`check_coarse_mesh`] finds nothing wrong, by cache-friendly passes instead
+/// of vertex circulations: no face repeats a vertex (else some vertex would be its own
+/// neighbour), no face has two edges shared with the same other face (that is how an
+/// interior vertex of valence 2 shows), and no two edges join the same two vertices
+/// (edges bucketed by their lower end point, a counting sort). Linear, and equivalent
+/// for the verdict (the detailed check runs only when this fails).
+fn coarse_mesh_is_valid(coarse: &CornerTable) -> bool {
+    let corner_vertex = coarse.corner_vertices();
+    let faces_ok = (0..coarse.face_count() as u32).into_par_iter().with_min_len(GROUP_CHUNK).all(|f| {
+        let c = 3 * f;
+        let [a, b, d] = [coarse.vertex(c), coarse.vertex(c + 1), coarse.vertex(c + 2)];
+        let other = |k: u32| {
+            let t = coarse.twin(c + k);
+            if t == NONE { NONE - k } else { t / 3 }
+        };
+        a != b && b != d && d != a && other(0) != other(1) && other(1) != other(2) && other(2) != other(0)
+    });
+    if !faces_ok {
+        return false;
+    }
+    // Counting sort of the edges by lower end point, then look for a repeated upper end
+    // point within each bucket.
+    let nv = coarse.vertex_count();
+    let ends = |e: u32| {
+        let c = coarse.edge_corner(e);
+        let (a, b) = (corner_vertex[c as usize], corner_vertex[next(c) as usize]);
+        (a.min(b), a.max(b))
+    };
+    let mut start = vec![0u32; nv + 1];
+    for e in 0..coarse.edge_count() as u32 {
+        start[ends(e).0 as usize + 1] += 1;
+    }
+    for v in 0..nv {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut upper = vec![0u32; coarse.edge_count()];
+    for e in 0..coarse.edge_count() as u32 {
+        let (lo, hi) = ends(e);
+        upper[fill[lo as usize] as usize] = hi;
+        fill[lo as usize] += 1;
+    }
+    // `fill` now holds each bucket's end; reuse it to stamp the upper end points seen
+    // from the current lower one.
+    let seen_from = &mut fill;
+    seen_from.fill(NONE);
+    for v in 0..nv {
+        for &b in &upper[start[v] as usize..start[v + 1] as usize] {
+            if std::mem::replace(&mut seen_from[b as usize], v as u32) == v as u32 {
+                return false;
+            }
+        }
+    }
+    true
+}
+
 /// The fast path: a fine mesh in the canonical order (as made by Loop subdivision or
 /// by reconstruction). Faces `4g .. 4g + 4` must be `(x_k, m_k, m_{k-1})` and
 /// `(m_0, m_1, m_2)` with every `x < V` and `m_k = V + e_k`, where `V` is the smallest
@@ -325,80 +431,90 @@ fn check_coarse_mesh(coarsening: &Coarsening) -> Result<(), LoopError> {
 /// x_2)`, and the vertex count must be `V + E`: then the fine faces are exactly the
 /// canonical refinement of the coarse mesh, which is what [`detect_general`] finds on
 /// such a mesh (each component's lowest vertex is a vertex point, so no other labeling
-/// is preferred). Returns `None` as soon as anything differs; linear, one pass over the
-/// faces, no propagation.
+/// is preferred). Returns `None` as soon as anything differs.
 fn detect_canonical(fine: &CornerTable, seed_vertex: Option<u32>) -> Option<Coarsening> {
-    let faces = fine.face_count();
-    if !faces.is_multiple_of(4) {
+    let corners = fine.corner_vertices();
+    detect_canonical_faces(fine.face_count(), fine.vertex_count(), seed_vertex, |f| {
+        Some([corners[3 * f], corners[3 * f + 1], corners[3 * f + 2]])
+    })
+}
+
+/// [`detect_canonical`] from the faces alone (`face(f)`: the corners of face `f`,
+/// `None` if it is not a triangle) of a valid manifold mesh with `vertex_count`
+/// vertices: its twins follow from the corners, so no fine connectivity is needed. The
+/// coarse twins come from the shared edge points: edge point `V + e` is named by coarse
+/// half-edges of edge `e` only, which must appear in order of first appearance (the
+/// numbering of `mesh_topo`), at most twice and in opposite directions. Linear: one
+/// parallel pass over the groups and one sequential pass over the coarse corners, no
+/// hashing, no fine twins.
+fn detect_canonical_faces(
+    faces: usize,
+    vertex_count: usize,
+    seed_vertex: Option<u32>,
+    face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
+) -> Option<Coarsening> {
+    if faces == 0 || !faces.is_multiple_of(4) {
         return None;
     }
     let groups = faces / 4;
-    let inner = |g: usize| 3 * (4 * g as u32 + 3);
-    let first_odd = (0..groups)
-        .into_par_iter()
-        .map(|g| fine.vertex(inner(g)).min(fine.vertex(inner(g) + 1)).min(fine.vertex(inner(g) + 2)))
-        .min()?;
-    if seed_vertex.is_some_and(|s| s >= first_odd) {
-        return None;
-    }
-    // Per group (in parallel): the coarse corners and their twins, or a mismatch.
-    let mut corner_vertex = vec![0u32; 3 * groups];
-    let mut twin = vec![0u32; 3 * groups];
-    let canonical = corner_vertex.par_chunks_mut(3).zip(twin.par_chunks_mut(3)).enumerate().all(|(g, (xs, ts))| {
-        let m = [fine.vertex(inner(g)), fine.vertex(inner(g) + 1), fine.vertex(inner(g) + 2)];
-        for k in 0..3 {
-            let child = 3 * (4 * g as u32 + k as u32);
-            let x = fine.vertex(child);
-            if x >= first_odd || fine.vertex(child + 1) != m[k] || fine.vertex(child + 2) != m[(k + 2) % 3] {
-                return false;
-            }
-            xs[k] = x;
-            // x_k -> m_k is twinned with m -> x_k, corner 2 of child j of another
-            // group: the second half of that group's coarse half-edge j - 1.
-            let t = fine.twin(child);
-            ts[k] = if t == NONE {
-                NONE
-            } else {
-                let (face, corner) = (t / 3, t % 3);
-                if face % 4 == 3 || corner != 2 {
-                    return false;
+    // Per group (in parallel): the coarse corners `x`, the edge points `m` of the coarse
+    // half-edges, and the largest `x` and smallest `m`, or `None` for a mismatch.
+    let corners = 3 * groups;
+    let mut coarse_vertex = vec![0u32; corners];
+    let mut edge_point = vec![0u32; corners];
+    let (largest_x, first_odd) = coarse_vertex
+        .par_chunks_mut(3)
+        .zip(edge_point.par_chunks_mut(3))
+        .with_min_len(GROUP_CHUNK)
+        .enumerate()
+        .map(|(g, (xs, ms))| {
+            let m = face(4 * g + 3)?;
+            for k in 0..3 {
+                let [x, a, b] = face(4 * g + k)?;
+                if a != m[k] || b != m[(k + 2) % 3] {
+                    return None;
                 }
-                3 * (face / 4) + (face % 4 + 2) % 3
-            };
+                xs[k] = x;
+            }
+            ms.copy_from_slice(&m);
+            Some((xs[0].max(xs[1]).max(xs[2]), m[0].min(m[1]).min(m[2])))
+        })
+        .try_reduce(|| (0, u32::MAX), |a, b| Some((a.0.max(b.0), a.1.min(b.1))))?;
+    if largest_x >= first_odd || seed_vertex.is_some_and(|s| s >= first_odd) {
+        return None;
+    }
+    // Coarse half-edge c has edge point m_c = V + e_c. In corner order an edge is new
+    // exactly when it is the next number; an older one is its twin.
+    let edge_count = vertex_count - first_odd as usize;
+    let mut twin = vec![NONE; corners];
+    let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
+    for c in 0..corners as u32 {
+        let e = &mut edge_point[c as usize];
+        *e -= first_odd;
+        if *e as usize == edge_corner.len() {
+            edge_corner.push(c);
+            continue;
         }
-        true
-    });
-    if !canonical {
+        let t = *edge_corner.get(*e as usize)?;
+        if twin[t as usize] != NONE
+            || coarse_vertex[t as usize] != coarse_vertex[next(c) as usize]
+            || coarse_vertex[next(t) as usize] != coarse_vertex[c as usize]
+        {
+            return None;
+        }
+        twin[t as usize] = c;
+        twin[c as usize] = t;
+    }
+    if edge_corner.len() != edge_count {
         return None;
     }
-    let consistent = twin.par_iter().enumerate().all(|(c, &t)| {
-        let c = c as u32;
-        t == NONE
-            || (twin[t as usize] == c
-                && corner_vertex[t as usize] == corner_vertex[next(c) as usize]
-                && corner_vertex[next(t) as usize] == corner_vertex[c as usize])
-    });
-    if !consistent {
-        return None;
-    }
-    let coarse = CornerTable::from_parts(first_odd as usize, corner_vertex, twin);
-    if first_odd as usize + coarse.edge_count() != fine.vertex_count() {
-        return None;
-    }
-    let numbered = (0..3 * groups as u32)
-        .into_par_iter()
-        .all(|c| fine.vertex(inner(c as usize / 3) + c % 3) == first_odd + coarse.corner_edge(c));
-    if !numbered {
-        return None;
-    }
-    let nv = fine.vertex_count() as u32;
-    Some(Coarsening {
-        coarse,
-        vertex_point: (0..first_odd).collect(),
-        edge_point: (first_odd..nv).collect(),
-        face_of_canonical: (0..faces as u32).map(|k| 3 * k).collect(),
-    })
+    let corner_edge = edge_point;
+    let coarse = CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner);
+    Some(Coarsening::canonical(coarse))
 }
+
+/// Groups (or faces, vertices) per parallel work item of the linear passes.
+const GROUP_CHUNK: usize = 4096;
 
 /// The general detection: propagation from seeds and validation (see the module docs).
 fn detect_general(fine: &CornerTable, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
@@ -820,7 +936,7 @@ impl<'a> Labeler<'a> {
         let edge_point =
             (0..coarse.edge_count() as u32).map(|e| corner_edge_point[coarse.edge_corner(e) as usize]).collect();
         debug_assert_eq!(vertex_point.len() + coarse.edge_count(), nv);
-        Coarsening { coarse, vertex_point, edge_point, face_of_canonical }
+        Coarsening::new(coarse, vertex_point, edge_point, face_of_canonical)
     }
 }
 

@@ -33,7 +33,7 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
 
 use crate::LoopError;
 use crate::corner_table::CornerTable;
-use crate::detect::{FineOrder, detect_table};
+use crate::detect::{FineOrder, detect_mesh, detect_table};
 use crate::forward::LoopOptions;
 use crate::reverse::{check_level, reconstruct_levels, reverse_positions};
 
@@ -137,7 +137,8 @@ pub struct RateDistortion {
 /// connectivity.
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
     check_input_positions(mesh.positions())?;
-    let mut table = CornerTable::from_mesh(mesh)?;
+    // `None` until the first reversal: the input is read as it is (see `detect_mesh`).
+    let mut table: Option<CornerTable> = None;
     let mut positions = mesh.positions().to_vec();
     let mut levels = Vec::new();
     let wanted = match options.levels {
@@ -147,8 +148,11 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Loop
     // Every reversal divides the face count by 4 (a mesh without faces is an error), so
     // `Levels::Max` ends after at most log4(faces) + 1 rounds.
     while levels.len() < wanted {
-        let seed = if levels.is_empty() { options.seed_vertex } else { None };
-        let coarsening = match detect_table(&table, seed) {
+        let detected = match &table {
+            None => detect_mesh(mesh, options.seed_vertex),
+            Some(table) => detect_table(table, None),
+        };
+        let coarsening = match detected {
             Ok(coarsening) => coarsening,
             Err(LoopError::NotLoopConnectivity { .. }) if options.levels == Levels::Max && !levels.is_empty() => {
                 break;
@@ -157,10 +161,14 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Loop
         };
         let (coarse_positions, details) = reverse_positions(&coarsening, &positions, &options.rules);
         levels.push(DetailLevel { details, order: coarsening.fine_order() });
-        table = coarsening.coarse;
+        table = Some(coarsening.coarse);
         positions = coarse_positions;
     }
     levels.reverse();
+    let table = match table {
+        Some(table) => table,
+        None => CornerTable::from_mesh(mesh)?,
+    };
     Ok(LoopPyramid { rules: options.rules, base: table.to_soup(positions), levels })
 }
 

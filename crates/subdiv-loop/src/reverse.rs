@@ -52,7 +52,7 @@ use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
-use crate::detect::{Coarsening, FineOrder, detect_table};
+use crate::detect::{Coarsening, FineOrder, detect_mesh};
 use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
 use crate::forward::topology::{BASE_MASK, INVALID as TOPOLOGY_INVALID, MAX_FACES, NEXT, Topology, is_first};
 use crate::forward::{LoopOptions, VertexWeights};
@@ -137,8 +137,7 @@ pub struct ReverseOptions {
 /// [`LoopError::SeedOutOfRange`] and [`LoopError::NotLoopConnectivity`] from detection.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<ReversedLevel, LoopError> {
     crate::pyramid::check_input_positions(fine.positions())?;
-    let table = CornerTable::from_mesh(fine)?;
-    let coarsening = detect_table(&table, options.seed_vertex)?;
+    let coarsening = detect_mesh(fine, options.seed_vertex)?;
     let (positions, details) = reverse_positions(&coarsening, fine.positions(), &options.rules);
     let order = coarsening.fine_order();
     let coarse = HalfedgeMesh::from_soup(&coarsening.coarse.to_soup(positions))
@@ -182,6 +181,8 @@ pub(crate) fn reconstruct_levels<'a>(
     let mut positions = coarse.positions().to_vec();
     let kernel_rules = Rules::new(rules);
     let count = levels.len();
+    // True when the last step found every position finite (the input was checked).
+    let mut known_finite = true;
     for (i, (details, order)) in levels.enumerate() {
         let level = i + 1;
         check_details(topology.vertex_count, topology.edge_count, topology.face_count(), details, order, level)?;
@@ -194,13 +195,31 @@ pub(crate) fn reconstruct_levels<'a>(
         }
         match order {
             None => {
-                let corrections = vertex_corrections(&topology, details, rules);
+                let corrections = VertexCorrections::new(&topology, details);
                 let step = kernel::step(&topology, &positions, &kernel_rules, level < count);
                 let nv = topology.vertex_count;
                 let mut fine = step.values;
                 let (vertex_points, edge_points) = fine.split_at_mut(nv);
-                vertex_points.par_iter_mut().zip(corrections.par_iter()).for_each(|(p, c)| *p += *c);
-                edge_points.par_iter_mut().zip(details.par_iter()).for_each(|(p, d)| *p += *d);
+                // The finiteness check of the result rides along (no pass of its own).
+                let vertices_finite = vertex_points
+                    .par_iter_mut()
+                    .with_min_len(4096)
+                    .enumerate()
+                    .map(|(v, p)| {
+                        corrections.apply(v, p, &kernel_rules);
+                        p.is_finite()
+                    })
+                    .reduce(|| true, |a, b| a && b);
+                let edges_finite = edge_points
+                    .par_iter_mut()
+                    .with_min_len(4096)
+                    .zip(details.par_iter())
+                    .map(|(p, d)| {
+                        *p += *d;
+                        p.is_finite()
+                    })
+                    .reduce(|| true, |a, b| a && b);
+                known_finite = vertices_finite && edges_finite;
                 positions = fine;
                 topology = step.topology;
             }
@@ -209,60 +228,84 @@ pub(crate) fn reconstruct_levels<'a>(
                 let (fine_table, fine_positions) = refine_level(&table, &positions, details, Some(order), rules);
                 topology = fine_table.to_topology();
                 positions = fine_positions;
+                known_finite = false;
             }
         }
     }
-    check_finite(&positions, count)?;
+    if !known_finite {
+        // Also names the first non-finite vertex.
+        check_finite(&positions, count)?;
+    }
     let faces = topology.triangles.len() as u32;
     Ok(PolygonSoup {
         positions,
         offsets: (0..=faces).map(|f| 3 * f).collect(),
-        indices: topology.triangles.into_iter().flatten().collect(),
+        indices: topology.triangles.as_flattened().to_vec(),
     })
 }
 
-/// What the details add to each vertex point (see [`reconstruct_levels`]), by one
-/// pass over the edges of the coarse topology.
-fn vertex_corrections(topology: &Topology, details: &[DVec3], rules: &LoopOptions) -> Vec<DVec3> {
+/// What the details add to each vertex point (see [`reconstruct_levels`]): the sums of
+/// the details around every vertex, by one pass over the edges of the coarse topology,
+/// applied in place to the vertex points (no array of corrections).
+struct VertexCorrections {
+    /// Per vertex: the sum of the details of its boundary edges if it has any, else of
+    /// all its edges (the two cases of the correction).
+    sum: Vec<DVec3>,
+    /// Number of edges at each vertex, [`Self::BOUNDARY`] set on the boundary.
+    valence: Vec<u32>,
+}
+
+impl VertexCorrections {
     const BOUNDARY: u32 = 1 << 31;
-    let nv = topology.vertex_count;
-    let mut all = vec![DVec3::ZERO; nv];
-    let mut boundary = vec![DVec3::ZERO; nv];
-    let mut valence = vec![0u32; nv];
-    let mut e = 0usize;
-    for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
-        for k in 0..3 {
-            let twin = link[k];
-            if !is_first((4 * f + k) as u32, twin) {
-                continue;
-            }
-            let d = details[e];
-            e += 1;
-            for v in [corners[k], corners[NEXT[k]]] {
-                let v = v as usize;
-                all[v] += d;
-                valence[v] += 1;
-                if twin == TOPOLOGY_INVALID {
-                    boundary[v] += d;
-                    valence[v] |= BOUNDARY;
+
+    fn new(topology: &Topology, details: &[DVec3]) -> Self {
+        let nv = topology.vertex_count;
+        let mut sum = vec![DVec3::ZERO; nv];
+        let mut valence = vec![0u32; nv];
+        let mut e = 0usize;
+        for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
+            for k in 0..3 {
+                let twin = link[k];
+                if !is_first((4 * f + k) as u32, twin) {
+                    continue;
+                }
+                let d = details[e];
+                e += 1;
+                let on_boundary = twin == TOPOLOGY_INVALID;
+                for v in [corners[k], corners[NEXT[k]]] {
+                    let v = v as usize;
+                    let seen_boundary = valence[v] & Self::BOUNDARY != 0;
+                    valence[v] += 1;
+                    if on_boundary {
+                        if !seen_boundary {
+                            // The first boundary edge: from now on only boundary edges count.
+                            sum[v] = DVec3::ZERO;
+                            valence[v] |= Self::BOUNDARY;
+                        }
+                        sum[v] += d;
+                    } else if !seen_boundary {
+                        sum[v] += d;
+                    }
                 }
             }
         }
+        debug_assert_eq!(e, details.len());
+        Self { sum, valence }
     }
-    debug_assert_eq!(e, details.len());
-    (0..nv)
-        .into_par_iter()
-        .map(|v| {
-            let n = (valence[v] & !BOUNDARY) as usize;
-            if valence[v] & BOUNDARY != 0 {
-                if rules.keep_corners && n == 2 { DVec3::ZERO } else { 0.25 * boundary[v] }
-            } else if n == 0 {
-                DVec3::ZERO
-            } else {
-                (1.6 * beta(rules.weights, n)) * all[v]
-            }
-        })
-        .collect()
+
+    /// Adds the correction of vertex `v` to its vertex point (`β` from the forward
+    /// kernel's table: the very numbers of the forward step).
+    #[inline]
+    fn apply(&self, v: usize, point: &mut DVec3, rules: &Rules) {
+        let n = (self.valence[v] & !Self::BOUNDARY) as usize;
+        *point += if self.valence[v] & Self::BOUNDARY != 0 {
+            if rules.is_fixed_corner(n) { DVec3::ZERO } else { 0.25 * self.sum[v] }
+        } else if n == 0 {
+            DVec3::ZERO
+        } else {
+            (1.6 * rules.interior(n).1) * self.sum[v]
+        };
+    }
 }
 
 /// Checks that `details` and `order` fit the coarse table (level numbers errors).
@@ -354,10 +397,11 @@ pub(crate) fn reverse_positions(
     let coarse = &coarsening.coarse;
     let nv = coarse.vertex_count();
     let edge_position = |e: u32| fine[coarsening.edge_point[e as usize] as usize];
-    // The edge points around every coarse vertex, summed in one pass over the edges
-    // (all of them, and the boundary ones apart), with the valence and boundary flag.
+    // The edge points around every coarse vertex, summed in one pass over the edges,
+    // with the valence and boundary flag: one sum per vertex, of all its edge points
+    // inside, of the boundary ones only on the boundary (restarted at the first
+    // boundary edge).
     let mut sum = vec![DVec3::ZERO; nv];
-    let mut boundary_sum = vec![DVec3::ZERO; nv];
     let mut valence = vec![0u32; nv];
     for e in 0..coarse.edge_count() as u32 {
         let c = coarse.edge_corner(e);
@@ -365,11 +409,16 @@ pub(crate) fn reverse_positions(
         let point = edge_position(e);
         for v in [coarse.vertex(c), coarse.vertex(next(c))] {
             let v = v as usize;
-            sum[v] += point;
+            let seen_boundary = valence[v] & BOUNDARY != 0;
             valence[v] += 1;
             if on_boundary {
-                boundary_sum[v] += point;
-                valence[v] |= BOUNDARY;
+                if !seen_boundary {
+                    sum[v] = DVec3::ZERO;
+                    valence[v] |= BOUNDARY;
+                }
+                sum[v] += point;
+            } else if !seen_boundary {
+                sum[v] += point;
             }
         }
     }
@@ -378,11 +427,7 @@ pub(crate) fn reverse_positions(
         let vertex_point = fine[coarsening.vertex_point[v as usize] as usize];
         let (n, flags) = (valence[v as usize] & !BOUNDARY, valence[v as usize] & BOUNDARY);
         if flags != 0 {
-            if rules.keep_corners && n == 2 {
-                vertex_point
-            } else {
-                2.0 * vertex_point - 0.5 * boundary_sum[v as usize]
-            }
+            if rules.keep_corners && n == 2 { vertex_point } else { 2.0 * vertex_point - 0.5 * sum[v as usize] }
         } else if n == 0 {
             vertex_point
         } else {
