@@ -13,6 +13,11 @@
 //!   refinement alone (read the 1,000 input points, write the output size once; all
 //!   intermediate levels live in the refiner's cache-sized scratch).
 //!
+//! - `memcpy-2d-parallel`: the same copy split into one contiguous piece per thread of
+//!   the pool. Large refinements spread their output blocks over the pool's threads, so
+//!   the default rows compare with this row as well as with the single-threaded copy;
+//!   the `-1t` rows refine on one thread.
+//!
 //! Both sides therefore follow the same allocation policy (reused, already faulted-in
 //! output); the ratio `refine / memcpy` of the same dimension, measured in the same run,
 //! is the figure the goal refers to. Throughput is reported in output points per second.
@@ -23,6 +28,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::{DVec2, DVec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 use subdiv_curve::{CurveScheme, Framework, Refiner, Topology, VirtualPoints};
 
 const POINTS: usize = 1000;
@@ -64,6 +70,19 @@ fn bench_refine(c: &mut Criterion) {
         })
     });
 
+    // The same copies spread over the thread pool, the fair baseline for the rows that
+    // refine their blocks on several threads.
+    let copy_in_parallel = |target: &mut [DVec2], source: &[DVec2]| {
+        let chunk = source.len().div_ceil(rayon::current_num_threads());
+        target.par_chunks_mut(chunk).zip(source.par_chunks(chunk)).for_each(|(t, s)| t.copy_from_slice(s));
+    };
+    group.bench_function("memcpy-2d-parallel", |b| {
+        b.iter(|| {
+            copy_in_parallel(&mut target, black_box(&source));
+            black_box(&target);
+        })
+    });
+
     let schemes = [
         ("chaikin", CurveScheme::chaikin()),
         ("cubic-bspline", CurveScheme::cubic_bspline()),
@@ -78,6 +97,20 @@ fn bench_refine(c: &mut Criterion) {
                     .refine_into(scheme, black_box(&points), Topology::Closed, LEVELS, &mut out)
                     .expect("valid input");
                 black_box(&out);
+            })
+        });
+    }
+    // One thread: what a caller inside a single-threaded pool gets.
+    let single = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("thread pool");
+    for (name, scheme) in &schemes {
+        group.bench_function(format!("{name}-2d-1t"), |b| {
+            single.install(|| {
+                b.iter(|| {
+                    refiner
+                        .refine_into(scheme, black_box(&points), Topology::Closed, LEVELS, &mut out)
+                        .expect("valid input");
+                    black_box(&out);
+                })
             })
         });
     }

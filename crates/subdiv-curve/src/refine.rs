@@ -48,7 +48,27 @@ pub struct Refiner<P> {
     pub(crate) lens: Vec<usize>,
     /// Range of extended indices each level of the current block keeps in scratch.
     pub(crate) windows: Vec<Window>,
+    /// Scratch of the other workers when blocks are refined on several threads.
+    pub(crate) spare: Vec<Scratch<P>>,
 }
+
+/// One worker's scratch levels and windows (see [`Refiner`]).
+#[derive(Debug, Clone)]
+pub(crate) struct Scratch<P> {
+    front: Vec<P>,
+    back: Vec<P>,
+    windows: Vec<Window>,
+}
+
+impl<P> Default for Scratch<P> {
+    fn default() -> Self {
+        Scratch { front: Vec::new(), back: Vec::new(), windows: Vec::new() }
+    }
+}
+
+/// Fewest output points per worker before blocks are spread over threads: below this the
+/// hand-off costs more than it saves.
+const PARALLEL_MIN_POINTS: usize = 1 << 16;
 
 /// Target size of one output block of the fused path. The scratch levels of a block
 /// (half the block, a quarter, ...) then take at most 256 KiB together and stay in L2
@@ -238,7 +258,7 @@ fn pairs_any<P: CurvePoint>(
 impl<P: CurvePoint> Refiner<P> {
     /// An empty context (buffers grow on first use).
     pub fn new() -> Self {
-        Refiner { front: Vec::new(), back: Vec::new(), lens: Vec::new(), windows: Vec::new() }
+        Refiner { front: Vec::new(), back: Vec::new(), lens: Vec::new(), windows: Vec::new(), spare: Vec::new() }
     }
 
     /// Refines `points` `levels` times with `scheme`, writing the result into `out`
@@ -296,22 +316,70 @@ impl<P: CurvePoint> Refiner<P> {
             out.copy_from_slice(points);
             return;
         }
-        for (index, target) in out.chunks_mut(block).enumerate() {
-            let first = (index * block) as i64;
-            let range = (first, first + target.len() as i64);
-            let buffers = [&mut self.front, &mut self.back];
-            refine_block(
-                scheme,
-                topology,
-                points,
-                &self.lens,
-                &mut self.windows,
-                range,
-                buffers,
-                target,
-                0,
-                &mut |_| {},
-            );
+        self.refine_blocks(scheme, topology, points, out, block, 0, || (), |_, _| {});
+    }
+
+    /// Refines the finest level into `out` (already of its length, `self.lens` set) block
+    /// by block, each block widened by `margin` (see [`refine_block`]); `hook` runs after
+    /// every level of every block with its worker's own `state` (made by `make_state`).
+    ///
+    /// Blocks are independent: with several threads each worker refines one contiguous
+    /// run of whole blocks with its own scratch. Every output point is computed by the
+    /// same arithmetic whichever worker owns it, so the result is bit-identical for any
+    /// thread count (as long as `hook` only depends on its block, as it must anyway).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn refine_blocks<S>(
+        &mut self,
+        scheme: &CurveScheme,
+        topology: Topology,
+        points: &[P],
+        out: &mut [P],
+        block: usize,
+        margin: i64,
+        make_state: impl Fn() -> S + Sync,
+        hook: impl Fn(&mut S, BlockLevel<'_, P>) + Sync,
+    ) {
+        let total = out.len();
+        let blocks = total.div_ceil(block);
+        let workers = rayon::current_num_threads().min(blocks).min(total / PARALLEL_MIN_POINTS).max(1);
+        self.spare.resize_with(workers - 1, Scratch::default);
+        let run = blocks.div_ceil(workers) * block;
+        let lens = &self.lens;
+        let mut scratch: Vec<(&mut Vec<P>, &mut Vec<P>, &mut Vec<Window>)> =
+            std::iter::once((&mut self.front, &mut self.back, &mut self.windows))
+                .chain(self.spare.iter_mut().map(|s| (&mut s.front, &mut s.back, &mut s.windows)))
+                .collect();
+        let refine_run =
+            |run_index: usize,
+             run_target: &mut [P],
+             (front, back, windows): &mut (&mut Vec<P>, &mut Vec<P>, &mut Vec<Window>)| {
+                let mut state = make_state();
+                for (index, target) in run_target.chunks_mut(block).enumerate() {
+                    let first = (run_index * run + index * block) as i64;
+                    let range = (first, first + target.len() as i64);
+                    let buffers = [&mut **front, &mut **back];
+                    refine_block(
+                        scheme,
+                        topology,
+                        points,
+                        lens,
+                        windows,
+                        range,
+                        buffers,
+                        target,
+                        margin,
+                        &mut |level| hook(&mut state, level),
+                    );
+                }
+            };
+        if workers == 1 {
+            refine_run(0, out, &mut scratch[0]);
+        } else {
+            use rayon::prelude::*;
+            out.par_chunks_mut(run)
+                .zip(scratch.par_iter_mut())
+                .enumerate()
+                .for_each(|(run_index, (run_target, worker))| refine_run(run_index, run_target, worker));
         }
     }
 
@@ -725,6 +793,28 @@ mod tests {
                 let framework = crate::Framework::published().with_mode(mode);
                 if let Ok(fine) = framework.refine(&points, &flags, topology, levels) {
                     prop_assert_eq!(bits(&[fine[0], fine[fine.len() - 1]]), bits(&[first, last]));
+                }
+            }
+        }
+    }
+
+    /// Large outputs are split over the worker threads: 1, 2 and 3 workers (runs of whole
+    /// blocks, the last one shorter) give the level-by-level result bit for bit.
+    #[test]
+    fn any_thread_count_gives_the_same_bits() {
+        let points: Vec<[f64; 2]> = (0..301).map(|k| [(k as f64 * 0.37).sin(), (k as f64 * 0.11).cos()]).collect();
+        for scheme in [CurveScheme::cubic_bspline(), CurveScheme::four_point(0.0625).unwrap()] {
+            for topology in [Topology::Closed, Topology::Open(EndRule::Reflect)] {
+                let mut reference = Vec::new();
+                Refiner::new().refine_levelwise(&scheme, &points, topology, 10, &mut reference);
+                assert!(reference.len() > 3 * PARALLEL_MIN_POINTS);
+                for threads in [1, 2, 3] {
+                    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                    let mut refiner = Refiner::new();
+                    let mut out = Vec::new();
+                    pool.install(|| refiner.refine_into(&scheme, &points, topology, 10, &mut out)).unwrap();
+                    assert_eq!(refiner.spare.len(), threads - 1);
+                    assert_eq!(bits(&out), bits(&reference), "{} {topology:?} on {threads} threads", scheme.name());
                 }
             }
         }
