@@ -33,6 +33,9 @@ pub(crate) struct Output<T> {
     len: usize,
     /// Elements in pieces that were written completely.
     filled: AtomicUsize,
+    /// Whether [`Output::slots`] was called: slots are handed out once, so no slot can
+    /// be counted twice through two sets of pieces.
+    handed_out: bool,
 }
 
 impl<T> Output<T> {
@@ -40,12 +43,17 @@ impl<T> Output<T> {
     pub(crate) fn new(len: usize) -> Self {
         let vec: Vec<T> = Vec::with_capacity(len);
         advise_huge_pages(vec.as_ptr().cast(), len * size_of::<T>());
-        Self { vec, len, filled: AtomicUsize::new(0) }
+        Self { vec, len, filled: AtomicUsize::new(0), handed_out: false }
     }
 
     /// All slots, to be split into the pieces that the tasks write.
+    ///
+    /// # Panics
+    /// If called a second time (an internal error).
     pub(crate) fn slots(&mut self) -> Slots<'_, T> {
-        let Self { vec, len, filled } = self;
+        let Self { vec, len, filled, handed_out } = self;
+        assert!(!*handed_out, "internal: output slots handed out twice");
+        *handed_out = true;
         Slots { slots: &mut vec.spare_capacity_mut()[..*len], written: 0, filled }
     }
 
@@ -54,11 +62,12 @@ impl<T> Output<T> {
     /// # Panics
     /// If some slot was not written (an internal error).
     pub(crate) fn into_vec(self) -> Vec<T> {
-        let Self { mut vec, len, filled } = self;
+        let Self { mut vec, len, filled, .. } = self;
         assert_eq!(filled.into_inner(), len, "internal: an output slot was not written");
         // SAFETY: `len <= capacity` (allocated with `Vec::with_capacity(len)`), and the
         // first `len` slots are initialised: the only way to reach them is
-        // `Slots::push`, which writes them in order; pieces are disjoint sub-slices and
+        // `Slots::push`, which writes them in order; the slots are handed out once and
+        // split into pieces that are disjoint sub-slices, which
         // add their length to `filled` only once all of their slots are written, so
         // `filled == len` means that every slot was written exactly once.
         unsafe { vec.set_len(len) };
@@ -207,6 +216,20 @@ mod tests {
             all.push(vec![2u8]);
         }
         output.into_vec();
+    }
+
+    #[test]
+    #[should_panic(expected = "internal: output slots handed out twice")]
+    fn slots_are_handed_out_once() {
+        // Otherwise the same half written through two sets of pieces would count as
+        // the whole array.
+        let mut output = Output::<u32>::new(2);
+        {
+            let mut front = output.slots().take_front(1);
+            front.push(1);
+        }
+        let mut again = output.slots().take_front(1);
+        again.push(1);
     }
 
     #[test]
