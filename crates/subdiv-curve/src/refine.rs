@@ -19,6 +19,13 @@
 //! on random polygons, open and closed, for every shipped and for random user-defined
 //! schemes and the framework.
 //!
+//! **Threads.** Blocks are independent, so an output of at least 65,536 points per worker
+//! is split into one contiguous run of whole blocks per thread of the current rayon
+//! pool, each worker with its own scratch (kept in the [`Refiner`]); every point is still
+//! computed by the same expression, so the result is the same bit for bit on any number
+//! of threads (tested on 1, 2 and 3). Run the call inside a one-thread pool
+//! (`rayon::ThreadPoolBuilder::new().num_threads(1)`) to keep it on the calling thread.
+//!
 //! **Level by level** (`step`, `fill_halo`) remains as the reference: one level reads
 //! the current polygon from a buffer that carries a few extra points on each side (the
 //! *halo*: wrapped points of a closed polygon, phantom points of an open one, see
