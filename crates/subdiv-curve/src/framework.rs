@@ -405,17 +405,7 @@ impl Framework {
         block: usize,
     ) {
         let scheme = &self.approximating;
-        refiner.lens.clear();
-        refiner.lens.push(points.len());
-        for _ in 0..levels {
-            let n = *refiner.lens.last().expect("internal: level 0 is present");
-            refiner.lens.push(scheme.next_len(n, topology));
-        }
-        let total = *refiner.lens.last().expect("internal: level 0 is present");
-        out.truncate(total);
-        out.resize(total, P::zero());
-        if levels == 0 {
-            out.copy_from_slice(points);
+        if !refiner.size_output(scheme, points, topology, levels, out) {
             return;
         }
         // The I-points of each level, and the virtual points of those near the block.

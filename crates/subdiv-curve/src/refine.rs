@@ -308,6 +308,22 @@ impl<P: CurvePoint> Refiner<P> {
         block: usize,
     ) {
         debug_assert!(block > 0 && points.len() >= scheme.min_points(topology));
+        if self.size_output(scheme, points, topology, levels, out) {
+            self.refine_blocks(scheme, topology, points, out, block, 0, || (), |_, _| {});
+        }
+    }
+
+    /// Records the polygon length of every level in `self.lens` and gives `out` the
+    /// finest one. Returns `false` when there is nothing left to refine (`levels == 0`:
+    /// `out` is then a copy of `points`).
+    pub(crate) fn size_output(
+        &mut self,
+        scheme: &CurveScheme,
+        points: &[P],
+        topology: Topology,
+        levels: u32,
+        out: &mut Vec<P>,
+    ) -> bool {
         self.lens.clear();
         self.lens.push(points.len());
         for _ in 0..levels {
@@ -315,15 +331,14 @@ impl<P: CurvePoint> Refiner<P> {
             self.lens.push(scheme.next_len(n, topology));
         }
         let total = *self.lens.last().expect("internal: level 0 is present");
-        // Every entry is overwritten below: keep the old ones instead of zeroing (a reused
-        // output of the same length costs no extra pass).
+        // Every entry is overwritten by the caller: keep the old ones instead of zeroing
+        // (a reused output of the same length costs no extra pass).
         out.truncate(total);
         out.resize(total, P::zero());
         if levels == 0 {
             out.copy_from_slice(points);
-            return;
         }
-        self.refine_blocks(scheme, topology, points, out, block, 0, || (), |_, _| {});
+        levels > 0
     }
 
     /// Refines the finest level into `out` (already of its length, `self.lens` set) block
