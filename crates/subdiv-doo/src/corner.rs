@@ -126,19 +126,7 @@ impl CornerMesh {
             prev[n as usize] = c as u32;
         }
         // Corners of each vertex (CSR, increasing corner order).
-        let mut start = vec![0u32; vertex_count + 1];
-        for &v in indices {
-            start[v as usize + 1] += 1;
-        }
-        for v in 0..vertex_count {
-            start[v + 1] += start[v];
-        }
-        let mut fill = start.clone();
-        let mut corners_of = vec![0u32; corners];
-        for (c, &v) in indices.iter().enumerate() {
-            corners_of[fill[v as usize] as usize] = c as u32;
-            fill[v as usize] += 1;
-        }
+        let (start, corners_of) = group_by_key(indices, vertex_count);
         let target = |c: u32| indices[next[c as usize] as usize];
         // Each directed edge once (this also rejects a face visiting a vertex twice along
         // one edge); the twin of `u -> w` is the corner of `w` whose edge goes to `u`.
@@ -220,6 +208,26 @@ impl CornerMesh {
             debug_assert!(count <= self.corner_count(), "internal: vertex cycle does not close");
         }
     }
+}
+
+/// Groups the indices `0..keys.len()` by their key (each below `key_count`) with a
+/// counting sort: `members[offsets[k]..offsets[k + 1]]` are the indices whose key is `k`,
+/// in increasing order. Linear in `keys.len() + key_count`.
+pub(crate) fn group_by_key(keys: &[u32], key_count: usize) -> (Vec<u32>, Vec<u32>) {
+    let mut offsets = vec![0u32; key_count + 1];
+    for &k in keys {
+        offsets[k as usize + 1] += 1;
+    }
+    for k in 0..key_count {
+        offsets[k + 1] += offsets[k];
+    }
+    let mut fill = offsets.clone();
+    let mut members = vec![0u32; keys.len()];
+    for (i, &k) in keys.iter().enumerate() {
+        members[fill[k as usize] as usize] = i as u32;
+        fill[k as usize] += 1;
+    }
+    (offsets, members)
 }
 
 /// The next corner of every corner, from the face offsets.

@@ -80,7 +80,9 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use serde::{Deserialize, Serialize};
 
 use crate::DooError;
-use crate::corner::{CornerMesh, NONE, doo_topology, expand_faces, face_points, faces_of_corners, next_of_corners};
+use crate::corner::{
+    CornerMesh, NONE, doo_topology, expand_faces, face_points, faces_of_corners, group_by_key, next_of_corners,
+};
 use crate::forward::check_finite;
 use crate::rule::{FaceMaps, FaceRule};
 
@@ -337,19 +339,7 @@ impl<'a> Session<'a> {
             given[k] = s as u32;
         }
         // The faces of each component in increasing order (a counting sort: linear).
-        let mut component_offsets = vec![0u32; component_count + 1];
-        for &k in &component_of_face {
-            component_offsets[k as usize + 1] += 1;
-        }
-        for k in 0..component_count {
-            component_offsets[k + 1] += component_offsets[k];
-        }
-        let mut fill = component_offsets.clone();
-        let mut faces_by_component = vec![0u32; face_count];
-        for (f, &k) in component_of_face.iter().enumerate() {
-            faces_by_component[fill[k as usize] as usize] = f as u32;
-            fill[k as usize] += 1;
-        }
+        let (component_offsets, faces_by_component) = group_by_key(&component_of_face, component_count);
 
         // Per component: the readings to use, best first (a given seed: just that one).
         // The number of vertices of each component (no vertex is isolated).
