@@ -105,6 +105,13 @@ impl CornerMesh {
     /// one fan), without building a half-edge mesh: linear time. The error says what is
     /// wrong and where.
     pub fn from_soup(soup: &PolygonSoup) -> Result<Self, String> {
+        Self::from_soup_grouped(soup).map(|(mesh, _)| mesh)
+    }
+
+    /// [`Self::from_soup`], also returning the corners of each vertex in increasing
+    /// order (CSR: `(offsets, corners)`, as [`group_by_key`] gives them), which the check
+    /// computes anyway.
+    pub fn from_soup_grouped(soup: &PolygonSoup) -> Result<(Self, VertexCorners), String> {
         let vertex_count = soup.positions.len();
         let indices = &soup.indices;
         let offsets = if soup.offsets.is_empty() { vec![0] } else { soup.offsets.clone() };
@@ -121,10 +128,8 @@ impl CornerMesh {
         }
         let corners = indices.len();
         let next = next_of_corners(&offsets);
-        let mut prev = vec![0u32; corners];
-        for (c, &n) in next.iter().enumerate() {
-            prev[n as usize] = c as u32;
-        }
+        // The previous corners, only needed for the fans of boundary vertices.
+        let mut prev: Vec<u32> = Vec::new();
         // Corners of each vertex (CSR, increasing corner order).
         let (start, corners_of) = group_by_key(indices, vertex_count);
         let target = |c: u32| indices[next[c as usize] as usize];
@@ -167,6 +172,12 @@ impl CornerMesh {
                 reached += 1;
             }
             if !closed {
+                if prev.is_empty() {
+                    prev = vec![0u32; corners];
+                    for (c, &n) in next.iter().enumerate() {
+                        prev[n as usize] = c as u32;
+                    }
+                }
                 let mut c = first;
                 while corner_twin[prev[c as usize] as usize] != NONE && reached <= mine.len() {
                     c = corner_twin[prev[c as usize] as usize];
@@ -177,14 +188,15 @@ impl CornerMesh {
                 return Err(format!("vertex {v} is not manifold (its faces do not form one fan)"));
             }
         }
-        Ok(Self {
+        let mesh = Self {
             offsets,
             corner_vertex: indices.clone(),
             corner_twin,
             corner_next: next,
             vertex_count,
             vertex_corner: Some(vertex_corner),
-        })
+        };
+        Ok((mesh, (start, corners_of)))
     }
 
     /// Walks clockwise around the vertex of corner `start` (`c -> next(twin(c))`),
@@ -209,6 +221,9 @@ impl CornerMesh {
         }
     }
 }
+
+/// The corners of each vertex as CSR arrays `(offsets, corners)` ([`group_by_key`]).
+pub(crate) type VertexCorners = (Vec<u32>, Vec<u32>);
 
 /// Groups the indices `0..keys.len()` by their key (each below `key_count`) with a
 /// counting sort: `members[offsets[k]..offsets[k + 1]]` are the indices whose key is `k`,

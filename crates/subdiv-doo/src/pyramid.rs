@@ -22,6 +22,8 @@
 //! [`PYRAMID_VERSION`], bincode payload of [`DooPyramid`]). Decoding checks every array
 //! length and permutation before use: a corrupted file is an error, never a panic.
 
+use std::borrow::Cow;
+
 use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
 use serde::{Deserialize, Serialize};
@@ -29,7 +31,10 @@ use serde::{Deserialize, Serialize};
 use crate::DooError;
 use crate::corner::{CornerMesh, NONE, doo_topology};
 use crate::forward::check_finite;
-use crate::reverse::{FineOrder, ReverseOptions, SeedChoice, Session, reconstruct_level};
+use crate::reverse::{
+    CornersByVertex, FineOrder, ReverseOptions, SeedChoice, Session, corners_by_vertex, level_candidates,
+    level_from_candidates, reconstruct_level,
+};
 use crate::rule::FaceRule;
 
 /// Magic number of a Doo-Sabin `.mres` pyramid.
@@ -322,9 +327,11 @@ impl DooPyramid {
         };
         self.rule.validate()?;
         check_finite(&self.base.positions)?;
-        let mut mesh =
-            CornerMesh::from_soup(&self.base).map_err(|e| DooError::InvalidPyramid(format!("base mesh: {e}")))?;
-        let mut positions = self.base.positions.clone();
+        let (mut mesh, grouping) = CornerMesh::from_soup_grouped(&self.base)
+            .map_err(|e| DooError::InvalidPyramid(format!("base mesh: {e}")))?;
+        // The base's corners by vertex come with its check; finer levels group their own.
+        let mut grouping = Some(CornersByVertex::from_parts(grouping));
+        let mut positions = Cow::Borrowed(&self.base.positions[..]);
         for (k, data) in self.levels[..level].iter().enumerate() {
             self.check_level(k, &mesh, data)?;
             let filtered;
@@ -340,18 +347,25 @@ impl DooPyramid {
                     &filtered
                 }
             };
-            check_finite(details).map_err(|e| DooError::InvalidPyramid(format!("level {}: detail {e}", k + 1)))?;
+            let by_vertex = grouping.take().unwrap_or_else(|| corners_by_vertex(&mesh));
+            let (candidates, finite) = level_candidates(&by_vertex, &positions, details);
+            drop(by_vertex);
+            if !finite {
+                // Name the offending detail (a non-finite candidate may also come from an
+                // overflow, which is not an error).
+                check_finite(details).map_err(|e| DooError::InvalidPyramid(format!("level {}: detail {e}", k + 1)))?;
+            }
             let with_adjacency = k + 1 < level;
             let (fine, fine_positions) =
-                reconstruct_level(&mesh, &positions, details, &data.order, self.rule, with_adjacency)
+                level_from_candidates(&mesh, &candidates, &data.order, self.rule, with_adjacency)
                     .map_err(|e| DooError::InvalidPyramid(format!("level {}: {e}", k + 1)))?;
             mesh = fine;
-            positions = fine_positions;
+            positions = Cow::Owned(fine_positions);
         }
         if level == 0 {
             return Ok(self.base.clone());
         }
-        Ok(PolygonSoup { positions, offsets: mesh.offsets, indices: mesh.corner_vertex })
+        Ok(PolygonSoup { positions: positions.into_owned(), offsets: mesh.offsets, indices: mesh.corner_vertex })
     }
 
     /// For each level, which detail vectors the fraction `keep` keeps.
@@ -508,4 +522,55 @@ fn is_permutation(values: &[u32], n: usize) -> bool {
     }
     let mut seen = vec![false; n];
     values.iter().all(|&v| (v as usize) < n && !std::mem::replace(&mut seen[v as usize], true))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{DooOptions, subdivide};
+    use mesh_topo::shapes;
+
+    fn cube_pyramid() -> DooPyramid {
+        let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
+        let mut fine = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 2)).unwrap().to_mesh().unwrap();
+        fine.positions_mut()[40].z += 0.1;
+        decompose(&fine, &DecomposeOptions::levels(FaceRule::DooSabin, 2)).unwrap().pyramid
+    }
+
+    #[test]
+    fn a_non_finite_detail_is_named() {
+        let mut pyramid = cube_pyramid();
+        pyramid.levels[1].details[7].y = f64::NAN;
+        pyramid.levels[1].details[9].x = f64::INFINITY;
+        // Level 1 does not use the bad details.
+        assert!(pyramid.reconstruct(1, None).is_ok());
+        match pyramid.reconstruct(2, None) {
+            Err(DooError::InvalidPyramid(message)) => {
+                assert!(message.starts_with("level 2: detail vertex 7:"), "{message}");
+            }
+            other => panic!("expected an error, got {other:?}"),
+        }
+        // The same when the bad detail is kept by the compression.
+        assert!(matches!(pyramid.reconstruct(2, Some(1.0)), Err(DooError::InvalidPyramid(_))));
+    }
+
+    #[test]
+    fn a_non_finite_base_vertex_is_named() {
+        let mut pyramid = cube_pyramid();
+        pyramid.base.positions[5].x = f64::NEG_INFINITY;
+        for level in 0..=2 {
+            assert!(matches!(pyramid.reconstruct(level, None), Err(DooError::NonFinite { vertex: 5, .. })));
+        }
+    }
+
+    #[test]
+    fn overflowing_finite_details_are_not_an_error() {
+        // Finite details whose sum overflows: the inputs are valid, the result is what
+        // the arithmetic gives (no detail to name).
+        let mut pyramid = cube_pyramid();
+        pyramid.base.positions[0] = DVec3::splat(f64::MAX);
+        pyramid.levels[0].details[0] = DVec3::splat(f64::MAX);
+        let rebuilt = pyramid.reconstruct(2, None).unwrap();
+        assert!(rebuilt.positions.iter().any(|p| !p.is_finite()));
+    }
 }

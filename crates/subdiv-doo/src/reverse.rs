@@ -52,12 +52,15 @@
 //! Linear in the size of the fine mesh: the search visits each F_F face once and looks
 //! across each of its edges once; the candidate graph has two edges per F_E quad, at
 //! most `|NV|` ([`ReverseStats`] counts both, so tests can assert the bound). Every pass
-//! works on flat `u32` arrays, without hashing and without per-face allocation:
-//! components are labelled by one traversal and listed by a counting sort; the detail
-//! energy of a reading is one streaming pass over its F_F faces (expansion) and its F_V
+//! works on flat `u32` arrays, without hashing and without per-face allocation: a mesh
+//! whose first reading covers every vertex has one component and is not labelled, others
+//! are labelled by one traversal and listed by a counting sort; the detail
+//! energy of a reading is one streaming pass over its F_F faces in memory order
+//! (expansion; the search order is replayed only to name an error) and its F_V
 //! faces (each F_V face holds exactly the candidates of one coarse vertex, so no
 //! union-find is needed), with scratch arrays reused from reading to reading; the vertex
-//! groups of the result are walks around the coarse vertices; the automatic mode keeps
+//! groups of the result are walks around the coarse vertices, numbered through their F_V
+//! faces by a counting sort; the automatic mode keeps
 //! the F_F faces of its best reading instead of searching again, and the final checks run
 //! beside the geometry when rayon has more than one thread. The automatic mode evaluates
 //! every valid class (usually two readings, F_F and F_V), so it costs about twice a
@@ -81,7 +84,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::DooError;
 use crate::corner::{
-    CornerMesh, NONE, doo_topology, expand_faces, face_points, faces_of_corners, group_by_key, next_of_corners,
+    CornerMesh, NONE, VertexCorners, doo_topology, expand_faces, face_points, faces_of_corners, group_by_key,
+    next_of_corners,
 };
 use crate::forward::check_finite;
 use crate::rule::{FaceMaps, FaceRule};
@@ -170,6 +174,19 @@ pub struct SeedChoice {
     pub detail_energy: f64,
     /// Why this one, in words.
     pub reason: String,
+}
+
+impl SeedChoice {
+    fn given(component: usize, seed_face: usize) -> Self {
+        SeedChoice {
+            component,
+            seed_face,
+            given: true,
+            trials: Vec::new(),
+            detail_energy: f64::NAN,
+            reason: "seed face given".into(),
+        }
+    }
 }
 
 /// The result of reversing one Doo-Sabin step.
@@ -307,6 +324,9 @@ pub(crate) struct Session<'a> {
     /// so that building it does not search again (empty for a given seed).
     best_ff_faces: Vec<Vec<u32>>,
     choices: Vec<SeedChoice>,
+    /// The roles of the search are those of the given seed of a one-component mesh,
+    /// found while checking that it has one component: the first build uses them.
+    preclassified: bool,
 }
 
 impl<'a> Session<'a> {
@@ -327,6 +347,24 @@ impl<'a> Session<'a> {
             return Err(DooError::IsolatedVertex { vertex: v });
         }
         let mut search = Search::new(fine, positions, FaceMaps::new(options.rule));
+        let faces = FaceSet::All(face_count as u32);
+
+        // A mesh of one component (the usual case) needs no component labels: it is
+        // recognised by the first reading, whose F_F faces then cover every vertex once.
+        match options.seeds[..] {
+            [] => {
+                if let Some(first) = search.first_reading_covers_all(faces) {
+                    let (choice, ranked, best) = search.choose(0, faces, fine.vertex_count, Some(first))?;
+                    return Ok(Self::one_component(search, options.rule, NONE, ranked, best, choice, false));
+                }
+            }
+            [seed] if search.seed_covers_all(seed) => {
+                let choice = SeedChoice::given(0, seed);
+                let ranked = vec![(seed, f64::NAN)];
+                return Ok(Self::one_component(search, options.rule, seed as u32, ranked, Vec::new(), choice, true));
+            }
+            _ => {}
+        }
 
         // Components of the face graph, numbered by their lowest face.
         let (component_of_face, component_count) = search.face_components();
@@ -339,7 +377,11 @@ impl<'a> Session<'a> {
             given[k] = s as u32;
         }
         // The faces of each component in increasing order (a counting sort: linear).
-        let (component_offsets, faces_by_component) = group_by_key(&component_of_face, component_count);
+        let (component_offsets, faces_by_component) = if component_count == 1 {
+            (Vec::new(), Vec::new())
+        } else {
+            group_by_key(&component_of_face, component_count)
+        };
 
         // Per component: the readings to use, best first (a given seed: just that one).
         // The number of vertices of each component (no vertex is isolated).
@@ -359,24 +401,53 @@ impl<'a> Session<'a> {
             if given[k] != NONE {
                 let seed = given[k] as usize;
                 readings.push(vec![(seed, f64::NAN)]);
-                choices.push(SeedChoice {
-                    component: k,
-                    seed_face: seed,
-                    given: true,
-                    trials: Vec::new(),
-                    detail_energy: f64::NAN,
-                    reason: "seed face given".into(),
-                });
+                choices.push(SeedChoice::given(k, seed));
                 best_ff_faces.push(Vec::new());
             } else {
-                let faces = &faces_by_component[component_offsets[k] as usize..component_offsets[k + 1] as usize];
-                let (choice, ranked, best) = search.choose(k, faces, vertices_by_component[k])?;
+                let faces = if component_count == 1 {
+                    faces
+                } else {
+                    FaceSet::Listed(
+                        &faces_by_component[component_offsets[k] as usize..component_offsets[k + 1] as usize],
+                    )
+                };
+                let (choice, ranked, best) = search.choose(k, faces, vertices_by_component[k], None)?;
                 readings.push(ranked);
                 choices.push(choice);
                 best_ff_faces.push(best);
             }
         }
-        Ok(Self { search, rule: options.rule, component_of_face, given, readings, best_ff_faces, choices })
+        Ok(Self {
+            search,
+            rule: options.rule,
+            component_of_face,
+            given,
+            readings,
+            best_ff_faces,
+            choices,
+            preclassified: false,
+        })
+    }
+
+    fn one_component(
+        search: Search<'a>,
+        rule: FaceRule,
+        given: u32,
+        ranked: Ranked,
+        best: Vec<u32>,
+        choice: SeedChoice,
+        preclassified: bool,
+    ) -> Self {
+        Self {
+            search,
+            rule,
+            component_of_face: Vec::new(),
+            given: vec![given],
+            readings: vec![ranked],
+            best_ff_faces: vec![best],
+            choices: vec![choice],
+            preclassified,
+        }
     }
 
     /// Alternative choices of readings, best first: all components at their best, then
@@ -401,17 +472,21 @@ impl<'a> Session<'a> {
         let mut choices = self.choices.clone();
         let search = &mut self.search;
         loop {
-            search.role.fill(UNKNOWN);
-            search.queue.clear();
-            for ((ranked, &p), best) in self.readings.iter().zip(&pick).zip(&self.best_ff_faces) {
-                if p == 0 && !best.is_empty() {
-                    // The best automatic reading, as the ranking found it (only the F_F
-                    // roles matter from here on).
-                    for &f in best {
-                        search.role[f as usize] = FF;
+            if std::mem::take(&mut self.preclassified) {
+                // The roles of the given seed are set already.
+            } else {
+                search.role.fill(UNKNOWN);
+                search.queue.clear();
+                for ((ranked, &p), best) in self.readings.iter().zip(&pick).zip(&self.best_ff_faces) {
+                    if p == 0 && !best.is_empty() {
+                        // The best automatic reading, as the ranking found it (only the F_F
+                        // roles matter from here on).
+                        for &f in best {
+                            search.role[f as usize] = FF;
+                        }
+                    } else {
+                        search.classify(ranked[p].0)?;
                     }
-                } else {
-                    search.classify(ranked[p].0)?;
                 }
             }
             match search.finish(self.rule, &self.component_of_face, component_count) {
@@ -437,7 +512,7 @@ impl<'a> Session<'a> {
                         DooError::NotDooConnectivity { face, .. } => *face,
                         _ => return Err(error),
                     };
-                    let k = self.component_of_face[face] as usize;
+                    let k = if self.component_of_face.is_empty() { 0 } else { self.component_of_face[face] as usize };
                     if self.given[k] != NONE || pick[k] + 1 >= self.readings[k].len() {
                         return Err(error);
                     }
@@ -449,6 +524,38 @@ impl<'a> Session<'a> {
                     pick[k] += 1;
                 }
             }
+        }
+    }
+}
+
+/// The faces of one component, in increasing order: all faces of a one-component mesh
+/// (no list needed), or a listed subset.
+#[derive(Debug, Clone, Copy)]
+enum FaceSet<'s> {
+    All(u32),
+    Listed(&'s [u32]),
+}
+
+impl<'s> FaceSet<'s> {
+    fn iter(self) -> impl Iterator<Item = u32> + 's {
+        let (all, listed) = match self {
+            FaceSet::All(n) => (0..n, &[][..]),
+            FaceSet::Listed(faces) => (0..0, faces),
+        };
+        all.chain(listed.iter().copied())
+    }
+
+    fn len(self) -> usize {
+        match self {
+            FaceSet::All(n) => n as usize,
+            FaceSet::Listed(faces) => faces.len(),
+        }
+    }
+
+    fn first(self) -> u32 {
+        match self {
+            FaceSet::All(_) => 0,
+            FaceSet::Listed(faces) => faces[0],
         }
     }
 }
@@ -619,8 +726,8 @@ impl<'a> Search<'a> {
 
     /// Clears the roles of one component (its faces `component_faces`) and drops the
     /// queue entries from `queue_start`.
-    fn reset(&mut self, component_faces: &[u32], queue_start: usize) {
-        for &f in component_faces {
+    fn reset(&mut self, component_faces: FaceSet<'_>, queue_start: usize) {
+        for f in component_faces.iter() {
             self.role[f as usize] = UNKNOWN;
         }
         self.queue.truncate(queue_start);
@@ -649,7 +756,7 @@ impl<'a> Search<'a> {
     fn energy(
         &mut self,
         queue_start: usize,
-        component_faces: &[u32],
+        component_faces: FaceSet<'_>,
         component_vertices: usize,
     ) -> Result<(f64, f64), DooError> {
         let fine = self.fine;
@@ -679,30 +786,28 @@ impl<'a> Search<'a> {
     fn energy_inner(
         &mut self,
         queue_start: usize,
-        component_faces: &[u32],
+        component_faces: FaceSet<'_>,
         component_vertices: usize,
     ) -> Result<(f64, f64), DooError> {
         let fine = self.fine;
         let positions = self.positions;
         // Every vertex on one F_F face at most; candidates by expansion of each F_F face.
+        // The F_F faces in memory order (the search order only decides which of two F_F
+        // faces sharing a vertex is named: then the search order is replayed).
         let mut points = std::mem::take(&mut self.points);
         let mut expanded = std::mem::take(&mut self.expanded);
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         let mut ff_corners = 0;
-        for &f in &self.queue[queue_start..] {
+        let mut shared = false;
+        for f in component_faces.iter() {
+            if self.role[f as usize] != FF {
+                continue;
+            }
             let (b, e) = (fine.offsets[f as usize], fine.offsets[f as usize + 1]);
             points.clear();
             for fc in b..e {
                 let v = fine.corner_vertex[fc as usize] as usize;
-                let other = std::mem::replace(&mut self.ff_corner_of_vertex[v], fc);
-                if other != NONE {
-                    let g = self.corner_face[other as usize] as usize;
-                    let f = f as usize;
-                    return Err(Self::broken(
-                        f.max(g),
-                        format!("vertex {v} is a corner of two F_F faces ({} and {})", f.min(g), f.max(g)),
-                    ));
-                }
+                shared |= std::mem::replace(&mut self.ff_corner_of_vertex[v], fc) != NONE;
                 let p = positions[v];
                 lo = lo.min(p);
                 hi = hi.max(p);
@@ -717,10 +822,14 @@ impl<'a> Search<'a> {
         }
         self.points = points;
         self.expanded = expanded;
+        if shared {
+            self.ff_corner_of_vertex.fill(NONE);
+            return Err(self.shared_vertex_in_search_order(queue_start));
+        }
         // Every vertex on one F_F face at least: as no vertex is on two, the F_F faces
         // have as many corners as the component has vertices. Else find the culprit.
         if ff_corners != component_vertices {
-            for &f in component_faces {
+            for f in component_faces.iter() {
                 for c in fine.offsets[f as usize]..fine.offsets[f as usize + 1] {
                     let v = fine.corner_vertex[c as usize] as usize;
                     if self.ff_corner_of_vertex[v] == NONE {
@@ -732,7 +841,7 @@ impl<'a> Search<'a> {
         // Groups of interior coarse vertices: the corners of the other faces.
         let mut energy = 0.0;
         let mut grouped = 0;
-        for &f in component_faces {
+        for f in component_faces.iter() {
             if self.role[f as usize] != UNKNOWN {
                 continue;
             }
@@ -791,12 +900,91 @@ impl<'a> Search<'a> {
         Ok((energy, (hi - lo).length()))
     }
 
+    /// The first vertex on two F_F faces met in search order (some vertex is), as an error.
+    #[cold]
+    fn shared_vertex_in_search_order(&mut self, queue_start: usize) -> DooError {
+        let fine = self.fine;
+        for &f in &self.queue[queue_start..] {
+            for fc in fine.offsets[f as usize]..fine.offsets[f as usize + 1] {
+                let v = fine.corner_vertex[fc as usize] as usize;
+                let other = std::mem::replace(&mut self.ff_corner_of_vertex[v], fc);
+                if other != NONE {
+                    let g = self.corner_face[other as usize] as usize;
+                    let f = f as usize;
+                    return Self::broken(
+                        f.max(g),
+                        format!("vertex {v} is a corner of two F_F faces ({} and {})", f.min(g), f.max(g)),
+                    );
+                }
+            }
+        }
+        unreachable!("internal: a vertex on two F_F faces is met in any order")
+    }
+
+    /// Whether the reading of the lowest face as F_F is valid and its F_F faces cover
+    /// every vertex of the mesh once: then the mesh has one component. Returns its
+    /// detail energy and size, with the search state as [`Self::choose`] leaves it after
+    /// a first trial; otherwise restores the state as it was.
+    fn first_reading_covers_all(&mut self, faces: FaceSet<'_>) -> Option<(f64, f64)> {
+        let saved = self.stats;
+        let result = self.classify(0).and_then(|()| self.energy(0, faces, self.fine.vertex_count));
+        match result {
+            Ok(reading) => Some(reading),
+            Err(_) => {
+                self.stats = saved;
+                self.role.fill(UNKNOWN);
+                self.queue.clear();
+                None
+            }
+        }
+    }
+
+    /// Whether the reading of `seed` as F_F is valid as far as the search goes and its
+    /// F_F faces cover every vertex of the mesh once: then the mesh has one component and
+    /// the roles are kept; otherwise the state is restored.
+    fn seed_covers_all(&mut self, seed: usize) -> bool {
+        let fine = self.fine;
+        let saved = self.stats;
+        let mut covers = self.classify(seed).is_ok()
+            && self.queue.iter().map(|&f| self.face_size(f as usize)).sum::<usize>() == fine.vertex_count;
+        if covers {
+            // As many F_F corners as vertices: each vertex once iff none twice.
+            if self.grouped.len() != fine.vertex_count {
+                self.grouped = vec![false; fine.vertex_count];
+            }
+            for f in 0..fine.face_count() {
+                if self.role[f] == FF {
+                    for fc in fine.offsets[f]..fine.offsets[f + 1] {
+                        covers &= !std::mem::replace(&mut self.grouped[fine.corner_vertex[fc as usize] as usize], true);
+                    }
+                }
+            }
+            self.grouped.fill(false);
+        }
+        if !covers {
+            self.stats = saved;
+            self.role.fill(UNKNOWN);
+            self.queue.clear();
+        }
+        covers
+    }
+
     /// Automatic choice of the interpretation of component `k` (its faces `faces`, in
     /// increasing order, and its number of vertices `vertices`). Returns the choice, the valid readings ranked best first, and the
     /// F_F faces of the best one.
-    fn choose(&mut self, k: usize, faces: &[u32], vertices: usize) -> Result<(SeedChoice, Ranked, Vec<u32>), DooError> {
-        let lowest = faces[0] as usize;
-        let queue_start = self.queue.len();
+    ///
+    /// `first`: the result of the first trial (the lowest face as F_F) if it was made
+    /// already ([`Self::first_reading_covers_all`]).
+    fn choose(
+        &mut self,
+        k: usize,
+        faces: FaceSet<'_>,
+        vertices: usize,
+        mut first: Option<(f64, f64)>,
+    ) -> Result<(SeedChoice, Ranked, Vec<u32>), DooError> {
+        let lowest = faces.first() as usize;
+        // A first trial made already is the whole queue.
+        let queue_start = if first.is_some() { 0 } else { self.queue.len() };
         let mut trials = Vec::new();
 
         // A first valid reading: the lowest face, else its neighbours in order.
@@ -817,14 +1005,17 @@ impl<'a> Search<'a> {
         let mut other_classes = Vec::new();
         let mut scale = 0.0;
         for (seed, class) in candidates {
-            let result = self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices));
+            let result = match first.take() {
+                Some(reading) => Ok(reading),
+                None => self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices)),
+            };
             match result {
                 Ok((energy, size)) => {
                     scale = size;
                     trials.push(SeedTrial { seed_face: seed, class: "F_F".into(), outcome: Ok(energy) });
                     // The other classes of this reading.
-                    let fv = faces.iter().find(|&&f| self.role[f as usize] == UNKNOWN).copied();
-                    let fe = faces.iter().find(|&&f| self.role[f as usize] == FE).copied();
+                    let fv = faces.iter().find(|&f| self.role[f as usize] == UNKNOWN);
+                    let fe = faces.iter().find(|&f| self.role[f as usize] == FE);
                     if let Some(f) = fv {
                         other_classes.push((f as usize, "F_V"));
                     }
@@ -901,15 +1092,15 @@ impl<'a> Search<'a> {
         let fine = self.fine;
         let faces = fine.face_count();
         // Coarse faces: the F_F faces in increasing order.
-        let mut coarse_offsets = vec![0u32];
+        let ff_count = self.role.iter().filter(|&&r| r == FF).count();
+        let mut coarse_offsets = Vec::with_capacity(ff_count + 1);
+        coarse_offsets.push(0u32);
         let mut fine_corner_of = Vec::with_capacity(fine.vertex_count);
-        let mut ff_faces = Vec::new();
+        let mut ff_faces = Vec::with_capacity(ff_count);
         for f in 0..faces {
             if self.role[f] == FF {
                 ff_faces.push(f as u32);
-                for fc in fine.offsets[f]..fine.offsets[f + 1] {
-                    fine_corner_of.push(fc);
-                }
+                fine_corner_of.extend(fine.offsets[f]..fine.offsets[f + 1]);
                 coarse_offsets.push(fine_corner_of.len() as u32);
             }
         }
@@ -979,12 +1170,7 @@ impl<'a> Search<'a> {
         // vertices; on a mesh made by `subdivide` this is the original order), then the
         // boundary vertices in order of first appearance.
         let vertex_face = find_vertex_faces(fine, &self.corner_face, &coarse, &vertex_of, &fine_corner_of)?;
-        let mut new_order: Vec<u32> = (0..coarse_vertex_count as u32).collect();
-        let key = |v: u32| match vertex_face[v as usize] {
-            NONE => faces as u64 + coarse.first_corner(v as usize) as u64,
-            f => f as u64,
-        };
-        new_order.sort_by_key(|&v| key(v));
+        let new_order = coarse_vertex_order(&coarse, &vertex_face, faces);
         let mut renumber = vec![0u32; coarse_vertex_count];
         for (new, &old) in new_order.iter().enumerate() {
             renumber[old as usize] = new as u32;
@@ -1085,6 +1271,11 @@ pub(crate) struct CornersByVertex {
 }
 
 impl CornersByVertex {
+    /// From the `(offsets, corners)` of [`group_by_key`] on the corner vertices.
+    pub(crate) fn from_parts((offsets, corners): VertexCorners) -> Self {
+        Self { offsets, corners }
+    }
+
     fn iter(&self) -> impl Iterator<Item = &[u32]> + '_ {
         self.offsets.windows(2).map(|w| &self.corners[w[0] as usize..w[1] as usize])
     }
@@ -1112,15 +1303,6 @@ fn details_offset(by_vertex: &CornersByVertex, v: usize) -> usize {
     by_vertex.offsets[v] as usize - v
 }
 
-/// `d_1 .. d_r` from the prefix sums `e_1 .. e_{r-1}`.
-fn detail_offsets_of(e: &[DVec3], r: usize) -> impl Iterator<Item = DVec3> + '_ {
-    (0..r).map(move |i| {
-        let current = if i + 1 < r { e[i] } else { DVec3::ZERO };
-        let previous = if i > 0 { e[i - 1] } else { DVec3::ZERO };
-        current - previous
-    })
-}
-
 /// Coarse vertex = mean of its candidates; details = prefix sums of the offsets; and each
 /// vertex's squared detail norm `Σ |d_i|²` (one pass over the candidates).
 fn means_and_details(by_vertex: &CornersByVertex, candidates: &[DVec3]) -> (Vec<DVec3>, Vec<DVec3>, Vec<f64>) {
@@ -1143,6 +1325,37 @@ fn means_and_details(by_vertex: &CornersByVertex, candidates: &[DVec3]) -> (Vec<
         energies.push(energy + last.length_squared());
     }
     (means, details, energies)
+}
+
+/// The coarse vertices sorted by their F_V faces (`vertex_face`, [`NONE`] for boundary
+/// vertices), then the boundary vertices by their first corner; equal keys keep the
+/// vertex order. Linear: the F_V faces are listed by face (a counting sort with one slot
+/// per face), the boundary vertices come in corner order.
+fn coarse_vertex_order(coarse: &CornerMesh, vertex_face: &[u32], faces: usize) -> Vec<u32> {
+    let mut vertex_of_face = vec![NONE; faces];
+    for (v, &f) in vertex_face.iter().enumerate() {
+        if f != NONE && std::mem::replace(&mut vertex_of_face[f as usize], v as u32) != NONE {
+            // Two vertices claim one F_V face (the structure check rejects this later):
+            // the general sort keeps their order.
+            let key = |v: u32| match vertex_face[v as usize] {
+                NONE => faces as u64 + coarse.first_corner(v as usize) as u64,
+                f => f as u64,
+            };
+            let mut order: Vec<u32> = (0..vertex_face.len() as u32).collect();
+            order.sort_by_key(|&v| key(v));
+            return order;
+        }
+    }
+    let mut order = Vec::with_capacity(vertex_face.len());
+    order.extend(vertex_of_face.iter().copied().filter(|&v| v != NONE));
+    if order.len() < vertex_face.len() {
+        for (c, &v) in coarse.corner_vertex.iter().enumerate() {
+            if vertex_face[v as usize] == NONE && coarse.first_corner(v as usize) == c as u32 {
+                order.push(v);
+            }
+        }
+    }
+    order
 }
 
 /// The coarse mesh must be a valid manifold mesh: no face visits a vertex twice, and no
@@ -1358,16 +1571,50 @@ pub(crate) fn reconstruct_level(
     rule: FaceRule,
     with_adjacency: bool,
 ) -> Result<(CornerMesh, Vec<DVec3>), DooError> {
-    let maps = FaceMaps::new(rule);
-    let by_vertex = corners_by_vertex(coarse);
-    let mut candidates = vec![DVec3::ZERO; coarse.corner_count()];
+    let (candidates, _) = level_candidates(&corners_by_vertex(coarse), coarse_positions, details);
+    level_from_candidates(coarse, &candidates, order, rule, with_adjacency)
+}
+
+/// The candidates of one level (per coarse corner): each coarse vertex plus the offsets
+/// `d_1 = e_1`, `d_j = e_j - e_{j-1}`, `d_r = -e_{r-1}` decoded from its details, vertex
+/// by vertex. Also tells whether every candidate is finite (so that the caller checks
+/// the inputs only when one is not).
+pub(crate) fn level_candidates(
+    by_vertex: &CornersByVertex,
+    coarse_positions: &[DVec3],
+    details: &[DVec3],
+) -> (Vec<DVec3>, bool) {
+    let mut candidates = vec![DVec3::ZERO; by_vertex.corners.len()];
+    // `0 x` is zero for a finite `x` and NaN otherwise: one NaN makes the sum NaN.
+    let mut probe = DVec3::ZERO;
     for (v, corners) in by_vertex.iter().enumerate() {
-        let base = details_offset(&by_vertex, v);
-        let e = &details[base..base + corners.len() - 1];
-        for (&c, d) in corners.iter().zip(detail_offsets_of(e, corners.len())) {
-            candidates[c as usize] = coarse_positions[v] + d;
+        let base = details_offset(by_vertex, v);
+        let p = coarse_positions[v];
+        let (last, rest) = corners.split_last().expect("internal: a coarse vertex has a corner");
+        let mut previous = DVec3::ZERO;
+        for (&c, &e) in rest.iter().zip(&details[base..base + rest.len()]) {
+            let candidate = p + (e - previous);
+            probe += candidate * 0.0;
+            candidates[c as usize] = candidate;
+            previous = e;
         }
+        let candidate = p + (DVec3::ZERO - previous);
+        probe += candidate * 0.0;
+        candidates[*last as usize] = candidate;
     }
+    (candidates, probe == DVec3::ZERO)
+}
+
+/// The forward rule on each coarse face's own candidates, the canonical Doo-Sabin
+/// connectivity, then the fine order (see [`reconstruct_level`]).
+pub(crate) fn level_from_candidates(
+    coarse: &CornerMesh,
+    candidates: &[DVec3],
+    order: &FineOrder,
+    rule: FaceRule,
+    with_adjacency: bool,
+) -> Result<(CornerMesh, Vec<DVec3>), DooError> {
+    let maps = FaceMaps::new(rule);
     let canonical_positions = face_points(&coarse.offsets, &maps, |c| candidates[c]);
     let topology = doo_topology(coarse, with_adjacency)?;
     let vertex_count = canonical_positions.len();
@@ -1444,4 +1691,80 @@ fn apply_order(
         mesh.vertex_corner = Some(vertex_corner);
     }
     (mesh, positions)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{DooOptions, subdivide_soup};
+    use mesh_topo::shapes::{self, CellKind};
+
+    /// The refinement of a cube and a torus side by side (two components), one vertex moved.
+    fn two_components() -> HalfedgeMesh {
+        let mut soup = shapes::cube();
+        let torus = shapes::torus(4, 3, CellKind::Mixed).unwrap();
+        let base = soup.vertex_count() as u32;
+        soup.positions.extend(torus.positions.iter().map(|&p| p + DVec3::splat(5.0)));
+        for face in torus.faces() {
+            soup.push_face(&face.iter().map(|&v| v + base).collect::<Vec<u32>>());
+        }
+        let mut fine = subdivide_soup(&soup, &DooOptions::default()).unwrap().to_mesh().unwrap();
+        fine.positions_mut()[30].x += 0.05;
+        fine
+    }
+
+    fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
+        a.iter().zip(b).map(|(p, q)| (*p - *q).length()).fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn one_seed_per_component_on_a_multi_component_mesh() {
+        let fine = two_components();
+        let auto = reverse(&fine, &ReverseOptions::default()).unwrap();
+        // The F_F faces come first: face 6 is the torus's first F_F face.
+        let torus_face = 6;
+        for seeds in [vec![0], vec![torus_face], vec![0, torus_face], vec![torus_face, 0]] {
+            let options = ReverseOptions { rule: FaceRule::DooSabin, seeds: seeds.clone() };
+            let seeded = reverse(&fine, &options).unwrap();
+            assert_eq!(seeded.choices().len(), 2);
+            assert_eq!(seeded.choices()[0].given, seeds.contains(&0), "{seeds:?}");
+            assert_eq!(seeded.choices()[1].given, seeds.contains(&torus_face), "{seeds:?}");
+            assert_eq!(seeded.coarse(), auto.coarse(), "{seeds:?}");
+            assert_eq!(seeded.details(), auto.details(), "{seeds:?}");
+            assert!(max_distance(&seeded.reconstruct().positions, fine.positions()) < 1e-13);
+        }
+        // Two seeds in one component.
+        let options = ReverseOptions { rule: FaceRule::DooSabin, seeds: vec![1, torus_face, 0] };
+        assert!(matches!(reverse(&fine, &options), Err(DooError::DuplicateSeed { first: 1, second: 0 })));
+    }
+
+    #[test]
+    fn one_component_readings_are_searched_once_each() {
+        // An exact refinement: the first reading has zero details, nothing else is tried,
+        // and building it does not search again.
+        let torus = shapes::torus(6, 5, CellKind::Mixed).unwrap();
+        let fine = subdivide_soup(&torus, &DooOptions::default()).unwrap().to_mesh().unwrap();
+        let stats = reverse(&fine, &ReverseOptions::default()).unwrap().stats();
+        assert_eq!((stats.visited_faces, stats.interpretations), (torus.face_count(), 1));
+        let seeded = reverse(&fine, &ReverseOptions::with_seed(FaceRule::DooSabin, 3)).unwrap().stats();
+        assert_eq!(seeded.visited_faces, torus.face_count());
+    }
+
+    #[test]
+    fn a_given_seed_that_does_not_cover_the_mesh_still_names_the_break() {
+        // A one-component mesh whose given seed is an F_E quad: the quick one-component
+        // test fails and the search's own error is reported.
+        let fine = subdivide_soup(&shapes::cube(), &DooOptions::default()).unwrap().to_mesh().unwrap();
+        let error = reverse(&fine, &ReverseOptions::with_seed(FaceRule::DooSabin, 6)).unwrap_err();
+        assert!(matches!(error, DooError::NotDooConnectivity { .. }), "{error}");
+        // A one-component mesh whose lowest face is not an F_F face: the automatic mode
+        // still finds the reading (here the F_V triangles of the cube are not F_F faces).
+        let soup = subdivide_soup(&shapes::cube(), &DooOptions::default()).unwrap().into_soup();
+        let mut faces: Vec<Vec<u32>> = soup.faces().map(<[u32]>::to_vec).collect();
+        faces.rotate_right(8);
+        let shuffled = HalfedgeMesh::from_soup(&PolygonSoup::from_faces(soup.positions.clone(), faces)).unwrap();
+        let reversal = reverse(&shuffled, &ReverseOptions::default()).unwrap();
+        assert_eq!(reversal.coarse().face_count(), 6);
+        assert!(max_distance(&reversal.reconstruct().positions, shuffled.positions()) < 1e-14);
+    }
 }
