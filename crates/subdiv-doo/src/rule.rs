@@ -275,10 +275,11 @@ impl FaceMaps {
     pub(crate) fn inverse(&self, points: &[DVec3], out: &mut [DVec3]) {
         let m = points.len();
         debug_assert!(m >= 3 && out.len() == m);
-        if m <= DENSE_MAX {
-            circulant(&self.inverse[m], points, out);
-        } else {
-            self.inverse_large(points, out);
+        match m {
+            3 => circulant_fixed::<3>(&self.inverse[3], points, out),
+            4 => circulant_fixed::<4>(&self.inverse[4], points, out),
+            _ if m <= DENSE_MAX => circulant(&self.inverse[m], points, out),
+            _ => self.inverse_large(points, out),
         }
     }
 
@@ -338,6 +339,21 @@ fn circulant(w: &[f64], points: &[DVec3], out: &mut [DVec3]) {
         let mut acc = DVec3::ZERO;
         for (k, &wk) in w.iter().enumerate() {
             let idx = if i + k >= m { i + k - m } else { i + k };
+            acc += wk * points[idx];
+        }
+        *o = acc;
+    }
+}
+
+/// [`circulant`] for a size known at compile time (unrolled; the same operations in the
+/// same order, so the same bits).
+#[inline]
+fn circulant_fixed<const M: usize>(w: &[f64], points: &[DVec3], out: &mut [DVec3]) {
+    let (w, points, out) = (&w[..M], &points[..M], &mut out[..M]);
+    for (i, o) in out.iter_mut().enumerate() {
+        let mut acc = DVec3::ZERO;
+        for (k, &wk) in w.iter().enumerate() {
+            let idx = if i + k >= M { i + k - M } else { i + k };
             acc += wk * points[idx];
         }
         *o = acc;
