@@ -529,6 +529,29 @@ where
     out
 }
 
+/// [`face_points`] in place: `points[c]` is the point of corner `c` on entry and its
+/// F_F corner on return (each face reads and writes only its own corners, so no second
+/// array is needed). Bit-identical for any thread count.
+pub(crate) fn face_points_in_place(offsets: &[u32], maps: &FaceMaps, points: &mut [DVec3]) {
+    let faces = offsets.len().saturating_sub(1);
+    let work = |first: usize, end: usize, slice: &mut [DVec3]| {
+        let base = offsets[first] as usize;
+        let mut gathered: Vec<DVec3> = Vec::new();
+        for f in first..end {
+            let (b, e) = (offsets[f] as usize - base, offsets[f + 1] as usize - base);
+            gathered.clear();
+            gathered.extend_from_slice(&slice[b..e]);
+            maps.forward(&gathered, &mut slice[b..e]);
+        }
+    };
+    if faces < PARALLEL_FACES {
+        work(0, faces, points);
+    } else {
+        let target = rayon::current_num_threads() * 8;
+        face_chunks(offsets, points, target).into_par_iter().for_each(|(first, end, slice)| work(first, end, slice));
+    }
+}
+
 /// Per-face expansion (inverse map) of the points `point(c)` at the corners of the
 /// faces listed in `faces` (ranges given by `offsets`), written per corner.
 pub(crate) fn expand_faces<P>(offsets: &[u32], maps: &FaceMaps, point: P) -> Vec<DVec3>

@@ -357,7 +357,7 @@ impl DooPyramid {
             }
             let with_adjacency = k + 1 < level;
             let (fine, fine_positions) =
-                level_from_candidates(&mesh, &candidates, &data.order, self.rule, with_adjacency)
+                level_from_candidates(&mesh, candidates, &data.order, self.rule, with_adjacency)
                     .map_err(|e| DooError::InvalidPyramid(format!("level {}: {e}", k + 1)))?;
             mesh = fine;
             positions = Cow::Owned(fine_positions);

@@ -84,7 +84,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::DooError;
 use crate::corner::{
-    CornerMesh, NONE, VertexCorners, doo_topology, expand_faces, face_points, faces_of_corners, group_by_key,
+    CornerMesh, NONE, VertexCorners, doo_topology, expand_faces, face_points_in_place, faces_of_corners, group_by_key,
     next_of_corners,
 };
 use crate::forward::check_finite;
@@ -1572,7 +1572,7 @@ pub(crate) fn reconstruct_level(
     with_adjacency: bool,
 ) -> Result<(CornerMesh, Vec<DVec3>), DooError> {
     let (candidates, _) = level_candidates(&corners_by_vertex(coarse), coarse_positions, details);
-    level_from_candidates(coarse, &candidates, order, rule, with_adjacency)
+    level_from_candidates(coarse, candidates, order, rule, with_adjacency)
 }
 
 /// The candidates of one level (per coarse corner): each coarse vertex plus the offsets
@@ -1605,17 +1605,19 @@ pub(crate) fn level_candidates(
     (candidates, probe == DVec3::ZERO)
 }
 
-/// The forward rule on each coarse face's own candidates, the canonical Doo-Sabin
-/// connectivity, then the fine order (see [`reconstruct_level`]).
+/// The forward rule on each coarse face's own candidates (in place: fine vertex `c` is
+/// coarse corner `c`), the canonical Doo-Sabin connectivity, then the fine order (see
+/// [`reconstruct_level`]).
 pub(crate) fn level_from_candidates(
     coarse: &CornerMesh,
-    candidates: &[DVec3],
+    mut candidates: Vec<DVec3>,
     order: &FineOrder,
     rule: FaceRule,
     with_adjacency: bool,
 ) -> Result<(CornerMesh, Vec<DVec3>), DooError> {
     let maps = FaceMaps::new(rule);
-    let canonical_positions = face_points(&coarse.offsets, &maps, |c| candidates[c]);
+    face_points_in_place(&coarse.offsets, &maps, &mut candidates);
+    let canonical_positions = candidates;
     let topology = doo_topology(coarse, with_adjacency)?;
     let vertex_count = canonical_positions.len();
     let canonical = if with_adjacency {
