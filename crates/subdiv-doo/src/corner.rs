@@ -554,12 +554,14 @@ pub(crate) fn face_points_in_place(offsets: &[u32], maps: &FaceMaps, points: &mu
 
 /// Per-face expansion (inverse map) of the points `point(c)` at the corners of the
 /// faces listed in `faces` (ranges given by `offsets`), written per corner.
-pub(crate) fn expand_faces<P>(offsets: &[u32], maps: &FaceMaps, point: P) -> Vec<DVec3>
+/// `buffer` is reused for the result (its contents are overwritten).
+pub(crate) fn expand_faces<P>(offsets: &[u32], maps: &FaceMaps, point: P, buffer: Vec<DVec3>) -> Vec<DVec3>
 where
     P: Fn(usize) -> DVec3 + Sync,
 {
     let corners = offsets.last().copied().unwrap_or(0) as usize;
-    let mut out = vec![DVec3::ZERO; corners];
+    let mut out = buffer;
+    out.resize(corners, DVec3::ZERO);
     let faces = offsets.len().saturating_sub(1);
     let work = |first: usize, end: usize, slice: &mut [DVec3]| {
         let base = offsets[first] as usize;

@@ -489,7 +489,10 @@ impl<'a> Session<'a> {
                     }
                 }
             }
-            match search.finish(self.rule, &self.component_of_face, component_count) {
+            // The candidates of the result are written into the energy scratch (no reading
+            // is evaluated after the ranking).
+            let buffer = std::mem::take(&mut search.candidate);
+            match search.finish(self.rule, &self.component_of_face, component_count, buffer) {
                 Ok((mut reversal, energies)) => {
                     for (k, choice) in choices.iter_mut().enumerate() {
                         let (seed, _) = self.readings[k][pick[k]];
@@ -763,6 +766,8 @@ impl<'a> Search<'a> {
         if self.ff_corner_of_vertex.is_empty() {
             self.ff_corner_of_vertex = vec![NONE; fine.vertex_count];
             self.grouped = vec![false; fine.vertex_count];
+        }
+        if self.candidate.len() != fine.vertex_count {
             self.candidate = vec![DVec3::ZERO; fine.vertex_count];
         }
         let result = self.energy_inner(queue_start, component_faces, component_vertices);
@@ -1082,12 +1087,14 @@ impl<'a> Search<'a> {
     }
 
     /// Builds the coarse mesh, details and fine order from the roles of all components;
-    /// also returns the total squared detail norm of each component.
+    /// also returns the total squared detail norm of each component. `buffer` is reused
+    /// for the candidates.
     fn finish(
         &self,
         rule: FaceRule,
         component_of_face: &[u32],
         component_count: usize,
+        buffer: Vec<DVec3>,
     ) -> Result<(DooReversal, Vec<f64>), DooError> {
         let fine = self.fine;
         let faces = fine.face_count();
@@ -1199,7 +1206,8 @@ impl<'a> Search<'a> {
             },
             || {
                 // Candidates, means and details.
-                let candidates = expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize]);
+                let candidates =
+                    expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize], buffer);
                 let by_vertex = corners_by_vertex(&coarse);
                 let (coarse_positions, details, vertex_energy) = means_and_details(&by_vertex, &candidates);
                 (by_vertex, coarse_positions, details, vertex_energy)
