@@ -5,12 +5,20 @@
 //! the ratio against the peer libraries it finds on the machine. Outputs above
 //! [`MAX_OUTPUT_FACES`] are skipped. The Loop and Doo-Sabin defaults also run on two
 //! threads; results are bit-identical for any thread count, only the time changes.
+//!
+//! Beside `loop-<threads>t`, the `loop-reuse-<threads>t` rows time
+//! `forward::Subdivider::subdivide_into` called again and again into the same output, as
+//! an editor, an animation or a pipeline stage that subdivides repeatedly does: after the
+//! first call it allocates nothing and takes no page fault. Its output is the Loop
+//! arrays themselves (the `loop` rows also build the facade's polygon soup). `cargo
+//! xtask bench` compares these rows with the same peer runs as `loop`.
 
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use multires::loop_subdiv::forward::{LoopMesh, Subdivider};
 use multires::prelude::*;
 
 /// Largest output (faces) a benchmark is run for: level 4 of the 75k-face bunny.
@@ -44,6 +52,26 @@ fn subdivide_all_schemes(c: &mut Criterion) {
                             b.iter_with_large_drop(|| scheme.subdivide(black_box(&mesh), level).expect("subdivision"))
                         })
                     });
+                }
+                if scheme == SurfaceScheme::Loop {
+                    // One subdivider and output per thread count, reused by every call.
+                    let (mut subdivider, mut out) = (Subdivider::default(), LoopMesh::default());
+                    for level in 1..=4u32 {
+                        let faces =
+                            scheme.closed_face_count(mesh.vertex_count(), mesh.edge_count(), mesh.face_count(), level);
+                        if faces > MAX_OUTPUT_FACES {
+                            break;
+                        }
+                        group.throughput(Throughput::Elements(faces as u64));
+                        let id = BenchmarkId::new(format!("loop-reuse-{threads}t"), level);
+                        group.bench_function(id, |b| {
+                            pool.install(|| {
+                                b.iter(|| {
+                                    subdivider.subdivide_into(black_box(&mesh), level, &mut out).expect("subdivision")
+                                })
+                            })
+                        });
+                    }
                 }
             }
         }

@@ -6,6 +6,11 @@
 //! alone (reading and writing excluded), like our criterion benchmarks. The drivers are
 //! looked up in `$MULTIRES_PEERS_DIR`, `$MULTIRES_PEERS_DIR/build` and the `PATH`; a
 //! missing driver is skipped with a note, so the command works on a bare machine too.
+//!
+//! Variants of one of our schemes are compared with the peers' runs of the scheme itself:
+//! `loop-reuse` (repeated subdivision into the previous result's memory) with `loop`.
+//! Each peer run (driver, scheme, mesh, level) is made once per report and shared by
+//! the rows that need it.
 
 use std::collections::BTreeMap;
 use std::env;
@@ -30,6 +35,39 @@ const DRIVERS: &[Driver] = &[
 pub struct Measurement {
     pub mean_ns: f64,
     pub elements: Option<f64>,
+}
+
+/// Benchmark variants of our schemes: (suffix of the variant, the scheme the peers run).
+/// `loop-reuse` writes into the memory of its previous result; the peers' `loop` runs
+/// are the comparison.
+const VARIANTS: &[(&str, &str)] = &[("loop-reuse", "loop")];
+
+/// The scheme whose peer runs a benchmark scheme is compared with.
+fn peer_scheme(scheme: &str) -> &str {
+    VARIANTS.iter().find(|(variant, _)| *variant == scheme).map_or(scheme, |&(_, base)| base)
+}
+
+/// Peer runs made so far, so that the same (driver, scheme, mesh, level) runs once.
+#[derive(Default)]
+struct PeerRuns {
+    runs: BTreeMap<(String, String, PathBuf, u32), Result<f64, String>>,
+}
+
+impl PeerRuns {
+    /// The result of `run` for this key, running it only the first time.
+    fn get_or_run(
+        &mut self,
+        program: &str,
+        scheme: &str,
+        input: &Path,
+        level: u32,
+        run: impl FnOnce() -> Result<f64, String>,
+    ) -> Result<f64, String> {
+        self.runs
+            .entry((program.to_string(), scheme.to_string(), input.to_path_buf(), level))
+            .or_insert_with(run)
+            .clone()
+    }
 }
 
 /// Our time for one (mesh, scheme, level), per thread count.
@@ -58,7 +96,9 @@ pub fn comparison(rows: &BTreeMap<String, Measurement>, mesh_file: impl Fn(&str)
     let mut text = String::from(
         "## Subdivision against peer libraries (same run)\n\n\
          Times of the subdivision call alone, best of up to 3 runs for the peers, criterion mean for \
-         ours; `ratio` = fastest peer time / our time (above 1: we are faster).\n\n",
+         ours; `ratio` = fastest peer time / our time (above 1: we are faster). `loop-reuse` rows \
+         (repeated subdivision into the previous result's memory) are compared with the same peer \
+         runs as `loop`.\n\n",
     );
     let missing: Vec<&str> =
         DRIVERS.iter().filter(|d| !found.iter().any(|(f, _)| f.program == d.program)).map(|d| d.library).collect();
@@ -69,6 +109,7 @@ pub fn comparison(rows: &BTreeMap<String, Measurement>, mesh_file: impl Fn(&str)
             missing.join(", ")
         ));
     }
+    let mut peer_runs = PeerRuns::default();
     text.push_str("| mesh | scheme | level | faces | ours 1 thread | ours 2 threads | peers | ratio 1t | ratio 2t |\n");
     text.push_str("|---|---|---:|---:|---:|---:|---|---:|---:|\n");
     for ((mesh, scheme, level), measured) in &ours {
@@ -77,9 +118,15 @@ pub fn comparison(rows: &BTreeMap<String, Measurement>, mesh_file: impl Fn(&str)
         let mut peer_times = Vec::new();
         if let Some(input) = mesh_file(mesh) {
             for (driver, program) in &found {
-                let Some((_, their_scheme)) = driver.schemes.iter().find(|(our, _)| our == scheme) else { continue };
-                eprintln!("    {} {their_scheme} {} level {level}", driver.library, input.display());
-                match run_driver(program, their_scheme, &input, *level) {
+                let compared = peer_scheme(scheme);
+                let Some((_, their_scheme)) = driver.schemes.iter().find(|(our, _)| *our == compared) else {
+                    continue;
+                };
+                let result = peer_runs.get_or_run(driver.program, their_scheme, &input, *level, || {
+                    eprintln!("    {} {their_scheme} {} level {level}", driver.library, input.display());
+                    run_driver(program, their_scheme, &input, *level)
+                });
+                match result {
                     Ok(seconds) => peer_times.push((driver.library, seconds)),
                     Err(message) => eprintln!("    {}: {message}", driver.library),
                 }
@@ -156,5 +203,36 @@ mod tests {
         assert_eq!(parse_id("subdivide-bunny/loop-warren-1t/4").unwrap().1, "loop-warren");
         assert_eq!(parse_id("build/bunny"), None);
         assert_eq!(parse_id("subdivide-bunny/loop/4"), None);
+    }
+
+    #[test]
+    fn reuse_rows_parse_and_compare_with_the_peers_loop() {
+        assert_eq!(parse_id("subdivide-bunny00/loop-reuse-2t/4"), Some(("bunny00".into(), "loop-reuse".into(), 2, 4)));
+        assert_eq!(parse_id("subdivide-bunny/loop-reuse-1t/1").unwrap().1, "loop-reuse");
+        assert_eq!(peer_scheme("loop-reuse"), "loop");
+        assert_eq!(peer_scheme("loop"), "loop");
+        assert_eq!(peer_scheme("doo-sabin"), "doo-sabin");
+    }
+
+    #[test]
+    fn a_peer_run_is_made_once_per_driver_mesh_and_level() {
+        let mut runs = PeerRuns::default();
+        let mut count = 0;
+        let mesh = Path::new("bunny.obj");
+        for _ in 0..3 {
+            let time = runs.get_or_run("osd_subdiv", "loop", mesh, 2, || {
+                count += 1;
+                Ok(0.5)
+            });
+            assert_eq!(time, Ok(0.5));
+        }
+        assert_eq!(count, 1);
+        // Another level, driver or mesh is another run; failures are remembered too.
+        let failed = runs.get_or_run("osd_subdiv", "loop", mesh, 3, || Err("exit 1".into()));
+        assert_eq!(failed, Err("exit 1".to_string()));
+        assert_eq!(runs.get_or_run("osd_subdiv", "loop", mesh, 3, || Ok(1.0)), failed);
+        assert_eq!(runs.get_or_run("cgal_subdiv", "loop", mesh, 2, || Ok(0.25)), Ok(0.25));
+        assert_eq!(runs.get_or_run("osd_subdiv", "loop", Path::new("bunny00.off"), 2, || Ok(2.0)), Ok(2.0));
+        assert_eq!(runs.runs.len(), 4);
     }
 }

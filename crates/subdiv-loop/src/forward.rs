@@ -47,7 +47,10 @@
 //! the next level's topology follows from the previous one by index arithmetic
 //! (Dupuy and Vanhoey 2021), without hashing. Faces, edges and vertices are processed in
 //! parallel with `rayon`, each output written by exactly one task with a fixed formula,
-//! so results are bit-identical for any number of threads. The last level computes only
+//! so results are bit-identical for any number of threads; levels of fewer than 4096
+//! coarse faces, and all levels on a one-thread pool, run the same tasks one after the
+//! other on the calling thread, where handing them to the pool would cost more than
+//! it saves. The last level computes only
 //! positions and triangles. Outputs are written once, without a zero or placeholder pass
 //! first, and on Linux the large ones are backed by transparent huge pages: the first
 //! touch of fresh memory (a page fault per 4 KiB page, and the kernel zeroing it) is the
@@ -56,7 +59,12 @@
 //! the result from about 50 ms to 2 ms. Peak memory beyond the output is the previous level: about 40% of the output size
 //! (level 4 of a 75k-triangle mesh: peak resident memory of the whole process 1.45 times
 //! the output, 1.42 without the input mesh).
-//! [`LoopMesh::into_soup`] reuses the triangles' memory. The result is flat arrays;
+//! [`LoopMesh::into_soup`] reuses the triangles' memory.
+//!
+//! Repeated subdivision (an editor moving vertices, an animation, a pipeline stage) should
+//! use a [`Subdivider`]: it writes into the arrays of the previous result and keeps the
+//! intermediate levels between calls, so after the first call nothing is allocated and no
+//! page is touched for the first time. The result is flat arrays;
 //! building a [`HalfedgeMesh`] from them ([`LoopMesh::to_halfedge_mesh`]) validates and
 //! sorts, and costs more than the subdivision itself at large sizes.
 //!
@@ -71,6 +79,7 @@ mod attribute;
 mod buffer;
 pub(crate) mod kernel;
 mod matrix;
+mod subdivider;
 pub(crate) mod topology;
 
 use glam::DVec3;
@@ -80,6 +89,7 @@ use serde::{Deserialize, Serialize};
 pub use attribute::Attribute;
 pub(crate) use attribute::SparseRow;
 pub use matrix::SubdivisionMatrix;
+pub use subdivider::Subdivider;
 
 use crate::LoopError;
 use kernel::Rules;
@@ -123,8 +133,9 @@ impl LoopOptions {
 }
 
 /// A subdivided triangle mesh as flat arrays, in the order documented in the
-/// [module docs](self).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// [module docs](self). The default is the empty mesh, for instance as the output of
+/// [`Subdivider::subdivide_into`] before its first call.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct LoopMesh {
     /// Vertex positions.
     pub positions: Vec<DVec3>,

@@ -46,6 +46,19 @@ impl<T> Output<T> {
         Self { vec, len, filled: AtomicUsize::new(0), handed_out: false }
     }
 
+    /// Room for `len` elements in the memory of `vec` (its elements are dropped) when
+    /// its capacity suffices: memory that was written before is already mapped, so
+    /// writing it again takes no page fault. A vector that is too small is released
+    /// before a new one is allocated, as by [`Output::new`].
+    pub(crate) fn reuse(mut vec: Vec<T>, len: usize) -> Self {
+        vec.clear();
+        if vec.capacity() < len {
+            drop(vec);
+            return Self::new(len);
+        }
+        Self { vec, len, filled: AtomicUsize::new(0), handed_out: false }
+    }
+
     /// All slots, to be split into the pieces that the tasks write.
     ///
     /// # Panics
@@ -256,6 +269,39 @@ mod tests {
         let values = output.into_vec();
         assert!(values.iter().enumerate().all(|(i, &v)| v == i as u64));
         assert!(Output::<u8>::new(0).into_vec().is_empty());
+    }
+
+    #[test]
+    fn reused_vectors_keep_their_memory_and_grow_when_too_small() {
+        let mut output = Output::reuse(vec![7u64; 10], 4);
+        {
+            let mut all = output.slots();
+            for i in 0..4 {
+                all.push(i);
+            }
+        }
+        let values = output.into_vec();
+        assert_eq!(values, [0, 1, 2, 3]);
+        assert!(values.capacity() >= 10);
+        let address = values.as_ptr();
+        let mut again = Output::reuse(values, 10);
+        {
+            let mut all = again.slots();
+            for i in 0..10 {
+                all.push(i);
+            }
+        }
+        let values = again.into_vec();
+        assert_eq!(values.as_ptr(), address, "the memory is reused");
+        assert_eq!(values.len(), 10);
+        let mut grown = Output::reuse(values, 100);
+        {
+            let mut all = grown.slots();
+            for i in 0..100 {
+                all.push(i);
+            }
+        }
+        assert!(grown.into_vec().iter().copied().eq(0..100));
     }
 
     #[test]

@@ -17,6 +17,9 @@ use super::{LoopOptions, VertexWeights};
 const FACE_CHUNK: usize = 2048;
 /// Vertices per parallel work item.
 const VERTEX_CHUNK: usize = 4096;
+/// Steps on fewer coarse faces than this run on the calling thread: handing a few
+/// chunks to the thread pool costs more than it saves.
+pub(crate) const PARALLEL_MIN_FACES: usize = 4096;
 /// Valences whose weights are tabulated.
 const TABLE: usize = 32;
 
@@ -139,9 +142,40 @@ pub(crate) fn refine_topology(topo: &Topology) -> Topology {
     step(topo, &vec![NoValue; topo.vertex_count], &rules, true).topology
 }
 
+/// The vectors a step writes its outputs into: their memory is reused when large enough
+/// (see [`Output::reuse`]); their contents are dropped.
+pub(crate) struct Buffers<T> {
+    pub(crate) values: Vec<T>,
+    pub(crate) triangles: Vec<[u32; 3]>,
+    pub(crate) links: Vec<[u32; 4]>,
+    pub(crate) starts: Vec<u32>,
+}
+
+impl<T> Default for Buffers<T> {
+    fn default() -> Self {
+        Self { values: Vec::new(), triangles: Vec::new(), links: Vec::new(), starts: Vec::new() }
+    }
+}
+
 /// One Loop step of `values` on `topo`. With `refine_topology` the fine links and
 /// vertex starts are produced too (needed for a further step).
 pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, refine_topology: bool) -> Step<T> {
+    step_into(topo, values, rules, refine_topology, Buffers::default())
+}
+
+/// [`step`] writing into the memory of `buffers` (bit-identical results).
+///
+/// Steps with fewer than [`PARALLEL_MIN_FACES`] coarse faces, and every step when the
+/// current rayon pool has one thread, run their chunks one after the other on the
+/// calling thread, without building a list of tasks: the same chunks and formulas, so
+/// the same bits.
+pub(crate) fn step_into<T: Attribute>(
+    topo: &Topology,
+    values: &[T],
+    rules: &Rules,
+    refine_topology: bool,
+    buffers: Buffers<T>,
+) -> Step<T> {
     let nv = topo.vertex_count;
     let ne = topo.edge_count;
     let nf = topo.face_count();
@@ -152,63 +186,12 @@ pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, r
 
     // Every output element is written exactly once below, by one task.
     let optional = |n: usize| if refine_topology { n } else { 0 };
-    let mut fine_values = Output::<T>::new(fine_vertex_count);
-    let mut fine_triangles = Output::<[u32; 3]>::new(4 * nf);
-    let mut fine_links = Output::<[u32; 4]>::new(optional(4 * nf));
-    let mut fine_starts = Output::<u32>::new(optional(nv));
+    let mut fine_values = Output::<T>::reuse(buffers.values, fine_vertex_count);
+    let mut fine_triangles = Output::<[u32; 3]>::reuse(buffers.triangles, 4 * nf);
+    let mut fine_links = Output::<[u32; 4]>::reuse(buffers.links, optional(4 * nf));
+    let mut fine_starts = Output::<u32>::reuse(buffers.starts, optional(nv));
 
-    let mut work = Vec::with_capacity(nf.div_ceil(FACE_CHUNK) + even.div_ceil(VERTEX_CHUNK));
-    {
-        let mut values = fine_values.slots();
-        let mut starts = fine_starts.slots();
-        let mut even_values = values.take_front(even);
-        let mut even_starts = starts.take_front(optional(even));
-        let (mut ov, mut os) = (values.take_front(nv - even), starts.take_front(optional(nv - even)));
-        let mut ev = values.take_front(ne);
-        let (mut tr, mut li) = (fine_triangles.slots(), fine_links.slots());
-        // Face chunks: edge points, odd vertex points, fine faces and fine links.
-        let edges_before = |f: usize| if f == nf { ne } else { edge_base(topo.links[f][3]) as usize };
-        // Odd vertices are the edge points of the level before, numbered by its edges:
-        // group g has 3g + 2 e_g edges before it, e_g of the level before.
-        let odd_before = |f: usize| {
-            if even == nv {
-                0
-            } else if f == nf {
-                nv - even
-            } else {
-                (edges_before(f) - 3 * (f / 4)) / 2
-            }
-        };
-        let mut f0 = 0;
-        while f0 < nf {
-            let f1 = (f0 + FACE_CHUNK).min(nf);
-            let edges = edges_before(f1) - edges_before(f0);
-            let odd = odd_before(f1) - odd_before(f0);
-            work.push(Work::Faces(FaceWork {
-                faces: f0..f1,
-                first_edge: edges_before(f0),
-                edge_values: ev.take_front(edges),
-                first_odd: even + odd_before(f0),
-                odd_values: ov.take_front(odd),
-                odd_starts: os.take_front(optional(odd)),
-                triangles: tr.take_front(4 * (f1 - f0)),
-                links: li.take_front(optional(4 * (f1 - f0))),
-            }));
-            f0 = f1;
-        }
-        // Vertex chunks: vertex points (and starts) of even vertices.
-        let mut v0 = 0;
-        while v0 < even {
-            let v1 = (v0 + VERTEX_CHUNK).min(even);
-            work.push(Work::Vertices(VertexWork {
-                first: v0,
-                values: even_values.take_front(v1 - v0),
-                starts: even_starts.take_front(optional(v1 - v0)),
-            }));
-            v0 = v1;
-        }
-    }
-    work.into_par_iter().for_each(|work| match work {
+    let run = |work: Work<'_, T>| match work {
         Work::Faces(mut w) => {
             if even < nv {
                 odd_chunk(topo, values, rules, &mut w, refine_topology);
@@ -216,7 +199,17 @@ pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, r
             face_chunk(topo, values, w, refine_topology);
         }
         Work::Vertices(w) => vertex_chunk(topo, values, rules, w, refine_topology),
-    });
+    };
+    {
+        let slots = (fine_values.slots(), fine_triangles.slots(), fine_links.slots(), fine_starts.slots());
+        if nf < PARALLEL_MIN_FACES || rayon::current_num_threads() == 1 {
+            split_work(topo, refine_topology, slots, run);
+        } else {
+            let mut work = Vec::with_capacity(nf.div_ceil(FACE_CHUNK) + even.div_ceil(VERTEX_CHUNK));
+            split_work(topo, refine_topology, slots, |w| work.push(w));
+            work.into_par_iter().for_each(run);
+        }
+    }
 
     let topology = Topology {
         triangles: fine_triangles.into_vec(),
@@ -226,6 +219,69 @@ pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, r
         edge_count: 2 * ne + 3 * nf,
     };
     Step { values: fine_values.into_vec(), topology }
+}
+
+/// The slots of a step's four outputs: values, triangles, links, starts.
+type AllSlots<'a, T> = (Slots<'a, T>, Slots<'a, [u32; 3]>, Slots<'a, [u32; 4]>, Slots<'a, u32>);
+
+/// Splits the outputs of a step into its chunks of work, in order (faces, then even
+/// vertices), and hands each to `emit`.
+fn split_work<'a, T>(
+    topo: &Topology,
+    refine_topology: bool,
+    (mut values, mut tr, mut li, mut starts): AllSlots<'a, T>,
+    mut emit: impl FnMut(Work<'a, T>),
+) {
+    let nv = topo.vertex_count;
+    let ne = topo.edge_count;
+    let nf = topo.face_count();
+    let even = topo.vertex_halfedge.len();
+    let optional = |n: usize| if refine_topology { n } else { 0 };
+    let mut even_values = values.take_front(even);
+    let mut even_starts = starts.take_front(optional(even));
+    let (mut ov, mut os) = (values.take_front(nv - even), starts.take_front(optional(nv - even)));
+    let mut ev = values.take_front(ne);
+    // Face chunks: edge points, odd vertex points, fine faces and fine links.
+    let edges_before = |f: usize| if f == nf { ne } else { edge_base(topo.links[f][3]) as usize };
+    // Odd vertices are the edge points of the level before, numbered by its edges:
+    // group g has 3g + 2 e_g edges before it, e_g of the level before.
+    let odd_before = |f: usize| {
+        if even == nv {
+            0
+        } else if f == nf {
+            nv - even
+        } else {
+            (edges_before(f) - 3 * (f / 4)) / 2
+        }
+    };
+    let mut f0 = 0;
+    while f0 < nf {
+        let f1 = (f0 + FACE_CHUNK).min(nf);
+        let edges = edges_before(f1) - edges_before(f0);
+        let odd = odd_before(f1) - odd_before(f0);
+        emit(Work::Faces(FaceWork {
+            faces: f0..f1,
+            first_edge: edges_before(f0),
+            edge_values: ev.take_front(edges),
+            first_odd: even + odd_before(f0),
+            odd_values: ov.take_front(odd),
+            odd_starts: os.take_front(optional(odd)),
+            triangles: tr.take_front(4 * (f1 - f0)),
+            links: li.take_front(optional(4 * (f1 - f0))),
+        }));
+        f0 = f1;
+    }
+    // Vertex chunks: vertex points (and starts) of even vertices.
+    let mut v0 = 0;
+    while v0 < even {
+        let v1 = (v0 + VERTEX_CHUNK).min(even);
+        emit(Work::Vertices(VertexWork {
+            first: v0,
+            values: even_values.take_front(v1 - v0),
+            starts: even_starts.take_front(optional(v1 - v0)),
+        }));
+        v0 = v1;
+    }
 }
 
 /// Vertex points of the odd vertices owned by a chunk of groups.
@@ -373,6 +429,9 @@ fn vertex_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, mut 
 }
 
 /// The vertex point of even vertex `v`, by a walk around its one-ring.
+///
+/// The walk is a chain of dependent loads (half-edge, the link of its predecessor, the
+/// next half-edge), so it works on the flat arrays with the corner arithmetic inline.
 #[inline]
 fn vertex_point<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, v: u32) -> T {
     let start = topo.vertex_halfedge[v as usize];
@@ -380,36 +439,36 @@ fn vertex_point<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, v: u
     if start == INVALID {
         return p.clone();
     }
-    let tri = &topo.triangles[..];
-    let links = &topo.links[..];
-    let mut f = (start >> 2) as usize;
-    let mut k = (start & 3) as usize;
-    let mut corners = tri[f];
-    let mut sum = values[corners[NEXT[k]] as usize].clone();
+    let tri = topo.triangles.as_flattened();
+    let links = topo.links.as_flattened();
+    // Corner `k + 1 mod 3` of the face of `h` (the target of `h`), and the half-edge
+    // before `h` in its face (`4f + k - 1 mod 3`), whose link is the next fan half-edge.
+    let target = |h: u32| tri[3 * (h >> 2) as usize + if h & 3 == 2 { 0 } else { (h & 3) as usize + 1 }];
+    let before = |h: u32| if h & 3 == 0 { h + 2 } else { h - 1 };
+    let mut h = start;
+    let mut sum = values[target(h) as usize].clone();
     let mut valence = 1usize;
     loop {
-        let t = links[f][PREV[k]];
+        let t = links[before(h) as usize];
         if t == INVALID {
             // Boundary: the fan ends here; the two boundary neighbours are the target of
             // the first and the origin of the last fan half-edge.
             if rules.is_fixed_corner(valence + 1) {
                 return p.clone();
             }
-            let first = tri[(start >> 2) as usize][NEXT[(start & 3) as usize]];
-            let mut ends = values[first as usize].clone();
-            ends.add(&values[corners[PREV[k]] as usize]);
+            let last = tri[3 * (h >> 2) as usize + PREV[(h & 3) as usize]];
+            let mut ends = values[target(start) as usize].clone();
+            ends.add(&values[last as usize]);
             let mut point = p.scaled(0.75);
             point.add_scaled(&ends, 0.125);
             return point;
         }
-        if t == start || valence > tri.len() {
+        if t == start || valence > topo.triangles.len() {
             debug_assert!(t == start, "internal: one-ring walk did not close");
             break;
         }
-        f = (t >> 2) as usize;
-        k = (t & 3) as usize;
-        corners = tri[f];
-        sum.add(&values[corners[NEXT[k]] as usize]);
+        h = t;
+        sum.add(&values[target(h) as usize]);
         valence += 1;
     }
     let (alpha, beta) = rules.interior(valence);

@@ -19,7 +19,7 @@
 //! group, so only the *even* vertices need a walk around their one-ring and a start
 //! half-edge.
 
-use mesh_topo::{HalfedgeMesh, MeshError};
+use mesh_topo::{FaceId, HalfedgeId, HalfedgeMesh, MeshError};
 
 use crate::LoopError;
 
@@ -83,6 +83,18 @@ impl Topology {
     /// [`LoopError::InteriorValenceTwo`] for two triangles glued along all three edges;
     /// [`MeshError::TooLarge`] if the mesh has too many faces or edges for the layout.
     pub(crate) fn from_mesh(mesh: &HalfedgeMesh) -> Result<Self, LoopError> {
+        let mut topology = Self::default();
+        topology.rebuild(mesh, &mut Vec::new())?;
+        Ok(topology)
+    }
+
+    /// [`Topology::from_mesh`] into the memory of `self` (its arrays are overwritten
+    /// and grow only when too small); `compact` is scratch for the half-edge map. On
+    /// error the arrays hold no valid topology but keep their memory.
+    ///
+    /// # Errors
+    /// As [`Topology::from_mesh`].
+    pub(crate) fn rebuild(&mut self, mesh: &HalfedgeMesh, compact: &mut Vec<u32>) -> Result<(), LoopError> {
         let face_count = mesh.face_count();
         if face_count as u64 > MAX_FACES {
             return Err(MeshError::TooLarge { what: "faces", count: face_count, max: MAX_FACES as usize }.into());
@@ -90,48 +102,58 @@ impl Topology {
         if mesh.edge_count() > BASE_MASK as usize {
             return Err(MeshError::TooLarge { what: "edges", count: mesh.edge_count(), max: BASE_MASK as usize }.into());
         }
+        let Self { triangles, links, vertex_halfedge, vertex_count, edge_count } = self;
+        (*vertex_count, *edge_count) = (0, 0);
         // Mesh half-edge -> compact half-edge (boundary half-edges have none).
-        let mut compact = vec![INVALID; mesh.halfedge_count()];
-        let mut triangles = Vec::with_capacity(face_count);
-        for f in mesh.faces() {
-            let mut corners = [0u32; 3];
-            let mut count = 0;
-            for h in mesh.face_halfedges(f) {
-                if count < 3 {
-                    corners[count] = mesh.origin(h).raw();
-                    compact[h.index()] = (4 * f.index() + count) as u32;
-                }
-                count += 1;
-            }
-            if count != 3 {
-                return Err(LoopError::NotTriangle { face: f.index(), corners: count });
-            }
-            triangles.push(corners);
+        compact.clear();
+        compact.resize(mesh.halfedge_count(), INVALID);
+        triangles.clear();
+        triangles.reserve(face_count);
+        // The three half-edges of face `f`, found by `next` alone (no circulator: this is
+        // a large part of the work of a small first level), or `None` for a polygon.
+        #[inline(always)]
+        fn face_halfedges(mesh: &HalfedgeMesh, f: FaceId) -> Option<(HalfedgeId, HalfedgeId, HalfedgeId)> {
+            let h0 = mesh.face_halfedge(f);
+            let h1 = mesh.next(h0);
+            let h2 = mesh.next(h1);
+            if h1 != h0 && mesh.next(h2) == h0 { Some((h0, h1, h2)) } else { None }
         }
-        let mut links = vec![[INVALID; 4]; face_count];
+        for f in mesh.faces() {
+            let Some((h0, h1, h2)) = face_halfedges(mesh, f) else {
+                return Err(LoopError::NotTriangle { face: f.index(), corners: mesh.face_halfedges(f).count() });
+            };
+            let base = 4 * f.raw();
+            triangles.push([mesh.origin(h0).raw(), mesh.origin(h1).raw(), mesh.origin(h2).raw()]);
+            compact[h0.index()] = base;
+            compact[h1.index()] = base + 1;
+            compact[h2.index()] = base + 2;
+        }
+        links.clear();
+        links.reserve(face_count);
         let mut edges_before = 0u32;
         for f in mesh.faces() {
             let fi = f.index();
-            let mut mask = 0u32;
-            for (k, h) in mesh.face_halfedges(f).enumerate() {
-                let twin = compact[h.twin().index()];
-                links[fi][k] = twin;
-                if is_first((4 * fi + k) as u32, twin) {
-                    mask |= 1 << k;
-                }
-            }
-            let [t0, t1, t2, _] = links[fi];
+            let base = 4 * f.raw();
+            let Some((h0, h1, h2)) = face_halfedges(mesh, f) else {
+                unreachable!("internal: every face was checked to be a triangle");
+            };
+            let twins = [compact[h0.twin().index()], compact[h1.twin().index()], compact[h2.twin().index()]];
+            let mask = u32::from(is_first(base, twins[0]))
+                | u32::from(is_first(base + 1, twins[1])) << 1
+                | u32::from(is_first(base + 2, twins[2])) << 2;
+            let [t0, t1, t2] = twins;
             if t0 != INVALID && (t0 >> 2 == t1 >> 2 || t0 >> 2 == t2 >> 2) || t1 != INVALID && t1 >> 2 == t2 >> 2 {
                 // Two triangles sharing two edges share all three: a closed "pillow"
                 // whose vertices have interior valence 2. One Loop step would glue the
                 // children along three faces per edge (a non-manifold result).
                 return Err(LoopError::InteriorValenceTwo { vertex: triangles[fi][0], face: fi });
             }
-            links[fi][3] = edges_before | (mask << BASE_BITS);
+            links.push([t0, t1, t2, edges_before | (mask << BASE_BITS)]);
             edges_before += mask.count_ones();
         }
         debug_assert_eq!(edges_before as usize, mesh.edge_count(), "internal: edge numbering");
-        let mut vertex_halfedge = vec![INVALID; mesh.vertex_count()];
+        vertex_halfedge.clear();
+        vertex_halfedge.resize(mesh.vertex_count(), INVALID);
         for v in mesh.vertices() {
             if let Some(h) = mesh.vertex_halfedge(v) {
                 // Boundary vertices get their start below.
@@ -147,7 +169,8 @@ impl Topology {
                 }
             }
         }
-        Ok(Self { triangles, links, vertex_halfedge, vertex_count: mesh.vertex_count(), edge_count: mesh.edge_count() })
+        (*vertex_count, *edge_count) = (mesh.vertex_count(), mesh.edge_count());
+        Ok(())
     }
 
     /// Number of faces.
