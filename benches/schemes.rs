@@ -27,6 +27,17 @@ const MAX_OUTPUT_FACES: usize = 20_000_000;
 /// The meshes, from `tests/data/` (origins in its README).
 const MESHES: [(&str, &str); 2] = [("bunny", "bunny.obj"), ("bunny00", "bunny00.off")];
 
+/// Levels 1 to 4 of `scheme` on `mesh` with their output face counts, up to the first
+/// level whose output exceeds `MAX_OUTPUT_FACES`.
+fn levels_within_budget(scheme: SurfaceScheme, mesh: &HalfedgeMesh) -> impl Iterator<Item = (u32, u64)> + '_ {
+    (1..=4u32)
+        .map(move |level| {
+            (level, scheme.closed_face_count(mesh.vertex_count(), mesh.edge_count(), mesh.face_count(), level))
+        })
+        .take_while(|&(_, faces)| faces <= MAX_OUTPUT_FACES)
+        .map(|(level, faces)| (level, faces as u64))
+}
+
 fn subdivide_all_schemes(c: &mut Criterion) {
     for (name, file) in MESHES {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(file);
@@ -38,13 +49,8 @@ fn subdivide_all_schemes(c: &mut Criterion) {
                 if matches!(scheme, SurfaceScheme::Loop | SurfaceScheme::DooSabin) { &[1, 2] } else { &[1] };
             for &threads in thread_counts {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
-                for level in 1..=4u32 {
-                    let faces =
-                        scheme.closed_face_count(mesh.vertex_count(), mesh.edge_count(), mesh.face_count(), level);
-                    if faces > MAX_OUTPUT_FACES {
-                        break;
-                    }
-                    group.throughput(Throughput::Elements(faces as u64));
+                for (level, faces) in levels_within_budget(scheme, &mesh) {
+                    group.throughput(Throughput::Elements(faces));
                     let id = BenchmarkId::new(format!("{scheme}-{threads}t"), level);
                     group.bench_function(id, |b| {
                         // The result is freed outside the clock, as the peer drivers do.
@@ -56,13 +62,8 @@ fn subdivide_all_schemes(c: &mut Criterion) {
                 if scheme == SurfaceScheme::Loop {
                     // One subdivider and output per thread count, reused by every call.
                     let (mut subdivider, mut out) = (Subdivider::default(), LoopMesh::default());
-                    for level in 1..=4u32 {
-                        let faces =
-                            scheme.closed_face_count(mesh.vertex_count(), mesh.edge_count(), mesh.face_count(), level);
-                        if faces > MAX_OUTPUT_FACES {
-                            break;
-                        }
-                        group.throughput(Throughput::Elements(faces as u64));
+                    for (level, faces) in levels_within_budget(scheme, &mesh) {
+                        group.throughput(Throughput::Elements(faces));
                         let id = BenchmarkId::new(format!("loop-reuse-{threads}t"), level);
                         group.bench_function(id, |b| {
                             pool.install(|| {
