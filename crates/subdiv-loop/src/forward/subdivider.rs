@@ -1,6 +1,7 @@
 //! Repeated subdivision into the memory of the previous result.
 
 use std::mem::take;
+use std::sync::atomic::AtomicU32;
 
 use glam::DVec3;
 use mesh_topo::HalfedgeMesh;
@@ -66,7 +67,7 @@ pub struct Subdivider {
 #[derive(Debug, Default)]
 struct Scratch {
     /// The half-edge map of [`Topology::rebuild`].
-    compact: Vec<u32>,
+    compact: Vec<AtomicU32>,
     values: Vec<DVec3>,
     triangles: Vec<[u32; 3]>,
     links: [Vec<[u32; 4]>; 2],

@@ -19,8 +19,16 @@
 //! group, so only the *even* vertices need a walk around their one-ring and a start
 //! half-edge.
 
-use mesh_topo::{FaceId, HalfedgeId, HalfedgeMesh, MeshError};
+use std::mem::take;
+use std::ops::Range;
+use std::sync::atomic::AtomicU32;
+use std::sync::atomic::Ordering::Relaxed;
 
+use mesh_topo::{FaceId, HalfedgeId, HalfedgeMesh, MeshError};
+use rayon::prelude::*;
+
+use super::buffer::Output;
+use super::kernel::PARALLEL_MIN_FACES;
 use crate::LoopError;
 
 /// "No half-edge": the twin of a boundary half-edge, the start of an isolated vertex.
@@ -92,9 +100,17 @@ impl Topology {
     /// and grow only when too small); `compact` is scratch for the half-edge map. On
     /// error the arrays hold no valid topology but keep their memory.
     ///
+    /// The faces are read in chunks of [`REBUILD_CHUNK`], in parallel on the current
+    /// `rayon` pool by the kernel's rule (at least [`PARALLEL_MIN_FACES`] faces and more
+    /// than one thread), else one after the other: at level 1 this pass is a quarter of
+    /// the work, and done on one thread it would cap what a second thread can gain.
+    /// Every chunk writes only its own faces' entries (and the half-edge map entries of
+    /// its faces' half-edges), so the result does not depend on the number of threads.
+    ///
     /// # Errors
-    /// As [`Topology::from_mesh`].
-    pub(crate) fn rebuild(&mut self, mesh: &HalfedgeMesh, compact: &mut Vec<u32>) -> Result<(), LoopError> {
+    /// As [`Topology::from_mesh`]; when several faces are wrong, the first in face order
+    /// is named, triangles checked before pillows (as in one pass after the other).
+    pub(crate) fn rebuild(&mut self, mesh: &HalfedgeMesh, compact: &mut Vec<AtomicU32>) -> Result<(), LoopError> {
         let face_count = mesh.face_count();
         if face_count as u64 > MAX_FACES {
             return Err(MeshError::TooLarge { what: "faces", count: face_count, max: MAX_FACES as usize }.into());
@@ -102,74 +118,125 @@ impl Topology {
         if mesh.edge_count() > BASE_MASK as usize {
             return Err(MeshError::TooLarge { what: "edges", count: mesh.edge_count(), max: BASE_MASK as usize }.into());
         }
+        let parallel = face_count >= PARALLEL_MIN_FACES && rayon::current_num_threads() > 1;
         let Self { triangles, links, vertex_halfedge, vertex_count, edge_count } = self;
         (*vertex_count, *edge_count) = (0, 0);
-        // Mesh half-edge -> compact half-edge (boundary half-edges have none).
-        compact.clear();
-        compact.resize(mesh.halfedge_count(), INVALID);
-        triangles.clear();
-        triangles.reserve(face_count);
-        // The three half-edges of face `f`, found by `next` alone (no circulator: this is
-        // a large part of the work of a small first level), or `None` for a polygon.
-        #[inline(always)]
-        fn face_halfedges(mesh: &HalfedgeMesh, f: FaceId) -> Option<(HalfedgeId, HalfedgeId, HalfedgeId)> {
-            let h0 = mesh.face_halfedge(f);
-            let h1 = mesh.next(h0);
-            let h2 = mesh.next(h1);
-            if h1 != h0 && mesh.next(h2) == h0 { Some((h0, h1, h2)) } else { None }
+        let chunks: Vec<Range<usize>> =
+            (0..face_count).step_by(REBUILD_CHUNK).map(|f0| f0..(f0 + REBUILD_CHUNK).min(face_count)).collect();
+
+        // Mesh half-edge -> compact half-edge (boundary half-edges have none). Each
+        // face half-edge belongs to one face, so the chunks store disjoint entries.
+        fill_invalid(compact, mesh.halfedge_count(), parallel);
+        let compact: &[AtomicU32] = compact;
+        let mut corners = Output::<[u32; 3]>::reuse(take(triangles), face_count);
+        let mut not_triangles = {
+            let mut slots = corners.slots();
+            let pieces: Vec<_> = chunks.iter().map(|r| (r.clone(), slots.take_front(r.len()))).collect();
+            map_chunks(parallel, pieces, |(range, mut piece)| {
+                let mut first_bad = None;
+                for fi in range {
+                    let f = face_at(mesh, fi);
+                    let Some((h0, h1, h2)) = face_halfedges(mesh, f) else {
+                        first_bad.get_or_insert(LoopError::NotTriangle {
+                            face: fi,
+                            corners: mesh.face_halfedges(f).count(),
+                        });
+                        piece.push([INVALID; 3]);
+                        continue;
+                    };
+                    let base = 4 * fi as u32;
+                    piece.push([mesh.origin(h0).raw(), mesh.origin(h1).raw(), mesh.origin(h2).raw()]);
+                    compact[h0.index()].store(base, Relaxed);
+                    compact[h1.index()].store(base + 1, Relaxed);
+                    compact[h2.index()].store(base + 2, Relaxed);
+                }
+                first_bad
+            })
+        };
+        *triangles = corners.into_vec();
+        if let Some(error) = not_triangles.iter_mut().find_map(Option::take) {
+            return Err(error);
         }
-        for f in mesh.faces() {
-            let Some((h0, h1, h2)) = face_halfedges(mesh, f) else {
-                return Err(LoopError::NotTriangle { face: f.index(), corners: mesh.face_halfedges(f).count() });
-            };
-            let base = 4 * f.raw();
-            triangles.push([mesh.origin(h0).raw(), mesh.origin(h1).raw(), mesh.origin(h2).raw()]);
-            compact[h0.index()] = base;
-            compact[h1.index()] = base + 1;
-            compact[h2.index()] = base + 2;
-        }
-        links.clear();
-        links.reserve(face_count);
+
+        // Twins and edge information, each chunk numbering its edges from 0; the chunk
+        // offsets are added once all counts are known.
+        let triangles: &[[u32; 3]] = triangles;
+        let mut output = Output::<[u32; 4]>::reuse(take(links), face_count);
+        let counted = {
+            let mut slots = output.slots();
+            let pieces: Vec<_> = chunks.iter().map(|r| (r.clone(), slots.take_front(r.len()))).collect();
+            map_chunks(parallel, pieces, |(range, mut piece)| {
+                let (mut edges, mut pillow) = (0u32, None);
+                for fi in range {
+                    let base = 4 * fi as u32;
+                    let Some((h0, h1, h2)) = face_halfedges(mesh, face_at(mesh, fi)) else {
+                        unreachable!("internal: every face was checked to be a triangle");
+                    };
+                    let twin = |h: HalfedgeId| compact[h.twin().index()].load(Relaxed);
+                    let [t0, t1, t2] = [twin(h0), twin(h1), twin(h2)];
+                    let mask = u32::from(is_first(base, t0))
+                        | u32::from(is_first(base + 1, t1)) << 1
+                        | u32::from(is_first(base + 2, t2)) << 2;
+                    if pillow.is_none()
+                        && (t0 != INVALID && (t0 >> 2 == t1 >> 2 || t0 >> 2 == t2 >> 2)
+                            || t1 != INVALID && t1 >> 2 == t2 >> 2)
+                    {
+                        // Two triangles sharing two edges share all three: a closed
+                        // "pillow" whose vertices have interior valence 2. One Loop step
+                        // would glue the children along three faces per edge (a
+                        // non-manifold result).
+                        pillow = Some(LoopError::InteriorValenceTwo { vertex: triangles[fi][0], face: fi });
+                    }
+                    piece.push([t0, t1, t2, edges | (mask << BASE_BITS)]);
+                    edges += mask.count_ones();
+                }
+                (edges, pillow)
+            })
+        };
+        *links = output.into_vec();
+        let mut offsets = Vec::with_capacity(chunks.len());
         let mut edges_before = 0u32;
-        for f in mesh.faces() {
-            let fi = f.index();
-            let base = 4 * f.raw();
-            let Some((h0, h1, h2)) = face_halfedges(mesh, f) else {
-                unreachable!("internal: every face was checked to be a triangle");
-            };
-            let twins = [compact[h0.twin().index()], compact[h1.twin().index()], compact[h2.twin().index()]];
-            let mask = u32::from(is_first(base, twins[0]))
-                | u32::from(is_first(base + 1, twins[1])) << 1
-                | u32::from(is_first(base + 2, twins[2])) << 2;
-            let [t0, t1, t2] = twins;
-            if t0 != INVALID && (t0 >> 2 == t1 >> 2 || t0 >> 2 == t2 >> 2) || t1 != INVALID && t1 >> 2 == t2 >> 2 {
-                // Two triangles sharing two edges share all three: a closed "pillow"
-                // whose vertices have interior valence 2. One Loop step would glue the
-                // children along three faces per edge (a non-manifold result).
-                return Err(LoopError::InteriorValenceTwo { vertex: triangles[fi][0], face: fi });
+        for (edges, pillow) in counted {
+            if let Some(error) = pillow {
+                return Err(error);
             }
-            links.push([t0, t1, t2, edges_before | (mask << BASE_BITS)]);
-            edges_before += mask.count_ones();
+            offsets.push(edges_before);
+            edges_before += edges;
         }
         debug_assert_eq!(edges_before as usize, mesh.edge_count(), "internal: edge numbering");
-        vertex_halfedge.clear();
-        vertex_halfedge.resize(mesh.vertex_count(), INVALID);
-        for v in mesh.vertices() {
-            if let Some(h) = mesh.vertex_halfedge(v) {
-                // Boundary vertices get their start below.
-                if !mesh.is_boundary_halfedge(h) {
-                    vertex_halfedge[v.index()] = compact[h.index()];
-                }
+        let pieces: Vec<_> = links.chunks_mut(REBUILD_CHUNK).zip(offsets).filter(|(_, offset)| *offset > 0).collect();
+        map_chunks(parallel, pieces, |(piece, offset)| {
+            for link in piece {
+                link[3] += offset;
             }
-        }
-        for (f, link) in links.iter().enumerate() {
-            for k in 0..3 {
-                if link[k] == INVALID {
-                    vertex_halfedge[triangles[f][k] as usize] = (4 * f + k) as u32;
+        });
+
+        // Starts: a vertex's outgoing half-edge; on the boundary the one whose twin is
+        // missing, the twin of the boundary half-edge that ends at the vertex.
+        let vertices = mesh.vertex_count();
+        let mut starts = Output::<u32>::reuse(take(vertex_halfedge), vertices);
+        {
+            let mut slots = starts.slots();
+            let pieces: Vec<_> = (0..vertices)
+                .step_by(REBUILD_CHUNK)
+                .map(|v0| {
+                    let range = v0..(v0 + REBUILD_CHUNK).min(vertices);
+                    (range.clone(), slots.take_front(range.len()))
+                })
+                .collect();
+            map_chunks(parallel, pieces, |(range, mut piece)| {
+                for vi in range {
+                    let v = mesh.vertex(vi).unwrap_or_else(|| unreachable!("internal: vertex {vi} out of range"));
+                    piece.push(match mesh.vertex_halfedge(v) {
+                        None => INVALID,
+                        Some(h) if mesh.is_boundary_halfedge(h) => compact[mesh.prev(h).twin().index()].load(Relaxed),
+                        Some(h) => compact[h.index()].load(Relaxed),
+                    });
                 }
-            }
+            });
         }
-        (*vertex_count, *edge_count) = (mesh.vertex_count(), mesh.edge_count());
+        *vertex_halfedge = starts.into_vec();
+        (*vertex_count, *edge_count) = (vertices, mesh.edge_count());
         Ok(())
     }
 
@@ -215,6 +282,41 @@ impl Topology {
     }
 }
 
+/// Faces (and vertices) per chunk of [`Topology::rebuild`].
+const REBUILD_CHUNK: usize = 8192;
+
+/// Face `fi` of `mesh`, for an index known to be in range.
+#[inline(always)]
+fn face_at(mesh: &HalfedgeMesh, fi: usize) -> FaceId {
+    mesh.face(fi).unwrap_or_else(|| unreachable!("internal: face {fi} out of range"))
+}
+
+/// The three half-edges of face `f`, found by `next` alone (no circulator: this is a
+/// large part of the work of a small first level), or `None` for a polygon.
+#[inline(always)]
+fn face_halfedges(mesh: &HalfedgeMesh, f: FaceId) -> Option<(HalfedgeId, HalfedgeId, HalfedgeId)> {
+    let h0 = mesh.face_halfedge(f);
+    let h1 = mesh.next(h0);
+    let h2 = mesh.next(h1);
+    if h1 != h0 && mesh.next(h2) == h0 { Some((h0, h1, h2)) } else { None }
+}
+
+/// Sets `map` to `len` entries of [`INVALID`], keeping its memory.
+fn fill_invalid(map: &mut Vec<AtomicU32>, len: usize, parallel: bool) {
+    map.truncate(len);
+    if parallel {
+        map.par_iter().for_each(|entry| entry.store(INVALID, Relaxed));
+    } else {
+        map.iter().for_each(|entry| entry.store(INVALID, Relaxed));
+    }
+    map.resize_with(len, || AtomicU32::new(INVALID));
+}
+
+/// `work.map(run)` in order, on the current `rayon` pool when `parallel`.
+fn map_chunks<W: Send, R: Send>(parallel: bool, work: Vec<W>, run: impl Fn(W) -> R + Sync + Send) -> Vec<R> {
+    if parallel { work.into_par_iter().map(run).collect() } else { work.into_iter().map(run).collect() }
+}
+
 #[cfg(test)]
 mod tests {
     use glam::DVec3;
@@ -248,6 +350,57 @@ mod tests {
             sorted.sort_unstable();
             expected.sort_unstable();
             assert_eq!(sorted, expected, "vertex {v:?}");
+        }
+    }
+
+    /// A triangulated grid of several rebuild chunks with a boundary, on pools of 1 to
+    /// 3 threads: the same topology, whose edges and rings match the half-edge mesh.
+    #[test]
+    fn chunked_rebuild_matches_the_halfedge_mesh_on_any_pool() {
+        let mesh = HalfedgeMesh::from_soup(&shapes::grid(120, 80, CellKind::Triangles).unwrap()).unwrap();
+        assert!(mesh.face_count() > 2 * REBUILD_CHUNK && mesh.vertex_count() > REBUILD_CHUNK);
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| Topology::from_mesh(&mesh).unwrap())
+        };
+        let one = on(1);
+        for f in mesh.faces() {
+            for (k, h) in mesh.face_halfedges(f).enumerate() {
+                assert_eq!(one.edge_of((4 * f.index() + k) as u32) as usize, h.edge().index());
+            }
+        }
+        for v in mesh.vertices() {
+            let (mut ring, boundary) = one.ring(v.raw());
+            assert_eq!(boundary, mesh.is_boundary_vertex(v));
+            let mut expected: Vec<u32> = mesh.vertex_neighbors(v).map(|w| w.raw()).collect();
+            ring.sort_unstable();
+            expected.sort_unstable();
+            assert_eq!(ring, expected, "vertex {v:?}");
+        }
+        for threads in [2, 3] {
+            let other = on(threads);
+            assert_eq!(other.triangles, one.triangles);
+            assert_eq!(other.links, one.links);
+            assert_eq!(other.vertex_halfedge, one.vertex_halfedge);
+            assert_eq!((other.vertex_count, other.edge_count), (one.vertex_count, one.edge_count));
+        }
+    }
+
+    /// The first bad face in face order is named, whichever chunk finds it first.
+    #[test]
+    fn chunked_rebuild_names_the_first_polygon() {
+        let grid = shapes::grid(120, 80, CellKind::Triangles).unwrap();
+        let mut faces: Vec<Vec<u32>> = grid.faces().map(<[u32]>::to_vec).collect();
+        // Merge the two triangles of two cells, in the second and third chunk, into quads.
+        for cell in [9000, 5000] {
+            let (first, second) = (faces[2 * cell].clone(), faces.remove(2 * cell + 1));
+            faces[2 * cell] = vec![first[0], first[1], first[2], second[2]];
+        }
+        let mesh = HalfedgeMesh::from_soup(&PolygonSoup::from_faces(grid.positions.clone(), faces)).unwrap();
+        for threads in [1, 2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let error = pool.install(|| Topology::from_mesh(&mesh)).unwrap_err();
+            assert_eq!(error, LoopError::NotTriangle { face: 10_000, corners: 4 }, "{threads} threads");
         }
     }
 
