@@ -64,26 +64,47 @@ impl CornerMesh {
         }
     }
 
-    /// The corner arrays of a half-edge mesh (linear time).
+    /// The corner arrays of a half-edge mesh (linear time). One walk around each face
+    /// gives the corner vertices (the origin of a half-edge is the target of the one
+    /// before it) and the half-edge of each corner; the twins go through one array
+    /// from half-edges to corners.
     pub fn from_halfedge(mesh: &HalfedgeMesh) -> Self {
-        let soup_faces = mesh.face_count();
-        let mut offsets = Vec::with_capacity(soup_faces + 1);
+        let halfedges = mesh.halfedge_count();
+        let target = mesh.raw_halfedge_targets();
+        let next_halfedge = mesh.raw_halfedge_next();
+        let mut offsets = Vec::with_capacity(mesh.face_count() + 1);
         offsets.push(0u32);
-        let mut corner_vertex = Vec::with_capacity(mesh.halfedge_count());
-        let mut halfedge_corner = vec![NONE; mesh.halfedge_count()];
+        let mut corner_vertex = Vec::with_capacity(halfedges);
+        // The half-edge of each corner, turned into the twin corners below.
+        let mut corner_twin = Vec::with_capacity(halfedges);
+        let mut corner_next = Vec::with_capacity(halfedges);
         for f in mesh.faces() {
-            for h in mesh.face_halfedges(f) {
-                halfedge_corner[h.index()] = corner_vertex.len() as u32;
-                corner_vertex.push(mesh.origin(h).raw());
+            let first = mesh.face_halfedge(f).raw();
+            let begin = corner_vertex.len() as u32;
+            let mut origin = target[(first ^ 1) as usize];
+            let mut h = first;
+            loop {
+                corner_vertex.push(origin);
+                corner_twin.push(h);
+                origin = target[h as usize];
+                h = next_halfedge[h as usize];
+                if h == first {
+                    break;
+                }
             }
-            offsets.push(corner_vertex.len() as u32);
+            let end = corner_vertex.len() as u32;
+            corner_next.extend(begin + 1..end);
+            corner_next.push(begin);
+            offsets.push(end);
         }
-        let mut corner_twin = vec![NONE; corner_vertex.len()];
-        for (h, &c) in halfedge_corner.iter().enumerate() {
-            if c != NONE {
-                corner_twin[c as usize] = halfedge_corner[h ^ 1];
-            }
+        let mut halfedge_corner = vec![NONE; halfedges];
+        for (c, &h) in corner_twin.iter().enumerate() {
+            halfedge_corner[h as usize] = c as u32;
         }
+        for t in corner_twin.iter_mut() {
+            *t = halfedge_corner[(*t ^ 1) as usize];
+        }
+        drop(halfedge_corner);
         let mut vertex_corner = vec![NONE; mesh.vertex_count()];
         for (c, &v) in corner_vertex.iter().enumerate() {
             if vertex_corner[v as usize] == NONE {
@@ -91,10 +112,10 @@ impl CornerMesh {
             }
         }
         Self {
-            corner_next: next_of_corners(&offsets),
             offsets,
             corner_vertex,
             corner_twin,
+            corner_next,
             vertex_count: mesh.vertex_count(),
             vertex_corner: Some(vertex_corner),
         }
@@ -128,19 +149,23 @@ impl CornerMesh {
         }
         let corners = indices.len();
         let next = next_of_corners(&offsets);
-        // The previous corners, only needed for the fans of boundary vertices.
-        let mut prev: Vec<u32> = Vec::new();
+        let mut prev = vec![0u32; corners];
+        for (c, &n) in next.iter().enumerate() {
+            prev[n as usize] = c as u32;
+        }
         // Corners of each vertex (CSR, increasing corner order).
         let (start, corners_of) = group_by_key(indices, vertex_count);
-        let target = |c: u32| indices[next[c as usize] as usize];
         // Each directed edge once (this also rejects a face visiting a vertex twice along
-        // one edge); the twin of `u -> w` is the corner of `w` whose edge goes to `u`.
+        // one edge). Vertex by vertex: its outgoing edges `u -> w` are recorded by target
+        // (`slot[w]`, valid while `stamp[w] == u`); then each incoming edge `x -> u` (the
+        // corner before each corner of `u`) and the outgoing `u -> x`, if any, are twins.
         let mut stamp = vec![NONE; vertex_count];
+        let mut slot = vec![NONE; vertex_count];
         let mut corner_twin = vec![NONE; corners];
         for u in 0..vertex_count {
             let mine = &corners_of[start[u] as usize..start[u + 1] as usize];
             for &c in mine {
-                let w = target(c);
+                let w = indices[next[c as usize] as usize];
                 if w as usize == u {
                     return Err(format!("a face has two consecutive corners at vertex {u}"));
                 }
@@ -148,9 +173,13 @@ impl CornerMesh {
                     return Err(format!("the edge {u} -> {w} is used twice in the same direction"));
                 }
                 stamp[w as usize] = u as u32;
-                let theirs = &corners_of[start[w as usize] as usize..start[w as usize + 1] as usize];
-                if let Some(&d) = theirs.iter().find(|&&d| target(d) as usize == u) {
-                    corner_twin[c as usize] = d;
+                slot[w as usize] = c;
+            }
+            for &c in mine {
+                let p = prev[c as usize];
+                let x = indices[p as usize] as usize;
+                if stamp[x] == u as u32 {
+                    corner_twin[p as usize] = slot[x];
                 }
             }
         }
@@ -172,12 +201,6 @@ impl CornerMesh {
                 reached += 1;
             }
             if !closed {
-                if prev.is_empty() {
-                    prev = vec![0u32; corners];
-                    for (c, &n) in next.iter().enumerate() {
-                        prev[n as usize] = c as u32;
-                    }
-                }
                 let mut c = first;
                 while corner_twin[prev[c as usize] as usize] != NONE && reached <= mine.len() {
                     c = corner_twin[prev[c as usize] as usize];
