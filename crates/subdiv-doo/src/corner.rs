@@ -149,18 +149,14 @@ impl CornerMesh {
         }
         let corners = indices.len();
         let next = next_of_corners(&offsets);
-        let mut prev = vec![0u32; corners];
-        for (c, &n) in next.iter().enumerate() {
-            prev[n as usize] = c as u32;
-        }
+        let prev = prev_of_corners(&offsets);
         // Corners of each vertex (CSR, increasing corner order).
         let (start, corners_of) = group_by_key(indices, vertex_count);
         // Each directed edge once (this also rejects a face visiting a vertex twice along
         // one edge). Vertex by vertex: its outgoing edges `u -> w` are recorded by target
-        // (`slot[w]`, valid while `stamp[w] == u`); then each incoming edge `x -> u` (the
+        // (`slot[w] = (u, corner)`); then each incoming edge `x -> u` (the
         // corner before each corner of `u`) and the outgoing `u -> x`, if any, are twins.
-        let mut stamp = vec![NONE; vertex_count];
-        let mut slot = vec![NONE; vertex_count];
+        let mut slot = vec![(NONE, NONE); vertex_count];
         let mut corner_twin = vec![NONE; corners];
         for u in 0..vertex_count {
             let mine = &corners_of[start[u] as usize..start[u + 1] as usize];
@@ -169,17 +165,16 @@ impl CornerMesh {
                 if w as usize == u {
                     return Err(format!("a face has two consecutive corners at vertex {u}"));
                 }
-                if stamp[w as usize] == u as u32 {
+                if slot[w as usize].0 == u as u32 {
                     return Err(format!("the edge {u} -> {w} is used twice in the same direction"));
                 }
-                stamp[w as usize] = u as u32;
-                slot[w as usize] = c;
+                slot[w as usize] = (u as u32, c);
             }
             for &c in mine {
                 let p = prev[c as usize];
-                let x = indices[p as usize] as usize;
-                if stamp[x] == u as u32 {
-                    corner_twin[p as usize] = slot[x];
+                let (owner, d) = slot[indices[p as usize] as usize];
+                if owner == u as u32 {
+                    corner_twin[p as usize] = d;
                 }
             }
         }
@@ -259,12 +254,15 @@ pub(crate) fn group_by_key(keys: &[u32], key_count: usize) -> (Vec<u32>, Vec<u32
     for k in 0..key_count {
         offsets[k + 1] += offsets[k];
     }
-    let mut fill = offsets.clone();
+    // Each group's start serves as its fill cursor and ends at the next group's start.
     let mut members = vec![0u32; keys.len()];
     for (i, &k) in keys.iter().enumerate() {
-        members[fill[k as usize] as usize] = i as u32;
-        fill[k as usize] += 1;
+        let fill = &mut offsets[k as usize];
+        members[*fill as usize] = i as u32;
+        *fill += 1;
     }
+    offsets.copy_within(0..key_count, 1);
+    offsets[0] = 0;
     (offsets, members)
 }
 
@@ -279,6 +277,19 @@ pub(crate) fn next_of_corners(offsets: &[u32]) -> Vec<u32> {
         }
     }
     next
+}
+
+/// The previous corner of every corner, from the face offsets.
+pub(crate) fn prev_of_corners(offsets: &[u32]) -> Vec<u32> {
+    let corners = offsets.last().copied().unwrap_or(0) as usize;
+    let mut prev = Vec::with_capacity(corners);
+    for w in offsets.windows(2) {
+        if w[1] > w[0] {
+            prev.push(w[1] - 1);
+            prev.extend(w[0]..w[1] - 1);
+        }
+    }
+    prev
 }
 
 /// The face of every corner, from the face offsets.
@@ -523,6 +534,43 @@ fn face_chunks<'a, T>(offsets: &[u32], mut out: &'a mut [T], target: usize) -> V
 /// Faces per parallel task below which a single task does everything.
 const PARALLEL_FACES: usize = 1 << 14;
 
+/// Runs `work(first, end, slice)` on runs of whole faces `first..end`, `slice` being the
+/// part of `out` that holds their corners: one run for small meshes, else pieces spread
+/// over the rayon pool. Each corner is written by one task, so results do not depend on
+/// the thread count.
+fn for_face_runs<T, W>(offsets: &[u32], out: &mut [T], work: W)
+where
+    T: Send,
+    W: Fn(usize, usize, &mut [T]) + Sync,
+{
+    let faces = offsets.len().saturating_sub(1);
+    if faces < PARALLEL_FACES {
+        work(0, faces, out);
+    } else {
+        let target = rayon::current_num_threads() * 8;
+        face_chunks(offsets, out, target).into_par_iter().for_each(|(first, end, slice)| work(first, end, slice));
+    }
+}
+
+/// Applies `map(points, out)` to every face, `points` being `point(c)` for its corners
+/// `c` and `out` its corners in `out` (see [`for_face_runs`]).
+fn map_faces<P, M>(offsets: &[u32], out: &mut [DVec3], point: P, map: M)
+where
+    P: Fn(usize) -> DVec3 + Sync,
+    M: Fn(&[DVec3], &mut [DVec3]) + Sync,
+{
+    for_face_runs(offsets, out, |first, end, slice| {
+        let base = offsets[first] as usize;
+        let mut gathered: Vec<DVec3> = Vec::new();
+        for f in first..end {
+            let (b, e) = (offsets[f] as usize, offsets[f + 1] as usize);
+            gathered.clear();
+            gathered.extend((b..e).map(&point));
+            map(&gathered, &mut slice[b - base..e - base]);
+        }
+    });
+}
+
 /// New positions of one step: for every face, its F_F corners computed from the points
 /// `point(c)` of its corners `c` (the coarse vertex positions, or per-corner candidates
 /// in reconstruction). Output index = corner index. Bit-identical for any thread count.
@@ -532,23 +580,7 @@ where
 {
     let corners = offsets.last().copied().unwrap_or(0) as usize;
     let mut out = vec![DVec3::ZERO; corners];
-    let faces = offsets.len().saturating_sub(1);
-    let work = |first: usize, end: usize, slice: &mut [DVec3]| {
-        let base = offsets[first] as usize;
-        let mut gathered: Vec<DVec3> = Vec::new();
-        for f in first..end {
-            let (b, e) = (offsets[f] as usize, offsets[f + 1] as usize);
-            gathered.clear();
-            gathered.extend((b..e).map(&point));
-            maps.forward(&gathered, &mut slice[b - base..e - base]);
-        }
-    };
-    if faces < PARALLEL_FACES {
-        work(0, faces, &mut out);
-    } else {
-        let target = rayon::current_num_threads() * 8;
-        face_chunks(offsets, &mut out, target).into_par_iter().for_each(|(first, end, slice)| work(first, end, slice));
-    }
+    map_faces(offsets, &mut out, point, |points, out| maps.forward(points, out));
     out
 }
 
@@ -556,8 +588,7 @@ where
 /// F_F corner on return (each face reads and writes only its own corners, so no second
 /// array is needed). Bit-identical for any thread count.
 pub(crate) fn face_points_in_place(offsets: &[u32], maps: &FaceMaps, points: &mut [DVec3]) {
-    let faces = offsets.len().saturating_sub(1);
-    let work = |first: usize, end: usize, slice: &mut [DVec3]| {
+    for_face_runs(offsets, points, |first, end, slice| {
         let base = offsets[first] as usize;
         let mut gathered: Vec<DVec3> = Vec::new();
         for f in first..end {
@@ -566,13 +597,7 @@ pub(crate) fn face_points_in_place(offsets: &[u32], maps: &FaceMaps, points: &mu
             gathered.extend_from_slice(&slice[b..e]);
             maps.forward(&gathered, &mut slice[b..e]);
         }
-    };
-    if faces < PARALLEL_FACES {
-        work(0, faces, points);
-    } else {
-        let target = rayon::current_num_threads() * 8;
-        face_chunks(offsets, points, target).into_par_iter().for_each(|(first, end, slice)| work(first, end, slice));
-    }
+    });
 }
 
 /// Per-face expansion (inverse map) of the points `point(c)` at the corners of the
@@ -585,23 +610,7 @@ where
     let corners = offsets.last().copied().unwrap_or(0) as usize;
     let mut out = buffer;
     out.resize(corners, DVec3::ZERO);
-    let faces = offsets.len().saturating_sub(1);
-    let work = |first: usize, end: usize, slice: &mut [DVec3]| {
-        let base = offsets[first] as usize;
-        let mut gathered: Vec<DVec3> = Vec::new();
-        for f in first..end {
-            let (b, e) = (offsets[f] as usize, offsets[f + 1] as usize);
-            gathered.clear();
-            gathered.extend((b..e).map(&point));
-            maps.inverse(&gathered, &mut slice[b - base..e - base]);
-        }
-    };
-    if faces < PARALLEL_FACES {
-        work(0, faces, &mut out);
-    } else {
-        let target = rayon::current_num_threads() * 8;
-        face_chunks(offsets, &mut out, target).into_par_iter().for_each(|(first, end, slice)| work(first, end, slice));
-    }
+    map_faces(offsets, &mut out, point, |points, out| maps.inverse(points, out));
     out
 }
 

@@ -85,7 +85,7 @@ use serde::{Deserialize, Serialize};
 use crate::DooError;
 use crate::corner::{
     CornerMesh, NONE, VertexCorners, doo_topology, expand_faces, face_points_in_place, faces_of_corners, group_by_key,
-    next_of_corners,
+    next_of_corners, prev_of_corners,
 };
 use crate::forward::check_finite;
 use crate::rule::{FaceMaps, FaceRule};
@@ -1238,12 +1238,7 @@ impl<'a> Search<'a> {
 /// Labels `0..count` in order of each group's smallest corner (as union-find would give).
 fn corner_groups(offsets: &[u32], next: &[u32], twins: &[u32]) -> (Vec<u32>, usize) {
     let corners = next.len();
-    let mut prev = vec![0u32; corners];
-    for w in offsets.windows(2) {
-        for c in w[0]..w[1] {
-            prev[next[c as usize] as usize] = c;
-        }
-    }
+    let prev = prev_of_corners(offsets);
     let mut labels = vec![NONE; corners];
     let mut count = 0u32;
     for c in 0..corners as u32 {
@@ -1290,20 +1285,7 @@ impl CornersByVertex {
 }
 
 pub(crate) fn corners_by_vertex(mesh: &CornerMesh) -> CornersByVertex {
-    let mut offsets = vec![0u32; mesh.vertex_count + 1];
-    for &v in &mesh.corner_vertex {
-        offsets[v as usize + 1] += 1;
-    }
-    for v in 0..mesh.vertex_count {
-        offsets[v + 1] += offsets[v];
-    }
-    let mut fill = offsets.clone();
-    let mut corners = vec![0u32; mesh.corner_vertex.len()];
-    for (c, &v) in mesh.corner_vertex.iter().enumerate() {
-        corners[fill[v as usize] as usize] = c as u32;
-        fill[v as usize] += 1;
-    }
-    CornersByVertex { offsets, corners }
+    CornersByVertex::from_parts(group_by_key(&mesh.corner_vertex, mesh.vertex_count))
 }
 
 /// Start of vertex `v`'s details in the flat detail array (`Σ_{u<v} (r_u - 1)`).
