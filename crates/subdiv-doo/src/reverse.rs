@@ -1524,7 +1524,10 @@ fn match_fine_faces(
         // its corner 0 in the cycle.
         let face = &fine.corner_vertex[b..e];
         let r = cycle.iter().position(|&x| x == face[0]);
-        let fits = r.is_some_and(|r| face[..m - r] == cycle[r..] && face[m - r..] == cycle[..r]);
+        let fits = r.is_some_and(|r| {
+            let (head, tail) = face.split_at(m - r);
+            head.iter().zip(&cycle[r..]).all(|(a, b)| a == b) && tail.iter().zip(&cycle[..r]).all(|(a, b)| a == b)
+        });
         if !fits {
             return Err(broken(g, format!("its corners are not those of the expected {what}")));
         }
