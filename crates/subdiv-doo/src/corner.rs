@@ -64,26 +64,47 @@ impl CornerMesh {
         }
     }
 
-    /// The corner arrays of a half-edge mesh (linear time).
+    /// The corner arrays of a half-edge mesh (linear time). One walk around each face
+    /// gives the corner vertices (the origin of a half-edge is the target of the one
+    /// before it) and the half-edge of each corner; the twins go through one array
+    /// from half-edges to corners.
     pub fn from_halfedge(mesh: &HalfedgeMesh) -> Self {
-        let soup_faces = mesh.face_count();
-        let mut offsets = Vec::with_capacity(soup_faces + 1);
+        let halfedges = mesh.halfedge_count();
+        let target = mesh.raw_halfedge_targets();
+        let next_halfedge = mesh.raw_halfedge_next();
+        let mut offsets = Vec::with_capacity(mesh.face_count() + 1);
         offsets.push(0u32);
-        let mut corner_vertex = Vec::with_capacity(mesh.halfedge_count());
-        let mut halfedge_corner = vec![NONE; mesh.halfedge_count()];
+        let mut corner_vertex = Vec::with_capacity(halfedges);
+        // The half-edge of each corner, turned into the twin corners below.
+        let mut corner_twin = Vec::with_capacity(halfedges);
+        let mut corner_next = Vec::with_capacity(halfedges);
         for f in mesh.faces() {
-            for h in mesh.face_halfedges(f) {
-                halfedge_corner[h.index()] = corner_vertex.len() as u32;
-                corner_vertex.push(mesh.origin(h).raw());
+            let first = mesh.face_halfedge(f).raw();
+            let begin = corner_vertex.len() as u32;
+            let mut origin = target[(first ^ 1) as usize];
+            let mut h = first;
+            loop {
+                corner_vertex.push(origin);
+                corner_twin.push(h);
+                origin = target[h as usize];
+                h = next_halfedge[h as usize];
+                if h == first {
+                    break;
+                }
             }
-            offsets.push(corner_vertex.len() as u32);
+            let end = corner_vertex.len() as u32;
+            corner_next.extend(begin + 1..end);
+            corner_next.push(begin);
+            offsets.push(end);
         }
-        let mut corner_twin = vec![NONE; corner_vertex.len()];
-        for (h, &c) in halfedge_corner.iter().enumerate() {
-            if c != NONE {
-                corner_twin[c as usize] = halfedge_corner[h ^ 1];
-            }
+        let mut halfedge_corner = vec![NONE; halfedges];
+        for (c, &h) in corner_twin.iter().enumerate() {
+            halfedge_corner[h as usize] = c as u32;
         }
+        for t in corner_twin.iter_mut() {
+            *t = halfedge_corner[(*t ^ 1) as usize];
+        }
+        drop(halfedge_corner);
         let mut vertex_corner = vec![NONE; mesh.vertex_count()];
         for (c, &v) in corner_vertex.iter().enumerate() {
             if vertex_corner[v as usize] == NONE {
@@ -91,10 +112,10 @@ impl CornerMesh {
             }
         }
         Self {
-            corner_next: next_of_corners(&offsets),
             offsets,
             corner_vertex,
             corner_twin,
+            corner_next,
             vertex_count: mesh.vertex_count(),
             vertex_corner: Some(vertex_corner),
         }
@@ -128,29 +149,32 @@ impl CornerMesh {
         }
         let corners = indices.len();
         let next = next_of_corners(&offsets);
-        // The previous corners, only needed for the fans of boundary vertices.
-        let mut prev: Vec<u32> = Vec::new();
+        let prev = prev_of_corners(&offsets);
         // Corners of each vertex (CSR, increasing corner order).
         let (start, corners_of) = group_by_key(indices, vertex_count);
-        let target = |c: u32| indices[next[c as usize] as usize];
         // Each directed edge once (this also rejects a face visiting a vertex twice along
-        // one edge); the twin of `u -> w` is the corner of `w` whose edge goes to `u`.
-        let mut stamp = vec![NONE; vertex_count];
+        // one edge). Vertex by vertex: its outgoing edges `u -> w` are recorded by target
+        // (`slot[w] = (u, corner)`); then each incoming edge `x -> u` (the
+        // corner before each corner of `u`) and the outgoing `u -> x`, if any, are twins.
+        let mut slot = vec![(NONE, NONE); vertex_count];
         let mut corner_twin = vec![NONE; corners];
         for u in 0..vertex_count {
             let mine = &corners_of[start[u] as usize..start[u + 1] as usize];
             for &c in mine {
-                let w = target(c);
+                let w = indices[next[c as usize] as usize];
                 if w as usize == u {
                     return Err(format!("a face has two consecutive corners at vertex {u}"));
                 }
-                if stamp[w as usize] == u as u32 {
+                if slot[w as usize].0 == u as u32 {
                     return Err(format!("the edge {u} -> {w} is used twice in the same direction"));
                 }
-                stamp[w as usize] = u as u32;
-                let theirs = &corners_of[start[w as usize] as usize..start[w as usize + 1] as usize];
-                if let Some(&d) = theirs.iter().find(|&&d| target(d) as usize == u) {
-                    corner_twin[c as usize] = d;
+                slot[w as usize] = (u as u32, c);
+            }
+            for &c in mine {
+                let p = prev[c as usize];
+                let (owner, d) = slot[indices[p as usize] as usize];
+                if owner == u as u32 {
+                    corner_twin[p as usize] = d;
                 }
             }
         }
@@ -172,12 +196,6 @@ impl CornerMesh {
                 reached += 1;
             }
             if !closed {
-                if prev.is_empty() {
-                    prev = vec![0u32; corners];
-                    for (c, &n) in next.iter().enumerate() {
-                        prev[n as usize] = c as u32;
-                    }
-                }
                 let mut c = first;
                 while corner_twin[prev[c as usize] as usize] != NONE && reached <= mine.len() {
                     c = corner_twin[prev[c as usize] as usize];
@@ -236,12 +254,15 @@ pub(crate) fn group_by_key(keys: &[u32], key_count: usize) -> (Vec<u32>, Vec<u32
     for k in 0..key_count {
         offsets[k + 1] += offsets[k];
     }
-    let mut fill = offsets.clone();
+    // Each group's start serves as its fill cursor and ends at the next group's start.
     let mut members = vec![0u32; keys.len()];
     for (i, &k) in keys.iter().enumerate() {
-        members[fill[k as usize] as usize] = i as u32;
-        fill[k as usize] += 1;
+        let fill = &mut offsets[k as usize];
+        members[*fill as usize] = i as u32;
+        *fill += 1;
     }
+    offsets.copy_within(0..key_count, 1);
+    offsets[0] = 0;
     (offsets, members)
 }
 
@@ -256,6 +277,19 @@ pub(crate) fn next_of_corners(offsets: &[u32]) -> Vec<u32> {
         }
     }
     next
+}
+
+/// The previous corner of every corner, from the face offsets.
+pub(crate) fn prev_of_corners(offsets: &[u32]) -> Vec<u32> {
+    let corners = offsets.last().copied().unwrap_or(0) as usize;
+    let mut prev = Vec::with_capacity(corners);
+    for w in offsets.windows(2) {
+        if w[1] > w[0] {
+            prev.push(w[1] - 1);
+            prev.extend(w[0]..w[1] - 1);
+        }
+    }
+    prev
 }
 
 /// The face of every corner, from the face offsets.
@@ -500,6 +534,43 @@ fn face_chunks<'a, T>(offsets: &[u32], mut out: &'a mut [T], target: usize) -> V
 /// Faces per parallel task below which a single task does everything.
 const PARALLEL_FACES: usize = 1 << 14;
 
+/// Runs `work(first, end, slice)` on runs of whole faces `first..end`, `slice` being the
+/// part of `out` that holds their corners: one run for small meshes, else pieces spread
+/// over the rayon pool. Each corner is written by one task, so results do not depend on
+/// the thread count.
+fn for_face_runs<T, W>(offsets: &[u32], out: &mut [T], work: W)
+where
+    T: Send,
+    W: Fn(usize, usize, &mut [T]) + Sync,
+{
+    let faces = offsets.len().saturating_sub(1);
+    if faces < PARALLEL_FACES {
+        work(0, faces, out);
+    } else {
+        let target = rayon::current_num_threads() * 8;
+        face_chunks(offsets, out, target).into_par_iter().for_each(|(first, end, slice)| work(first, end, slice));
+    }
+}
+
+/// Applies `map(points, out)` to every face, `points` being `point(c)` for its corners
+/// `c` and `out` its corners in `out` (see [`for_face_runs`]).
+fn map_faces<P, M>(offsets: &[u32], out: &mut [DVec3], point: P, map: M)
+where
+    P: Fn(usize) -> DVec3 + Sync,
+    M: Fn(&[DVec3], &mut [DVec3]) + Sync,
+{
+    for_face_runs(offsets, out, |first, end, slice| {
+        let base = offsets[first] as usize;
+        let mut gathered: Vec<DVec3> = Vec::new();
+        for f in first..end {
+            let (b, e) = (offsets[f] as usize, offsets[f + 1] as usize);
+            gathered.clear();
+            gathered.extend((b..e).map(&point));
+            map(&gathered, &mut slice[b - base..e - base]);
+        }
+    });
+}
+
 /// New positions of one step: for every face, its F_F corners computed from the points
 /// `point(c)` of its corners `c` (the coarse vertex positions, or per-corner candidates
 /// in reconstruction). Output index = corner index. Bit-identical for any thread count.
@@ -509,23 +580,7 @@ where
 {
     let corners = offsets.last().copied().unwrap_or(0) as usize;
     let mut out = vec![DVec3::ZERO; corners];
-    let faces = offsets.len().saturating_sub(1);
-    let work = |first: usize, end: usize, slice: &mut [DVec3]| {
-        let base = offsets[first] as usize;
-        let mut gathered: Vec<DVec3> = Vec::new();
-        for f in first..end {
-            let (b, e) = (offsets[f] as usize, offsets[f + 1] as usize);
-            gathered.clear();
-            gathered.extend((b..e).map(&point));
-            maps.forward(&gathered, &mut slice[b - base..e - base]);
-        }
-    };
-    if faces < PARALLEL_FACES {
-        work(0, faces, &mut out);
-    } else {
-        let target = rayon::current_num_threads() * 8;
-        face_chunks(offsets, &mut out, target).into_par_iter().for_each(|(first, end, slice)| work(first, end, slice));
-    }
+    map_faces(offsets, &mut out, point, |points, out| maps.forward(points, out));
     out
 }
 
@@ -533,8 +588,7 @@ where
 /// F_F corner on return (each face reads and writes only its own corners, so no second
 /// array is needed). Bit-identical for any thread count.
 pub(crate) fn face_points_in_place(offsets: &[u32], maps: &FaceMaps, points: &mut [DVec3]) {
-    let faces = offsets.len().saturating_sub(1);
-    let work = |first: usize, end: usize, slice: &mut [DVec3]| {
+    for_face_runs(offsets, points, |first, end, slice| {
         let base = offsets[first] as usize;
         let mut gathered: Vec<DVec3> = Vec::new();
         for f in first..end {
@@ -543,13 +597,7 @@ pub(crate) fn face_points_in_place(offsets: &[u32], maps: &FaceMaps, points: &mu
             gathered.extend_from_slice(&slice[b..e]);
             maps.forward(&gathered, &mut slice[b..e]);
         }
-    };
-    if faces < PARALLEL_FACES {
-        work(0, faces, points);
-    } else {
-        let target = rayon::current_num_threads() * 8;
-        face_chunks(offsets, points, target).into_par_iter().for_each(|(first, end, slice)| work(first, end, slice));
-    }
+    });
 }
 
 /// Per-face expansion (inverse map) of the points `point(c)` at the corners of the
@@ -562,23 +610,7 @@ where
     let corners = offsets.last().copied().unwrap_or(0) as usize;
     let mut out = buffer;
     out.resize(corners, DVec3::ZERO);
-    let faces = offsets.len().saturating_sub(1);
-    let work = |first: usize, end: usize, slice: &mut [DVec3]| {
-        let base = offsets[first] as usize;
-        let mut gathered: Vec<DVec3> = Vec::new();
-        for f in first..end {
-            let (b, e) = (offsets[f] as usize, offsets[f + 1] as usize);
-            gathered.clear();
-            gathered.extend((b..e).map(&point));
-            maps.inverse(&gathered, &mut slice[b - base..e - base]);
-        }
-    };
-    if faces < PARALLEL_FACES {
-        work(0, faces, &mut out);
-    } else {
-        let target = rayon::current_num_threads() * 8;
-        face_chunks(offsets, &mut out, target).into_par_iter().for_each(|(first, end, slice)| work(first, end, slice));
-    }
+    map_faces(offsets, &mut out, point, |points, out| maps.inverse(points, out));
     out
 }
 

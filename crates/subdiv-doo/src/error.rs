@@ -53,6 +53,9 @@ pub enum DooError {
         /// The vertex.
         vertex: usize,
     },
+    /// The mesh to reverse has no faces.
+    #[error("the mesh has no faces; there is nothing to reverse")]
+    EmptyMesh,
     /// A seed face given by the caller does not exist.
     #[error("seed face {face} does not exist (the mesh has {face_count} faces)")]
     SeedOutOfRange {

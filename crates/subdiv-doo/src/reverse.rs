@@ -85,7 +85,7 @@ use serde::{Deserialize, Serialize};
 use crate::DooError;
 use crate::corner::{
     CornerMesh, NONE, VertexCorners, doo_topology, expand_faces, face_points_in_place, faces_of_corners, group_by_key,
-    next_of_corners,
+    next_of_corners, prev_of_corners,
 };
 use crate::forward::check_finite;
 use crate::rule::{FaceMaps, FaceRule};
@@ -290,8 +290,8 @@ impl DooReversal {
 /// # Errors
 /// [`DooError::NotDooConnectivity`] naming the face where the structure breaks (in
 /// automatic mode: the error of the first seed tried in the first component that has no
-/// valid interpretation); [`DooError::IsolatedVertex`]; [`DooError::NonFinite`];
-/// [`DooError::SeedOutOfRange`] and [`DooError::DuplicateSeed`] for bad seeds;
+/// valid interpretation); [`DooError::IsolatedVertex`]; [`DooError::EmptyMesh`] for a
+/// mesh without faces; [`DooError::NonFinite`]; [`DooError::SeedOutOfRange`] and [`DooError::DuplicateSeed`] for bad seeds;
 /// [`DooError::InvalidParameter`] for a bad centroid parameter.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
     check_finite(fine.positions())?;
@@ -345,6 +345,9 @@ impl<'a> Session<'a> {
         }
         if let Some(v) = (0..fine.vertex_count).find(|&v| fine.first_corner(v) == NONE) {
             return Err(DooError::IsolatedVertex { vertex: v });
+        }
+        if face_count == 0 {
+            return Err(DooError::EmptyMesh);
         }
         let mut search = Search::new(fine, positions, FaceMaps::new(options.rule));
         let faces = FaceSet::All(face_count as u32);
@@ -653,6 +656,12 @@ impl<'a> Search<'a> {
     /// F_F face at the far end of the quad), checking the quad on the way.
     #[inline]
     fn across(&self, f: usize, fc: u32) -> Result<Option<u32>, DooError> {
+        Ok(self.across_quad(f, fc)?.map(|(_, gt)| gt))
+    }
+
+    /// [`Self::across`], also giving the quad crossed.
+    #[inline]
+    fn across_quad(&self, f: usize, fc: u32) -> Result<Option<(u32, u32)>, DooError> {
         let fine = self.fine;
         let ft = fine.corner_twin[fc as usize];
         if ft == NONE {
@@ -669,7 +678,7 @@ impl<'a> Search<'a> {
         if gt == NONE {
             return Err(Self::quad_on_boundary(f, g));
         }
-        Ok(Some(gt))
+        Ok(Some((g as u32, gt)))
     }
 
     #[cold]
@@ -1104,25 +1113,28 @@ impl<'a> Search<'a> {
         coarse_offsets.push(0u32);
         let mut fine_corner_of = Vec::with_capacity(fine.vertex_count);
         let mut ff_faces = Vec::with_capacity(ff_count);
+        // Fine vertex of each coarse corner; every fine vertex exactly once.
+        let mut vertex_of = Vec::with_capacity(fine.vertex_count);
+        let mut canonical_of_vertex = vec![NONE; fine.vertex_count];
         for f in 0..faces {
-            if self.role[f] == FF {
-                ff_faces.push(f as u32);
-                fine_corner_of.extend(fine.offsets[f]..fine.offsets[f + 1]);
-                coarse_offsets.push(fine_corner_of.len() as u32);
+            if self.role[f] != FF {
+                continue;
             }
+            ff_faces.push(f as u32);
+            for fc in fine.offsets[f]..fine.offsets[f + 1] {
+                let x = fine.corner_vertex[fc as usize];
+                let c = vertex_of.len() as u32;
+                let earlier = std::mem::replace(&mut canonical_of_vertex[x as usize], c);
+                if earlier != NONE {
+                    let g = self.corner_face[fine_corner_of[earlier as usize] as usize] as usize;
+                    return Err(Self::broken(f, format!("vertex {x} is a corner of two F_F faces ({g} and {f})")));
+                }
+                fine_corner_of.push(fc);
+                vertex_of.push(x);
+            }
+            coarse_offsets.push(vertex_of.len() as u32);
         }
         let coarse_corners = fine_corner_of.len();
-        // Fine vertex of each coarse corner; every fine vertex exactly once.
-        let vertex_of: Vec<u32> = fine_corner_of.iter().map(|&fc| fine.corner_vertex[fc as usize]).collect();
-        let mut canonical_of_vertex = vec![NONE; fine.vertex_count];
-        for (c, &x) in vertex_of.iter().enumerate() {
-            if canonical_of_vertex[x as usize] != NONE {
-                let f = self.corner_face[fine_corner_of[c] as usize] as usize;
-                let g = self.corner_face[fine_corner_of[canonical_of_vertex[x as usize] as usize] as usize] as usize;
-                return Err(Self::broken(f, format!("vertex {x} is a corner of two F_F faces ({g} and {f})")));
-            }
-            canonical_of_vertex[x as usize] = c as u32;
-        }
         if let Some(x) = canonical_of_vertex.iter().position(|&c| c == NONE) {
             let f = self.corner_face[fine.first_corner(x) as usize] as usize;
             return Err(Self::broken(f, format!("its corner vertex {x} is on no F_F face")));
@@ -1131,13 +1143,15 @@ impl<'a> Search<'a> {
         // Coarse twins (through the F_E quads) and the quad of each coarse edge.
         let mut twins = vec![NONE; coarse_corners];
         let mut quad_face = vec![NONE; coarse_corners];
-        for (c, &fc) in fine_corner_of.iter().enumerate() {
-            let f = self.corner_face[fc as usize] as usize;
-            if let Some(gt) = self.across(f, fc)? {
-                // Every fine vertex is on one F_F face: its coarse corner is that of `gt`.
-                twins[c] = canonical_of_vertex[fine.corner_vertex[gt as usize] as usize];
-                quad_face[c] = self.corner_face[fine.corner_twin[fc as usize] as usize];
-                debug_assert_eq!(fine_corner_of[twins[c] as usize], gt, "internal: the far face is F_F");
+        for (k, &f) in ff_faces.iter().enumerate() {
+            let first = coarse_offsets[k] as usize;
+            for (c, fc) in (first..).zip(fine.offsets[f as usize]..fine.offsets[f as usize + 1]) {
+                if let Some((g, gt)) = self.across_quad(f as usize, fc)? {
+                    // Every fine vertex is on one F_F face: its coarse corner is that of `gt`.
+                    twins[c] = canonical_of_vertex[fine.corner_vertex[gt as usize] as usize];
+                    quad_face[c] = g;
+                    debug_assert_eq!(fine_corner_of[twins[c] as usize], gt, "internal: the far face is F_F");
+                }
             }
         }
         for c in 0..coarse_corners {
@@ -1191,30 +1205,22 @@ impl<'a> Search<'a> {
         // The remaining checks and the geometry are independent: with several threads they
         // run side by side (each is computed by one task, so the results and the first
         // error reported are those of the sequential order).
+        let by_vertex = corners_by_vertex(&coarse);
         let (checked, geometry) = rayon::join(
             || {
-                check_coarse_manifold(&coarse, &ff_faces)?;
-                match_fine_faces(
-                    fine,
-                    &self.corner_face,
-                    &coarse,
-                    &vertex_of,
-                    &fine_corner_of,
-                    &quad_face,
-                    &vertex_face,
-                )
+                check_coarse_manifold(&coarse, &ff_faces, &by_vertex)?;
+                match_fine_faces(fine, &ff_faces, &coarse, &vertex_of, &quad_face, &vertex_face)
             },
             || {
                 // Candidates, means and details.
                 let candidates =
                     expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize], buffer);
-                let by_vertex = corners_by_vertex(&coarse);
                 let (coarse_positions, details, vertex_energy) = means_and_details(&by_vertex, &candidates);
-                (by_vertex, coarse_positions, details, vertex_energy)
+                (coarse_positions, details, vertex_energy)
             },
         );
         let order = checked?;
-        let (by_vertex, coarse_positions, details, vertex_energy) = geometry;
+        let (coarse_positions, details, vertex_energy) = geometry;
         debug_assert_eq!(coarse_positions.len() + details.len(), fine.vertex_count);
         let mut energies = vec![0.0; component_count];
         if component_count == 1 {
@@ -1238,12 +1244,7 @@ impl<'a> Search<'a> {
 /// Labels `0..count` in order of each group's smallest corner (as union-find would give).
 fn corner_groups(offsets: &[u32], next: &[u32], twins: &[u32]) -> (Vec<u32>, usize) {
     let corners = next.len();
-    let mut prev = vec![0u32; corners];
-    for w in offsets.windows(2) {
-        for c in w[0]..w[1] {
-            prev[next[c as usize] as usize] = c;
-        }
-    }
+    let prev = prev_of_corners(offsets);
     let mut labels = vec![NONE; corners];
     let mut count = 0u32;
     for c in 0..corners as u32 {
@@ -1290,20 +1291,7 @@ impl CornersByVertex {
 }
 
 pub(crate) fn corners_by_vertex(mesh: &CornerMesh) -> CornersByVertex {
-    let mut offsets = vec![0u32; mesh.vertex_count + 1];
-    for &v in &mesh.corner_vertex {
-        offsets[v as usize + 1] += 1;
-    }
-    for v in 0..mesh.vertex_count {
-        offsets[v + 1] += offsets[v];
-    }
-    let mut fill = offsets.clone();
-    let mut corners = vec![0u32; mesh.corner_vertex.len()];
-    for (c, &v) in mesh.corner_vertex.iter().enumerate() {
-        corners[fill[v as usize] as usize] = c as u32;
-        fill[v as usize] += 1;
-    }
-    CornersByVertex { offsets, corners }
+    CornersByVertex::from_parts(group_by_key(&mesh.corner_vertex, mesh.vertex_count))
 }
 
 /// Start of vertex `v`'s details in the flat detail array (`Σ_{u<v} (r_u - 1)`).
@@ -1367,8 +1355,8 @@ fn coarse_vertex_order(coarse: &CornerMesh, vertex_face: &[u32], faces: usize) -
 }
 
 /// The coarse mesh must be a valid manifold mesh: no face visits a vertex twice, and no
-/// two edges join the same two vertices.
-fn check_coarse_manifold(coarse: &CornerMesh, ff_faces: &[u32]) -> Result<(), DooError> {
+/// two edges join the same two vertices. `by_vertex`: the corners of each vertex.
+fn check_coarse_manifold(coarse: &CornerMesh, ff_faces: &[u32], by_vertex: &CornersByVertex) -> Result<(), DooError> {
     let mut stamp = vec![NONE; coarse.vertex_count];
     for (f, &ff) in ff_faces.iter().enumerate() {
         for c in coarse.offsets[f]..coarse.offsets[f + 1] {
@@ -1381,6 +1369,26 @@ fn check_coarse_manifold(coarse: &CornerMesh, ff_faces: &[u32]) -> Result<(), Do
             }
             stamp[v] = f as u32;
         }
+    }
+    let two_edges = |u: usize, w: u32, c: u32| {
+        let f = ff_faces[faces_of_corner(coarse, c)] as usize;
+        Err(DooError::NotDooConnectivity {
+            face: f,
+            reason: format!("the coarse mesh would have two edges between coarse vertices {u} and {w}"),
+        })
+    };
+    if !coarse.corner_twin.contains(&NONE) {
+        // Closed: the outgoing half-edges of a vertex are its corners, in increasing order.
+        stamp.fill(NONE);
+        for (u, corners) in by_vertex.iter().enumerate() {
+            for &c in corners {
+                let w = coarse.corner_vertex[coarse.corner_next[c as usize] as usize];
+                if std::mem::replace(&mut stamp[w as usize], u as u32) == u as u32 {
+                    return two_edges(u, w, c);
+                }
+            }
+        }
+        return Ok(());
     }
     // Outgoing half-edges of each vertex: from its corners, and the boundary half-edges
     // opposite boundary corners.
@@ -1410,11 +1418,7 @@ fn check_coarse_manifold(coarse: &CornerMesh, ff_faces: &[u32]) -> Result<(), Do
     for u in 0..coarse.vertex_count {
         for &(w, c) in &targets[out_offsets[u] as usize..out_offsets[u + 1] as usize] {
             if stamp[w as usize] == u as u32 {
-                let f = ff_faces[faces_of_corner(coarse, c)] as usize;
-                return Err(DooError::NotDooConnectivity {
-                    face: f,
-                    reason: format!("the coarse mesh would have two edges between coarse vertices {u} and {w}"),
-                });
+                return two_edges(u, w, c);
             }
             stamp[w as usize] = u as u32;
         }
@@ -1491,10 +1495,9 @@ fn find_vertex_faces(
 /// fine order; fails at the first fine face that does not fit.
 fn match_fine_faces(
     fine: &CornerMesh,
-    corner_face: &[u32],
+    ff_faces: &[u32],
     coarse: &CornerMesh,
     vertex_of: &[u32],
-    fine_corner_of: &[u32],
     quad_face: &[u32],
     vertex_face: &[u32],
 ) -> Result<FineOrder, DooError> {
@@ -1502,6 +1505,13 @@ fn match_fine_faces(
     let mut matched = vec![false; faces];
     let mut face_order = Vec::with_capacity(faces);
     let mut rotations = Vec::with_capacity(faces);
+    // F_F faces: the coarse faces, made of their corners in order (so they fit, without
+    // rotation, and each is claimed once).
+    for &g in ff_faces {
+        matched[g as usize] = true;
+    }
+    face_order.extend_from_slice(ff_faces);
+    rotations.resize(ff_faces.len(), 0);
     let broken = |face: usize, reason: String| DooError::NotDooConnectivity { face, reason };
     // Claims fine face `g` for the canonical face with (fine) vertices `cycle`.
     let mut claim = |g: usize, cycle: &[u32], what: &str| -> Result<(), DooError> {
@@ -1510,8 +1520,14 @@ fn match_fine_faces(
         if m != cycle.len() {
             return Err(broken(g, format!("expected an {what} with {} sides, found {m}", cycle.len())));
         }
-        let r = (0..m).find(|&r| fine.corner_vertex[b] == cycle[r]);
-        let fits = r.is_some_and(|r| (0..m).all(|i| fine.corner_vertex[b + i] == cycle[(i + r) % m]));
+        // Corner `i` of the face must be `cycle[(i + r) mod m]`, `r` the first position of
+        // its corner 0 in the cycle.
+        let face = &fine.corner_vertex[b..e];
+        let r = cycle.iter().position(|&x| x == face[0]);
+        let fits = r.is_some_and(|r| {
+            let (head, tail) = face.split_at(m - r);
+            head.iter().zip(&cycle[r..]).all(|(a, b)| a == b) && tail.iter().zip(&cycle[..r]).all(|(a, b)| a == b)
+        });
         if !fits {
             return Err(broken(g, format!("its corners are not those of the expected {what}")));
         }
@@ -1522,12 +1538,6 @@ fn match_fine_faces(
         rotations.push(r.unwrap_or(0) as u32);
         Ok(())
     };
-    // F_F faces: the coarse faces, same corners.
-    for f in 0..coarse.face_count() {
-        let (b, e) = (coarse.offsets[f] as usize, coarse.offsets[f + 1] as usize);
-        let g = corner_face[fine_corner_of[b] as usize] as usize;
-        claim(g, &vertex_of[b..e], "F_F face")?;
-    }
     // F_E quads: (c, next(t), t, next(c)) for each interior coarse edge.
     for c in 0..coarse.corner_count() {
         let t = coarse.corner_twin[c];
@@ -1725,6 +1735,14 @@ mod tests {
 
     fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
         a.iter().zip(b).map(|(p, q)| (*p - *q).length()).fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn an_empty_mesh_is_an_error() {
+        let empty = HalfedgeMesh::from_soup(&PolygonSoup::default()).unwrap();
+        assert!(matches!(reverse(&empty, &ReverseOptions::default()), Err(DooError::EmptyMesh)));
+        let options = crate::DecomposeOptions::levels(FaceRule::DooSabin, 1);
+        assert!(matches!(crate::decompose(&empty, &options), Err(DooError::EmptyMesh)));
     }
 
     #[test]
