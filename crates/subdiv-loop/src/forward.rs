@@ -76,7 +76,7 @@
 //! subdivision*, HPG 2021 (index-arithmetic refinement).
 
 mod attribute;
-mod buffer;
+pub(crate) mod buffer;
 pub(crate) mod kernel;
 mod matrix;
 mod subdivider;

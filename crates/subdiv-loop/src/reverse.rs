@@ -52,7 +52,11 @@ use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
-use crate::detect::{Coarsening, FineOrder, detect_mesh};
+use crate::detect::{
+    Coarsening, FineOrder, canonical_groups, coarse_edges_are_simple, coarse_face_is_valid, detect_mesh,
+    reverse_canonical_mesh,
+};
+use crate::forward::buffer::{Output, Slots};
 use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
 use crate::forward::topology::{BASE_MASK, INVALID as TOPOLOGY_INVALID, MAX_FACES, NEXT, Topology, is_first};
 use crate::forward::{LoopOptions, VertexWeights};
@@ -137,8 +141,15 @@ pub struct ReverseOptions {
 /// [`LoopError::SeedOutOfRange`] and [`LoopError::NotLoopConnectivity`] from detection.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<ReversedLevel, LoopError> {
     crate::pyramid::check_input_positions(fine.positions())?;
-    let coarsening = detect_mesh(fine, options.seed_vertex)?;
-    let (positions, details) = reverse_positions(&coarsening, fine.positions(), &options.rules);
+    let (coarsening, positions, details) =
+        match reverse_canonical_mesh(fine, options.seed_vertex, fine.positions(), &options.rules) {
+            Some(level) => level,
+            None => {
+                let coarsening = detect_mesh(fine, options.seed_vertex)?;
+                let (positions, details) = reverse_positions(&coarsening, fine.positions(), &options.rules);
+                (coarsening, positions, details)
+            }
+        };
     let order = coarsening.fine_order();
     let coarse = HalfedgeMesh::from_soup(&coarsening.coarse.to_soup(positions))
         .expect("internal: a detected coarse mesh is a valid mesh");
@@ -426,17 +437,151 @@ pub(crate) fn reverse_positions(
     let positions = map_indices(nv, |v| {
         let vertex_point = fine[coarsening.vertex_point[v as usize] as usize];
         let (n, flags) = (valence[v as usize] & !BOUNDARY, valence[v as usize] & BOUNDARY);
-        if flags != 0 {
-            if rules.keep_corners && n == 2 { vertex_point } else { 2.0 * vertex_point - 0.5 * sum[v as usize] }
-        } else if n == 0 {
-            vertex_point
-        } else {
-            let (mu, eta) = weights.get(n as usize);
-            mu * vertex_point + eta * sum[v as usize]
-        }
+        coarse_position(vertex_point, sum[v as usize], n, flags != 0, rules, &weights)
     });
     let details = map_indices(coarse.edge_count(), |e| edge_position(e) - edge_rule(coarse, &positions, e));
     (positions, details)
+}
+
+/// A fine mesh in the canonical order (see [`detect`](crate::detect)), detected and
+/// reversed in one go: the same coarse mesh, positions and details, bit for bit, as
+/// [`detect_mesh`] / [`detect_table`](crate::detect::detect_table) followed by
+/// [`reverse_positions`], in fewer passes over memory. `None` when anything differs
+/// from a valid canonical refinement; the caller then takes the general path, which
+/// also names the error.
+///
+/// Passes: the groups of four faces (parallel); the coarse corners in order, which
+/// number the edges, pair the twins and sum the edge points around every coarse vertex
+/// in edge order (sequential: these sums are what [`reverse_positions`] adds, in the
+/// same order); the boundary edges, if any; the coarse positions (parallel); the
+/// details by chunks of coarse faces (parallel), which also check the faces.
+pub(crate) fn reverse_canonical(
+    faces: usize,
+    vertex_count: usize,
+    seed_vertex: Option<u32>,
+    face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
+    fine: &[DVec3],
+    rules: &LoopOptions,
+) -> Option<(Coarsening, Vec<DVec3>, Vec<DVec3>)> {
+    const BOUNDARY: u32 = 1 << 31;
+    let groups = canonical_groups(faces, seed_vertex, face)?;
+    let first_odd = groups.first_odd;
+    let nv = first_odd as usize;
+    let edge_position = |e: u32| fine[(first_odd + e) as usize];
+    let mut sum = vec![DVec3::ZERO; nv];
+    let mut valence = vec![0u32; nv];
+    let coarse = groups.into_table(vertex_count, |e, ends| {
+        let point = edge_position(e);
+        for v in ends {
+            sum[v as usize] += point;
+            valence[v as usize] += 1;
+        }
+    })?;
+    // On the boundary only the boundary edges count, summed in edge order from zero:
+    // boundary corners in corner order are the boundary edges in edge order.
+    let (corner_vertex, twin, corner_edge) = (coarse.corner_vertices(), coarse.twins(), coarse.corner_edges());
+    if 2 * coarse.edge_count() != coarse.corner_count() {
+        for c in (0..twin.len() as u32).filter(|&c| twin[c as usize] == NONE) {
+            let point = edge_position(corner_edge[c as usize]);
+            for v in [corner_vertex[c as usize], corner_vertex[next(c) as usize]] {
+                let v = v as usize;
+                if valence[v] & BOUNDARY == 0 {
+                    sum[v] = DVec3::ZERO;
+                    valence[v] |= BOUNDARY;
+                }
+                sum[v] += point;
+            }
+        }
+    }
+    if !coarse_edges_are_simple(&coarse) {
+        return None;
+    }
+    let weights = InverseWeights::new(rules.weights);
+    let positions = map_indices(nv, |v| {
+        let (n, flags) = (valence[v as usize] & !BOUNDARY, valence[v as usize] & BOUNDARY);
+        coarse_position(fine[v as usize], sum[v as usize], n, flags != 0, rules, &weights)
+    });
+    let details = canonical_details(&coarse, &positions, edge_position)?;
+    Some((Coarsening::canonical(coarse), positions, details))
+}
+
+/// Coarse faces per parallel work item of [`canonical_details`].
+const DETAIL_CHUNK: usize = 2048;
+
+/// The detail of every coarse edge, by chunks of faces (each edge at its first corner,
+/// so each chunk writes a contiguous run of edges), checking every face on the way
+/// (the face part of the coarse mesh check): `None` if one is not valid. The same
+/// formula as [`edge_rule`], on the face's three positions read once.
+fn canonical_details(
+    coarse: &CornerTable,
+    positions: &[DVec3],
+    edge_position: impl Fn(u32) -> DVec3 + Sync,
+) -> Option<Vec<DVec3>> {
+    let (corner_vertex, twin, edge_corner) = (coarse.corner_vertices(), coarse.twins(), coarse.edge_corners());
+    let faces = coarse.face_count();
+    let mut output = Output::<DVec3>::new(coarse.edge_count());
+    let valid = {
+        let mut slots = output.slots();
+        let first_edge = |f: usize| edge_corner.partition_point(|&c| (c as usize) < 3 * f);
+        let pieces: Vec<_> = (0..faces)
+            .step_by(DETAIL_CHUNK)
+            .map(|f0| {
+                let f1 = (f0 + DETAIL_CHUNK).min(faces);
+                let e0 = first_edge(f0);
+                (f0..f1, e0, slots.take_front(first_edge(f1) - e0))
+            })
+            .collect();
+        let run = |(range, e0, mut piece): (std::ops::Range<usize>, usize, Slots<'_, DVec3>)| {
+            for f in range {
+                let c0 = 3 * f;
+                let x = [corner_vertex[c0], corner_vertex[c0 + 1], corner_vertex[c0 + 2]];
+                let t = [twin[c0], twin[c0 + 1], twin[c0 + 2]];
+                if !coarse_face_is_valid(x, t) {
+                    return false;
+                }
+                let p = [positions[x[0] as usize], positions[x[1] as usize], positions[x[2] as usize]];
+                for k in 0..3 {
+                    let c = (c0 + k) as u32;
+                    if t[k] != NONE && t[k] < c {
+                        continue;
+                    }
+                    let (a, b) = (p[k], p[(k + 1) % 3]);
+                    let predicted = if t[k] == NONE {
+                        0.5 * (a + b)
+                    } else {
+                        let (r, s) = (p[(k + 2) % 3], positions[corner_vertex[prev(t[k]) as usize] as usize]);
+                        0.375 * (a + b) + 0.125 * (r + s)
+                    };
+                    let e = (e0 + piece.written()) as u32;
+                    piece.push(edge_position(e) - predicted);
+                }
+            }
+            true
+        };
+        if faces >= PARALLEL_THRESHOLD / 4 { pieces.into_par_iter().all(run) } else { pieces.into_iter().all(run) }
+    };
+    valid.then(|| output.into_vec())
+}
+
+/// The coarse position of a vertex from its vertex point and the sum of its edge
+/// points (of the boundary ones on the boundary): the exact inverse of the vertex rule.
+#[inline]
+fn coarse_position(
+    vertex_point: DVec3,
+    sum: DVec3,
+    valence: u32,
+    on_boundary: bool,
+    rules: &LoopOptions,
+    weights: &InverseWeights,
+) -> DVec3 {
+    if on_boundary {
+        if rules.keep_corners && valence == 2 { vertex_point } else { 2.0 * vertex_point - 0.5 * sum }
+    } else if valence == 0 {
+        vertex_point
+    } else {
+        let (mu, eta) = weights.get(valence as usize);
+        mu * vertex_point + eta * sum
+    }
 }
 
 /// [`inverse_weights`] tabulated for the usual valences (no cosine per vertex).
