@@ -55,7 +55,7 @@ use mesh_topo::HalfedgeMesh;
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::forward::LoopOptions;
-use crate::reverse::reverse_canonical;
+use crate::reverse::{CanonicalLevel, reverse_canonical};
 
 /// A fine-mesh element named by an error.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -308,7 +308,7 @@ pub(crate) fn reverse_canonical_mesh(
     seed_vertex: Option<u32>,
     positions: &[DVec3],
     rules: &LoopOptions,
-) -> Option<(Coarsening, Vec<DVec3>, Vec<DVec3>)> {
+) -> Option<CanonicalLevel> {
     reverse_canonical(fine.face_count(), fine.vertex_count(), seed_vertex, mesh_face_corners(fine), positions, rules)
 }
 
@@ -318,7 +318,7 @@ pub(crate) fn reverse_canonical_table(
     seed_vertex: Option<u32>,
     positions: &[DVec3],
     rules: &LoopOptions,
-) -> Option<(Coarsening, Vec<DVec3>, Vec<DVec3>)> {
+) -> Option<CanonicalLevel> {
     let corners = fine.corner_vertices();
     let face = |f: usize| Some([corners[3 * f], corners[3 * f + 1], corners[3 * f + 2]]);
     reverse_canonical(fine.face_count(), fine.vertex_count(), seed_vertex, face, positions, rules)
@@ -490,7 +490,7 @@ fn detect_canonical_faces(
     face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
 ) -> Option<Coarsening> {
     let groups = canonical_groups(faces, seed_vertex, face)?;
-    let coarse = groups.into_table(vertex_count, |_, _| {})?;
+    let (coarse, ()) = groups.into_table(vertex_count, |_, _| ())?;
     Some(Coarsening::canonical(coarse))
 }
 
@@ -554,41 +554,45 @@ pub(crate) fn canonical_groups(
 impl CanonicalGroups {
     /// The coarse table (second pass, sequential over the coarse corners): coarse
     /// half-edge `c` has edge point `m_c = V + e_c`; in corner order an edge is new
-    /// exactly when it is the next number, and an older one is its twin. `new_edge(e,
-    /// ends)` is called for every new edge in order, with the coarse vertices of its
-    /// first half-edge.
-    pub(crate) fn into_table(
+    /// exactly when it is the next number, and an older one is its twin.
+    ///
+    /// `alongside(coarse_vertex, edge_point)` runs at the same time on another thread
+    /// (when there is one), reading the same arrays: a second sequential pass, for
+    /// work that follows the edges in order.
+    pub(crate) fn into_table<S: Send>(
         self,
         vertex_count: usize,
-        mut new_edge: impl FnMut(u32, [u32; 2]),
-    ) -> Option<CornerTable> {
+        alongside: impl FnOnce(&[u32], &[u32]) -> S + Send,
+    ) -> Option<(CornerTable, S)> {
         let Self { coarse_vertex, edge_point: mut corner_edge, first_odd } = self;
         let corners = coarse_vertex.len();
         let edge_count = vertex_count - first_odd as usize;
-        let mut twin = vec![NONE; corners];
-        let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
-        for c in 0..corners as u32 {
-            let e = &mut corner_edge[c as usize];
-            *e -= first_odd;
-            if *e as usize == edge_corner.len() {
-                edge_corner.push(c);
-                new_edge(*e, [coarse_vertex[c as usize], coarse_vertex[next(c) as usize]]);
-                continue;
+        let pair_twins = || {
+            let mut twin = vec![NONE; corners];
+            let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
+            for c in 0..corners as u32 {
+                let e = corner_edge[c as usize] - first_odd;
+                if e as usize == edge_corner.len() {
+                    edge_corner.push(c);
+                    continue;
+                }
+                let t = *edge_corner.get(e as usize)?;
+                if twin[t as usize] != NONE
+                    || coarse_vertex[t as usize] != coarse_vertex[next(c) as usize]
+                    || coarse_vertex[next(t) as usize] != coarse_vertex[c as usize]
+                {
+                    return None;
+                }
+                twin[t as usize] = c;
+                twin[c as usize] = t;
             }
-            let t = *edge_corner.get(*e as usize)?;
-            if twin[t as usize] != NONE
-                || coarse_vertex[t as usize] != coarse_vertex[next(c) as usize]
-                || coarse_vertex[next(t) as usize] != coarse_vertex[c as usize]
-            {
-                return None;
-            }
-            twin[t as usize] = c;
-            twin[c as usize] = t;
-        }
-        if edge_corner.len() != edge_count {
-            return None;
-        }
-        Some(CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner))
+            (edge_corner.len() == edge_count).then_some((twin, edge_corner))
+        };
+        let (paired, side) = rayon::join(pair_twins, || alongside(&coarse_vertex, &corner_edge));
+        let (twin, edge_corner) = paired?;
+        corner_edge.par_iter_mut().with_min_len(3 * GROUP_CHUNK).for_each(|e| *e -= first_odd);
+        let table = CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner);
+        Some((table, side))
     }
 }
 

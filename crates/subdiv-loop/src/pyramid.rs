@@ -139,7 +139,6 @@ pub struct RateDistortion {
 /// when a requested level (or, with [`Levels::Max`], the first level) has no Loop
 /// connectivity.
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
-    check_input_positions(mesh.positions())?;
     // `None` until the first reversal: the input is read as it is (see `detect_mesh`).
     let mut table: Option<CornerTable> = None;
     // The input positions are read in place; each reversal makes the next ones.
@@ -149,6 +148,13 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Loop
         Levels::Count(n) => n,
         Levels::Max => usize::MAX,
     };
+    // Non-finite input positions are an error, found before anything else. The fast
+    // path below needs no pass of its own for that: its results are all finite when
+    // the input is (see `CanonicalLevel::finite`).
+    let check_input = || check_input_positions(mesh.positions());
+    if wanted == 0 {
+        check_input()?;
+    }
     // Every reversal divides the face count by 4 (a mesh without faces is an error), so
     // `Levels::Max` ends after at most log4(faces) + 1 rounds.
     while levels.len() < wanted {
@@ -156,9 +162,18 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Loop
             None => reverse_canonical_mesh(mesh, options.seed_vertex, &positions, &options.rules),
             Some(table) => reverse_canonical_table(table, None, &positions, &options.rules),
         };
+        let first = table.is_none();
         let (coarsening, coarse_positions, details) = match fused {
-            Some(level) => level,
+            Some(level) => {
+                if first && !level.finite {
+                    check_input()?;
+                }
+                (level.coarsening, level.positions, level.details)
+            }
             None => {
+                if first {
+                    check_input()?;
+                }
                 let detected = match &table {
                     None => detect_mesh(mesh, options.seed_vertex),
                     Some(table) => detect_table(table, None),
@@ -583,6 +598,42 @@ mod tests {
             reverse(&tetrahedron, &ReverseOptions::default()),
             Err(LoopError::NotLoopConnectivity { at: crate::detect::FineElement::Vertex(_), .. })
         ));
+    }
+
+    /// Non-finite input positions are an error whichever path the decomposition takes
+    /// (the fast path of canonical meshes finds them through its results), at every
+    /// kind of fine vertex and for any number of levels; huge finite ones are not.
+    #[test]
+    fn non_finite_input_is_an_error_on_every_path() {
+        let rules = LoopOptions::default();
+        let canonical = loop_steps(&open_fan(4), &rules, 2);
+        let scrambled = scramble(&canonical, 3);
+        let edge_point = open_fan(4).vertex_count() + 1;
+        for soup in [&canonical, &scrambled] {
+            for vertex in [0, edge_point, soup.vertex_count() - 1] {
+                for value in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                    let mut bad = soup.clone();
+                    bad.positions[vertex].y = value;
+                    // Built from finite positions, then edited (as a user may).
+                    let mut fine = mesh(soup);
+                    fine.positions_mut()[vertex] = bad.positions[vertex];
+                    for levels in [Levels::Count(0), Levels::Count(1), Levels::Count(2), Levels::Max] {
+                        let options = DecomposeOptions { levels, ..max_levels(rules) };
+                        match decompose(&fine, &options) {
+                            Err(LoopError::Mesh(mesh_topo::MeshError::NonFiniteCoordinate {
+                                vertex: v, axis, ..
+                            })) => {
+                                assert_eq!((v, axis), (vertex, 1));
+                            }
+                            other => panic!("vertex {vertex}, {value}, {levels:?}: {other:?}"),
+                        }
+                    }
+                }
+            }
+        }
+        let mut huge = mesh(&canonical);
+        huge.positions_mut()[0] = DVec3::splat(f64::MAX);
+        assert!(decompose(&huge, &max_levels(rules)).is_ok());
     }
 
     #[test]

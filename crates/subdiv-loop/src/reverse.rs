@@ -140,11 +140,16 @@ pub struct ReverseOptions {
 /// [`LoopError::Mesh`] for a non-finite position, and [`LoopError::NotTriangle`],
 /// [`LoopError::SeedOutOfRange`] and [`LoopError::NotLoopConnectivity`] from detection.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<ReversedLevel, LoopError> {
-    crate::pyramid::check_input_positions(fine.positions())?;
     let (coarsening, positions, details) =
         match reverse_canonical_mesh(fine, options.seed_vertex, fine.positions(), &options.rules) {
-            Some(level) => level,
+            Some(level) => {
+                if !level.finite {
+                    crate::pyramid::check_input_positions(fine.positions())?;
+                }
+                (level.coarsening, level.positions, level.details)
+            }
             None => {
+                crate::pyramid::check_input_positions(fine.positions())?;
                 let coarsening = detect_mesh(fine, options.seed_vertex)?;
                 let (positions, details) = reverse_positions(&coarsening, fine.positions(), &options.rules);
                 (coarsening, positions, details)
@@ -443,6 +448,18 @@ pub(crate) fn reverse_positions(
     (positions, details)
 }
 
+/// A level reversed by [`reverse_canonical`].
+pub(crate) struct CanonicalLevel {
+    pub(crate) coarsening: Coarsening,
+    pub(crate) positions: Vec<DVec3>,
+    pub(crate) details: Vec<DVec3>,
+    /// True if every coarse position and detail is finite, as they are whenever the
+    /// fine positions are (every fine vertex is a vertex point or an edge point, and a
+    /// non-finite one makes its coarse position or detail non-finite): callers that
+    /// must reject non-finite input only look at the input when this is false.
+    pub(crate) finite: bool,
+}
+
 /// A fine mesh in the canonical order (see [`detect`](crate::detect)), detected and
 /// reversed in one go: the same coarse mesh, positions and details, bit for bit, as
 /// [`detect_mesh`] / [`detect_table`](crate::detect::detect_table) followed by
@@ -462,21 +479,32 @@ pub(crate) fn reverse_canonical(
     face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
     fine: &[DVec3],
     rules: &LoopOptions,
-) -> Option<(Coarsening, Vec<DVec3>, Vec<DVec3>)> {
+) -> Option<CanonicalLevel> {
     const BOUNDARY: u32 = 1 << 31;
     let groups = canonical_groups(faces, seed_vertex, face)?;
     let first_odd = groups.first_odd;
     let nv = first_odd as usize;
     let edge_position = |e: u32| fine[(first_odd + e) as usize];
-    let mut sum = vec![DVec3::ZERO; nv];
-    let mut valence = vec![0u32; nv];
-    let coarse = groups.into_table(vertex_count, |e, ends| {
-        let point = edge_position(e);
-        for v in ends {
-            sum[v as usize] += point;
-            valence[v as usize] += 1;
+    // The edge points around every coarse vertex, summed in edge order (the order of
+    // `reverse_positions`), alongside the pairing of the twins.
+    let sum_edge_points = |coarse_vertex: &[u32], edge_point: &[u32]| {
+        let mut sum = vec![DVec3::ZERO; nv];
+        let mut valence = vec![0u32; nv];
+        let mut new_edge = first_odd;
+        for (c, &m) in edge_point.iter().enumerate() {
+            if m != new_edge {
+                continue;
+            }
+            new_edge += 1;
+            let point = fine[m as usize];
+            for v in [coarse_vertex[c], coarse_vertex[next(c as u32) as usize]] {
+                sum[v as usize] += point;
+                valence[v as usize] += 1;
+            }
         }
-    })?;
+        (sum, valence)
+    };
+    let (coarse, (mut sum, mut valence)) = groups.into_table(vertex_count, sum_edge_points)?;
     // On the boundary only the boundary edges count, summed in edge order from zero:
     // boundary corners in corner order are the boundary edges in edge order.
     let (corner_vertex, twin, corner_edge) = (coarse.corner_vertices(), coarse.twins(), coarse.corner_edges());
@@ -493,16 +521,28 @@ pub(crate) fn reverse_canonical(
             }
         }
     }
-    if !coarse_edges_are_simple(&coarse) {
-        return None;
-    }
-    let weights = InverseWeights::new(rules.weights);
-    let positions = map_indices(nv, |v| {
-        let (n, flags) = (valence[v as usize] & !BOUNDARY, valence[v as usize] & BOUNDARY);
-        coarse_position(fine[v as usize], sum[v as usize], n, flags != 0, rules, &weights)
-    });
-    let details = canonical_details(&coarse, &positions, edge_position)?;
-    Some((Coarsening::canonical(coarse), positions, details))
+    // The (sequential) check for doubled edges runs beside the (parallel) reversal.
+    let reverse = || {
+        let weights = InverseWeights::new(rules.weights);
+        let positions = map_indices(nv, |v| {
+            let (n, flags) = (valence[v as usize] & !BOUNDARY, valence[v as usize] & BOUNDARY);
+            coarse_position(fine[v as usize], sum[v as usize], n, flags != 0, rules, &weights)
+        });
+        let (details, details_finite) = canonical_details(&coarse, &positions, edge_position)?;
+        let finite = details_finite && crate::pyramid::all_finite(&positions);
+        Some((positions, details, finite))
+    };
+    let (simple, reversed) = rayon::join(|| coarse_edges_are_simple(&coarse), reverse);
+    let (positions, details, finite) = reversed.filter(|_| simple)?;
+    Some(CanonicalLevel { coarsening: Coarsening::canonical(coarse), positions, details, finite })
+}
+
+/// Non-zero if a coordinate of `p` is not finite (branch-free).
+#[inline(always)]
+fn non_finite_bits(p: DVec3) -> u64 {
+    const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
+    let bits = |x: f64| u64::from(x.to_bits() & EXPONENT == EXPONENT);
+    bits(p.x) | bits(p.y) | bits(p.z)
 }
 
 /// Coarse faces per parallel work item of [`canonical_details`].
@@ -516,11 +556,11 @@ fn canonical_details(
     coarse: &CornerTable,
     positions: &[DVec3],
     edge_position: impl Fn(u32) -> DVec3 + Sync,
-) -> Option<Vec<DVec3>> {
+) -> Option<(Vec<DVec3>, bool)> {
     let (corner_vertex, twin, edge_corner) = (coarse.corner_vertices(), coarse.twins(), coarse.edge_corners());
     let faces = coarse.face_count();
     let mut output = Output::<DVec3>::new(coarse.edge_count());
-    let valid = {
+    let finite = {
         let mut slots = output.slots();
         let first_edge = |f: usize| edge_corner.partition_point(|&c| (c as usize) < 3 * f);
         let pieces: Vec<_> = (0..faces)
@@ -532,12 +572,13 @@ fn canonical_details(
             })
             .collect();
         let run = |(range, e0, mut piece): (std::ops::Range<usize>, usize, Slots<'_, DVec3>)| {
+            let mut non_finite = 0;
             for f in range {
                 let c0 = 3 * f;
                 let x = [corner_vertex[c0], corner_vertex[c0 + 1], corner_vertex[c0 + 2]];
                 let t = [twin[c0], twin[c0 + 1], twin[c0 + 2]];
                 if !coarse_face_is_valid(x, t) {
-                    return false;
+                    return None;
                 }
                 let p = [positions[x[0] as usize], positions[x[1] as usize], positions[x[2] as usize]];
                 for k in 0..3 {
@@ -553,14 +594,22 @@ fn canonical_details(
                         0.375 * (a + b) + 0.125 * (r + s)
                     };
                     let e = (e0 + piece.written()) as u32;
-                    piece.push(edge_position(e) - predicted);
+                    let detail = edge_position(e) - predicted;
+                    non_finite |= non_finite_bits(detail);
+                    piece.push(detail);
                 }
             }
-            true
+            Some(non_finite == 0)
         };
-        if faces >= PARALLEL_THRESHOLD / 4 { pieces.into_par_iter().all(run) } else { pieces.into_iter().all(run) }
+        let both = |a: bool, b: bool| Some(a && b);
+        if faces >= PARALLEL_THRESHOLD / 4 {
+            pieces.into_par_iter().map(run).try_reduce(|| true, both)
+        } else {
+            pieces.into_iter().map(run).try_fold(true, |a, b| both(a, b?))
+        }
     };
-    valid.then(|| output.into_vec())
+    let finite = finite?;
+    Some((output.into_vec(), finite))
 }
 
 /// The coarse position of a vertex from its vertex point and the sum of its edge
