@@ -55,6 +55,7 @@ use mesh_topo::HalfedgeMesh;
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::forward::LoopOptions;
+use crate::forward::kernel::PARALLEL_MIN_FACES;
 use crate::reverse::{CanonicalLevel, reverse_canonical};
 
 /// A fine-mesh element named by an error.
@@ -588,7 +589,10 @@ impl CanonicalGroups {
             }
             (edge_corner.len() == edge_count).then_some((twin, edge_corner))
         };
-        let (paired, side) = rayon::join(pair_twins, || alongside(&coarse_vertex, &corner_edge));
+        let side = || alongside(&coarse_vertex, &corner_edge);
+        // Below this size waking a second thread costs more than it saves.
+        let (paired, side) =
+            if corners / 3 >= PARALLEL_MIN_FACES { rayon::join(pair_twins, side) } else { (pair_twins(), side()) };
         let (twin, edge_corner) = paired?;
         corner_edge.par_iter_mut().with_min_len(3 * GROUP_CHUNK).for_each(|e| *e -= first_odd);
         let table = CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner);

@@ -57,7 +57,7 @@ use crate::detect::{
     reverse_canonical_mesh,
 };
 use crate::forward::buffer::{Output, Slots};
-use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
+use crate::forward::kernel::{self, PARALLEL_MIN_FACES, Rules, loop_beta, warren_beta};
 use crate::forward::topology::{BASE_MASK, INVALID as TOPOLOGY_INVALID, MAX_FACES, NEXT, Topology, is_first};
 use crate::forward::{LoopOptions, VertexWeights};
 
@@ -252,11 +252,12 @@ pub(crate) fn reconstruct_levels<'a>(
         // Also names the first non-finite vertex.
         check_finite(&positions, count)?;
     }
-    let faces = topology.triangles.len() as u32;
+    // The triangles' memory becomes the indices (no copy); the offsets are filled in
+    // parallel, as for the forward subdivision's soups.
     Ok(PolygonSoup {
         positions,
-        offsets: (0..=faces).map(|f| 3 * f).collect(),
-        indices: topology.triangles.as_flattened().to_vec(),
+        offsets: crate::forward::triangle_offsets(topology.triangles.len()),
+        indices: topology.triangles.into_flattened(),
     })
 }
 
@@ -349,7 +350,9 @@ fn check_details(
             reason: format!("{} details for a mesh with {edges} edges", details.len()),
         });
     }
-    if let Some(i) = details.iter().position(|d| !d.is_finite()) {
+    if !crate::pyramid::all_finite(details)
+        && let Some(i) = details.iter().position(|d| !d.is_finite())
+    {
         return Err(LoopError::InvalidDetails { level, reason: format!("detail {i} is not finite") });
     }
     if let Some(order) = order {
@@ -532,7 +535,9 @@ pub(crate) fn reverse_canonical(
         let finite = details_finite && crate::pyramid::all_finite(&positions);
         Some((positions, details, finite))
     };
-    let (simple, reversed) = rayon::join(|| coarse_edges_are_simple(&coarse), reverse);
+    let simple = || coarse_edges_are_simple(&coarse);
+    let (simple, reversed) =
+        if coarse.face_count() >= PARALLEL_MIN_FACES { rayon::join(simple, reverse) } else { (simple(), reverse()) };
     let (positions, details, finite) = reversed.filter(|_| simple)?;
     Some(CanonicalLevel { coarsening: Coarsening::canonical(coarse), positions, details, finite })
 }
