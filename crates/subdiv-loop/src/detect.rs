@@ -423,20 +423,29 @@ pub(crate) fn coarse_face_is_valid([a, b, d]: [u32; 3], twins: [u32; 3]) -> bool
 }
 
 /// The edge part of [`coarse_mesh_is_valid`]: no two edges join the same two vertices.
-pub(crate) fn coarse_edges_are_simple(coarse: &CornerTable) -> bool {
+fn coarse_edges_are_simple(coarse: &CornerTable) -> bool {
+    let mut lower_ends = vec![0u32; coarse.vertex_count() + 1];
+    for e in 0..coarse.edge_count() as u32 {
+        let c = coarse.edge_corner(e);
+        let (a, b) = (coarse.vertex(c), coarse.vertex(next(c)));
+        lower_ends[a.min(b) as usize + 1] += 1;
+    }
+    coarse_edges_are_simple_counted(coarse, lower_ends)
+}
+
+/// [`coarse_edges_are_simple`] given `lower_ends[v + 1]`, the number of edges whose
+/// lower end point is `v` (a pass that visits the edges anyway can count them).
+pub(crate) fn coarse_edges_are_simple_counted(coarse: &CornerTable, mut start: Vec<u32>) -> bool {
     let corner_vertex = coarse.corner_vertices();
     // Counting sort of the edges by lower end point, then look for a repeated upper end
     // point within each bucket.
     let nv = coarse.vertex_count();
+    debug_assert_eq!(start.len(), nv + 1);
     let ends = |e: u32| {
         let c = coarse.edge_corner(e);
         let (a, b) = (corner_vertex[c as usize], corner_vertex[next(c) as usize]);
         (a.min(b), a.max(b))
     };
-    let mut start = vec![0u32; nv + 1];
-    for e in 0..coarse.edge_count() as u32 {
-        start[ends(e).0 as usize + 1] += 1;
-    }
     for v in 0..nv {
         start[v + 1] += start[v];
     }

@@ -163,12 +163,12 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Loop
             Some(table) => reverse_canonical_table(table, None, &positions, &options.rules),
         };
         let first = table.is_none();
-        let (coarsening, coarse_positions, details) = match fused {
+        let (coarse, order, coarse_positions, details) = match fused {
             Some(level) => {
                 if first && !level.finite {
                     check_input()?;
                 }
-                (level.coarsening, level.positions, level.details)
+                (level.coarse, None, level.positions, level.details)
             }
             None => {
                 if first {
@@ -188,11 +188,14 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Loop
                     Err(error) => return Err(error),
                 };
                 let (coarse_positions, details) = reverse_positions(&coarsening, &positions, &options.rules);
-                (coarsening, coarse_positions, details)
+                {
+                    let order = coarsening.fine_order();
+                    (coarsening.coarse, order, coarse_positions, details)
+                }
             }
         };
-        levels.push(DetailLevel { details, order: coarsening.fine_order() });
-        table = Some(coarsening.coarse);
+        levels.push(DetailLevel { details, order });
+        table = Some(coarse);
         positions = Cow::Owned(coarse_positions);
     }
     levels.reverse();

@@ -53,7 +53,7 @@ use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::detect::{
-    Coarsening, FineOrder, canonical_groups, coarse_edges_are_simple, coarse_face_is_valid, detect_mesh,
+    Coarsening, FineOrder, canonical_groups, coarse_edges_are_simple_counted, coarse_face_is_valid, detect_mesh,
     reverse_canonical_mesh,
 };
 use crate::forward::buffer::{Output, Slots};
@@ -140,24 +140,26 @@ pub struct ReverseOptions {
 /// [`LoopError::Mesh`] for a non-finite position, and [`LoopError::NotTriangle`],
 /// [`LoopError::SeedOutOfRange`] and [`LoopError::NotLoopConnectivity`] from detection.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<ReversedLevel, LoopError> {
-    let (coarsening, positions, details) =
+    let (coarse, order, positions, details) =
         match reverse_canonical_mesh(fine, options.seed_vertex, fine.positions(), &options.rules) {
             Some(level) => {
                 if !level.finite {
                     crate::pyramid::check_input_positions(fine.positions())?;
                 }
-                (level.coarsening, level.positions, level.details)
+                (level.coarse, None, level.positions, level.details)
             }
             None => {
                 crate::pyramid::check_input_positions(fine.positions())?;
                 let coarsening = detect_mesh(fine, options.seed_vertex)?;
                 let (positions, details) = reverse_positions(&coarsening, fine.positions(), &options.rules);
-                (coarsening, positions, details)
+                {
+                    let order = coarsening.fine_order();
+                    (coarsening.coarse, order, positions, details)
+                }
             }
         };
-    let order = coarsening.fine_order();
-    let coarse = HalfedgeMesh::from_soup(&coarsening.coarse.to_soup(positions))
-        .expect("internal: a detected coarse mesh is a valid mesh");
+    let coarse =
+        HalfedgeMesh::from_soup(&coarse.to_soup(positions)).expect("internal: a detected coarse mesh is a valid mesh");
     Ok(ReversedLevel { coarse, details, order })
 }
 
@@ -453,7 +455,8 @@ pub(crate) fn reverse_positions(
 
 /// A level reversed by [`reverse_canonical`].
 pub(crate) struct CanonicalLevel {
-    pub(crate) coarsening: Coarsening,
+    /// The coarse mesh (the fine mesh is its canonical refinement: no fine order).
+    pub(crate) coarse: CornerTable,
     pub(crate) positions: Vec<DVec3>,
     pub(crate) details: Vec<DVec3>,
     /// True if every coarse position and detail is finite, as they are whenever the
@@ -493,6 +496,8 @@ pub(crate) fn reverse_canonical(
     let sum_edge_points = |coarse_vertex: &[u32], edge_point: &[u32]| {
         let mut sum = vec![DVec3::ZERO; nv];
         let mut valence = vec![0u32; nv];
+        // For the doubled-edge check: the edges by lower end point.
+        let mut lower_ends = vec![0u32; nv + 1];
         let mut new_edge = first_odd;
         for (c, &m) in edge_point.iter().enumerate() {
             if m != new_edge {
@@ -500,14 +505,16 @@ pub(crate) fn reverse_canonical(
             }
             new_edge += 1;
             let point = fine[m as usize];
-            for v in [coarse_vertex[c], coarse_vertex[next(c as u32) as usize]] {
+            let ends = [coarse_vertex[c], coarse_vertex[next(c as u32) as usize]];
+            for v in ends {
                 sum[v as usize] += point;
                 valence[v as usize] += 1;
             }
+            lower_ends[ends[0].min(ends[1]) as usize + 1] += 1;
         }
-        (sum, valence)
+        (sum, valence, lower_ends)
     };
-    let (coarse, (mut sum, mut valence)) = groups.into_table(vertex_count, sum_edge_points)?;
+    let (coarse, (mut sum, mut valence, lower_ends)) = groups.into_table(vertex_count, sum_edge_points)?;
     // On the boundary only the boundary edges count, summed in edge order from zero:
     // boundary corners in corner order are the boundary edges in edge order.
     let (corner_vertex, twin, corner_edge) = (coarse.corner_vertices(), coarse.twins(), coarse.corner_edges());
@@ -535,11 +542,11 @@ pub(crate) fn reverse_canonical(
         let finite = details_finite && crate::pyramid::all_finite(&positions);
         Some((positions, details, finite))
     };
-    let simple = || coarse_edges_are_simple(&coarse);
+    let simple = || coarse_edges_are_simple_counted(&coarse, lower_ends);
     let (simple, reversed) =
         if coarse.face_count() >= PARALLEL_MIN_FACES { rayon::join(simple, reverse) } else { (simple(), reverse()) };
     let (positions, details, finite) = reversed.filter(|_| simple)?;
-    Some(CanonicalLevel { coarsening: Coarsening::canonical(coarse), positions, details, finite })
+    Some(CanonicalLevel { coarse, positions, details, finite })
 }
 
 /// Non-zero if a coordinate of `p` is not finite (branch-free).
