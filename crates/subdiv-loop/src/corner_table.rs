@@ -12,6 +12,8 @@
 //! kernel's index arithmetic on the equivalent compact topology; nothing here hashes or
 //! sorts.
 
+use std::sync::OnceLock;
+
 use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use rayon::prelude::*;
@@ -36,7 +38,7 @@ pub(crate) fn prev(c: u32) -> u32 {
 }
 
 /// Triangle-mesh connectivity as flat `u32` arrays (see the module docs).
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone)]
 pub(crate) struct CornerTable {
     vertex_count: usize,
     /// Vertex of each corner.
@@ -49,8 +51,22 @@ pub(crate) struct CornerTable {
     edge_corner: Vec<u32>,
     /// Start of each vertex's counter-clockwise circulation: for a boundary vertex the
     /// corner whose half-edge lies on the boundary; [`NONE`] for an isolated vertex.
-    vertex_corner: Vec<u32>,
+    /// Made on first use (only circulations need it), from the other arrays.
+    vertex_corner: OnceLock<Vec<u32>>,
 }
+
+/// Tables are equal when their connectivity is: the circulation starts follow from it.
+impl PartialEq for CornerTable {
+    fn eq(&self, other: &Self) -> bool {
+        self.vertex_count == other.vertex_count
+            && self.corner_vertex == other.corner_vertex
+            && self.twin == other.twin
+            && self.corner_edge == other.corner_edge
+            && self.edge_corner == other.edge_corner
+    }
+}
+
+impl Eq for CornerTable {}
 
 /// What a circulation around a vertex found: the data every vertex rule needs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -95,7 +111,7 @@ impl CornerTable {
     }
 
     /// [`from_parts`](Self::from_parts) with the edges already numbered the same way
-    /// (first appearance in corner order): only the circulation starts are computed.
+    /// (first appearance in corner order).
     pub(crate) fn from_numbered_parts(
         vertex_count: usize,
         corner_vertex: Vec<u32>,
@@ -104,14 +120,22 @@ impl CornerTable {
         edge_corner: Vec<u32>,
     ) -> Self {
         debug_assert_eq!(corner_edge.len(), corner_vertex.len());
-        let mut vertex_corner = vec![NONE; vertex_count];
-        for (c, (&v, &t)) in corner_vertex.iter().zip(&twin).enumerate() {
-            let start = &mut vertex_corner[v as usize];
-            if *start == NONE || t == NONE {
-                *start = c as u32;
+        Self { vertex_count, corner_vertex, twin, corner_edge, edge_corner, vertex_corner: OnceLock::new() }
+    }
+
+    /// The circulation start of every vertex: its first corner, or its last corner
+    /// whose half-edge lies on the boundary.
+    fn vertex_corners(&self) -> &[u32] {
+        self.vertex_corner.get_or_init(|| {
+            let mut vertex_corner = vec![NONE; self.vertex_count];
+            for (c, (&v, &t)) in self.corner_vertex.iter().zip(&self.twin).enumerate() {
+                let start = &mut vertex_corner[v as usize];
+                if *start == NONE || t == NONE {
+                    *start = c as u32;
+                }
             }
-        }
-        Self { vertex_count, corner_vertex, twin, corner_edge, edge_corner, vertex_corner }
+            vertex_corner
+        })
     }
 
     /// The table of a validated half-edge mesh.
@@ -173,7 +197,7 @@ impl CornerTable {
         }
         // The mesh numbers edges the same way (half-edges 2e, 2e + 1; 2e has a face).
         let edge_corner = (0..mesh.edge_count() as u32).into_par_iter().map(|e| corner_of(2 * e)).collect();
-        let vertex_corner = (0..mesh.vertex_count())
+        let vertex_corner: Vec<u32> = (0..mesh.vertex_count())
             .into_par_iter()
             .map(|v| match mesh.vertex_halfedge(mesh.vertex(v).expect("internal: vertex in range")) {
                 None => NONE,
@@ -183,13 +207,20 @@ impl CornerTable {
                 Some(h) => corner_of(h.raw()),
             })
             .collect();
-        let table =
-            Self { vertex_count: mesh.vertex_count(), corner_vertex, twin, corner_edge, edge_corner, vertex_corner };
-        debug_assert_eq!(
-            table,
-            Self::from_parts(table.vertex_count, table.corner_vertex.clone(), table.twin.clone()),
-            "internal: corner table differs from its construction from parts"
-        );
+        let table = Self {
+            vertex_count: mesh.vertex_count(),
+            corner_vertex,
+            twin,
+            corner_edge,
+            edge_corner,
+            vertex_corner: OnceLock::from(vertex_corner),
+        };
+        #[cfg(debug_assertions)]
+        {
+            let from_parts = Self::from_parts(table.vertex_count, table.corner_vertex.clone(), table.twin.clone());
+            assert_eq!(table, from_parts, "internal: corner table differs from its construction from parts");
+            assert_eq!(table.vertex_corners(), from_parts.vertex_corners(), "internal: circulation starts differ");
+        }
         Ok(table)
     }
 
@@ -231,6 +262,25 @@ impl CornerTable {
         &self.corner_vertex
     }
 
+    /// The twin of every corner ([`NONE`] on the boundary).
+    #[inline]
+    pub(crate) fn twins(&self) -> &[u32] {
+        &self.twin
+    }
+
+    /// The edge of every corner.
+    #[inline]
+    pub(crate) fn corner_edges(&self) -> &[u32] {
+        &self.corner_edge
+    }
+
+    /// The first corner of every edge (increasing: edges are numbered by first
+    /// appearance).
+    #[inline]
+    pub(crate) fn edge_corners(&self) -> &[u32] {
+        &self.edge_corner
+    }
+
     /// Vertex of corner `c`.
     #[inline]
     pub(crate) fn vertex(&self, c: u32) -> u32 {
@@ -252,13 +302,13 @@ impl CornerTable {
     /// True if `v` has no incident face.
     #[inline]
     pub(crate) fn is_isolated(&self, v: u32) -> bool {
-        self.vertex_corner[v as usize] == NONE
+        self.vertex_corners()[v as usize] == NONE
     }
 
     /// True if `v` lies on the boundary.
     #[inline]
     pub(crate) fn is_boundary_vertex(&self, v: u32) -> bool {
-        let c = self.vertex_corner[v as usize];
+        let c = self.vertex_corners()[v as usize];
         c != NONE && self.twin[c as usize] == NONE
     }
 
@@ -266,7 +316,7 @@ impl CornerTable {
     /// circulation start.
     #[inline]
     pub(crate) fn outgoing(&self, v: u32) -> Outgoing<'_> {
-        let start = self.vertex_corner[v as usize];
+        let start = self.vertex_corners()[v as usize];
         Outgoing { table: self, start, current: start }
     }
 
@@ -275,7 +325,7 @@ impl CornerTable {
     /// before its last), and reports the star.
     #[inline]
     pub(crate) fn visit_star(&self, v: u32, mut visit: impl FnMut(u32, u32)) -> VertexStar {
-        let start = self.vertex_corner[v as usize];
+        let start = self.vertex_corners()[v as usize];
         if start == NONE {
             return VertexStar::Isolated;
         }
@@ -363,7 +413,7 @@ impl CornerTable {
         Topology {
             triangles,
             links,
-            vertex_halfedge: self.vertex_corner.iter().map(|&c| encode(c)).collect(),
+            vertex_halfedge: self.vertex_corners().iter().map(|&c| encode(c)).collect(),
             vertex_count: self.vertex_count,
             edge_count: self.edge_count(),
         }

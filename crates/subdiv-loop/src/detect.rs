@@ -49,10 +49,14 @@ use std::fmt;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use glam::DVec3;
 use mesh_topo::HalfedgeMesh;
 
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
+use crate::forward::LoopOptions;
+use crate::forward::kernel::PARALLEL_MIN_FACES;
+use crate::reverse::{CanonicalLevel, reverse_canonical};
 
 /// A fine-mesh element named by an error.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -162,7 +166,7 @@ impl Coarsening {
     }
 
     /// The coarsening of a fine mesh in the canonical order.
-    fn canonical(coarse: CornerTable) -> Self {
+    pub(crate) fn canonical(coarse: CornerTable) -> Self {
         let (nv, ne) = (coarse.vertex_count() as u32, coarse.edge_count() as u32);
         Self {
             coarse,
@@ -276,22 +280,49 @@ pub fn detect(fine: &HalfedgeMesh, options: &DetectOptions) -> Result<LoopConnec
 /// corners alone, without building the fine corner table; anything else goes through
 /// the corner table and the general detection, which also reports every error.
 pub(crate) fn detect_mesh(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
-    let next_halfedge = fine.raw_halfedge_next();
-    let targets = fine.raw_halfedge_targets();
-    // The corners of face f from its first corner, `None` if it is not a triangle.
-    let face_corners = |f: usize| {
-        let h0 = fine.face_halfedge(fine.face(f)?).raw();
-        let h1 = next_halfedge[h0 as usize];
-        let h2 = next_halfedge[h1 as usize];
-        // Corner k is the origin of half-edge k: the target of half-edge k - 1.
-        (next_halfedge[h2 as usize] == h0).then(|| [targets[h2 as usize], targets[h0 as usize], targets[h1 as usize]])
-    };
-    if let Some(coarsening) = detect_canonical_faces(fine.face_count(), fine.vertex_count(), seed_vertex, face_corners)
+    if let Some(coarsening) =
+        detect_canonical_faces(fine.face_count(), fine.vertex_count(), seed_vertex, mesh_face_corners(fine))
         && coarse_mesh_is_valid(&coarsening.coarse)
     {
         return Ok(coarsening);
     }
     detect_table(&CornerTable::from_mesh(fine)?, seed_vertex)
+}
+
+/// The corners of face `f` of a half-edge mesh from its first corner, `None` if it is
+/// not a triangle.
+fn mesh_face_corners(fine: &HalfedgeMesh) -> impl Fn(usize) -> Option<[u32; 3]> + Sync + '_ {
+    let next_halfedge = fine.raw_halfedge_next();
+    let targets = fine.raw_halfedge_targets();
+    move |f: usize| {
+        let h0 = fine.face_halfedge(fine.face(f)?).raw();
+        let h1 = next_halfedge[h0 as usize];
+        let h2 = next_halfedge[h1 as usize];
+        // Corner k is the origin of half-edge k: the target of half-edge k - 1.
+        (next_halfedge[h2 as usize] == h0).then(|| [targets[h2 as usize], targets[h0 as usize], targets[h1 as usize]])
+    }
+}
+
+/// [`reverse_canonical`](crate::reverse::reverse_canonical) on a half-edge mesh.
+pub(crate) fn reverse_canonical_mesh(
+    fine: &HalfedgeMesh,
+    seed_vertex: Option<u32>,
+    positions: &[DVec3],
+    rules: &LoopOptions,
+) -> Option<CanonicalLevel> {
+    reverse_canonical(fine.face_count(), fine.vertex_count(), seed_vertex, mesh_face_corners(fine), positions, rules)
+}
+
+/// [`reverse_canonical`](crate::reverse::reverse_canonical) on a corner table.
+pub(crate) fn reverse_canonical_table(
+    fine: &CornerTable,
+    seed_vertex: Option<u32>,
+    positions: &[DVec3],
+    rules: &LoopOptions,
+) -> Option<CanonicalLevel> {
+    let corners = fine.corner_vertices();
+    let face = |f: usize| Some([corners[3 * f], corners[3 * f + 1], corners[3 * f + 2]]);
+    reverse_canonical(fine.face_count(), fine.vertex_count(), seed_vertex, face, positions, rules)
 }
 
 const UNKNOWN: u8 = 0;
@@ -375,31 +406,46 @@ fn check_coarse_mesh(coarsening: &Coarsening) -> Result<(), LoopError> {
 /// (edges bucketed by their lower end point, a counting sort). Linear, and equivalent
 /// for the verdict (the detailed check runs only when this fails).
 fn coarse_mesh_is_valid(coarse: &CornerTable) -> bool {
-    let corner_vertex = coarse.corner_vertices();
     let faces_ok = (0..coarse.face_count() as u32).into_par_iter().with_min_len(GROUP_CHUNK).all(|f| {
-        let c = 3 * f;
-        let [a, b, d] = [coarse.vertex(c), coarse.vertex(c + 1), coarse.vertex(c + 2)];
-        let other = |k: u32| {
-            let t = coarse.twin(c + k);
-            if t == NONE { NONE - k } else { t / 3 }
-        };
-        a != b && b != d && d != a && other(0) != other(1) && other(1) != other(2) && other(2) != other(0)
+        let c = 3 * f as usize;
+        let corners = |a: &[u32]| [a[c], a[c + 1], a[c + 2]];
+        coarse_face_is_valid(corners(coarse.corner_vertices()), corners(coarse.twins()))
     });
-    if !faces_ok {
-        return false;
+    faces_ok && coarse_edges_are_simple(coarse)
+}
+
+/// The face part of [`coarse_mesh_is_valid`] for one face (its corner vertices and
+/// twins): no repeated vertex, no two edges shared with the same other face.
+#[inline]
+pub(crate) fn coarse_face_is_valid([a, b, d]: [u32; 3], twins: [u32; 3]) -> bool {
+    let other = |k: usize| if twins[k] == NONE { NONE - k as u32 } else { twins[k] / 3 };
+    a != b && b != d && d != a && other(0) != other(1) && other(1) != other(2) && other(2) != other(0)
+}
+
+/// The edge part of [`coarse_mesh_is_valid`]: no two edges join the same two vertices.
+fn coarse_edges_are_simple(coarse: &CornerTable) -> bool {
+    let mut lower_ends = vec![0u32; coarse.vertex_count() + 1];
+    for e in 0..coarse.edge_count() as u32 {
+        let c = coarse.edge_corner(e);
+        let (a, b) = (coarse.vertex(c), coarse.vertex(next(c)));
+        lower_ends[a.min(b) as usize + 1] += 1;
     }
+    coarse_edges_are_simple_counted(coarse, lower_ends)
+}
+
+/// [`coarse_edges_are_simple`] given `lower_ends[v + 1]`, the number of edges whose
+/// lower end point is `v` (a pass that visits the edges anyway can count them).
+pub(crate) fn coarse_edges_are_simple_counted(coarse: &CornerTable, mut start: Vec<u32>) -> bool {
+    let corner_vertex = coarse.corner_vertices();
     // Counting sort of the edges by lower end point, then look for a repeated upper end
     // point within each bucket.
     let nv = coarse.vertex_count();
+    debug_assert_eq!(start.len(), nv + 1);
     let ends = |e: u32| {
         let c = coarse.edge_corner(e);
         let (a, b) = (corner_vertex[c as usize], corner_vertex[next(c) as usize]);
         (a.min(b), a.max(b))
     };
-    let mut start = vec![0u32; nv + 1];
-    for e in 0..coarse.edge_count() as u32 {
-        start[ends(e).0 as usize + 1] += 1;
-    }
     for v in 0..nv {
         start[v + 1] += start[v];
     }
@@ -453,21 +499,42 @@ fn detect_canonical_faces(
     seed_vertex: Option<u32>,
     face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
 ) -> Option<Coarsening> {
+    let groups = canonical_groups(faces, seed_vertex, face)?;
+    let (coarse, ()) = groups.into_table(vertex_count, |_, _| ())?;
+    Some(Coarsening::canonical(coarse))
+}
+
+/// The coarse corners of a fine mesh whose faces are in the canonical order (first pass
+/// of [`detect_canonical_faces`]).
+pub(crate) struct CanonicalGroups {
+    /// Coarse vertex of every coarse corner: the vertex point `x` of each corner face.
+    pub(crate) coarse_vertex: Vec<u32>,
+    /// Fine edge point of every coarse half-edge.
+    edge_point: Vec<u32>,
+    /// The number of vertex points `V` (the smallest edge point).
+    pub(crate) first_odd: u32,
+}
+
+/// Reads the groups of four faces (in parallel): faces `4g .. 4g + 4` must be
+/// `(x_k, m_k, m_{k-1})` and `(m_0, m_1, m_2)`, every `x` below every `m`, and the seed
+/// (if any) a vertex point.
+pub(crate) fn canonical_groups(
+    faces: usize,
+    seed_vertex: Option<u32>,
+    face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
+) -> Option<CanonicalGroups> {
     if faces == 0 || !faces.is_multiple_of(4) {
         return None;
     }
-    let groups = faces / 4;
-    // Per group (in parallel): the coarse corners `x`, the edge points `m` of the coarse
-    // half-edges, and the largest `x` and smallest `m`, or `None` for a mismatch.
-    let corners = 3 * groups;
+    let corners = 3 * (faces / 4);
     let mut coarse_vertex = vec![0u32; corners];
     let mut edge_point = vec![0u32; corners];
-    let (largest_x, first_odd) = coarse_vertex
-        .par_chunks_mut(3)
-        .zip(edge_point.par_chunks_mut(3))
-        .with_min_len(GROUP_CHUNK)
-        .enumerate()
-        .map(|(g, (xs, ms))| {
+    // Chunks of whole groups, each a plain loop: the largest `x` and smallest `m`, or
+    // `None` for a mismatch.
+    let chunk = |(c, (xs, ms)): (usize, (&mut [u32], &mut [u32]))| {
+        let (mut largest, mut smallest) = (0u32, u32::MAX);
+        for (i, (xs, ms)) in xs.chunks_exact_mut(3).zip(ms.chunks_exact_mut(3)).enumerate() {
+            let g = c * GROUP_CHUNK + i;
             let m = face(4 * g + 3)?;
             for k in 0..3 {
                 let [x, a, b] = face(4 * g + k)?;
@@ -477,40 +544,69 @@ fn detect_canonical_faces(
                 xs[k] = x;
             }
             ms.copy_from_slice(&m);
-            Some((xs[0].max(xs[1]).max(xs[2]), m[0].min(m[1]).min(m[2])))
-        })
+            largest = largest.max(xs[0].max(xs[1]).max(xs[2]));
+            smallest = smallest.min(m[0].min(m[1]).min(m[2]));
+        }
+        Some((largest, smallest))
+    };
+    let (largest_x, first_odd) = coarse_vertex
+        .par_chunks_mut(3 * GROUP_CHUNK)
+        .zip(edge_point.par_chunks_mut(3 * GROUP_CHUNK))
+        .enumerate()
+        .map(chunk)
         .try_reduce(|| (0, u32::MAX), |a, b| Some((a.0.max(b.0), a.1.min(b.1))))?;
     if largest_x >= first_odd || seed_vertex.is_some_and(|s| s >= first_odd) {
         return None;
     }
-    // Coarse half-edge c has edge point m_c = V + e_c. In corner order an edge is new
-    // exactly when it is the next number; an older one is its twin.
-    let edge_count = vertex_count - first_odd as usize;
-    let mut twin = vec![NONE; corners];
-    let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
-    for c in 0..corners as u32 {
-        let e = &mut edge_point[c as usize];
-        *e -= first_odd;
-        if *e as usize == edge_corner.len() {
-            edge_corner.push(c);
-            continue;
-        }
-        let t = *edge_corner.get(*e as usize)?;
-        if twin[t as usize] != NONE
-            || coarse_vertex[t as usize] != coarse_vertex[next(c) as usize]
-            || coarse_vertex[next(t) as usize] != coarse_vertex[c as usize]
-        {
-            return None;
-        }
-        twin[t as usize] = c;
-        twin[c as usize] = t;
+    Some(CanonicalGroups { coarse_vertex, edge_point, first_odd })
+}
+
+impl CanonicalGroups {
+    /// The coarse table (second pass, sequential over the coarse corners): coarse
+    /// half-edge `c` has edge point `m_c = V + e_c`; in corner order an edge is new
+    /// exactly when it is the next number, and an older one is its twin.
+    ///
+    /// `alongside(coarse_vertex, edge_point)` runs at the same time on another thread
+    /// (when there is one), reading the same arrays: a second sequential pass, for
+    /// work that follows the edges in order.
+    pub(crate) fn into_table<S: Send>(
+        self,
+        vertex_count: usize,
+        alongside: impl FnOnce(&[u32], &[u32]) -> S + Send,
+    ) -> Option<(CornerTable, S)> {
+        let Self { coarse_vertex, edge_point: mut corner_edge, first_odd } = self;
+        let corners = coarse_vertex.len();
+        let edge_count = vertex_count - first_odd as usize;
+        let pair_twins = || {
+            let mut twin = vec![NONE; corners];
+            let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
+            for c in 0..corners as u32 {
+                let e = corner_edge[c as usize] - first_odd;
+                if e as usize == edge_corner.len() {
+                    edge_corner.push(c);
+                    continue;
+                }
+                let t = *edge_corner.get(e as usize)?;
+                if twin[t as usize] != NONE
+                    || coarse_vertex[t as usize] != coarse_vertex[next(c) as usize]
+                    || coarse_vertex[next(t) as usize] != coarse_vertex[c as usize]
+                {
+                    return None;
+                }
+                twin[t as usize] = c;
+                twin[c as usize] = t;
+            }
+            (edge_corner.len() == edge_count).then_some((twin, edge_corner))
+        };
+        let side = || alongside(&coarse_vertex, &corner_edge);
+        // Below this size waking a second thread costs more than it saves.
+        let (paired, side) =
+            if corners / 3 >= PARALLEL_MIN_FACES { rayon::join(pair_twins, side) } else { (pair_twins(), side()) };
+        let (twin, edge_corner) = paired?;
+        corner_edge.par_iter_mut().with_min_len(3 * GROUP_CHUNK).for_each(|e| *e -= first_odd);
+        let table = CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner);
+        Some((table, side))
     }
-    if edge_corner.len() != edge_count {
-        return None;
-    }
-    let corner_edge = edge_point;
-    let coarse = CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner);
-    Some(Coarsening::canonical(coarse))
 }
 
 /// Groups (or faces, vertices) per parallel work item of the linear passes.

@@ -76,7 +76,7 @@
 //! subdivision*, HPG 2021 (index-arithmetic refinement).
 
 mod attribute;
-mod buffer;
+pub(crate) mod buffer;
 pub(crate) mod kernel;
 mod matrix;
 mod subdivider;
@@ -325,7 +325,7 @@ pub(crate) fn refine<T: Attribute>(
 
 /// The offsets of a soup of `faces` triangles: `0, 3, 6, ..., 3 faces` (in parallel;
 /// they are a third of the size of the indices).
-fn triangle_offsets(faces: usize) -> Vec<u32> {
+pub(crate) fn triangle_offsets(faces: usize) -> Vec<u32> {
     buffer::par_fill(faces + 1, |f| (3 * f) as u32)
 }
 

@@ -26,14 +26,17 @@
 //! compressed pyramid reconstructs a smooth approximation of the input.
 //! [`LoopPyramid::rate_distortion`] measures the resulting error.
 
+use std::borrow::Cow;
+
 use glam::DVec3;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
 
 use crate::LoopError;
 use crate::corner_table::CornerTable;
-use crate::detect::{FineOrder, detect_mesh, detect_table};
+use crate::detect::{FineOrder, detect_mesh, detect_table, reverse_canonical_mesh, reverse_canonical_table};
 use crate::forward::LoopOptions;
 use crate::reverse::{check_level, reconstruct_levels, reverse_positions};
 
@@ -136,44 +139,78 @@ pub struct RateDistortion {
 /// when a requested level (or, with [`Levels::Max`], the first level) has no Loop
 /// connectivity.
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
-    check_input_positions(mesh.positions())?;
     // `None` until the first reversal: the input is read as it is (see `detect_mesh`).
     let mut table: Option<CornerTable> = None;
-    let mut positions = mesh.positions().to_vec();
+    // The input positions are read in place; each reversal makes the next ones.
+    let mut positions = Cow::Borrowed(mesh.positions());
     let mut levels = Vec::new();
     let wanted = match options.levels {
         Levels::Count(n) => n,
         Levels::Max => usize::MAX,
     };
+    // Non-finite input positions are an error, found before anything else. The fast
+    // path below needs no pass of its own for that: its results are all finite when
+    // the input is (see `CanonicalLevel::finite`).
+    let check_input = || check_input_positions(mesh.positions());
+    if wanted == 0 {
+        check_input()?;
+    }
     // Every reversal divides the face count by 4 (a mesh without faces is an error), so
     // `Levels::Max` ends after at most log4(faces) + 1 rounds.
     while levels.len() < wanted {
-        let detected = match &table {
-            None => detect_mesh(mesh, options.seed_vertex),
-            Some(table) => detect_table(table, None),
+        let fused = match &table {
+            None => reverse_canonical_mesh(mesh, options.seed_vertex, &positions, &options.rules),
+            Some(table) => reverse_canonical_table(table, None, &positions, &options.rules),
         };
-        let coarsening = match detected {
-            Ok(coarsening) => coarsening,
-            Err(LoopError::NotLoopConnectivity { .. }) if options.levels == Levels::Max && !levels.is_empty() => {
-                break;
+        let first = table.is_none();
+        let (coarse, order, coarse_positions, details) = match fused {
+            Some(level) => {
+                if first && !level.finite {
+                    check_input()?;
+                }
+                (level.coarse, None, level.positions, level.details)
             }
-            Err(error) => return Err(error),
+            None => {
+                if first {
+                    check_input()?;
+                }
+                let detected = match &table {
+                    None => detect_mesh(mesh, options.seed_vertex),
+                    Some(table) => detect_table(table, None),
+                };
+                let coarsening = match detected {
+                    Ok(coarsening) => coarsening,
+                    Err(LoopError::NotLoopConnectivity { .. })
+                        if options.levels == Levels::Max && !levels.is_empty() =>
+                    {
+                        break;
+                    }
+                    Err(error) => return Err(error),
+                };
+                let (coarse_positions, details) = reverse_positions(&coarsening, &positions, &options.rules);
+                {
+                    let order = coarsening.fine_order();
+                    (coarsening.coarse, order, coarse_positions, details)
+                }
+            }
         };
-        let (coarse_positions, details) = reverse_positions(&coarsening, &positions, &options.rules);
-        levels.push(DetailLevel { details, order: coarsening.fine_order() });
-        table = Some(coarsening.coarse);
-        positions = coarse_positions;
+        levels.push(DetailLevel { details, order });
+        table = Some(coarse);
+        positions = Cow::Owned(coarse_positions);
     }
     levels.reverse();
     let table = match table {
         Some(table) => table,
         None => CornerTable::from_mesh(mesh)?,
     };
-    Ok(LoopPyramid { rules: options.rules, base: table.to_soup(positions), levels })
+    Ok(LoopPyramid { rules: options.rules, base: table.to_soup(positions.into_owned()), levels })
 }
 
 /// Positions given by the user must be finite (a `HalfedgeMesh` may have been edited).
 pub(crate) fn check_input_positions(positions: &[DVec3]) -> Result<(), LoopError> {
+    if all_finite(positions) {
+        return Ok(());
+    }
     for (vertex, p) in positions.iter().enumerate() {
         if let Some(axis) = (0..3).find(|&a| !p[a].is_finite()) {
             return Err(LoopError::Mesh(mesh_topo::MeshError::NonFiniteCoordinate { vertex, axis, value: p[axis] }));
@@ -181,6 +218,23 @@ pub(crate) fn check_input_positions(positions: &[DVec3]) -> Result<(), LoopError
     }
     Ok(())
 }
+
+/// True if every coordinate is finite: a branch-free test of the exponent bits that the
+/// compiler vectorises, in parallel on large inputs (the error path then finds where).
+pub(crate) fn all_finite(positions: &[DVec3]) -> bool {
+    const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
+    let non_finite = |x: f64| u64::from(x.to_bits() & EXPONENT == EXPONENT);
+    let chunk_ok =
+        |chunk: &[DVec3]| chunk.iter().fold(0, |bad, p| bad | non_finite(p.x) | non_finite(p.y) | non_finite(p.z)) == 0;
+    if positions.len() >= FINITE_CHUNK * 2 {
+        positions.par_chunks(FINITE_CHUNK).all(chunk_ok)
+    } else {
+        chunk_ok(positions)
+    }
+}
+
+/// Positions per parallel work item of [`all_finite`].
+const FINITE_CHUNK: usize = 1 << 15;
 
 impl LoopPyramid {
     /// The pyramid of `levels` Loop subdivision steps of `base` (all details zero):
@@ -547,6 +601,42 @@ mod tests {
             reverse(&tetrahedron, &ReverseOptions::default()),
             Err(LoopError::NotLoopConnectivity { at: crate::detect::FineElement::Vertex(_), .. })
         ));
+    }
+
+    /// Non-finite input positions are an error whichever path the decomposition takes
+    /// (the fast path of canonical meshes finds them through its results), at every
+    /// kind of fine vertex and for any number of levels; huge finite ones are not.
+    #[test]
+    fn non_finite_input_is_an_error_on_every_path() {
+        let rules = LoopOptions::default();
+        let canonical = loop_steps(&open_fan(4), &rules, 2);
+        let scrambled = scramble(&canonical, 3);
+        let edge_point = open_fan(4).vertex_count() + 1;
+        for soup in [&canonical, &scrambled] {
+            for vertex in [0, edge_point, soup.vertex_count() - 1] {
+                for value in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                    let mut bad = soup.clone();
+                    bad.positions[vertex].y = value;
+                    // Built from finite positions, then edited (as a user may).
+                    let mut fine = mesh(soup);
+                    fine.positions_mut()[vertex] = bad.positions[vertex];
+                    for levels in [Levels::Count(0), Levels::Count(1), Levels::Count(2), Levels::Max] {
+                        let options = DecomposeOptions { levels, ..max_levels(rules) };
+                        match decompose(&fine, &options) {
+                            Err(LoopError::Mesh(mesh_topo::MeshError::NonFiniteCoordinate {
+                                vertex: v, axis, ..
+                            })) => {
+                                assert_eq!((v, axis), (vertex, 1));
+                            }
+                            other => panic!("vertex {vertex}, {value}, {levels:?}: {other:?}"),
+                        }
+                    }
+                }
+            }
+        }
+        let mut huge = mesh(&canonical);
+        huge.positions_mut()[0] = DVec3::splat(f64::MAX);
+        assert!(decompose(&huge, &max_levels(rules)).is_ok());
     }
 
     #[test]

@@ -52,8 +52,12 @@ use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
-use crate::detect::{Coarsening, FineOrder, detect_mesh};
-use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
+use crate::detect::{
+    Coarsening, FineOrder, canonical_groups, coarse_edges_are_simple_counted, coarse_face_is_valid, detect_mesh,
+    reverse_canonical_mesh,
+};
+use crate::forward::buffer::{Output, Slots};
+use crate::forward::kernel::{self, PARALLEL_MIN_FACES, Rules, loop_beta, warren_beta};
 use crate::forward::topology::{BASE_MASK, INVALID as TOPOLOGY_INVALID, MAX_FACES, NEXT, Topology, is_first};
 use crate::forward::{LoopOptions, VertexWeights};
 
@@ -136,12 +140,26 @@ pub struct ReverseOptions {
 /// [`LoopError::Mesh`] for a non-finite position, and [`LoopError::NotTriangle`],
 /// [`LoopError::SeedOutOfRange`] and [`LoopError::NotLoopConnectivity`] from detection.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<ReversedLevel, LoopError> {
-    crate::pyramid::check_input_positions(fine.positions())?;
-    let coarsening = detect_mesh(fine, options.seed_vertex)?;
-    let (positions, details) = reverse_positions(&coarsening, fine.positions(), &options.rules);
-    let order = coarsening.fine_order();
-    let coarse = HalfedgeMesh::from_soup(&coarsening.coarse.to_soup(positions))
-        .expect("internal: a detected coarse mesh is a valid mesh");
+    let (coarse, order, positions, details) =
+        match reverse_canonical_mesh(fine, options.seed_vertex, fine.positions(), &options.rules) {
+            Some(level) => {
+                if !level.finite {
+                    crate::pyramid::check_input_positions(fine.positions())?;
+                }
+                (level.coarse, None, level.positions, level.details)
+            }
+            None => {
+                crate::pyramid::check_input_positions(fine.positions())?;
+                let coarsening = detect_mesh(fine, options.seed_vertex)?;
+                let (positions, details) = reverse_positions(&coarsening, fine.positions(), &options.rules);
+                {
+                    let order = coarsening.fine_order();
+                    (coarsening.coarse, order, positions, details)
+                }
+            }
+        };
+    let coarse =
+        HalfedgeMesh::from_soup(&coarse.to_soup(positions)).expect("internal: a detected coarse mesh is a valid mesh");
     Ok(ReversedLevel { coarse, details, order })
 }
 
@@ -236,11 +254,12 @@ pub(crate) fn reconstruct_levels<'a>(
         // Also names the first non-finite vertex.
         check_finite(&positions, count)?;
     }
-    let faces = topology.triangles.len() as u32;
+    // The triangles' memory becomes the indices (no copy); the offsets are filled in
+    // parallel, as for the forward subdivision's soups.
     Ok(PolygonSoup {
         positions,
-        offsets: (0..=faces).map(|f| 3 * f).collect(),
-        indices: topology.triangles.as_flattened().to_vec(),
+        offsets: crate::forward::triangle_offsets(topology.triangles.len()),
+        indices: topology.triangles.into_flattened(),
     })
 }
 
@@ -333,7 +352,9 @@ fn check_details(
             reason: format!("{} details for a mesh with {edges} edges", details.len()),
         });
     }
-    if let Some(i) = details.iter().position(|d| !d.is_finite()) {
+    if !crate::pyramid::all_finite(details)
+        && let Some(i) = details.iter().position(|d| !d.is_finite())
+    {
         return Err(LoopError::InvalidDetails { level, reason: format!("detail {i} is not finite") });
     }
     if let Some(order) = order {
@@ -426,17 +447,202 @@ pub(crate) fn reverse_positions(
     let positions = map_indices(nv, |v| {
         let vertex_point = fine[coarsening.vertex_point[v as usize] as usize];
         let (n, flags) = (valence[v as usize] & !BOUNDARY, valence[v as usize] & BOUNDARY);
-        if flags != 0 {
-            if rules.keep_corners && n == 2 { vertex_point } else { 2.0 * vertex_point - 0.5 * sum[v as usize] }
-        } else if n == 0 {
-            vertex_point
-        } else {
-            let (mu, eta) = weights.get(n as usize);
-            mu * vertex_point + eta * sum[v as usize]
-        }
+        coarse_position(vertex_point, sum[v as usize], n, flags != 0, rules, &weights)
     });
     let details = map_indices(coarse.edge_count(), |e| edge_position(e) - edge_rule(coarse, &positions, e));
     (positions, details)
+}
+
+/// A level reversed by [`reverse_canonical`].
+pub(crate) struct CanonicalLevel {
+    /// The coarse mesh (the fine mesh is its canonical refinement: no fine order).
+    pub(crate) coarse: CornerTable,
+    pub(crate) positions: Vec<DVec3>,
+    pub(crate) details: Vec<DVec3>,
+    /// True if every coarse position and detail is finite, as they are whenever the
+    /// fine positions are (every fine vertex is a vertex point or an edge point, and a
+    /// non-finite one makes its coarse position or detail non-finite): callers that
+    /// must reject non-finite input only look at the input when this is false.
+    pub(crate) finite: bool,
+}
+
+/// A fine mesh in the canonical order (see [`detect`](crate::detect)), detected and
+/// reversed in one go: the same coarse mesh, positions and details, bit for bit, as
+/// [`detect_mesh`] / [`detect_table`](crate::detect::detect_table) followed by
+/// [`reverse_positions`], in fewer passes over memory. `None` when anything differs
+/// from a valid canonical refinement; the caller then takes the general path, which
+/// also names the error.
+///
+/// Passes: the groups of four faces (parallel); the coarse corners in order, which
+/// number the edges, pair the twins and sum the edge points around every coarse vertex
+/// in edge order (sequential: these sums are what [`reverse_positions`] adds, in the
+/// same order); the boundary edges, if any; the coarse positions (parallel); the
+/// details by chunks of coarse faces (parallel), which also check the faces.
+pub(crate) fn reverse_canonical(
+    faces: usize,
+    vertex_count: usize,
+    seed_vertex: Option<u32>,
+    face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
+    fine: &[DVec3],
+    rules: &LoopOptions,
+) -> Option<CanonicalLevel> {
+    const BOUNDARY: u32 = 1 << 31;
+    let groups = canonical_groups(faces, seed_vertex, face)?;
+    let first_odd = groups.first_odd;
+    let nv = first_odd as usize;
+    let edge_position = |e: u32| fine[(first_odd + e) as usize];
+    // The edge points around every coarse vertex, summed in edge order (the order of
+    // `reverse_positions`), alongside the pairing of the twins.
+    let sum_edge_points = |coarse_vertex: &[u32], edge_point: &[u32]| {
+        let mut sum = vec![DVec3::ZERO; nv];
+        let mut valence = vec![0u32; nv];
+        // For the doubled-edge check: the edges by lower end point.
+        let mut lower_ends = vec![0u32; nv + 1];
+        let mut new_edge = first_odd;
+        for (c, &m) in edge_point.iter().enumerate() {
+            if m != new_edge {
+                continue;
+            }
+            new_edge += 1;
+            let point = fine[m as usize];
+            let ends = [coarse_vertex[c], coarse_vertex[next(c as u32) as usize]];
+            for v in ends {
+                sum[v as usize] += point;
+                valence[v as usize] += 1;
+            }
+            lower_ends[ends[0].min(ends[1]) as usize + 1] += 1;
+        }
+        (sum, valence, lower_ends)
+    };
+    let (coarse, (mut sum, mut valence, lower_ends)) = groups.into_table(vertex_count, sum_edge_points)?;
+    // On the boundary only the boundary edges count, summed in edge order from zero:
+    // boundary corners in corner order are the boundary edges in edge order.
+    let (corner_vertex, twin, corner_edge) = (coarse.corner_vertices(), coarse.twins(), coarse.corner_edges());
+    if 2 * coarse.edge_count() != coarse.corner_count() {
+        for c in (0..twin.len() as u32).filter(|&c| twin[c as usize] == NONE) {
+            let point = edge_position(corner_edge[c as usize]);
+            for v in [corner_vertex[c as usize], corner_vertex[next(c) as usize]] {
+                let v = v as usize;
+                if valence[v] & BOUNDARY == 0 {
+                    sum[v] = DVec3::ZERO;
+                    valence[v] |= BOUNDARY;
+                }
+                sum[v] += point;
+            }
+        }
+    }
+    // The (sequential) check for doubled edges runs beside the (parallel) reversal.
+    let reverse = || {
+        let weights = InverseWeights::new(rules.weights);
+        let positions = map_indices(nv, |v| {
+            let (n, flags) = (valence[v as usize] & !BOUNDARY, valence[v as usize] & BOUNDARY);
+            coarse_position(fine[v as usize], sum[v as usize], n, flags != 0, rules, &weights)
+        });
+        let (details, details_finite) = canonical_details(&coarse, &positions, edge_position)?;
+        let finite = details_finite && crate::pyramid::all_finite(&positions);
+        Some((positions, details, finite))
+    };
+    let simple = || coarse_edges_are_simple_counted(&coarse, lower_ends);
+    let (simple, reversed) =
+        if coarse.face_count() >= PARALLEL_MIN_FACES { rayon::join(simple, reverse) } else { (simple(), reverse()) };
+    let (positions, details, finite) = reversed.filter(|_| simple)?;
+    Some(CanonicalLevel { coarse, positions, details, finite })
+}
+
+/// Non-zero if a coordinate of `p` is not finite (branch-free).
+#[inline(always)]
+fn non_finite_bits(p: DVec3) -> u64 {
+    const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
+    let bits = |x: f64| u64::from(x.to_bits() & EXPONENT == EXPONENT);
+    bits(p.x) | bits(p.y) | bits(p.z)
+}
+
+/// Coarse faces per parallel work item of [`canonical_details`].
+const DETAIL_CHUNK: usize = 2048;
+
+/// The detail of every coarse edge, by chunks of faces (each edge at its first corner,
+/// so each chunk writes a contiguous run of edges), checking every face on the way
+/// (the face part of the coarse mesh check): `None` if one is not valid. The same
+/// formula as [`edge_rule`], on the face's three positions read once.
+fn canonical_details(
+    coarse: &CornerTable,
+    positions: &[DVec3],
+    edge_position: impl Fn(u32) -> DVec3 + Sync,
+) -> Option<(Vec<DVec3>, bool)> {
+    let (corner_vertex, twin, edge_corner) = (coarse.corner_vertices(), coarse.twins(), coarse.edge_corners());
+    let faces = coarse.face_count();
+    let mut output = Output::<DVec3>::new(coarse.edge_count());
+    let finite = {
+        let mut slots = output.slots();
+        let first_edge = |f: usize| edge_corner.partition_point(|&c| (c as usize) < 3 * f);
+        let pieces: Vec<_> = (0..faces)
+            .step_by(DETAIL_CHUNK)
+            .map(|f0| {
+                let f1 = (f0 + DETAIL_CHUNK).min(faces);
+                let e0 = first_edge(f0);
+                (f0..f1, e0, slots.take_front(first_edge(f1) - e0))
+            })
+            .collect();
+        let run = |(range, e0, mut piece): (std::ops::Range<usize>, usize, Slots<'_, DVec3>)| {
+            let mut non_finite = 0;
+            for f in range {
+                let c0 = 3 * f;
+                let x = [corner_vertex[c0], corner_vertex[c0 + 1], corner_vertex[c0 + 2]];
+                let t = [twin[c0], twin[c0 + 1], twin[c0 + 2]];
+                if !coarse_face_is_valid(x, t) {
+                    return None;
+                }
+                let p = [positions[x[0] as usize], positions[x[1] as usize], positions[x[2] as usize]];
+                for k in 0..3 {
+                    let c = (c0 + k) as u32;
+                    if t[k] != NONE && t[k] < c {
+                        continue;
+                    }
+                    let (a, b) = (p[k], p[(k + 1) % 3]);
+                    let predicted = if t[k] == NONE {
+                        0.5 * (a + b)
+                    } else {
+                        let (r, s) = (p[(k + 2) % 3], positions[corner_vertex[prev(t[k]) as usize] as usize]);
+                        0.375 * (a + b) + 0.125 * (r + s)
+                    };
+                    let e = (e0 + piece.written()) as u32;
+                    let detail = edge_position(e) - predicted;
+                    non_finite |= non_finite_bits(detail);
+                    piece.push(detail);
+                }
+            }
+            Some(non_finite == 0)
+        };
+        let both = |a: bool, b: bool| Some(a && b);
+        if faces >= PARALLEL_THRESHOLD / 4 {
+            pieces.into_par_iter().map(run).try_reduce(|| true, both)
+        } else {
+            pieces.into_iter().map(run).try_fold(true, |a, b| both(a, b?))
+        }
+    };
+    let finite = finite?;
+    Some((output.into_vec(), finite))
+}
+
+/// The coarse position of a vertex from its vertex point and the sum of its edge
+/// points (of the boundary ones on the boundary): the exact inverse of the vertex rule.
+#[inline]
+fn coarse_position(
+    vertex_point: DVec3,
+    sum: DVec3,
+    valence: u32,
+    on_boundary: bool,
+    rules: &LoopOptions,
+    weights: &InverseWeights,
+) -> DVec3 {
+    if on_boundary {
+        if rules.keep_corners && valence == 2 { vertex_point } else { 2.0 * vertex_point - 0.5 * sum }
+    } else if valence == 0 {
+        vertex_point
+    } else {
+        let (mu, eta) = weights.get(valence as usize);
+        mu * vertex_point + eta * sum
+    }
 }
 
 /// [`inverse_weights`] tabulated for the usual valences (no cosine per vertex).
