@@ -6,12 +6,15 @@
 //! forward step of the same size; the throughput is in fine vertices, so a flat
 //! elements-per-second figure across sizes is linear time.
 //!
-//! "The forward Doo-Sabin step of the same size" is `subdivide(coarse, 1 level)`: from the
-//! coarse mesh to the very fine mesh (connectivity and positions) that `decompose` takes
-//! apart and `reconstruct` rebuilds, each starting from what its user holds: the forward
-//! step and `decompose` from a built `HalfedgeMesh`, `reconstruct` from the `DooPyramid`
-//! (whose base mesh is a polygon soup). Compare each with `forward` in the same run and
-//! with the same number of threads (`*_1thread` against `forward_1thread`).
+//! "The forward Doo-Sabin step of the same size" is one level of subdivision of the
+//! coarse mesh, to the very fine mesh (connectivity and positions) that `decompose` takes
+//! apart and `reconstruct` rebuilds, each starting from what its user holds: `forward`
+//! (`subdivide`) and `decompose` start from a built `HalfedgeMesh`; `reconstruct` starts
+//! from the `DooPyramid`, whose base mesh is a polygon soup that it validates, so its
+//! counterpart is `forward_soup` (`subdivide_soup`: the coarse soup validated, then
+//! subdivided), as in the reverse Loop bench. Compare in the same run and with the same
+//! number of threads: `decompose*_1thread` with `forward_1thread`, `reconstruct_1thread`
+//! with `forward_soup_1thread` (and with `forward_1thread` for the stricter reading).
 //!
 //! Run with `cargo bench -p subdiv-doo --bench doo`. The inputs are built before timing;
 //! the timed call is `subdivide` on an already built half-edge mesh (the counterpart of
@@ -27,7 +30,7 @@ use mesh_topo::{DVec3, HalfedgeMesh, PolygonSoup};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use subdiv_doo::pyramid::{DecomposeOptions, decompose};
-use subdiv_doo::{DooOptions, FaceRule, subdivide};
+use subdiv_doo::{DooOptions, FaceRule, subdivide, subdivide_soup};
 
 /// The bunny of `tests/data` (a minimal OBJ reader: positions and faces only).
 fn bunny() -> HalfedgeMesh {
@@ -123,6 +126,10 @@ fn multires(c: &mut Criterion) {
         });
         group.bench_with_input(BenchmarkId::new("decompose_seed_1thread", fine_vertices), &fine, |b, fine| {
             b.iter(|| one.install(|| decompose(black_box(fine), &seeded).unwrap()))
+        });
+        let coarse_soup = coarse.to_soup();
+        group.bench_with_input(BenchmarkId::new("forward_soup_1thread", fine_vertices), &coarse_soup, |b, soup| {
+            b.iter(|| one.install(|| subdivide_soup(black_box(soup), &forward_options).unwrap()))
         });
         group.bench_with_input(BenchmarkId::new("reconstruct_1thread", fine_vertices), &pyramid, |b, pyramid| {
             b.iter(|| one.install(|| black_box(pyramid).reconstruct(1, None).unwrap()))
