@@ -36,9 +36,9 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
 
 use crate::LoopError;
 use crate::corner_table::CornerTable;
-use crate::detect::{FineOrder, detect_mesh, detect_table, reverse_canonical_mesh, reverse_canonical_table};
+use crate::detect::FineOrder;
 use crate::forward::LoopOptions;
-use crate::reverse::{check_level, reconstruct_levels, reverse_positions};
+use crate::reverse::{FineLevel, LevelParts, check_level, non_finite_bits, reconstruct_levels, reverse_level};
 
 /// Magic number of a Loop pyramid file.
 pub const PYRAMID_MAGIC: [u8; 8] = *b"MRSLOOP\0";
@@ -148,52 +148,25 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Loop
         Levels::Count(n) => n,
         Levels::Max => usize::MAX,
     };
-    // Non-finite input positions are an error, found before anything else. The fast
-    // path below needs no pass of its own for that: its results are all finite when
-    // the input is (see `CanonicalLevel::finite`).
-    let check_input = || check_input_positions(mesh.positions());
     if wanted == 0 {
-        check_input()?;
+        // No reversal reads the input: check it here.
+        check_input_positions(mesh.positions())?;
     }
     // Every reversal divides the face count by 4 (a mesh without faces is an error), so
     // `Levels::Max` ends after at most log4(faces) + 1 rounds.
     while levels.len() < wanted {
-        let fused = match &table {
-            None => reverse_canonical_mesh(mesh, options.seed_vertex, &positions, &options.rules),
-            Some(table) => reverse_canonical_table(table, None, &positions, &options.rules),
+        let (fine, seed) = match &table {
+            None => (FineLevel::Mesh(mesh), options.seed_vertex),
+            Some(table) => (FineLevel::Table(table), None),
         };
-        let first = table.is_none();
-        let (coarse, order, coarse_positions, details) = match fused {
-            Some(level) => {
-                if first && !level.finite {
-                    check_input()?;
+        let LevelParts { coarse, order, positions: coarse_positions, details } =
+            match reverse_level(fine, &positions, seed, &options.rules) {
+                Ok(level) => level,
+                Err(LoopError::NotLoopConnectivity { .. }) if options.levels == Levels::Max && !levels.is_empty() => {
+                    break;
                 }
-                (level.coarse, None, level.positions, level.details)
-            }
-            None => {
-                if first {
-                    check_input()?;
-                }
-                let detected = match &table {
-                    None => detect_mesh(mesh, options.seed_vertex),
-                    Some(table) => detect_table(table, None),
-                };
-                let coarsening = match detected {
-                    Ok(coarsening) => coarsening,
-                    Err(LoopError::NotLoopConnectivity { .. })
-                        if options.levels == Levels::Max && !levels.is_empty() =>
-                    {
-                        break;
-                    }
-                    Err(error) => return Err(error),
-                };
-                let (coarse_positions, details) = reverse_positions(&coarsening, &positions, &options.rules);
-                {
-                    let order = coarsening.fine_order();
-                    (coarsening.coarse, order, coarse_positions, details)
-                }
-            }
-        };
+                Err(error) => return Err(error),
+            };
         levels.push(DetailLevel { details, order });
         table = Some(coarse);
         positions = Cow::Owned(coarse_positions);
@@ -222,10 +195,7 @@ pub(crate) fn check_input_positions(positions: &[DVec3]) -> Result<(), LoopError
 /// True if every coordinate is finite: a branch-free test of the exponent bits that the
 /// compiler vectorises, in parallel on large inputs (the error path then finds where).
 pub(crate) fn all_finite(positions: &[DVec3]) -> bool {
-    const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
-    let non_finite = |x: f64| u64::from(x.to_bits() & EXPONENT == EXPONENT);
-    let chunk_ok =
-        |chunk: &[DVec3]| chunk.iter().fold(0, |bad, p| bad | non_finite(p.x) | non_finite(p.y) | non_finite(p.z)) == 0;
+    let chunk_ok = |chunk: &[DVec3]| chunk.iter().fold(0, |bad, &p| bad | non_finite_bits(p)) == 0;
     if positions.len() >= FINITE_CHUNK * 2 {
         positions.par_chunks(FINITE_CHUNK).all(chunk_ok)
     } else {

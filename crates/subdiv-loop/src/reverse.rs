@@ -54,7 +54,7 @@ use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::detect::{
     Coarsening, FineOrder, canonical_groups, coarse_edges_are_simple_counted, coarse_face_is_valid, detect_mesh,
-    reverse_canonical_mesh,
+    detect_table, reverse_canonical_mesh, reverse_canonical_table,
 };
 use crate::forward::buffer::{Output, Slots};
 use crate::forward::kernel::{self, PARALLEL_MIN_FACES, Rules, loop_beta, warren_beta};
@@ -140,24 +140,8 @@ pub struct ReverseOptions {
 /// [`LoopError::Mesh`] for a non-finite position, and [`LoopError::NotTriangle`],
 /// [`LoopError::SeedOutOfRange`] and [`LoopError::NotLoopConnectivity`] from detection.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<ReversedLevel, LoopError> {
-    let (coarse, order, positions, details) =
-        match reverse_canonical_mesh(fine, options.seed_vertex, fine.positions(), &options.rules) {
-            Some(level) => {
-                if !level.finite {
-                    crate::pyramid::check_input_positions(fine.positions())?;
-                }
-                (level.coarse, None, level.positions, level.details)
-            }
-            None => {
-                crate::pyramid::check_input_positions(fine.positions())?;
-                let coarsening = detect_mesh(fine, options.seed_vertex)?;
-                let (positions, details) = reverse_positions(&coarsening, fine.positions(), &options.rules);
-                {
-                    let order = coarsening.fine_order();
-                    (coarsening.coarse, order, positions, details)
-                }
-            }
-        };
+    let LevelParts { coarse, order, positions, details } =
+        reverse_level(FineLevel::Mesh(fine), fine.positions(), options.seed_vertex, &options.rules)?;
     let coarse =
         HalfedgeMesh::from_soup(&coarse.to_soup(positions)).expect("internal: a detected coarse mesh is a valid mesh");
     Ok(ReversedLevel { coarse, details, order })
@@ -453,6 +437,60 @@ pub(crate) fn reverse_positions(
     (positions, details)
 }
 
+/// The fine mesh of one reversal: the user's mesh, or a coarse level of an earlier
+/// reversal (whose positions were computed here, so they need no input check).
+pub(crate) enum FineLevel<'a> {
+    Mesh(&'a HalfedgeMesh),
+    Table(&'a CornerTable),
+}
+
+/// What one reversal makes.
+pub(crate) struct LevelParts {
+    pub(crate) coarse: CornerTable,
+    /// `None` when the fine mesh is in the canonical order.
+    pub(crate) order: Option<FineOrder>,
+    pub(crate) positions: Vec<DVec3>,
+    pub(crate) details: Vec<DVec3>,
+}
+
+/// One level reversed, by the fused path when the fine mesh is canonical, else by
+/// detection and [`reverse_positions`]. A user's mesh with a
+/// non-finite position is an error before any connectivity error, on either path.
+pub(crate) fn reverse_level(
+    fine: FineLevel<'_>,
+    positions: &[DVec3],
+    seed_vertex: Option<u32>,
+    rules: &LoopOptions,
+) -> Result<LevelParts, LoopError> {
+    let check_input = || match fine {
+        FineLevel::Mesh(_) => crate::pyramid::check_input_positions(positions),
+        FineLevel::Table(_) => Ok(()),
+    };
+    let fused = match fine {
+        FineLevel::Mesh(mesh) => reverse_canonical_mesh(mesh, seed_vertex, positions, rules),
+        FineLevel::Table(table) => reverse_canonical_table(table, seed_vertex, positions, rules),
+    };
+    if let Some(level) = fused {
+        if !level.finite {
+            check_input()?;
+        }
+        return Ok(LevelParts {
+            coarse: level.coarse,
+            order: None,
+            positions: level.positions,
+            details: level.details,
+        });
+    }
+    check_input()?;
+    let coarsening = match fine {
+        FineLevel::Mesh(mesh) => detect_mesh(mesh, seed_vertex)?,
+        FineLevel::Table(table) => detect_table(table, seed_vertex)?,
+    };
+    let (coarse_positions, details) = reverse_positions(&coarsening, positions, rules);
+    let order = coarsening.fine_order();
+    Ok(LevelParts { coarse: coarsening.coarse, order, positions: coarse_positions, details })
+}
+
 /// A level reversed by [`reverse_canonical`].
 pub(crate) struct CanonicalLevel {
     /// The coarse mesh (the fine mesh is its canonical refinement: no fine order).
@@ -549,9 +587,9 @@ pub(crate) fn reverse_canonical(
     Some(CanonicalLevel { coarse, positions, details, finite })
 }
 
-/// Non-zero if a coordinate of `p` is not finite (branch-free).
+/// Non-zero if a coordinate of `p` is not finite (branch-free, so loops over it vectorise).
 #[inline(always)]
-fn non_finite_bits(p: DVec3) -> u64 {
+pub(crate) fn non_finite_bits(p: DVec3) -> u64 {
     const EXPONENT: u64 = 0x7ff0_0000_0000_0000;
     let bits = |x: f64| u64::from(x.to_bits() & EXPONENT == EXPONENT);
     bits(p.x) | bits(p.y) | bits(p.z)
