@@ -20,6 +20,12 @@ const VERTEX_CHUNK: usize = 4096;
 /// Steps on fewer coarse faces than this run on the calling thread: handing a few
 /// chunks to the thread pool costs more than it saves.
 pub(crate) const PARALLEL_MIN_FACES: usize = 4096;
+/// Whether a pass over `faces` faces is split over the current `rayon` pool: only for
+/// [`PARALLEL_MIN_FACES`] faces or more, and on more than one thread.
+pub(crate) fn runs_in_parallel(faces: usize) -> bool {
+    faces >= PARALLEL_MIN_FACES && rayon::current_num_threads() > 1
+}
+
 /// Valences whose weights are tabulated.
 const TABLE: usize = 32;
 
@@ -202,7 +208,7 @@ pub(crate) fn step_into<T: Attribute>(
     };
     {
         let slots = (fine_values.slots(), fine_triangles.slots(), fine_links.slots(), fine_starts.slots());
-        if nf < PARALLEL_MIN_FACES || rayon::current_num_threads() == 1 {
+        if !runs_in_parallel(nf) {
             split_work(topo, refine_topology, slots, run);
         } else {
             let mut work = Vec::with_capacity(nf.div_ceil(FACE_CHUNK) + even.div_ceil(VERTEX_CHUNK));

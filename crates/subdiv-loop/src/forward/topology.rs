@@ -27,8 +27,8 @@ use std::sync::atomic::Ordering::Relaxed;
 use mesh_topo::{FaceId, HalfedgeId, HalfedgeMesh, MeshError};
 use rayon::prelude::*;
 
-use super::buffer::Output;
-use super::kernel::PARALLEL_MIN_FACES;
+use super::buffer::{Output, Slots};
+use super::kernel::runs_in_parallel;
 use crate::LoopError;
 
 /// "No half-edge": the twin of a boundary half-edge, the start of an isolated vertex.
@@ -101,8 +101,7 @@ impl Topology {
     /// error the arrays hold no valid topology but keep their memory.
     ///
     /// The faces are read in chunks of [`REBUILD_CHUNK`], in parallel on the current
-    /// `rayon` pool by the kernel's rule (at least [`PARALLEL_MIN_FACES`] faces and more
-    /// than one thread), else one after the other: at level 1 this pass is a quarter of
+    /// `rayon` pool by the kernel's rule ([`runs_in_parallel`]), else one after the other: at level 1 this pass is a quarter of
     /// the work, and done on one thread it would cap what a second thread can gain.
     /// Every chunk writes only its own faces' entries (and the half-edge map entries of
     /// its faces' half-edges), so the result does not depend on the number of threads.
@@ -118,11 +117,10 @@ impl Topology {
         if mesh.edge_count() > BASE_MASK as usize {
             return Err(MeshError::TooLarge { what: "edges", count: mesh.edge_count(), max: BASE_MASK as usize }.into());
         }
-        let parallel = face_count >= PARALLEL_MIN_FACES && rayon::current_num_threads() > 1;
+        let parallel = runs_in_parallel(face_count);
         let Self { triangles, links, vertex_halfedge, vertex_count, edge_count } = self;
         (*vertex_count, *edge_count) = (0, 0);
-        let chunks: Vec<Range<usize>> =
-            (0..face_count).step_by(REBUILD_CHUNK).map(|f0| f0..(f0 + REBUILD_CHUNK).min(face_count)).collect();
+        let chunks = chunk_ranges(face_count);
 
         // Mesh half-edge -> compact half-edge (boundary half-edges have none). Each
         // face half-edge belongs to one face, so the chunks store disjoint entries.
@@ -131,7 +129,7 @@ impl Topology {
         let mut corners = Output::<[u32; 3]>::reuse(take(triangles), face_count);
         let mut not_triangles = {
             let mut slots = corners.slots();
-            let pieces: Vec<_> = chunks.iter().map(|r| (r.clone(), slots.take_front(r.len()))).collect();
+            let pieces = split_slots(&mut slots, &chunks);
             map_chunks(parallel, pieces, |(range, mut piece)| {
                 let mut first_bad = None;
                 for fi in range {
@@ -164,7 +162,7 @@ impl Topology {
         let mut output = Output::<[u32; 4]>::reuse(take(links), face_count);
         let counted = {
             let mut slots = output.slots();
-            let pieces: Vec<_> = chunks.iter().map(|r| (r.clone(), slots.take_front(r.len()))).collect();
+            let pieces = split_slots(&mut slots, &chunks);
             map_chunks(parallel, pieces, |(range, mut piece)| {
                 let (mut edges, mut pillow) = (0u32, None);
                 for fi in range {
@@ -217,13 +215,7 @@ impl Topology {
         let mut starts = Output::<u32>::reuse(take(vertex_halfedge), vertices);
         {
             let mut slots = starts.slots();
-            let pieces: Vec<_> = (0..vertices)
-                .step_by(REBUILD_CHUNK)
-                .map(|v0| {
-                    let range = v0..(v0 + REBUILD_CHUNK).min(vertices);
-                    (range.clone(), slots.take_front(range.len()))
-                })
-                .collect();
+            let pieces = split_slots(&mut slots, &chunk_ranges(vertices));
             map_chunks(parallel, pieces, |(range, mut piece)| {
                 for vi in range {
                     let v = mesh.vertex(vi).unwrap_or_else(|| unreachable!("internal: vertex {vi} out of range"));
@@ -284,6 +276,16 @@ impl Topology {
 
 /// Faces (and vertices) per chunk of [`Topology::rebuild`].
 const REBUILD_CHUNK: usize = 8192;
+
+/// `0..len` in runs of [`REBUILD_CHUNK`].
+fn chunk_ranges(len: usize) -> Vec<Range<usize>> {
+    (0..len).step_by(REBUILD_CHUNK).map(|start| start..(start + REBUILD_CHUNK).min(len)).collect()
+}
+
+/// One piece of `slots` per range (consecutive ranges from the front), with its range.
+fn split_slots<'a, T>(slots: &mut Slots<'a, T>, ranges: &[Range<usize>]) -> Vec<(Range<usize>, Slots<'a, T>)> {
+    ranges.iter().map(|range| (range.clone(), slots.take_front(range.len()))).collect()
+}
 
 /// Face `fi` of `mesh`, for an index known to be in range.
 #[inline(always)]
