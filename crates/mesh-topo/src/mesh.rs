@@ -491,6 +491,13 @@ impl HalfedgeMesh {
     pub fn raw_halfedge_faces(&self) -> &[u32] {
         &self.halfedge_face
     }
+
+    /// Raw array of the half-edge leaving each face's first corner, one entry per face
+    /// (see [`face_halfedge`](Self::face_halfedge)).
+    #[inline]
+    pub fn raw_face_halfedges(&self) -> &[u32] {
+        &self.face_halfedge
+    }
 }
 
 /// Error from [`HalfedgeMesh::replace_positions`].
