@@ -295,6 +295,8 @@ fn mesh_face_corners(fine: &HalfedgeMesh) -> impl Fn(usize) -> Option<[u32; 3]> 
     let next_halfedge = fine.raw_halfedge_next();
     let targets = fine.raw_halfedge_targets();
     let face_halfedges = fine.raw_face_halfedges();
+    // Called four times per group in the canonical pass: inlined there.
+    #[inline(always)]
     move |f: usize| {
         let h0 = *face_halfedges.get(f)?;
         let h1 = next_halfedge[h0 as usize];

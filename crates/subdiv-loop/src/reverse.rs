@@ -182,12 +182,20 @@ pub(crate) fn reconstruct_levels<'a>(
     let mut topology = Topology::from_mesh(coarse)?;
     let mut positions = coarse.positions().to_vec();
     let kernel_rules = Rules::new(rules);
+    let levels: Vec<_> = levels.collect();
     let count = levels.len();
+    // When every level fits the counts, the details are not read for finiteness before
+    // the steps: a non-finite detail makes the result non-finite (every fine value has
+    // a non-zero weight on it), and the check below then names the first one, so the
+    // errors are the same as checking each level first.
+    let fit = levels_fit(&topology, &levels);
     // True when the last step found every position finite (the input was checked).
     let mut known_finite = true;
-    for (i, (details, order)) in levels.enumerate() {
+    for (i, &(details, order)) in levels.iter().enumerate() {
         let level = i + 1;
-        check_details(topology.vertex_count, topology.edge_count, topology.face_count(), details, order, level)?;
+        if !fit {
+            check_details(topology.vertex_count, topology.edge_count, topology.face_count(), details, order, level)?;
+        }
         if topology.face_count() as u64 > MAX_FACES || topology.edge_count > BASE_MASK as usize {
             return Err(LoopError::Mesh(MeshError::TooLarge {
                 what: "faces",
@@ -198,11 +206,13 @@ pub(crate) fn reconstruct_levels<'a>(
         match order {
             None => {
                 let corrections = VertexCorrections::new(&topology, details);
-                let step = kernel::step(&topology, &positions, &kernel_rules, level < count);
+                // The kernel adds the details to the edge points as it makes them.
+                let step = kernel::step_with_details(&topology, &positions, &kernel_rules, level < count, details);
                 let nv = topology.vertex_count;
                 let mut fine = step.values;
                 let (vertex_points, edge_points) = fine.split_at_mut(nv);
-                // The finiteness check of the result rides along (no pass of its own).
+                // The finiteness check of the vertex points rides along (no pass of its
+                // own).
                 let vertices_finite = vertex_points
                     .par_iter_mut()
                     .with_min_len(4096)
@@ -212,16 +222,9 @@ pub(crate) fn reconstruct_levels<'a>(
                         p.is_finite()
                     })
                     .reduce(|| true, |a, b| a && b);
-                let edges_finite = edge_points
-                    .par_iter_mut()
-                    .with_min_len(4096)
-                    .zip(details.par_iter())
-                    .map(|(p, d)| {
-                        *p += *d;
-                        p.is_finite()
-                    })
-                    .reduce(|| true, |a, b| a && b);
-                known_finite = vertices_finite && edges_finite;
+                // Only the last step's verdict is read after the loop: the edge points
+                // are checked there alone.
+                known_finite = vertices_finite && (level < count || crate::pyramid::all_finite(edge_points));
                 positions = fine;
                 topology = step.topology;
             }
@@ -235,6 +238,11 @@ pub(crate) fn reconstruct_levels<'a>(
         }
     }
     if !known_finite {
+        if fit {
+            for (i, &(details, _)) in levels.iter().enumerate() {
+                check_details_finite(details, i + 1)?;
+            }
+        }
         // Also names the first non-finite vertex.
         check_finite(&positions, count)?;
     }
@@ -336,15 +344,40 @@ fn check_details(
             reason: format!("{} details for a mesh with {edges} edges", details.len()),
         });
     }
+    check_details_finite(details, level)?;
+    if let Some(order) = order {
+        order.check(vertices + edges, 4 * faces).map_err(|reason| LoopError::InvalidDetails { level, reason })?;
+    }
+    Ok(())
+}
+
+/// The finiteness part of [`check_details`].
+fn check_details_finite(details: &[DVec3], level: usize) -> Result<(), LoopError> {
     if !crate::pyramid::all_finite(details)
         && let Some(i) = details.iter().position(|d| !d.is_finite())
     {
         return Err(LoopError::InvalidDetails { level, reason: format!("detail {i} is not finite") });
     }
-    if let Some(order) = order {
-        order.check(vertices + edges, 4 * faces).map_err(|reason| LoopError::InvalidDetails { level, reason })?;
-    }
     Ok(())
+}
+
+/// True if [`check_details`] (but for the finiteness of the details) and the size
+/// check of [`reconstruct_levels`] pass at every level, from the counts alone: a step
+/// makes `V + E` vertices, `2E + 3F` edges and `4F` faces of `V, E, F`.
+fn levels_fit(topology: &Topology, levels: &[(&[DVec3], Option<&FineOrder>)]) -> bool {
+    let (mut v, mut e, mut f) = (topology.vertex_count, topology.edge_count, topology.face_count());
+    for &(details, order) in levels {
+        if details.len() != e || f as u64 > MAX_FACES || e > BASE_MASK as usize {
+            return false;
+        }
+        if let Some(order) = order
+            && order.check(v + e, 4 * f).is_err()
+        {
+            return false;
+        }
+        (v, e, f) = (v + e, 2 * e + 3 * f, 4 * f);
+    }
+    true
 }
 
 pub(crate) fn check_finite(positions: &[DVec3], level: usize) -> Result<(), LoopError> {
@@ -969,6 +1002,24 @@ mod tests {
         let mut fine = reconstruct(&coarse, &zeros, None, &rules).unwrap();
         fine.positions_mut()[4].x = f64::NAN;
         assert!(matches!(reverse(&fine, &ReverseOptions::default()), Err(LoopError::Mesh(_))));
+    }
+
+    /// Non-finite details are named by level and index whether the levels fit their
+    /// counts (checked after the steps) or not (checked before each step).
+    #[test]
+    fn non_finite_details_are_named_before_later_errors() {
+        let rules = LoopOptions::default();
+        let pyramid = crate::pyramid::LoopPyramid::smooth(shapes::icosahedron(), rules, 3).unwrap();
+        let mut nan = pyramid.clone();
+        nan.levels[1].details[5].x = f64::NAN;
+        let expected = |e: LoopError| matches!(e, LoopError::InvalidDetails { level: 2, ref reason } if reason == "detail 5 is not finite");
+        assert!(expected(nan.reconstruct(3).unwrap_err()));
+        nan.levels[2].details.pop();
+        assert!(expected(nan.reconstruct(3).unwrap_err()));
+        let mut short = pyramid.clone();
+        short.levels[2].details.pop();
+        assert!(matches!(short.reconstruct(3), Err(LoopError::InvalidDetails { level: 3, .. })));
+        assert!(short.reconstruct(2).is_ok());
     }
 
     proptest! {
