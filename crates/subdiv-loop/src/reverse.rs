@@ -259,11 +259,19 @@ pub(crate) fn reconstruct_levels<'a>(
 /// the details around every vertex, by one pass over the edges of the coarse topology,
 /// applied in place to the vertex points (no array of corrections).
 struct VertexCorrections {
-    /// Per vertex: the sum of the details of its boundary edges if it has any, else of
-    /// all its edges (the two cases of the correction).
-    sum: Vec<DVec3>,
-    /// Number of edges at each vertex, [`Self::BOUNDARY`] set on the boundary.
-    valence: Vec<u32>,
+    /// Per vertex, side by side (one cache line per vertex in the scattered pass).
+    vertices: Vec<VertexSum>,
+}
+
+/// What [`VertexCorrections`] keeps per vertex.
+#[derive(Clone, Copy)]
+struct VertexSum {
+    /// The sum of the details of its boundary edges if it has any, else of all its
+    /// edges (the two cases of the correction).
+    sum: DVec3,
+    /// Number of edges at the vertex, [`VertexCorrections::BOUNDARY`] set on the
+    /// boundary.
+    valence: u32,
 }
 
 impl VertexCorrections {
@@ -271,8 +279,7 @@ impl VertexCorrections {
 
     fn new(topology: &Topology, details: &[DVec3]) -> Self {
         let nv = topology.vertex_count;
-        let mut sum = vec![DVec3::ZERO; nv];
-        let mut valence = vec![0u32; nv];
+        let mut vertices = vec![VertexSum { sum: DVec3::ZERO, valence: 0 }; nv];
         let mut e = 0usize;
         for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
             for k in 0..3 {
@@ -284,37 +291,38 @@ impl VertexCorrections {
                 e += 1;
                 let on_boundary = twin == TOPOLOGY_INVALID;
                 for v in [corners[k], corners[NEXT[k]]] {
-                    let v = v as usize;
-                    let seen_boundary = valence[v] & Self::BOUNDARY != 0;
-                    valence[v] += 1;
+                    let vertex = &mut vertices[v as usize];
+                    let seen_boundary = vertex.valence & Self::BOUNDARY != 0;
+                    vertex.valence += 1;
                     if on_boundary {
                         if !seen_boundary {
                             // The first boundary edge: from now on only boundary edges count.
-                            sum[v] = DVec3::ZERO;
-                            valence[v] |= Self::BOUNDARY;
+                            vertex.sum = DVec3::ZERO;
+                            vertex.valence |= Self::BOUNDARY;
                         }
-                        sum[v] += d;
+                        vertex.sum += d;
                     } else if !seen_boundary {
-                        sum[v] += d;
+                        vertex.sum += d;
                     }
                 }
             }
         }
         debug_assert_eq!(e, details.len());
-        Self { sum, valence }
+        Self { vertices }
     }
 
     /// Adds the correction of vertex `v` to its vertex point (`β` from the forward
     /// kernel's table: the very numbers of the forward step).
     #[inline]
     fn apply(&self, v: usize, point: &mut DVec3, rules: &Rules) {
-        let n = (self.valence[v] & !Self::BOUNDARY) as usize;
-        *point += if self.valence[v] & Self::BOUNDARY != 0 {
-            if rules.is_fixed_corner(n) { DVec3::ZERO } else { 0.25 * self.sum[v] }
+        let VertexSum { sum, valence } = self.vertices[v];
+        let n = (valence & !Self::BOUNDARY) as usize;
+        *point += if valence & Self::BOUNDARY != 0 {
+            if rules.is_fixed_corner(n) { DVec3::ZERO } else { 0.25 * sum }
         } else if n == 0 {
             DVec3::ZERO
         } else {
-            (1.6 * rules.interior(n).1) * self.sum[v]
+            (1.6 * rules.interior(n).1) * sum
         };
     }
 }
