@@ -556,12 +556,17 @@ pub(crate) fn canonical_groups(
         }
         Some((largest, smallest))
     };
-    let (largest_x, first_odd) = coarse_vertex
-        .par_chunks_mut(3 * GROUP_CHUNK)
-        .zip(edge_point.par_chunks_mut(3 * GROUP_CHUNK))
-        .enumerate()
-        .map(chunk)
-        .try_reduce(|| (0, u32::MAX), |a, b| Some((a.0.max(b.0), a.1.min(b.1))))?;
+    // One chunk is read on the calling thread: handing it to the pool costs a wake-up.
+    let (largest_x, first_odd) = if corners <= 3 * GROUP_CHUNK {
+        chunk((0, (&mut coarse_vertex[..], &mut edge_point[..])))?
+    } else {
+        coarse_vertex
+            .par_chunks_mut(3 * GROUP_CHUNK)
+            .zip(edge_point.par_chunks_mut(3 * GROUP_CHUNK))
+            .enumerate()
+            .map(chunk)
+            .try_reduce(|| (0, u32::MAX), |a, b| Some((a.0.max(b.0), a.1.min(b.1))))?
+    };
     if largest_x >= first_odd || seed_vertex.is_some_and(|s| s >= first_odd) {
         return None;
     }
@@ -610,7 +615,11 @@ impl CanonicalGroups {
         let (paired, side) =
             if corners / 3 >= PARALLEL_MIN_FACES { rayon::join(pair_twins, side) } else { (pair_twins(), side()) };
         let (twin, edge_corner) = paired?;
-        corner_edge.par_iter_mut().with_min_len(3 * GROUP_CHUNK).for_each(|e| *e -= first_odd);
+        if corners <= 3 * GROUP_CHUNK {
+            corner_edge.iter_mut().for_each(|e| *e -= first_odd);
+        } else {
+            corner_edge.par_iter_mut().with_min_len(3 * GROUP_CHUNK).for_each(|e| *e -= first_odd);
+        }
         let table = CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner);
         Some((table, side))
     }

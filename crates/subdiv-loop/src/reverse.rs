@@ -212,16 +212,21 @@ pub(crate) fn reconstruct_levels<'a>(
                 let mut fine = step.values;
                 let (vertex_points, edge_points) = fine.split_at_mut(nv);
                 // The finiteness check of the vertex points rides along (no pass of its
-                // own).
-                let vertices_finite = vertex_points
-                    .par_iter_mut()
-                    .with_min_len(4096)
-                    .enumerate()
-                    .map(|(v, p)| {
-                        corrections.apply(v, p, &kernel_rules);
-                        p.is_finite()
-                    })
-                    .reduce(|| true, |a, b| a && b);
+                // own); small levels stay on the calling thread (no pool wake-up).
+                let apply = |(v, p): (usize, &mut DVec3)| {
+                    corrections.apply(v, p, &kernel_rules);
+                    p.is_finite()
+                };
+                let vertices_finite = if nv < PARALLEL_THRESHOLD {
+                    vertex_points.iter_mut().enumerate().map(apply).fold(true, |a, b| a & b)
+                } else {
+                    vertex_points
+                        .par_iter_mut()
+                        .with_min_len(4096)
+                        .enumerate()
+                        .map(apply)
+                        .reduce(|| true, |a, b| a && b)
+                };
                 // Only the last step's verdict is read after the loop: the edge points
                 // are checked there alone.
                 known_finite = vertices_finite && (level < count || crate::pyramid::all_finite(edge_points));
