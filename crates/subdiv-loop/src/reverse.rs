@@ -205,9 +205,15 @@ pub(crate) fn reconstruct_levels<'a>(
         }
         match order {
             None => {
-                let corrections = VertexCorrections::new(&topology, details);
-                // The kernel adds the details to the edge points as it makes them.
-                let step = kernel::step_with_details(&topology, &positions, &kernel_rules, level < count, details);
+                // The kernel adds the details to the edge points as it makes them; the
+                // (sequential) sums of the details around the vertices run beside it.
+                let corrections = || VertexCorrections::new(&topology, details);
+                let step = || kernel::step_with_details(&topology, &positions, &kernel_rules, level < count, details);
+                let (corrections, step) = if kernel::runs_in_parallel(topology.face_count()) {
+                    rayon::join(corrections, step)
+                } else {
+                    (corrections(), step())
+                };
                 let nv = topology.vertex_count;
                 let mut fine = step.values;
                 let (vertex_points, edge_points) = fine.split_at_mut(nv);
