@@ -896,6 +896,19 @@ impl HalfedgeMesh {
 mod tests {
     use super::*;
 
+    #[test]
+    fn raw_arrays_agree_with_the_handles() {
+        let mesh = HalfedgeMesh::from_soup(&crate::shapes::grid(3, 2, crate::shapes::CellKind::Triangles).unwrap())
+            .expect("valid grid");
+        assert_eq!(mesh.raw_face_halfedges().len(), mesh.face_count());
+        for f in mesh.faces() {
+            let h = mesh.face_halfedge(f);
+            assert_eq!(mesh.raw_face_halfedges()[f.index()], h.raw());
+            assert_eq!(mesh.raw_halfedge_next()[h.index()], mesh.next(h).raw());
+            assert_eq!(mesh.raw_halfedge_targets()[h.twin().index()], mesh.origin(h).raw());
+        }
+    }
+
     /// The limits themselves: a soup that big cannot be allocated in a test, so the guard
     /// the builder calls first is checked on counts alone (`shapes` tests reach the same
     /// error through a real call).
