@@ -491,6 +491,13 @@ impl HalfedgeMesh {
     pub fn raw_halfedge_faces(&self) -> &[u32] {
         &self.halfedge_face
     }
+
+    /// Raw array of the half-edge leaving each face's first corner, one entry per face
+    /// (see [`face_halfedge`](Self::face_halfedge)).
+    #[inline]
+    pub fn raw_face_halfedges(&self) -> &[u32] {
+        &self.face_halfedge
+    }
 }
 
 /// Error from [`HalfedgeMesh::replace_positions`].
@@ -888,6 +895,19 @@ impl HalfedgeMesh {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn raw_arrays_agree_with_the_handles() {
+        let mesh = HalfedgeMesh::from_soup(&crate::shapes::grid(3, 2, crate::shapes::CellKind::Triangles).unwrap())
+            .expect("valid grid");
+        assert_eq!(mesh.raw_face_halfedges().len(), mesh.face_count());
+        for f in mesh.faces() {
+            let h = mesh.face_halfedge(f);
+            assert_eq!(mesh.raw_face_halfedges()[f.index()], h.raw());
+            assert_eq!(mesh.raw_halfedge_next()[h.index()], mesh.next(h).raw());
+            assert_eq!(mesh.raw_halfedge_targets()[h.twin().index()], mesh.origin(h).raw());
+        }
+    }
 
     /// The limits themselves: a soup that big cannot be allocated in a test, so the guard
     /// the builder calls first is checked on counts alone (`shapes` tests reach the same

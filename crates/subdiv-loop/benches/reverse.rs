@@ -17,6 +17,12 @@
 //!   `forward_soup` (Loop subdivision from the coarse soup, validated first as
 //!   `reconstruct` validates its base mesh).
 //!
+//! What each side writes: `decompose` a pyramid (the base soup, one detail per coarse
+//! edge of every level), `forward_mesh` and `forward_soup` a `LoopMesh` (fine positions
+//! and triangles), `reconstruct` a `PolygonSoup` (the same positions and triangles, as
+//! indices, plus one offset per face, which the `LoopMesh` does not have: a small extra
+//! pass that comes with the return type, counted against `reconstruct`).
+//!
 //! Ratios are only meaningful within one run (the machine is shared): group `levelL`
 //! times the four operations of size `L` back to back; compare `levelL/decompose` with
 //! `levelL/forward_mesh` and `levelL/reconstruct` with `levelL/forward_soup`.

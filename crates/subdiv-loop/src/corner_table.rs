@@ -147,8 +147,10 @@ impl CornerTable {
         let next_halfedge = mesh.raw_halfedge_next();
         let targets = mesh.raw_halfedge_targets();
         let faces = mesh.face_count();
+        let first_halfedges = mesh.raw_face_halfedges();
+        // Flat arrays only: `HalfedgeMesh::face` is a call per face across crates.
         let face_halfedges = |f: u32| {
-            let h0 = mesh.face_halfedge(mesh.face(f as usize).expect("internal: face in range")).raw();
+            let h0 = first_halfedges[f as usize];
             let h1 = next_halfedge[h0 as usize];
             [h0, h1, next_halfedge[h1 as usize]]
         };

@@ -294,12 +294,19 @@ pub(crate) fn detect_mesh(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Resu
 fn mesh_face_corners(fine: &HalfedgeMesh) -> impl Fn(usize) -> Option<[u32; 3]> + Sync + '_ {
     let next_halfedge = fine.raw_halfedge_next();
     let targets = fine.raw_halfedge_targets();
+    let face_halfedges = fine.raw_face_halfedges();
+    // Called four times per group in the canonical pass: inlined there.
+    #[inline(always)]
     move |f: usize| {
-        let h0 = fine.face_halfedge(fine.face(f)?).raw();
+        let h0 = *face_halfedges.get(f)?;
         let h1 = next_halfedge[h0 as usize];
-        let h2 = next_halfedge[h1 as usize];
-        // Corner k is the origin of half-edge k: the target of half-edge k - 1.
-        (next_halfedge[h2 as usize] == h0).then(|| [targets[h2 as usize], targets[h0 as usize], targets[h1 as usize]])
+        // Corner 0 is the origin of half-edge 0, the target of its twin (half-edges
+        // come in twin pairs `2e`, `2e + 1`); corners 1 and 2 are the targets of
+        // half-edges 0 and 1.
+        let corners = [targets[(h0 ^ 1) as usize], targets[h0 as usize], targets[h1 as usize]];
+        // The face is a triangle if its third half-edge ends at corner 0: a face never
+        // repeats a vertex, so its loop closes there.
+        (targets[next_halfedge[h1 as usize] as usize] == corners[0]).then_some(corners)
     }
 }
 
@@ -549,12 +556,17 @@ pub(crate) fn canonical_groups(
         }
         Some((largest, smallest))
     };
-    let (largest_x, first_odd) = coarse_vertex
-        .par_chunks_mut(3 * GROUP_CHUNK)
-        .zip(edge_point.par_chunks_mut(3 * GROUP_CHUNK))
-        .enumerate()
-        .map(chunk)
-        .try_reduce(|| (0, u32::MAX), |a, b| Some((a.0.max(b.0), a.1.min(b.1))))?;
+    // One chunk is read on the calling thread: handing it to the pool costs a wake-up.
+    let (largest_x, first_odd) = if corners <= 3 * GROUP_CHUNK {
+        chunk((0, (&mut coarse_vertex[..], &mut edge_point[..])))?
+    } else {
+        coarse_vertex
+            .par_chunks_mut(3 * GROUP_CHUNK)
+            .zip(edge_point.par_chunks_mut(3 * GROUP_CHUNK))
+            .enumerate()
+            .map(chunk)
+            .try_reduce(|| (0, u32::MAX), |a, b| Some((a.0.max(b.0), a.1.min(b.1))))?
+    };
     if largest_x >= first_odd || seed_vertex.is_some_and(|s| s >= first_odd) {
         return None;
     }
@@ -603,7 +615,11 @@ impl CanonicalGroups {
         let (paired, side) =
             if corners / 3 >= PARALLEL_MIN_FACES { rayon::join(pair_twins, side) } else { (pair_twins(), side()) };
         let (twin, edge_corner) = paired?;
-        corner_edge.par_iter_mut().with_min_len(3 * GROUP_CHUNK).for_each(|e| *e -= first_odd);
+        if corners <= 3 * GROUP_CHUNK {
+            corner_edge.iter_mut().for_each(|e| *e -= first_odd);
+        } else {
+            corner_edge.par_iter_mut().with_min_len(3 * GROUP_CHUNK).for_each(|e| *e -= first_odd);
+        }
         let table = CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner);
         Some((table, side))
     }

@@ -182,12 +182,20 @@ pub(crate) fn reconstruct_levels<'a>(
     let mut topology = Topology::from_mesh(coarse)?;
     let mut positions = coarse.positions().to_vec();
     let kernel_rules = Rules::new(rules);
+    let levels: Vec<_> = levels.collect();
     let count = levels.len();
+    // When every level fits the counts, the details are not read for finiteness before
+    // the steps: a non-finite detail makes the result non-finite (every fine value has
+    // a non-zero weight on it), and the check below then names the first one, so the
+    // errors are the same as checking each level first.
+    let fit = levels_fit(&topology, &levels);
     // True when the last step found every position finite (the input was checked).
     let mut known_finite = true;
-    for (i, (details, order)) in levels.enumerate() {
+    for (i, &(details, order)) in levels.iter().enumerate() {
         let level = i + 1;
-        check_details(topology.vertex_count, topology.edge_count, topology.face_count(), details, order, level)?;
+        if !fit {
+            check_details(topology.vertex_count, topology.edge_count, topology.face_count(), details, order, level)?;
+        }
         if topology.face_count() as u64 > MAX_FACES || topology.edge_count > BASE_MASK as usize {
             return Err(LoopError::Mesh(MeshError::TooLarge {
                 what: "faces",
@@ -197,31 +205,37 @@ pub(crate) fn reconstruct_levels<'a>(
         }
         match order {
             None => {
-                let corrections = VertexCorrections::new(&topology, details);
-                let step = kernel::step(&topology, &positions, &kernel_rules, level < count);
+                // The kernel adds the details to the edge points as it makes them; the
+                // (sequential) sums of the details around the vertices run beside it.
+                let corrections = || VertexCorrections::new(&topology, details);
+                let step = || kernel::step_with_details(&topology, &positions, &kernel_rules, level < count, details);
+                let (corrections, step) = if kernel::runs_in_parallel(topology.face_count()) {
+                    rayon::join(corrections, step)
+                } else {
+                    (corrections(), step())
+                };
                 let nv = topology.vertex_count;
                 let mut fine = step.values;
                 let (vertex_points, edge_points) = fine.split_at_mut(nv);
-                // The finiteness check of the result rides along (no pass of its own).
-                let vertices_finite = vertex_points
-                    .par_iter_mut()
-                    .with_min_len(4096)
-                    .enumerate()
-                    .map(|(v, p)| {
-                        corrections.apply(v, p, &kernel_rules);
-                        p.is_finite()
-                    })
-                    .reduce(|| true, |a, b| a && b);
-                let edges_finite = edge_points
-                    .par_iter_mut()
-                    .with_min_len(4096)
-                    .zip(details.par_iter())
-                    .map(|(p, d)| {
-                        *p += *d;
-                        p.is_finite()
-                    })
-                    .reduce(|| true, |a, b| a && b);
-                known_finite = vertices_finite && edges_finite;
+                // The finiteness check of the vertex points rides along (no pass of its
+                // own); small levels stay on the calling thread (no pool wake-up).
+                let apply = |(v, p): (usize, &mut DVec3)| {
+                    corrections.apply(v, p, &kernel_rules);
+                    p.is_finite()
+                };
+                let vertices_finite = if nv < PARALLEL_THRESHOLD {
+                    vertex_points.iter_mut().enumerate().map(apply).fold(true, |a, b| a & b)
+                } else {
+                    vertex_points
+                        .par_iter_mut()
+                        .with_min_len(4096)
+                        .enumerate()
+                        .map(apply)
+                        .reduce(|| true, |a, b| a && b)
+                };
+                // Only the last step's verdict is read after the loop: the edge points
+                // are checked there alone.
+                known_finite = vertices_finite && (level < count || crate::pyramid::all_finite(edge_points));
                 positions = fine;
                 topology = step.topology;
             }
@@ -235,6 +249,11 @@ pub(crate) fn reconstruct_levels<'a>(
         }
     }
     if !known_finite {
+        if fit {
+            for (i, &(details, _)) in levels.iter().enumerate() {
+                check_details_finite(details, i + 1)?;
+            }
+        }
         // Also names the first non-finite vertex.
         check_finite(&positions, count)?;
     }
@@ -251,11 +270,19 @@ pub(crate) fn reconstruct_levels<'a>(
 /// the details around every vertex, by one pass over the edges of the coarse topology,
 /// applied in place to the vertex points (no array of corrections).
 struct VertexCorrections {
-    /// Per vertex: the sum of the details of its boundary edges if it has any, else of
-    /// all its edges (the two cases of the correction).
-    sum: Vec<DVec3>,
-    /// Number of edges at each vertex, [`Self::BOUNDARY`] set on the boundary.
-    valence: Vec<u32>,
+    /// Per vertex, side by side (one cache line per vertex in the scattered pass).
+    vertices: Vec<VertexSum>,
+}
+
+/// What [`VertexCorrections`] keeps per vertex.
+#[derive(Clone, Copy)]
+struct VertexSum {
+    /// The sum of the details of its boundary edges if it has any, else of all its
+    /// edges (the two cases of the correction).
+    sum: DVec3,
+    /// Number of edges at the vertex, [`VertexCorrections::BOUNDARY`] set on the
+    /// boundary.
+    valence: u32,
 }
 
 impl VertexCorrections {
@@ -263,8 +290,7 @@ impl VertexCorrections {
 
     fn new(topology: &Topology, details: &[DVec3]) -> Self {
         let nv = topology.vertex_count;
-        let mut sum = vec![DVec3::ZERO; nv];
-        let mut valence = vec![0u32; nv];
+        let mut vertices = vec![VertexSum { sum: DVec3::ZERO, valence: 0 }; nv];
         let mut e = 0usize;
         for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
             for k in 0..3 {
@@ -276,37 +302,38 @@ impl VertexCorrections {
                 e += 1;
                 let on_boundary = twin == TOPOLOGY_INVALID;
                 for v in [corners[k], corners[NEXT[k]]] {
-                    let v = v as usize;
-                    let seen_boundary = valence[v] & Self::BOUNDARY != 0;
-                    valence[v] += 1;
+                    let vertex = &mut vertices[v as usize];
+                    let seen_boundary = vertex.valence & Self::BOUNDARY != 0;
+                    vertex.valence += 1;
                     if on_boundary {
                         if !seen_boundary {
                             // The first boundary edge: from now on only boundary edges count.
-                            sum[v] = DVec3::ZERO;
-                            valence[v] |= Self::BOUNDARY;
+                            vertex.sum = DVec3::ZERO;
+                            vertex.valence |= Self::BOUNDARY;
                         }
-                        sum[v] += d;
+                        vertex.sum += d;
                     } else if !seen_boundary {
-                        sum[v] += d;
+                        vertex.sum += d;
                     }
                 }
             }
         }
         debug_assert_eq!(e, details.len());
-        Self { sum, valence }
+        Self { vertices }
     }
 
     /// Adds the correction of vertex `v` to its vertex point (`β` from the forward
     /// kernel's table: the very numbers of the forward step).
     #[inline]
     fn apply(&self, v: usize, point: &mut DVec3, rules: &Rules) {
-        let n = (self.valence[v] & !Self::BOUNDARY) as usize;
-        *point += if self.valence[v] & Self::BOUNDARY != 0 {
-            if rules.is_fixed_corner(n) { DVec3::ZERO } else { 0.25 * self.sum[v] }
+        let VertexSum { sum, valence } = self.vertices[v];
+        let n = (valence & !Self::BOUNDARY) as usize;
+        *point += if valence & Self::BOUNDARY != 0 {
+            if rules.is_fixed_corner(n) { DVec3::ZERO } else { 0.25 * sum }
         } else if n == 0 {
             DVec3::ZERO
         } else {
-            (1.6 * rules.interior(n).1) * self.sum[v]
+            (1.6 * rules.interior(n).1) * sum
         };
     }
 }
@@ -336,15 +363,40 @@ fn check_details(
             reason: format!("{} details for a mesh with {edges} edges", details.len()),
         });
     }
+    check_details_finite(details, level)?;
+    if let Some(order) = order {
+        order.check(vertices + edges, 4 * faces).map_err(|reason| LoopError::InvalidDetails { level, reason })?;
+    }
+    Ok(())
+}
+
+/// The finiteness part of [`check_details`].
+fn check_details_finite(details: &[DVec3], level: usize) -> Result<(), LoopError> {
     if !crate::pyramid::all_finite(details)
         && let Some(i) = details.iter().position(|d| !d.is_finite())
     {
         return Err(LoopError::InvalidDetails { level, reason: format!("detail {i} is not finite") });
     }
-    if let Some(order) = order {
-        order.check(vertices + edges, 4 * faces).map_err(|reason| LoopError::InvalidDetails { level, reason })?;
-    }
     Ok(())
+}
+
+/// True if [`check_details`] (but for the finiteness of the details) and the size
+/// check of [`reconstruct_levels`] pass at every level, from the counts alone: a step
+/// makes `V + E` vertices, `2E + 3F` edges and `4F` faces of `V, E, F`.
+fn levels_fit(topology: &Topology, levels: &[(&[DVec3], Option<&FineOrder>)]) -> bool {
+    let (mut v, mut e, mut f) = (topology.vertex_count, topology.edge_count, topology.face_count());
+    for &(details, order) in levels {
+        if details.len() != e || f as u64 > MAX_FACES || e > BASE_MASK as usize {
+            return false;
+        }
+        if let Some(order) = order
+            && order.check(v + e, 4 * f).is_err()
+        {
+            return false;
+        }
+        (v, e, f) = (v + e, 2 * e + 3 * f, 4 * f);
+    }
+    true
 }
 
 pub(crate) fn check_finite(positions: &[DVec3], level: usize) -> Result<(), LoopError> {
@@ -969,6 +1021,24 @@ mod tests {
         let mut fine = reconstruct(&coarse, &zeros, None, &rules).unwrap();
         fine.positions_mut()[4].x = f64::NAN;
         assert!(matches!(reverse(&fine, &ReverseOptions::default()), Err(LoopError::Mesh(_))));
+    }
+
+    /// Non-finite details are named by level and index whether the levels fit their
+    /// counts (checked after the steps) or not (checked before each step).
+    #[test]
+    fn non_finite_details_are_named_before_later_errors() {
+        let rules = LoopOptions::default();
+        let pyramid = crate::pyramid::LoopPyramid::smooth(shapes::icosahedron(), rules, 3).unwrap();
+        let mut nan = pyramid.clone();
+        nan.levels[1].details[5].x = f64::NAN;
+        let expected = |e: LoopError| matches!(e, LoopError::InvalidDetails { level: 2, ref reason } if reason == "detail 5 is not finite");
+        assert!(expected(nan.reconstruct(3).unwrap_err()));
+        nan.levels[2].details.pop();
+        assert!(expected(nan.reconstruct(3).unwrap_err()));
+        let mut short = pyramid.clone();
+        short.levels[2].details.pop();
+        assert!(matches!(short.reconstruct(3), Err(LoopError::InvalidDetails { level: 3, .. })));
+        assert!(short.reconstruct(2).is_ok());
     }
 
     proptest! {

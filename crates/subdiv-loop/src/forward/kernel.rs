@@ -169,6 +169,20 @@ pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, r
     step_into(topo, values, rules, refine_topology, Buffers::default())
 }
 
+/// [`step`] with `details[e]` added to the edge point of every edge `e` as it is
+/// computed (`point += detail`, the same operation as adding them afterwards, without
+/// another pass over the edge points).
+pub(crate) fn step_with_details<T: Attribute>(
+    topo: &Topology,
+    values: &[T],
+    rules: &Rules,
+    refine_topology: bool,
+    details: &[T],
+) -> Step<T> {
+    debug_assert_eq!(details.len(), topo.edge_count, "internal: one detail per edge");
+    step_impl(topo, values, rules, refine_topology, Buffers::default(), Some(details))
+}
+
 /// [`step`] writing into the memory of `buffers` (bit-identical results).
 ///
 /// Steps with fewer than [`PARALLEL_MIN_FACES`] coarse faces, and every step when the
@@ -181,6 +195,18 @@ pub(crate) fn step_into<T: Attribute>(
     rules: &Rules,
     refine_topology: bool,
     buffers: Buffers<T>,
+) -> Step<T> {
+    step_impl(topo, values, rules, refine_topology, buffers, None)
+}
+
+/// [`step_into`], adding `details` (one per edge) to the edge points if given.
+fn step_impl<T: Attribute>(
+    topo: &Topology,
+    values: &[T],
+    rules: &Rules,
+    refine_topology: bool,
+    buffers: Buffers<T>,
+    details: Option<&[T]>,
 ) -> Step<T> {
     let nv = topo.vertex_count;
     let ne = topo.edge_count;
@@ -202,7 +228,7 @@ pub(crate) fn step_into<T: Attribute>(
             if even < nv {
                 odd_chunk(topo, values, rules, &mut w, refine_topology);
             }
-            face_chunk(topo, values, w, refine_topology);
+            face_chunk(topo, values, details, w, refine_topology);
         }
         Work::Vertices(w) => vertex_chunk(topo, values, rules, w, refine_topology),
     };
@@ -354,7 +380,13 @@ fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut
 /// `4f + k`, `(4f + k, 1)` runs `m_k -> m_{k-1}`, `(4f + k, 2)` is the second half of
 /// `4f + k - 1`, `(4f + 3, j)` runs `m_j -> m_{j+1}`.
 #[inline(never)]
-fn face_chunk<T: Attribute>(topo: &Topology, values: &[T], mut w: FaceWork<'_, T>, refine_topology: bool) {
+fn face_chunk<T: Attribute>(
+    topo: &Topology,
+    values: &[T],
+    details: Option<&[T]>,
+    mut w: FaceWork<'_, T>,
+    refine_topology: bool,
+) {
     let nv = topo.vertex_count as u32;
     let tri = &topo.triangles[..];
     let links = &topo.links[..];
@@ -376,7 +408,7 @@ fn face_chunk<T: Attribute>(topo: &Topology, values: &[T], mut w: FaceWork<'_, T
                 let mut point = a.clone();
                 point.add(b);
                 debug_assert_eq!(e as usize - w.first_edge, w.edge_values.written(), "internal: edge order");
-                w.edge_values.push(if t == INVALID {
+                let mut point = if t == INVALID {
                     point.scaled(0.5)
                 } else {
                     let d = tri[(t >> 2) as usize][PREV[(t & 3) as usize]];
@@ -385,7 +417,11 @@ fn face_chunk<T: Attribute>(topo: &Topology, values: &[T], mut w: FaceWork<'_, T
                     let mut point = point.scaled(0.375);
                     point.add_scaled(&wings, 0.125);
                     point
-                });
+                };
+                if let Some(details) = details {
+                    point.add(&details[e as usize]);
+                }
+                w.edge_values.push(point);
             } else {
                 m[k] = nv + edge_at(links[(t >> 2) as usize][3], t & 3);
             }
