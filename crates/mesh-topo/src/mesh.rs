@@ -491,6 +491,13 @@ impl HalfedgeMesh {
     pub fn raw_halfedge_faces(&self) -> &[u32] {
         &self.halfedge_face
     }
+
+    /// Raw array of each face's first half-edge (the one leaving its first corner), one
+    /// entry per face.
+    #[inline]
+    pub fn raw_face_halfedges(&self) -> &[u32] {
+        &self.face_halfedge
+    }
 }
 
 /// Error from [`HalfedgeMesh::replace_positions`].

@@ -155,16 +155,33 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
     if options.depth == Depth::Levels(0) {
         return Err(DooError::InvalidParameter { name: "levels", value: 0.0, reason: "decompose at least one level" });
     }
-    let corners = CornerMesh::from_halfedge(mesh);
+    // A mesh in the canonical order with its seed given: the first level without the
+    // general search (the same result; `None` when it does not apply).
+    let first = crate::canonical::reverse_canonical(mesh, &reverse_options(options, 0)).map(Step::from_reversal);
     let mut steps = Vec::new();
     let mut stopped = None;
     match options.depth {
         Depth::Levels(n) => {
-            steps = descend(&corners, mesh.positions(), options, 0, n)?;
+            steps = match first {
+                Some(step) => {
+                    let rest = descend(&step.coarse, &step.coarse_positions, options, 1, n)?;
+                    let mut steps = vec![step];
+                    steps.extend(rest);
+                    steps
+                }
+                None => descend(&CornerMesh::from_halfedge(mesh), mesh.positions(), options, 0, n)?,
+            };
         }
         Depth::Max => {
-            let mut current = (corners, mesh.positions().to_vec());
-            for level in 0..MAX_LEVELS {
+            let (mut current, start) = match first {
+                Some(step) => {
+                    let current = (step.coarse.clone(), step.coarse_positions.clone());
+                    steps.push(step);
+                    (current, 1)
+                }
+                None => ((CornerMesh::from_halfedge(mesh), mesh.positions().to_vec()), 0),
+            };
+            for level in start..MAX_LEVELS {
                 let step = match greedy_step(&current.0, &current.1, options, level) {
                     Ok(step) => step,
                     Err(error) if level > 0 => {

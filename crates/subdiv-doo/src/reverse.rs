@@ -177,7 +177,7 @@ pub struct SeedChoice {
 }
 
 impl SeedChoice {
-    fn given(component: usize, seed_face: usize) -> Self {
+    pub(crate) fn given(component: usize, seed_face: usize) -> Self {
         SeedChoice {
             component,
             seed_face,
@@ -265,6 +265,18 @@ impl DooReversal {
         PolygonSoup { positions, offsets: mesh.offsets, indices: mesh.corner_vertex }
     }
 
+    pub(crate) fn from_parts(
+        rule: FaceRule,
+        coarse: CornerMesh,
+        coarse_positions: Vec<DVec3>,
+        details: Vec<DVec3>,
+        order: FineOrder,
+        choices: Vec<SeedChoice>,
+        stats: ReverseStats,
+    ) -> Self {
+        Self { rule, coarse, coarse_positions, details, order, choices, stats }
+    }
+
     pub(crate) fn into_parts(self) -> (CornerMesh, Vec<DVec3>, Vec<DVec3>, FineOrder, Vec<SeedChoice>) {
         (self.coarse, self.coarse_positions, self.details, self.order, self.choices)
     }
@@ -295,6 +307,9 @@ impl DooReversal {
 /// [`DooError::InvalidParameter`] for a bad centroid parameter.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
     check_finite(fine.positions())?;
+    if let Some(reversal) = crate::canonical::reverse_canonical(fine, options) {
+        return Ok(reversal);
+    }
     let corners = CornerMesh::from_halfedge(fine);
     reverse_corner_mesh(&corners, fine.positions(), options)
 }
@@ -1301,7 +1316,10 @@ fn details_offset(by_vertex: &CornersByVertex, v: usize) -> usize {
 
 /// Coarse vertex = mean of its candidates; details = prefix sums of the offsets; and each
 /// vertex's squared detail norm `Σ |d_i|²` (one pass over the candidates).
-fn means_and_details(by_vertex: &CornersByVertex, candidates: &[DVec3]) -> (Vec<DVec3>, Vec<DVec3>, Vec<f64>) {
+pub(crate) fn means_and_details(
+    by_vertex: &CornersByVertex,
+    candidates: &[DVec3],
+) -> (Vec<DVec3>, Vec<DVec3>, Vec<f64>) {
     let vertices = by_vertex.offsets.len() - 1;
     let mut means = Vec::with_capacity(vertices);
     let mut details = Vec::with_capacity(by_vertex.corners.len() - vertices);
@@ -1356,7 +1374,11 @@ fn coarse_vertex_order(coarse: &CornerMesh, vertex_face: &[u32], faces: usize) -
 
 /// The coarse mesh must be a valid manifold mesh: no face visits a vertex twice, and no
 /// two edges join the same two vertices. `by_vertex`: the corners of each vertex.
-fn check_coarse_manifold(coarse: &CornerMesh, ff_faces: &[u32], by_vertex: &CornersByVertex) -> Result<(), DooError> {
+pub(crate) fn check_coarse_manifold(
+    coarse: &CornerMesh,
+    ff_faces: &[u32],
+    by_vertex: &CornersByVertex,
+) -> Result<(), DooError> {
     let mut stamp = vec![NONE; coarse.vertex_count];
     for (f, &ff) in ff_faces.iter().enumerate() {
         for c in coarse.offsets[f]..coarse.offsets[f + 1] {
