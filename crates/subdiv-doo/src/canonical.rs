@@ -17,10 +17,13 @@
 
 use mesh_topo::HalfedgeMesh;
 
+use glam::DVec3;
+
+use crate::DooError;
 use crate::corner::{CornerMesh, NONE, expand_faces, next_of_corners};
 use crate::reverse::{
-    DooReversal, FineOrder, ReverseOptions, ReverseStats, SeedChoice, check_coarse_manifold, corners_by_vertex,
-    means_and_details,
+    DooReversal, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial, check_coarse_manifold,
+    corners_by_vertex, means_and_details,
 };
 use crate::rule::FaceMaps;
 
@@ -48,7 +51,11 @@ use crate::rule::FaceMaps;
 /// - the coarse mesh is connected (one component: the given seed covers the mesh), the
 ///   seed is an F_F face, and the coarse mesh passes the same manifold check.
 pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -> Option<DooReversal> {
-    let [seed] = options.seeds[..] else { return None };
+    let seed = match options.seeds[..] {
+        [seed] => Some(seed),
+        [] => None,
+        _ => return None,
+    };
     options.rule.validate().ok()?;
     let to = fine.raw_halfedge_targets();
     let next = fine.raw_halfedge_next();
@@ -135,7 +142,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     }
     let ff_count = offsets.len() - 1;
     let ff = ff_count as u32;
-    if seed >= ff_count || far_max >= ff || (quads > 0 && quad_base != ff) {
+    if seed.is_some_and(|seed| seed >= ff_count) || far_max >= ff || (quads > 0 && quad_base != ff) {
         return None;
     }
     let fv_first = ff_count + quads as usize;
@@ -160,11 +167,14 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     };
     let mut labels = vec![NONE; vertices];
     let mut vertex_corner = Vec::with_capacity(faces - fv_first + 1);
+    // The corners of the F_V faces in order, kept for the automatic choice.
+    let mut fv_vertices = Vec::with_capacity(if seed.is_none() { vertices } else { 0 });
+    let mut fv_sizes = Vec::with_capacity(if seed.is_none() { faces - fv_first } else { 0 });
     for (i, &first) in face_halfedge[fv_first..].iter().enumerate() {
         let x0 = to[(first ^ 1) as usize];
         let mut previous = x0;
         let mut h = first;
-        let mut size = 0;
+        let mut size = 0u32;
         loop {
             let x = to[(h ^ 1) as usize];
             if std::mem::replace(&mut labels[x as usize], i as u32) != NONE || x < x0 {
@@ -175,6 +185,9 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
             }
             previous = x;
             size += 1;
+            if seed.is_none() {
+                fv_vertices.push(x);
+            }
             h = next[h as usize];
             if h == first {
                 break;
@@ -184,7 +197,11 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
             return None;
         }
         vertex_corner.push(x0);
+        if seed.is_none() {
+            fv_sizes.push(size);
+        }
     }
+    let interior = vertex_corner.len();
     for c in 0..vertices as u32 {
         if labels[c as usize] != NONE {
             continue;
@@ -237,9 +254,27 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     let positions = fine.positions();
     let candidates = expand_faces(&coarse.offsets, &maps, |c| positions[c], Vec::new());
     let (coarse_positions, details, vertex_energy) = means_and_details(&by_vertex, &candidates);
-    let mut choice = SeedChoice::given(0, seed);
+    let (mut choice, stats) = match seed {
+        Some(seed) => {
+            let stats =
+                ReverseStats { visited_faces: ff_count, edges_crossed: vertices, candidate_edges, interpretations: 0 };
+            (SeedChoice::given(0, seed), stats)
+        }
+        None => {
+            if candidate_edges != vertices || quads == 0 || interior == 0 {
+                // Boundaries and the other cases of the automatic choice: general path.
+                return None;
+            }
+            let fv = FvFaces { first: fv_first, sizes_of: &fv_sizes, vertices: &fv_vertices };
+            let mut choice = automatic(fine, &maps, &coarse.offsets, &candidates, &fv, quads)?;
+            let visited = if choice.trials.len() == 1 { ff_count } else { ff_count + interior + 1 };
+            let interpretations = choice.trials.iter().filter(|t| t.outcome.is_ok()).count();
+            let edges_crossed = interpretations * vertices + choice.trials.len() - interpretations;
+            choice.component = 0;
+            (choice, ReverseStats { visited_faces: visited, edges_crossed, candidate_edges, interpretations })
+        }
+    };
     choice.detail_energy = vertex_energy.iter().sum();
-    let stats = ReverseStats { visited_faces: ff_count, edges_crossed: vertices, candidate_edges, interpretations: 0 };
     Some(DooReversal::from_parts(
         options.rule,
         coarse,
@@ -268,6 +303,106 @@ fn connected(offsets: &[u32], across: &[u32]) -> bool {
         }
     }
     count == faces
+}
+
+/// The F_V faces of a canonical mesh: faces `first..`, their sizes and their corners.
+struct FvFaces<'a> {
+    first: usize,
+    sizes_of: &'a [u32],
+    vertices: &'a [u32],
+}
+
+/// The automatic choice of the general path on a closed canonical mesh, made as it makes
+/// it (the same readings in the same order, the same sums in the same order, the same
+/// report): the lowest face as F_F (`candidates`: its expansion per coarse corner =
+/// fine vertex; its groups are the F_V faces), then, unless its details are all zero,
+/// the lowest F_V face as F_F (the dual reading: valid on a closed connected mesh, its
+/// groups are the F_F faces) and the lowest F_E quad as F_F (rejected at once when the
+/// face across its first edge is not a quad). `None` when that reading needs the full
+/// search, or when the dual reading wins (the general path builds it).
+fn automatic(
+    fine: &HalfedgeMesh,
+    maps: &FaceMaps,
+    ff_offsets: &[u32],
+    candidates: &[DVec3],
+    fv: &FvFaces<'_>,
+    quads: u32,
+) -> Option<SeedChoice> {
+    let positions = fine.positions();
+    let ff_count = ff_offsets.len() - 1;
+    let faces = fine.face_count();
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    for &p in positions {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    let scale = (hi - lo).length();
+    let zero = |energy: f64| energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * faces as f64;
+    // The lowest face as F_F: groups are the F_V faces, in face order.
+    let mut energy = 0.0;
+    let mut b = 0;
+    for &m in fv.sizes_of {
+        let group = &fv.vertices[b..b + m as usize];
+        b += m as usize;
+        let mean = group.iter().map(|&v| candidates[v as usize]).sum::<DVec3>() / group.len() as f64;
+        for &v in group {
+            energy += (candidates[v as usize] - mean).length_squared();
+        }
+    }
+    let mut trials = vec![SeedTrial { seed_face: 0, class: "F_F".into(), outcome: Ok(energy) }];
+    if zero(energy) {
+        let reason =
+            "face 0 as F_F gives all details zero (exact Doo-Sabin refinement); no other reading tried".to_string();
+        return Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason });
+    }
+    // The lowest F_E quad as F_F: the face across its first edge must be a quad.
+    let quad = ff_count;
+    debug_assert!(quads > 0);
+    let h = fine.raw_face_halfedges()[quad];
+    let across = fine.raw_halfedge_faces()[(h ^ 1) as usize] as usize;
+    let across_size =
+        if across >= fv.first { fv.sizes_of[across - fv.first] } else { ff_offsets[across + 1] - ff_offsets[across] };
+    if across_size == 4 {
+        return None;
+    }
+    // The dual reading: the F_V faces expanded, grouped by the F_F faces.
+    let mut dual = vec![DVec3::ZERO; positions.len()];
+    let (mut points, mut expanded) = (Vec::new(), Vec::new());
+    let mut b = 0;
+    for &m in fv.sizes_of {
+        let face = &fv.vertices[b..b + m as usize];
+        b += m as usize;
+        points.clear();
+        points.extend(face.iter().map(|&v| positions[v as usize]));
+        expanded.resize(points.len(), DVec3::ZERO);
+        maps.inverse(&points, &mut expanded);
+        for (&v, &p) in face.iter().zip(&expanded) {
+            dual[v as usize] = p;
+        }
+    }
+    let mut dual_energy = 0.0;
+    for w in ff_offsets.windows(2) {
+        let group = &dual[w[0] as usize..w[1] as usize];
+        let mean = group.iter().copied().sum::<DVec3>() / group.len() as f64;
+        for &c in group {
+            dual_energy += (c - mean).length_squared();
+        }
+    }
+    if dual_energy < energy {
+        return None;
+    }
+    let fv_seed = fv.first;
+    trials.push(SeedTrial { seed_face: fv_seed, class: "F_V".into(), outcome: Ok(dual_energy) });
+    let error = DooError::NotDooConnectivity {
+        face: across,
+        reason: format!("it lies across an edge of F_F face {quad} but has {across_size} sides, not 4"),
+    };
+    trials.push(SeedTrial { seed_face: quad, class: "F_E".into(), outcome: Err(error.to_string()) });
+    let reason = format!(
+        "smallest total squared detail norm among 2 valid readings: {energy:.6e} against {:.6e} (seed {fv_seed})",
+        dual_energy
+    );
+    Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason })
 }
 
 #[cfg(test)]
@@ -299,6 +434,7 @@ mod tests {
             shapes::grid(4, 3, CellKind::Quads).unwrap(),
             shapes::grid(5, 4, CellKind::Mixed).unwrap(),
         ];
+        let mut automatic = 0;
         for soup in &soups {
             for rule in [FaceRule::DooSabin, FaceRule::Simple, FaceRule::CENTROID_HALF] {
                 let fine = refine(soup, rule);
@@ -307,12 +443,25 @@ mod tests {
                     let fast = reverse_canonical(&fine, &options).expect("canonical order");
                     assert_eq!(fast, general(&fine, &options), "seed {seed}");
                 }
-                // Not an F_F face, or no seed given: the general path decides.
+                // Not an F_F face: the general path decides.
                 let quad = soup.face_count();
                 assert!(reverse_canonical(&fine, &ReverseOptions::with_seed(rule, quad)).is_none());
-                assert!(reverse_canonical(&fine, &ReverseOptions::auto(rule)).is_none());
+                // No seed: the same choice as the general path's, when this path makes it.
+                let auto = ReverseOptions::auto(rule);
+                if let Some(fast) = reverse_canonical(&fine, &auto) {
+                    assert_eq!(fast, general(&fine, &auto));
+                    automatic += 1;
+                }
+                let exact = subdivide_soup(soup, &DooOptions::new(rule, 1)).unwrap().to_mesh().unwrap();
+                if let Some(fast) = reverse_canonical(&exact, &auto) {
+                    assert_eq!(fast, general(&exact, &auto));
+                    assert_eq!(fast.choices()[0].trials.len(), 1);
+                    automatic += 1;
+                }
             }
         }
+        // The closed meshes that are not all quads: cube (dual reading tried) and torus.
+        assert!(automatic >= 4, "{automatic}");
     }
 
     #[test]
