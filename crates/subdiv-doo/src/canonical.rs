@@ -22,8 +22,8 @@ use glam::DVec3;
 use crate::DooError;
 use crate::corner::{CornerMesh, NONE, expand_faces, next_of_corners};
 use crate::reverse::{
-    DooReversal, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial, check_coarse_manifold,
-    corners_by_vertex, means_and_details,
+    CornersByVertex, DooReversal, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial,
+    check_coarse_manifold, corners_by_vertex, means_and_details, means_and_details_with,
 };
 use crate::rule::FaceMaps;
 
@@ -168,8 +168,8 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     let mut labels = vec![NONE; vertices];
     let mut vertex_corner = Vec::with_capacity(faces - fv_first + 1);
     // The corners of the F_V faces in order, kept for the automatic choice.
-    let mut fv_vertices = Vec::with_capacity(if seed.is_none() { vertices } else { 0 });
-    let mut fv_sizes = Vec::with_capacity(if seed.is_none() { faces - fv_first } else { 0 });
+    let mut fv_vertices = Vec::with_capacity(vertices);
+    let mut fv_sizes = Vec::with_capacity(faces - fv_first);
     for (i, &first) in face_halfedge[fv_first..].iter().enumerate() {
         let x0 = to[(first ^ 1) as usize];
         let mut previous = x0;
@@ -185,9 +185,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
             }
             previous = x;
             size += 1;
-            if seed.is_none() {
-                fv_vertices.push(x);
-            }
+            fv_vertices.push(x);
             h = next[h as usize];
             if h == first {
                 break;
@@ -197,9 +195,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
             return None;
         }
         vertex_corner.push(x0);
-        if seed.is_none() {
-            fv_sizes.push(size);
-        }
+        fv_sizes.push(size);
     }
     let interior = vertex_corner.len();
     for c in 0..vertices as u32 {
@@ -246,14 +242,38 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         vertex_count: coarse_vertex_count,
         vertex_corner: Some(vertex_corner),
     };
-    let by_vertex = corners_by_vertex(&coarse);
+    let closed = candidate_edges == vertices;
+    let by_vertex = if closed {
+        // Every vertex is interior: its corners are those of its F_V face, sorted.
+        by_vertex_of_fv_faces(&fv_sizes, &fv_vertices)
+    } else {
+        corners_by_vertex(&coarse)
+    };
     let ff_faces: Vec<u32> = (0..ff).collect();
     check_coarse_manifold(&coarse, &ff_faces, &by_vertex).ok()?;
 
     let maps = FaceMaps::new(options.rule);
     let positions = fine.positions();
     let candidates = expand_faces(&coarse.offsets, &maps, |c| positions[c], Vec::new());
-    let (coarse_positions, details, vertex_energy) = means_and_details(&by_vertex, &candidates);
+    let fv = FvFaces { first: fv_first, sizes_of: &fv_sizes, vertices: &fv_vertices };
+    // The detail energy of the lowest face read as F_F (for the automatic choice): its
+    // groups are the F_V faces, in face order, each summed while its candidates are in
+    // cache for the means.
+    let automatic_closed = seed.is_none() && closed && quads > 0 && interior > 0;
+    let mut reading_energy = 0.0;
+    let mut group_start = 0;
+    let (coarse_positions, details, vertex_energy) = if automatic_closed {
+        means_and_details_with(&by_vertex, &candidates, |v| {
+            let group = &fv_vertices[group_start..group_start + fv_sizes[v] as usize];
+            group_start += group.len();
+            let mean = group.iter().map(|&v| candidates[v as usize]).sum::<DVec3>() / group.len() as f64;
+            for &v in group {
+                reading_energy += (candidates[v as usize] - mean).length_squared();
+            }
+        })
+    } else {
+        means_and_details(&by_vertex, &candidates)
+    };
     let (mut choice, stats) = match seed {
         Some(seed) => {
             let stats =
@@ -261,12 +281,11 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
             (SeedChoice::given(0, seed), stats)
         }
         None => {
-            if candidate_edges != vertices || quads == 0 || interior == 0 {
+            if !automatic_closed {
                 // Boundaries and the other cases of the automatic choice: general path.
                 return None;
             }
-            let fv = FvFaces { first: fv_first, sizes_of: &fv_sizes, vertices: &fv_vertices };
-            let mut choice = automatic(fine, &maps, &coarse.offsets, &candidates, &fv, quads)?;
+            let mut choice = automatic(fine, &maps, &coarse.offsets, reading_energy, &fv, quads)?;
             let visited = if choice.trials.len() == 1 { ff_count } else { ff_count + interior + 1 };
             let interpretations = choice.trials.iter().filter(|t| t.outcome.is_ok()).count();
             let edges_crossed = interpretations * vertices + choice.trials.len() - interpretations;
@@ -305,6 +324,32 @@ fn connected(offsets: &[u32], across: &[u32]) -> bool {
     count == faces
 }
 
+/// The corners of each coarse vertex in increasing order when every vertex is interior:
+/// vertex `i` has the corners of F_V face `i` (of sizes `sizes`, corners `vertices`).
+fn by_vertex_of_fv_faces(sizes: &[u32], vertices: &[u32]) -> CornersByVertex {
+    let mut offsets = Vec::with_capacity(sizes.len() + 1);
+    offsets.push(0u32);
+    let mut corners = vertices.to_vec();
+    let mut b = 0;
+    for &m in sizes {
+        let e = b + m as usize;
+        let group = &mut corners[b..e];
+        // Small groups (the valences): insertion sort.
+        for i in 1..group.len() {
+            let x = group[i];
+            let mut j = i;
+            while j > 0 && group[j - 1] > x {
+                group[j] = group[j - 1];
+                j -= 1;
+            }
+            group[j] = x;
+        }
+        offsets.push(e as u32);
+        b = e;
+    }
+    CornersByVertex::from_parts((offsets, corners))
+}
+
 /// The F_V faces of a canonical mesh: faces `first..`, their sizes and their corners.
 struct FvFaces<'a> {
     first: usize,
@@ -314,8 +359,8 @@ struct FvFaces<'a> {
 
 /// The automatic choice of the general path on a closed canonical mesh, made as it makes
 /// it (the same readings in the same order, the same sums in the same order, the same
-/// report): the lowest face as F_F (`candidates`: its expansion per coarse corner =
-/// fine vertex; its groups are the F_V faces), then, unless its details are all zero,
+/// report): the lowest face as F_F (`energy`, summed by the caller over its groups, the
+/// F_V faces), then, unless its details are all zero,
 /// the lowest F_V face as F_F (the dual reading: valid on a closed connected mesh, its
 /// groups are the F_F faces) and the lowest F_E quad as F_F (rejected at once when the
 /// face across its first edge is not a quad). `None` when that reading needs the full
@@ -324,7 +369,7 @@ fn automatic(
     fine: &HalfedgeMesh,
     maps: &FaceMaps,
     ff_offsets: &[u32],
-    candidates: &[DVec3],
+    energy: f64,
     fv: &FvFaces<'_>,
     quads: u32,
 ) -> Option<SeedChoice> {
@@ -338,17 +383,6 @@ fn automatic(
     }
     let scale = (hi - lo).length();
     let zero = |energy: f64| energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * faces as f64;
-    // The lowest face as F_F: groups are the F_V faces, in face order.
-    let mut energy = 0.0;
-    let mut b = 0;
-    for &m in fv.sizes_of {
-        let group = &fv.vertices[b..b + m as usize];
-        b += m as usize;
-        let mean = group.iter().map(|&v| candidates[v as usize]).sum::<DVec3>() / group.len() as f64;
-        for &v in group {
-            energy += (candidates[v as usize] - mean).length_squared();
-        }
-    }
     let mut trials = vec![SeedTrial { seed_face: 0, class: "F_F".into(), outcome: Ok(energy) }];
     if zero(energy) {
         let reason =
