@@ -152,7 +152,6 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     if !connected(&offsets, &across) {
         return None;
     }
-    drop(across);
     let coarse_next = next_of_corners(&offsets);
     debug_assert!(
         twins.iter().enumerate().all(|(c, &t)| t == NONE || twins[t as usize] == c as u32),
@@ -165,7 +164,9 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         NONE => NONE,
         t => coarse_next[t as usize],
     };
-    let mut labels = vec![NONE; vertices];
+    // The connectivity array is done with: its memory holds the labels.
+    let mut labels = across;
+    labels.fill(NONE);
     let mut vertex_corner = Vec::with_capacity(faces - fv_first + 1);
     // The corners of the F_V faces in order, kept for the automatic choice.
     let mut fv_vertices = Vec::with_capacity(vertices);
@@ -245,7 +246,8 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     let closed = candidate_edges == vertices;
     let by_vertex = if closed {
         // Every vertex is interior: its corners are those of its F_V face, sorted.
-        by_vertex_of_fv_faces(&fv_sizes, &fv_vertices)
+        let corners = if seed.is_some() { std::mem::take(&mut fv_vertices) } else { fv_vertices.clone() };
+        by_vertex_of_fv_faces(&fv_sizes, corners)
     } else {
         corners_by_vertex(&coarse)
     };
@@ -285,7 +287,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
                 // Boundaries and the other cases of the automatic choice: general path.
                 return None;
             }
-            let mut choice = automatic(fine, &maps, &coarse.offsets, reading_energy, &fv, quads)?;
+            let mut choice = automatic(fine, &maps, &coarse.offsets, reading_energy, &fv, quads, candidates)?;
             let visited = if choice.trials.len() == 1 { ff_count } else { ff_count + interior + 1 };
             let interpretations = choice.trials.iter().filter(|t| t.outcome.is_ok()).count();
             let edges_crossed = interpretations * vertices + choice.trials.len() - interpretations;
@@ -325,11 +327,11 @@ fn connected(offsets: &[u32], across: &[u32]) -> bool {
 }
 
 /// The corners of each coarse vertex in increasing order when every vertex is interior:
-/// vertex `i` has the corners of F_V face `i` (of sizes `sizes`, corners `vertices`).
-fn by_vertex_of_fv_faces(sizes: &[u32], vertices: &[u32]) -> CornersByVertex {
+/// vertex `i` has the corners of F_V face `i` (of sizes `sizes`, corners `corners`,
+/// sorted in place).
+fn by_vertex_of_fv_faces(sizes: &[u32], mut corners: Vec<u32>) -> CornersByVertex {
     let mut offsets = Vec::with_capacity(sizes.len() + 1);
     offsets.push(0u32);
-    let mut corners = vertices.to_vec();
     let mut b = 0;
     for &m in sizes {
         let e = b + m as usize;
@@ -372,6 +374,7 @@ fn automatic(
     energy: f64,
     fv: &FvFaces<'_>,
     quads: u32,
+    scratch: Vec<DVec3>,
 ) -> Option<SeedChoice> {
     let positions = fine.positions();
     let ff_count = ff_offsets.len() - 1;
@@ -400,7 +403,9 @@ fn automatic(
         return None;
     }
     // The dual reading: the F_V faces expanded, grouped by the F_F faces.
-    let mut dual = vec![DVec3::ZERO; positions.len()];
+    // Every vertex is on one F_V face: each entry of `scratch` is written.
+    let mut dual = scratch;
+    debug_assert_eq!(dual.len(), positions.len());
     let (mut points, mut expanded) = (Vec::new(), Vec::new());
     let mut b = 0;
     for &m in fv.sizes_of {
