@@ -379,18 +379,43 @@ fn automatic(
     let positions = fine.positions();
     let ff_count = ff_offsets.len() - 1;
     let faces = fine.face_count();
-    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    for &p in positions {
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
-    let scale = (hi - lo).length();
-    let zero = |energy: f64| energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * faces as f64;
     let mut trials = vec![SeedTrial { seed_face: 0, class: "F_F".into(), outcome: Ok(energy) }];
-    if zero(energy) {
+    let zero_choice = |trials| {
         let reason =
             "face 0 as F_F gives all details zero (exact Doo-Sabin refinement); no other reading tried".to_string();
-        return Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason });
+        Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason })
+    };
+    if energy == 0.0 {
+        // Zero at any scale.
+        return zero_choice(trials);
+    }
+    // The dual reading: the F_V faces expanded (every vertex is on one F_V face, so
+    // each entry of `scratch` is written), to be grouped by the F_F faces. The same pass
+    // gives the bounding box of all vertices, the scale of the zero test.
+    let mut dual = scratch;
+    debug_assert_eq!(dual.len(), positions.len());
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let (mut points, mut expanded) = (Vec::new(), Vec::new());
+    let mut b = 0;
+    for &m in fv.sizes_of {
+        let face = &fv.vertices[b..b + m as usize];
+        b += m as usize;
+        points.clear();
+        for &v in face {
+            let p = positions[v as usize];
+            lo = lo.min(p);
+            hi = hi.max(p);
+            points.push(p);
+        }
+        expanded.resize(points.len(), DVec3::ZERO);
+        maps.inverse(&points, &mut expanded);
+        for (&v, &p) in face.iter().zip(&expanded) {
+            dual[v as usize] = p;
+        }
+    }
+    let scale = (hi - lo).length();
+    if energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * faces as f64 {
+        return zero_choice(trials);
     }
     // The lowest F_E quad as F_F: the face across its first edge must be a quad.
     let quad = ff_count;
@@ -401,23 +426,6 @@ fn automatic(
         if across >= fv.first { fv.sizes_of[across - fv.first] } else { ff_offsets[across + 1] - ff_offsets[across] };
     if across_size == 4 {
         return None;
-    }
-    // The dual reading: the F_V faces expanded, grouped by the F_F faces.
-    // Every vertex is on one F_V face: each entry of `scratch` is written.
-    let mut dual = scratch;
-    debug_assert_eq!(dual.len(), positions.len());
-    let (mut points, mut expanded) = (Vec::new(), Vec::new());
-    let mut b = 0;
-    for &m in fv.sizes_of {
-        let face = &fv.vertices[b..b + m as usize];
-        b += m as usize;
-        points.clear();
-        points.extend(face.iter().map(|&v| positions[v as usize]));
-        expanded.resize(points.len(), DVec3::ZERO);
-        maps.inverse(&points, &mut expanded);
-        for (&v, &p) in face.iter().zip(&expanded) {
-            dual[v as usize] = p;
-        }
     }
     let mut dual_energy = 0.0;
     for w in ff_offsets.windows(2) {
