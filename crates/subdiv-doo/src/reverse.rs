@@ -66,6 +66,16 @@
 //! every valid class (usually two readings, F_F and F_V), so it costs about twice a
 //! reversal with a given seed.
 //!
+//! A mesh in the *canonical order* (as written by [`crate::subdivide`] or rebuilt by a
+//! pyramid: identity [`FineOrder`]) of one connected coarse mesh is reversed without the
+//! corner arrays, the search and the face matching: its numbering says which faces are
+//! F_F, F_E and F_V, and three streaming passes over the half-edge arrays check every
+//! fine face against it while they build the coarse mesh. This covers a given seed face
+//! and, on closed meshes, the automatic choice (the same readings evaluated with the same
+//! sums in the same order). The result is bit for bit the one of the general path; any
+//! mesh it does not fit (another order, a boundary in automatic mode, several
+//! components, a broken mesh) goes to the general path, which names the face at fault.
+//!
 //! # Boundaries and components
 //! Coarse boundary edges are the F_F edges on the fine boundary (the default boundary
 //! rule of [`crate::forward`] puts nothing else there). Several connected components are
