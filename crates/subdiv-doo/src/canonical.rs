@@ -27,7 +27,8 @@ use crate::reverse::{
 };
 use crate::rule::FaceMaps;
 
-/// The reversal of `fine` with the one given seed of `options`, if `fine` is a valid
+/// The reversal of `fine` with the one given seed of `options` (or none, see
+/// [`automatic`]), if every position is finite and `fine` is a valid
 /// Doo-Sabin refinement of one connected coarse mesh in the canonical order and the seed
 /// is one of its F_F faces; `None` otherwise (the general path then decides).
 ///
@@ -276,6 +277,11 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     } else {
         means_and_details(&by_vertex, &candidates)
     };
+    // Every fine position is in some coarse vertex's mean: a position that is not
+    // finite makes a mean that is not (the general path reports it).
+    if !coarse_positions.iter().all(|p| p.is_finite()) {
+        return None;
+    }
     let (mut choice, stats) = match seed {
         Some(seed) => {
             let stats =
@@ -509,6 +515,24 @@ mod tests {
         }
         // The closed meshes that are not all quads: cube (dual reading tried) and torus.
         assert!(automatic >= 4, "{automatic}");
+    }
+
+    #[test]
+    fn a_position_that_is_not_finite_is_left_to_the_general_check() {
+        let mut fine = refine(&shapes::torus(5, 4, CellKind::Triangles).unwrap(), FaceRule::DooSabin);
+        fine.positions_mut()[17].y = f64::NAN;
+        fine.positions_mut()[40].z = f64::INFINITY;
+        for options in [ReverseOptions::with_seed(FaceRule::DooSabin, 0), ReverseOptions::auto(FaceRule::DooSabin)] {
+            assert!(reverse_canonical(&fine, &options).is_none());
+            let error = crate::reverse(&fine, &options).unwrap_err();
+            assert!(matches!(error, DooError::NonFinite { vertex: 17, .. }), "{error}");
+            let decompose = crate::DecomposeOptions {
+                seeds: options.seeds.clone(),
+                ..crate::DecomposeOptions::levels(FaceRule::DooSabin, 1)
+            };
+            let error = crate::decompose(&fine, &decompose).unwrap_err();
+            assert!(matches!(error, DooError::NonFinite { vertex: 17, .. }), "{error}");
+        }
     }
 
     #[test]

@@ -151,13 +151,17 @@ pub const MAX_LEVELS: u32 = 32;
 /// The errors of [`crate::reverse`](mod@crate::reverse) for the first level; for [`Depth::Levels`], also
 /// for any further level (the error says which level failed).
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
-    check_finite(mesh.positions())?;
     if options.depth == Depth::Levels(0) {
+        check_finite(mesh.positions())?;
         return Err(DooError::InvalidParameter { name: "levels", value: 0.0, reason: "decompose at least one level" });
     }
-    // A mesh in the canonical order with its seed given: the first level without the
-    // general search (the same result; `None` when it does not apply).
+    // A mesh in the canonical order: the first level without the general search (the
+    // same result; `None` when it does not apply, also when a position is not finite,
+    // so that the check below names it).
     let first = crate::canonical::reverse_canonical(mesh, &reverse_options(options, 0)).map(Step::from_reversal);
+    if first.is_none() {
+        check_finite(mesh.positions())?;
+    }
     let mut steps = Vec::new();
     let mut stopped = None;
     match options.depth {

@@ -316,10 +316,11 @@ impl DooReversal {
 /// mesh without faces; [`DooError::NonFinite`]; [`DooError::SeedOutOfRange`] and [`DooError::DuplicateSeed`] for bad seeds;
 /// [`DooError::InvalidParameter`] for a bad centroid parameter.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
-    check_finite(fine.positions())?;
+    // `None` also when a position is not finite, so that the check below names it.
     if let Some(reversal) = crate::canonical::reverse_canonical(fine, options) {
         return Ok(reversal);
     }
+    check_finite(fine.positions())?;
     let corners = CornerMesh::from_halfedge(fine);
     reverse_corner_mesh(&corners, fine.positions(), options)
 }
