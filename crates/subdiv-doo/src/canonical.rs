@@ -100,7 +100,8 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
                 let q1 = next[hb as usize];
                 let hf = next[q1 as usize];
                 let q3 = next[hf as usize];
-                if next[q3 as usize] != hb {
+                if next[q3 as usize] != hb || hf == hb {
+                    // Not a 4-cycle.
                     return None;
                 }
                 let far_face = face_of[(hf ^ 1) as usize];
