@@ -492,8 +492,8 @@ impl HalfedgeMesh {
         &self.halfedge_face
     }
 
-    /// Raw array of each face's first half-edge (the one leaving its first corner), one
-    /// entry per face.
+    /// Raw array of the half-edge leaving each face's first corner, one entry per face
+    /// (see [`face_halfedge`](Self::face_halfedge)).
     #[inline]
     pub fn raw_face_halfedges(&self) -> &[u32] {
         &self.face_halfedge
