@@ -4,7 +4,9 @@
 //! `doo_multires` times one reverse step (`decompose`, one level; automatic choice of the
 //! reading, and with a given seed face) and its reconstruction at four sizes, next to the
 //! forward step of the same size; the throughput is in fine vertices, so a flat
-//! elements-per-second figure across sizes is linear time.
+//! elements-per-second figure across sizes is linear time. The fine meshes are written
+//! by `subdivide`, so they are in the canonical order (the fast path of the reversal);
+//! `decompose_renumbered` times the general path on the same mesh renumbered.
 //!
 //! "The forward Doo-Sabin step of the same size" is one level of subdivision of the
 //! coarse mesh, to the very fine mesh (connectivity and positions) that `decompose` takes
@@ -26,6 +28,7 @@ use std::time::Duration;
 use criterion::Throughput;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use mesh_topo::shapes::{self, CellKind};
+use mesh_topo::testing::scramble;
 use mesh_topo::{DVec3, HalfedgeMesh, PolygonSoup};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -127,6 +130,14 @@ fn multires(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("decompose_seed_1thread", fine_vertices), &fine, |b, fine| {
             b.iter(|| one.install(|| decompose(black_box(fine), &seeded).unwrap()))
         });
+        // The same mesh with its vertices renumbered and its faces rotated: not in the
+        // canonical order, so the general path (search and face matching) runs.
+        let renumbered = HalfedgeMesh::from_soup(&scramble(fine.to_soup(), 7, 0.0)).unwrap();
+        group.bench_with_input(
+            BenchmarkId::new("decompose_renumbered_1thread", fine_vertices),
+            &renumbered,
+            |b, fine| b.iter(|| one.install(|| decompose(black_box(fine), &options).unwrap())),
+        );
         let coarse_soup = coarse.to_soup();
         group.bench_with_input(BenchmarkId::new("forward_soup_1thread", fine_vertices), &coarse_soup, |b, soup| {
             b.iter(|| one.install(|| subdivide_soup(black_box(soup), &forward_options).unwrap()))

@@ -5,6 +5,7 @@
 //! - [`analysis`]: the local subdivision matrix, its spectrum and Reif's C1 check.
 
 pub mod analysis;
+mod canonical;
 mod corner;
 mod error;
 pub mod forward;

@@ -151,20 +151,41 @@ pub const MAX_LEVELS: u32 = 32;
 /// The errors of [`crate::reverse`](mod@crate::reverse) for the first level; for [`Depth::Levels`], also
 /// for any further level (the error says which level failed).
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
-    check_finite(mesh.positions())?;
     if options.depth == Depth::Levels(0) {
+        check_finite(mesh.positions())?;
         return Err(DooError::InvalidParameter { name: "levels", value: 0.0, reason: "decompose at least one level" });
     }
-    let corners = CornerMesh::from_halfedge(mesh);
+    // A mesh in the canonical order: the first level without the general search (the
+    // same result; `None` when it does not apply, also when a position is not finite,
+    // so that the check below names it).
+    let first = crate::canonical::reverse_canonical(mesh, &reverse_options(options, 0)).map(Step::from_reversal);
+    if first.is_none() {
+        check_finite(mesh.positions())?;
+    }
     let mut steps = Vec::new();
     let mut stopped = None;
     match options.depth {
         Depth::Levels(n) => {
-            steps = descend(&corners, mesh.positions(), options, 0, n)?;
+            steps = match first {
+                Some(step) => {
+                    let rest = descend(&step.coarse, &step.coarse_positions, options, 1, n)?;
+                    let mut steps = vec![step];
+                    steps.extend(rest);
+                    steps
+                }
+                None => descend(&CornerMesh::from_halfedge(mesh), mesh.positions(), options, 0, n)?,
+            };
         }
         Depth::Max => {
-            let mut current = (corners, mesh.positions().to_vec());
-            for level in 0..MAX_LEVELS {
+            let (mut current, start) = match first {
+                Some(step) => {
+                    let current = (step.coarse.clone(), step.coarse_positions.clone());
+                    steps.push(step);
+                    (current, 1)
+                }
+                None => ((CornerMesh::from_halfedge(mesh), mesh.positions().to_vec()), 0),
+            };
+            for level in start..MAX_LEVELS {
                 let step = match greedy_step(&current.0, &current.1, options, level) {
                     Ok(step) => step,
                     Err(error) if level > 0 => {

@@ -66,6 +66,16 @@
 //! every valid class (usually two readings, F_F and F_V), so it costs about twice a
 //! reversal with a given seed.
 //!
+//! A mesh in the *canonical order* (as written by [`crate::subdivide`] or rebuilt by a
+//! pyramid: identity [`FineOrder`]) of one connected coarse mesh is reversed without the
+//! corner arrays, the search and the face matching: its numbering says which faces are
+//! F_F, F_E and F_V, and three streaming passes over the half-edge arrays check every
+//! fine face against it while they build the coarse mesh. This covers a given seed face
+//! and, on closed meshes, the automatic choice (the same readings evaluated with the same
+//! sums in the same order). The result is bit for bit the one of the general path; any
+//! mesh it does not fit (another order, a boundary in automatic mode, several
+//! components, a broken mesh) goes to the general path, which names the face at fault.
+//!
 //! # Boundaries and components
 //! Coarse boundary edges are the F_F edges on the fine boundary (the default boundary
 //! rule of [`crate::forward`] puts nothing else there). Several connected components are
@@ -177,7 +187,7 @@ pub struct SeedChoice {
 }
 
 impl SeedChoice {
-    fn given(component: usize, seed_face: usize) -> Self {
+    pub(crate) fn given(component: usize, seed_face: usize) -> Self {
         SeedChoice {
             component,
             seed_face,
@@ -265,6 +275,18 @@ impl DooReversal {
         PolygonSoup { positions, offsets: mesh.offsets, indices: mesh.corner_vertex }
     }
 
+    pub(crate) fn from_parts(
+        rule: FaceRule,
+        coarse: CornerMesh,
+        coarse_positions: Vec<DVec3>,
+        details: Vec<DVec3>,
+        order: FineOrder,
+        choices: Vec<SeedChoice>,
+        stats: ReverseStats,
+    ) -> Self {
+        Self { rule, coarse, coarse_positions, details, order, choices, stats }
+    }
+
     pub(crate) fn into_parts(self) -> (CornerMesh, Vec<DVec3>, Vec<DVec3>, FineOrder, Vec<SeedChoice>) {
         (self.coarse, self.coarse_positions, self.details, self.order, self.choices)
     }
@@ -294,6 +316,10 @@ impl DooReversal {
 /// mesh without faces; [`DooError::NonFinite`]; [`DooError::SeedOutOfRange`] and [`DooError::DuplicateSeed`] for bad seeds;
 /// [`DooError::InvalidParameter`] for a bad centroid parameter.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
+    // `None` also when a position is not finite, so that the check below names it.
+    if let Some(reversal) = crate::canonical::reverse_canonical(fine, options) {
+        return Ok(reversal);
+    }
     check_finite(fine.positions())?;
     let corners = CornerMesh::from_halfedge(fine);
     reverse_corner_mesh(&corners, fine.positions(), options)
@@ -1301,12 +1327,26 @@ fn details_offset(by_vertex: &CornersByVertex, v: usize) -> usize {
 
 /// Coarse vertex = mean of its candidates; details = prefix sums of the offsets; and each
 /// vertex's squared detail norm `Σ |d_i|²` (one pass over the candidates).
-fn means_and_details(by_vertex: &CornersByVertex, candidates: &[DVec3]) -> (Vec<DVec3>, Vec<DVec3>, Vec<f64>) {
+pub(crate) fn means_and_details(
+    by_vertex: &CornersByVertex,
+    candidates: &[DVec3],
+) -> (Vec<DVec3>, Vec<DVec3>, Vec<f64>) {
+    means_and_details_with(by_vertex, candidates, |_| {})
+}
+
+/// [`means_and_details`], calling `before(v)` before vertex `v` is summed (so that a
+/// caller can read the same candidates while they are in cache).
+pub(crate) fn means_and_details_with(
+    by_vertex: &CornersByVertex,
+    candidates: &[DVec3],
+    mut before: impl FnMut(usize),
+) -> (Vec<DVec3>, Vec<DVec3>, Vec<f64>) {
     let vertices = by_vertex.offsets.len() - 1;
     let mut means = Vec::with_capacity(vertices);
     let mut details = Vec::with_capacity(by_vertex.corners.len() - vertices);
     let mut energies = Vec::with_capacity(vertices);
-    for corners in by_vertex.iter() {
+    for (v, corners) in by_vertex.iter().enumerate() {
+        before(v);
         let mean = corners.iter().map(|&c| candidates[c as usize]).sum::<DVec3>() / corners.len() as f64;
         means.push(mean);
         let mut prefix = DVec3::ZERO;
@@ -1356,7 +1396,11 @@ fn coarse_vertex_order(coarse: &CornerMesh, vertex_face: &[u32], faces: usize) -
 
 /// The coarse mesh must be a valid manifold mesh: no face visits a vertex twice, and no
 /// two edges join the same two vertices. `by_vertex`: the corners of each vertex.
-fn check_coarse_manifold(coarse: &CornerMesh, ff_faces: &[u32], by_vertex: &CornersByVertex) -> Result<(), DooError> {
+pub(crate) fn check_coarse_manifold(
+    coarse: &CornerMesh,
+    ff_faces: &[u32],
+    by_vertex: &CornersByVertex,
+) -> Result<(), DooError> {
     let mut stamp = vec![NONE; coarse.vertex_count];
     for (f, &ff) in ff_faces.iter().enumerate() {
         for c in coarse.offsets[f]..coarse.offsets[f + 1] {

@@ -1,0 +1,570 @@
+//! The reversal of a fine mesh in the canonical order of [`crate::forward`], with a given
+//! seed face, read straight from the half-edge arrays.
+//!
+//! A mesh written by [`crate::subdivide`] (or rebuilt by a pyramid) numbers its fine
+//! vertices as the coarse corners and lists its faces as the F_F faces (coarse faces in
+//! order, corner `i` of coarse face `k` being fine vertex `offsets[k] + i`), then the F_E
+//! quads (one per interior coarse edge, in order of its smaller corner), then the F_V
+//! faces (one per interior coarse vertex). For such a mesh the coarse mesh follows from
+//! the numbering: the F_F faces, the twins across the F_E quads and the coarse vertices
+//! from the F_V faces are found in three streaming passes over the half-edge arrays,
+//! without the corner arrays of the general path, its search and its face matching.
+//!
+//! Every fine face is still checked, and every check of the general path is either made
+//! here or follows from the ones made (see [`reverse_canonical`]): the result is the one
+//! the general path gives, bit for bit. Any mismatch (a mesh in another order, a broken
+//! mesh) makes this path give up, and the general path runs and names the face at fault.
+
+use mesh_topo::HalfedgeMesh;
+
+use glam::DVec3;
+
+use crate::DooError;
+use crate::corner::{CornerMesh, NONE, expand_faces, next_of_corners};
+use crate::reverse::{
+    CornersByVertex, DooReversal, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial,
+    check_coarse_manifold, corners_by_vertex, means_and_details, means_and_details_with,
+};
+use crate::rule::FaceMaps;
+
+/// The reversal of `fine` with the one given seed of `options` (or none, see
+/// [`automatic`]), if every position is finite and `fine` is a valid
+/// Doo-Sabin refinement of one connected coarse mesh in the canonical order and the seed
+/// is one of its F_F faces; `None` otherwise (the general path then decides).
+///
+/// The checks, and why they are enough for the general path to give the same result:
+/// - the first faces use the vertices `0, 1, 2, ..` in order, each once, up to the last
+///   vertex: they are the F_F faces, every vertex is on exactly one, and fine vertex `c`
+///   is coarse corner `c` (the order of the F_F faces in increasing face order);
+/// - across each F_F edge not on the boundary lies a face that is a 4-cycle whose opposite
+///   edge is not on the boundary and belongs to an F_F face: as each vertex is on one F_F
+///   face, once, the far half-edge is the F_F edge of the twin corner, so the twins are an
+///   involution and both sides see the same quad (the checks of the search and of the
+///   coarse twins hold);
+/// - the quads, met from their smaller corner in corner order, are the faces right after
+///   the F_F faces, in that order, each starting at that corner (the canonical F_E quads,
+///   unrotated, each claimed once, none an F_F face);
+/// - all remaining faces are F_V faces: each, starting at its smallest corner, is the full
+///   orbit, counter-clockwise, of one interior coarse vertex, and each corner is on one of
+///   them at most; the corners on none form open walks (boundary vertices). This gives the
+///   coarse vertices and their numbering (interior vertices as their F_V faces, then the
+///   boundary vertices by first corner) and the F_V matching;
+/// - the coarse mesh is connected (one component: the given seed covers the mesh), the
+///   seed is an F_F face, and the coarse mesh passes the same manifold check.
+pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -> Option<DooReversal> {
+    let seed = match options.seeds[..] {
+        [seed] => Some(seed),
+        [] => None,
+        _ => return None,
+    };
+    options.rule.validate().ok()?;
+    let to = fine.raw_halfedge_targets();
+    let next = fine.raw_halfedge_next();
+    let face_of = fine.raw_halfedge_faces();
+    let face_halfedge = fine.raw_face_halfedges();
+    let vertices = fine.vertex_count();
+    let faces = face_halfedge.len();
+    if vertices == 0 || vertices >= NONE as usize || faces >= NONE as usize {
+        return None;
+    }
+
+    // F_F faces and coarse twins, one walk around each F_F face.
+    let mut offsets = Vec::with_capacity(vertices / 3 + 2);
+    offsets.push(0u32);
+    let mut twins = Vec::with_capacity(vertices);
+    // The F_F face across each coarse edge (for the connectivity check).
+    let mut across = Vec::with_capacity(vertices);
+    let mut quads = 0u32;
+    let mut quad_base = 0u32;
+    let mut far_max = 0u32;
+    let mut c = 0u32;
+    while (c as usize) < vertices {
+        let k = offsets.len() - 1;
+        if k >= faces {
+            return None;
+        }
+        let first = face_halfedge[k];
+        let start = c;
+        if to[(first ^ 1) as usize] != start {
+            return None;
+        }
+        let mut h = first;
+        loop {
+            // Corner `c` of the face, its half-edge `h` leaving vertex `c`.
+            let hb = h ^ 1;
+            let g = face_of[hb as usize];
+            if g == NONE {
+                twins.push(NONE);
+                across.push(NONE);
+            } else {
+                let q1 = next[hb as usize];
+                let hf = next[q1 as usize];
+                let q3 = next[hf as usize];
+                if next[q3 as usize] != hb || hf == hb {
+                    // Not a 4-cycle.
+                    return None;
+                }
+                let far_face = face_of[(hf ^ 1) as usize];
+                if far_face == NONE {
+                    return None;
+                }
+                let t = to[hf as usize];
+                if t > c {
+                    // The quad is claimed from its smaller corner, in corner order.
+                    if quads == 0 {
+                        quad_base = g;
+                    } else if g != quad_base.wrapping_add(quads) {
+                        return None;
+                    }
+                    if face_halfedge[g as usize] != q1 {
+                        return None;
+                    }
+                    quads += 1;
+                } else if t == c {
+                    return None;
+                }
+                far_max = far_max.max(far_face);
+                twins.push(t);
+                across.push(far_face);
+            }
+            let target = to[h as usize];
+            h = next[h as usize];
+            c += 1;
+            if h == first {
+                if target != start {
+                    return None;
+                }
+                break;
+            }
+            if target != c || c as usize >= vertices {
+                return None;
+            }
+        }
+        offsets.push(c);
+    }
+    let ff_count = offsets.len() - 1;
+    let ff = ff_count as u32;
+    if seed.is_some_and(|seed| seed >= ff_count) || far_max >= ff || (quads > 0 && quad_base != ff) {
+        return None;
+    }
+    let fv_first = ff_count + quads as usize;
+    if fv_first > faces {
+        return None;
+    }
+    if !connected(&offsets, &across) {
+        return None;
+    }
+    let coarse_next = next_of_corners(&offsets);
+    debug_assert!(
+        twins.iter().enumerate().all(|(c, &t)| t == NONE || twins[t as usize] == c as u32),
+        "internal: canonical twins are an involution"
+    );
+
+    // Interior coarse vertices from the F_V faces (vertex `i` is F_V face `i`), then the
+    // boundary vertices in order of their first corner.
+    let clockwise = |x: u32| match twins[x as usize] {
+        NONE => NONE,
+        t => coarse_next[t as usize],
+    };
+    // The connectivity array is done with: its memory holds the labels.
+    let mut labels = across;
+    labels.fill(NONE);
+    let mut vertex_corner = Vec::with_capacity(faces - fv_first + 1);
+    // The corners of the F_V faces in order, kept for the automatic choice.
+    let mut fv_vertices = Vec::with_capacity(vertices);
+    let mut fv_sizes = Vec::with_capacity(faces - fv_first);
+    for (i, &first) in face_halfedge[fv_first..].iter().enumerate() {
+        let x0 = to[(first ^ 1) as usize];
+        let mut previous = x0;
+        let mut h = first;
+        let mut size = 0u32;
+        loop {
+            let x = to[(h ^ 1) as usize];
+            if std::mem::replace(&mut labels[x as usize], i as u32) != NONE || x < x0 {
+                return None;
+            }
+            if size > 0 && clockwise(x) != previous {
+                return None;
+            }
+            previous = x;
+            size += 1;
+            fv_vertices.push(x);
+            h = next[h as usize];
+            if h == first {
+                break;
+            }
+        }
+        if size < 3 || clockwise(x0) != previous {
+            return None;
+        }
+        vertex_corner.push(x0);
+        fv_sizes.push(size);
+    }
+    let interior = vertex_corner.len();
+    for c in 0..vertices as u32 {
+        if labels[c as usize] != NONE {
+            continue;
+        }
+        let label = vertex_corner.len() as u32;
+        labels[c as usize] = label;
+        vertex_corner.push(c);
+        let mut x = c;
+        loop {
+            x = clockwise(x);
+            if x == NONE {
+                break;
+            }
+            if std::mem::replace(&mut labels[x as usize], label) != NONE {
+                // A closed orbit without its F_V face, or not a walk.
+                return None;
+            }
+        }
+        let mut x = c;
+        loop {
+            let mut p = x;
+            while coarse_next[p as usize] != x {
+                p = coarse_next[p as usize];
+            }
+            x = twins[p as usize];
+            if x == NONE {
+                break;
+            }
+            if std::mem::replace(&mut labels[x as usize], label) != NONE {
+                return None;
+            }
+        }
+    }
+
+    let coarse_vertex_count = vertex_corner.len();
+    let candidate_edges = twins.iter().filter(|&&t| t != NONE).count();
+    let coarse = CornerMesh {
+        offsets,
+        corner_vertex: labels,
+        corner_twin: twins,
+        corner_next: coarse_next,
+        vertex_count: coarse_vertex_count,
+        vertex_corner: Some(vertex_corner),
+    };
+    let closed = candidate_edges == vertices;
+    let by_vertex = if closed {
+        // Every vertex is interior: its corners are those of its F_V face, sorted.
+        let corners = if seed.is_some() { std::mem::take(&mut fv_vertices) } else { fv_vertices.clone() };
+        by_vertex_of_fv_faces(&fv_sizes, corners)
+    } else {
+        corners_by_vertex(&coarse)
+    };
+    let ff_faces: Vec<u32> = (0..ff).collect();
+    check_coarse_manifold(&coarse, &ff_faces, &by_vertex).ok()?;
+
+    let maps = FaceMaps::new(options.rule);
+    let positions = fine.positions();
+    let candidates = expand_faces(&coarse.offsets, &maps, |c| positions[c], Vec::new());
+    let fv = FvFaces { first: fv_first, sizes_of: &fv_sizes, vertices: &fv_vertices };
+    // The detail energy of the lowest face read as F_F (for the automatic choice): its
+    // groups are the F_V faces, in face order, each summed while its candidates are in
+    // cache for the means.
+    let automatic_closed = seed.is_none() && closed && quads > 0 && interior > 0;
+    let mut reading_energy = 0.0;
+    let mut group_start = 0;
+    let (coarse_positions, details, vertex_energy) = if automatic_closed {
+        means_and_details_with(&by_vertex, &candidates, |v| {
+            let group = &fv_vertices[group_start..group_start + fv_sizes[v] as usize];
+            group_start += group.len();
+            let mean = group.iter().map(|&v| candidates[v as usize]).sum::<DVec3>() / group.len() as f64;
+            for &v in group {
+                reading_energy += (candidates[v as usize] - mean).length_squared();
+            }
+        })
+    } else {
+        means_and_details(&by_vertex, &candidates)
+    };
+    // Every fine position is in some coarse vertex's mean: a position that is not
+    // finite makes a mean that is not (the general path reports it).
+    if !coarse_positions.iter().all(|p| p.is_finite()) {
+        return None;
+    }
+    let (mut choice, stats) = match seed {
+        Some(seed) => {
+            let stats =
+                ReverseStats { visited_faces: ff_count, edges_crossed: vertices, candidate_edges, interpretations: 0 };
+            (SeedChoice::given(0, seed), stats)
+        }
+        None => {
+            if !automatic_closed {
+                // Boundaries and the other cases of the automatic choice: general path.
+                return None;
+            }
+            let mut choice = automatic(fine, &maps, &coarse.offsets, reading_energy, &fv, quads, candidates)?;
+            let visited = if choice.trials.len() == 1 { ff_count } else { ff_count + interior + 1 };
+            let interpretations = choice.trials.iter().filter(|t| t.outcome.is_ok()).count();
+            let edges_crossed = interpretations * vertices + choice.trials.len() - interpretations;
+            choice.component = 0;
+            (choice, ReverseStats { visited_faces: visited, edges_crossed, candidate_edges, interpretations })
+        }
+    };
+    choice.detail_energy = vertex_energy.iter().sum();
+    Some(DooReversal::from_parts(
+        options.rule,
+        coarse,
+        coarse_positions,
+        details,
+        FineOrder::default(),
+        vec![choice],
+        stats,
+    ))
+}
+
+/// Whether the coarse faces (`offsets`) form one component across the coarse edges
+/// (`across[c]`: the face across corner `c`'s edge, or [`NONE`]).
+fn connected(offsets: &[u32], across: &[u32]) -> bool {
+    let faces = offsets.len() - 1;
+    let mut seen = vec![false; faces];
+    let mut stack = vec![0u32];
+    seen[0] = true;
+    let mut count = 1;
+    while let Some(f) = stack.pop() {
+        for &g in &across[offsets[f as usize] as usize..offsets[f as usize + 1] as usize] {
+            if g != NONE && !std::mem::replace(&mut seen[g as usize], true) {
+                count += 1;
+                stack.push(g);
+            }
+        }
+    }
+    count == faces
+}
+
+/// The corners of each coarse vertex in increasing order when every vertex is interior:
+/// vertex `i` has the corners of F_V face `i` (of sizes `sizes`, corners `corners`,
+/// sorted in place).
+fn by_vertex_of_fv_faces(sizes: &[u32], mut corners: Vec<u32>) -> CornersByVertex {
+    let mut offsets = Vec::with_capacity(sizes.len() + 1);
+    offsets.push(0u32);
+    let mut b = 0;
+    for &m in sizes {
+        let e = b + m as usize;
+        let group = &mut corners[b..e];
+        // Small groups (the valences): insertion sort.
+        for i in 1..group.len() {
+            let x = group[i];
+            let mut j = i;
+            while j > 0 && group[j - 1] > x {
+                group[j] = group[j - 1];
+                j -= 1;
+            }
+            group[j] = x;
+        }
+        offsets.push(e as u32);
+        b = e;
+    }
+    CornersByVertex::from_parts((offsets, corners))
+}
+
+/// The F_V faces of a canonical mesh: faces `first..`, their sizes and their corners.
+struct FvFaces<'a> {
+    first: usize,
+    sizes_of: &'a [u32],
+    vertices: &'a [u32],
+}
+
+/// The automatic choice of the general path on a closed canonical mesh, made as it makes
+/// it (the same readings in the same order, the same sums in the same order, the same
+/// report): the lowest face as F_F (`energy`, summed by the caller over its groups, the
+/// F_V faces), then, unless its details are all zero,
+/// the lowest F_V face as F_F (the dual reading: valid on a closed connected mesh, its
+/// groups are the F_F faces) and the lowest F_E quad as F_F (rejected at once when the
+/// face across its first edge is not a quad). `None` when that reading needs the full
+/// search, or when the dual reading wins (the general path builds it).
+fn automatic(
+    fine: &HalfedgeMesh,
+    maps: &FaceMaps,
+    ff_offsets: &[u32],
+    energy: f64,
+    fv: &FvFaces<'_>,
+    quads: u32,
+    scratch: Vec<DVec3>,
+) -> Option<SeedChoice> {
+    let positions = fine.positions();
+    let ff_count = ff_offsets.len() - 1;
+    let faces = fine.face_count();
+    let mut trials = vec![SeedTrial { seed_face: 0, class: "F_F".into(), outcome: Ok(energy) }];
+    let zero_choice = |trials| {
+        let reason =
+            "face 0 as F_F gives all details zero (exact Doo-Sabin refinement); no other reading tried".to_string();
+        Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason })
+    };
+    if energy == 0.0 {
+        // Zero at any scale.
+        return zero_choice(trials);
+    }
+    // The dual reading: the F_V faces expanded (every vertex is on one F_V face, so
+    // each entry of `scratch` is written), to be grouped by the F_F faces. The same pass
+    // gives the bounding box of all vertices, the scale of the zero test.
+    let mut dual = scratch;
+    debug_assert_eq!(dual.len(), positions.len());
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let (mut points, mut expanded) = (Vec::new(), Vec::new());
+    let mut b = 0;
+    for &m in fv.sizes_of {
+        let face = &fv.vertices[b..b + m as usize];
+        b += m as usize;
+        points.clear();
+        for &v in face {
+            let p = positions[v as usize];
+            lo = lo.min(p);
+            hi = hi.max(p);
+            points.push(p);
+        }
+        expanded.resize(points.len(), DVec3::ZERO);
+        maps.inverse(&points, &mut expanded);
+        for (&v, &p) in face.iter().zip(&expanded) {
+            dual[v as usize] = p;
+        }
+    }
+    let scale = (hi - lo).length();
+    if energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * faces as f64 {
+        return zero_choice(trials);
+    }
+    // The lowest F_E quad as F_F: the face across its first edge must be a quad.
+    let quad = ff_count;
+    debug_assert!(quads > 0);
+    let h = fine.raw_face_halfedges()[quad];
+    let across = fine.raw_halfedge_faces()[(h ^ 1) as usize] as usize;
+    let across_size =
+        if across >= fv.first { fv.sizes_of[across - fv.first] } else { ff_offsets[across + 1] - ff_offsets[across] };
+    if across_size == 4 {
+        return None;
+    }
+    let mut dual_energy = 0.0;
+    for w in ff_offsets.windows(2) {
+        let group = &dual[w[0] as usize..w[1] as usize];
+        let mean = group.iter().copied().sum::<DVec3>() / group.len() as f64;
+        for &c in group {
+            dual_energy += (c - mean).length_squared();
+        }
+    }
+    if dual_energy < energy {
+        return None;
+    }
+    let fv_seed = fv.first;
+    trials.push(SeedTrial { seed_face: fv_seed, class: "F_V".into(), outcome: Ok(dual_energy) });
+    let error = DooError::NotDooConnectivity {
+        face: across,
+        reason: format!("it lies across an edge of F_F face {quad} but has {across_size} sides, not 4"),
+    };
+    trials.push(SeedTrial { seed_face: quad, class: "F_E".into(), outcome: Err(error.to_string()) });
+    let reason = format!(
+        "smallest total squared detail norm among 2 valid readings: {energy:.6e} against {:.6e} (seed {fv_seed})",
+        dual_energy
+    );
+    Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reverse::reverse_corner_mesh;
+    use crate::{DooOptions, FaceRule, subdivide_soup};
+    use mesh_topo::shapes::{self, CellKind};
+    use mesh_topo::{PolygonSoup, testing::scramble};
+
+    fn general(fine: &HalfedgeMesh, options: &ReverseOptions) -> DooReversal {
+        reverse_corner_mesh(&CornerMesh::from_halfedge(fine), fine.positions(), options).unwrap()
+    }
+
+    fn refine(soup: &PolygonSoup, rule: FaceRule) -> HalfedgeMesh {
+        let mut fine = subdivide_soup(soup, &DooOptions::new(rule, 1)).unwrap().to_mesh().unwrap();
+        for (i, p) in fine.positions_mut().iter_mut().enumerate() {
+            p.x += 1e-3 * ((i * 7919) % 13) as f64;
+        }
+        fine
+    }
+
+    #[test]
+    fn a_canonical_mesh_gives_the_general_result() {
+        let soups = [
+            shapes::cube(),
+            shapes::torus(7, 5, CellKind::Triangles).unwrap(),
+            shapes::torus(6, 4, CellKind::Mixed).unwrap(),
+            shapes::grid(4, 3, CellKind::Quads).unwrap(),
+            shapes::grid(5, 4, CellKind::Mixed).unwrap(),
+        ];
+        let mut automatic = 0;
+        for soup in &soups {
+            for rule in [FaceRule::DooSabin, FaceRule::Simple, FaceRule::CENTROID_HALF] {
+                let fine = refine(soup, rule);
+                for seed in [0, 1, soup.face_count() - 1] {
+                    let options = ReverseOptions::with_seed(rule, seed);
+                    let fast = reverse_canonical(&fine, &options).expect("canonical order");
+                    assert_eq!(fast, general(&fine, &options), "seed {seed}");
+                }
+                // Not an F_F face: the general path decides.
+                let quad = soup.face_count();
+                assert!(reverse_canonical(&fine, &ReverseOptions::with_seed(rule, quad)).is_none());
+                // No seed: the same choice as the general path's, when this path makes it.
+                let auto = ReverseOptions::auto(rule);
+                if let Some(fast) = reverse_canonical(&fine, &auto) {
+                    assert_eq!(fast, general(&fine, &auto));
+                    automatic += 1;
+                }
+                let exact = subdivide_soup(soup, &DooOptions::new(rule, 1)).unwrap().to_mesh().unwrap();
+                if let Some(fast) = reverse_canonical(&exact, &auto) {
+                    assert_eq!(fast, general(&exact, &auto));
+                    assert_eq!(fast.choices()[0].trials.len(), 1);
+                    automatic += 1;
+                }
+            }
+        }
+        // The closed meshes that are not all quads: cube (dual reading tried) and torus.
+        assert!(automatic >= 4, "{automatic}");
+    }
+
+    #[test]
+    fn a_position_that_is_not_finite_is_left_to_the_general_check() {
+        let mut fine = refine(&shapes::torus(5, 4, CellKind::Triangles).unwrap(), FaceRule::DooSabin);
+        fine.positions_mut()[17].y = f64::NAN;
+        fine.positions_mut()[40].z = f64::INFINITY;
+        for options in [ReverseOptions::with_seed(FaceRule::DooSabin, 0), ReverseOptions::auto(FaceRule::DooSabin)] {
+            assert!(reverse_canonical(&fine, &options).is_none());
+            let error = crate::reverse(&fine, &options).unwrap_err();
+            assert!(matches!(error, DooError::NonFinite { vertex: 17, .. }), "{error}");
+            let decompose = crate::DecomposeOptions {
+                seeds: options.seeds.clone(),
+                ..crate::DecomposeOptions::levels(FaceRule::DooSabin, 1)
+            };
+            let error = crate::decompose(&fine, &decompose).unwrap_err();
+            assert!(matches!(error, DooError::NonFinite { vertex: 17, .. }), "{error}");
+        }
+    }
+
+    #[test]
+    fn other_orders_and_broken_meshes_are_left_to_the_general_path() {
+        let soup =
+            subdivide_soup(&shapes::torus(5, 4, CellKind::Mixed).unwrap(), &DooOptions::default()).unwrap().into_soup();
+        let options = ReverseOptions::with_seed(FaceRule::DooSabin, 0);
+        // Renumbered vertices and rotated faces.
+        let scrambled = HalfedgeMesh::from_soup(&scramble(soup.clone(), 3, 0.0)).unwrap();
+        assert!(reverse_canonical(&scrambled, &options).is_none());
+        // The last F_V face rotated by one corner.
+        let mut faces: Vec<Vec<u32>> = soup.faces().map(<[u32]>::to_vec).collect();
+        faces.last_mut().unwrap().rotate_left(1);
+        let rotated = HalfedgeMesh::from_soup(&PolygonSoup::from_faces(soup.positions.clone(), faces.clone())).unwrap();
+        assert!(reverse_canonical(&rotated, &options).is_none());
+        assert_eq!(crate::reverse(&rotated, &options).unwrap(), general(&rotated, &options));
+        // Two F_E quads swapped.
+        let fe = shapes::torus(5, 4, CellKind::Mixed).unwrap().face_count();
+        faces.last_mut().unwrap().rotate_right(1);
+        faces.swap(fe, fe + 1);
+        let swapped = HalfedgeMesh::from_soup(&PolygonSoup::from_faces(soup.positions.clone(), faces.clone())).unwrap();
+        assert!(reverse_canonical(&swapped, &options).is_none());
+        // Two components, refined together (F_F faces of both first): not connected.
+        let mut two = shapes::torus(5, 4, CellKind::Mixed).unwrap();
+        let cube = shapes::cube();
+        let base = two.vertex_count() as u32;
+        two.positions.extend(cube.positions.iter().map(|&p| p + glam::DVec3::splat(9.0)));
+        for face in cube.faces() {
+            two.push_face(&face.iter().map(|&v| v + base).collect::<Vec<u32>>());
+        }
+        let two = subdivide_soup(&two, &DooOptions::default()).unwrap().to_mesh().unwrap();
+        assert!(reverse_canonical(&two, &options).is_none());
+    }
+}
