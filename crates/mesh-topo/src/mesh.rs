@@ -140,41 +140,49 @@ impl HalfedgeMesh {
     }
 
     /// The vertex with index `i`, if it exists.
+    #[inline]
     pub fn vertex(&self, i: usize) -> Option<VertexId> {
         (i < self.vertex_count()).then(|| VertexId::new(i as u32))
     }
 
     /// The face with index `i`, if it exists.
+    #[inline]
     pub fn face(&self, i: usize) -> Option<FaceId> {
         (i < self.face_count()).then(|| FaceId::new(i as u32))
     }
 
     /// The edge with index `i`, if it exists.
+    #[inline]
     pub fn edge(&self, i: usize) -> Option<EdgeId> {
         (i < self.edge_count()).then(|| EdgeId::new(i as u32))
     }
 
     /// The half-edge with index `i`, if it exists.
+    #[inline]
     pub fn halfedge(&self, i: usize) -> Option<HalfedgeId> {
         (i < self.halfedge_count()).then(|| HalfedgeId::new(i as u32))
     }
 
     /// All vertices in index order.
+    #[inline]
     pub fn vertices(&self) -> impl ExactSizeIterator<Item = VertexId> + '_ {
         (0..self.vertex_count() as u32).map(VertexId::new)
     }
 
     /// All faces in index order.
+    #[inline]
     pub fn faces(&self) -> impl ExactSizeIterator<Item = FaceId> + '_ {
         (0..self.face_count() as u32).map(FaceId::new)
     }
 
     /// All edges in index order.
+    #[inline]
     pub fn edges(&self) -> impl ExactSizeIterator<Item = EdgeId> + '_ {
         (0..self.edge_count() as u32).map(EdgeId::new)
     }
 
     /// All half-edges in index order.
+    #[inline]
     pub fn halfedges(&self) -> impl ExactSizeIterator<Item = HalfedgeId> + '_ {
         (0..self.halfedge_count() as u32).map(HalfedgeId::new)
     }
@@ -301,11 +309,13 @@ impl HalfedgeMesh {
 
     /// Number of edges at `v`. For an interior vertex this is also its number of faces;
     /// a boundary vertex has one face fewer than its valence.
+    #[inline]
     pub fn valence(&self, v: VertexId) -> usize {
         self.outgoing_halfedges(v).count()
     }
 
     /// Number of corners of face `f`.
+    #[inline]
     pub fn face_degree(&self, f: FaceId) -> usize {
         self.face_halfedges(f).count()
     }
@@ -321,40 +331,47 @@ impl HalfedgeMesh {
     /// The outgoing half-edges of `v`, counter-clockwise, starting at
     /// [`vertex_halfedge`](Self::vertex_halfedge) (the boundary half-edge for a boundary
     /// vertex). Empty for an isolated vertex.
+    #[inline]
     pub fn outgoing_halfedges(&self, v: VertexId) -> VertexCirculator<'_> {
         let start = self.vertex_halfedge[v.index()];
         VertexCirculator { mesh: self, start, current: start }
     }
 
     /// The neighbours of `v` (targets of its outgoing half-edges), counter-clockwise.
+    #[inline]
     pub fn vertex_neighbors(&self, v: VertexId) -> impl Iterator<Item = VertexId> + '_ {
         self.outgoing_halfedges(v).map(|h| self.target(h))
     }
 
     /// The faces around `v`, counter-clockwise (for a boundary vertex from the face after
     /// the boundary to the face before it).
+    #[inline]
     pub fn vertex_faces(&self, v: VertexId) -> impl Iterator<Item = FaceId> + '_ {
         self.outgoing_halfedges(v).filter_map(|h| self.halfedge_face(h))
     }
 
     /// The half-edges of face `f` in order, starting at its first corner.
+    #[inline]
     pub fn face_halfedges(&self, f: FaceId) -> LoopCirculator<'_> {
         let start = self.face_halfedge[f.index()];
         LoopCirculator { mesh: self, start, current: start }
     }
 
     /// The half-edges of the loop through `h` (a face or a boundary loop), starting at `h`.
+    #[inline]
     pub fn halfedge_loop(&self, h: HalfedgeId) -> LoopCirculator<'_> {
         LoopCirculator { mesh: self, start: h.raw(), current: h.raw() }
     }
 
     /// The corners of face `f` in order, as given when the mesh was built.
+    #[inline]
     pub fn face_vertices(&self, f: FaceId) -> impl Iterator<Item = VertexId> + '_ {
         self.face_halfedges(f).map(|h| self.origin(h))
     }
 
     /// The faces sharing an edge with `f`, in the order of `f`'s half-edges (boundary
     /// edges skipped).
+    #[inline]
     pub fn face_neighbors(&self, f: FaceId) -> impl Iterator<Item = FaceId> + '_ {
         self.face_halfedges(f).filter_map(|h| self.halfedge_face(h.twin()))
     }
