@@ -303,15 +303,15 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         }
     };
     choice.detail_energy = vertex_energy.iter().sum();
-    Some(DooReversal::from_parts(
-        options.rule,
+    Some(DooReversal {
+        rule: options.rule,
         coarse,
         coarse_positions,
         details,
-        FineOrder::default(),
-        vec![choice],
+        order: FineOrder::default(),
+        choices: vec![choice],
         stats,
-    ))
+    })
 }
 
 /// Whether the coarse faces (`offsets`) form one component across the coarse edges

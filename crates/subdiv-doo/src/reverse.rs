@@ -202,13 +202,13 @@ impl SeedChoice {
 /// The result of reversing one Doo-Sabin step.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DooReversal {
-    rule: FaceRule,
-    coarse: CornerMesh,
-    coarse_positions: Vec<DVec3>,
-    details: Vec<DVec3>,
-    order: FineOrder,
-    choices: Vec<SeedChoice>,
-    stats: ReverseStats,
+    pub(crate) rule: FaceRule,
+    pub(crate) coarse: CornerMesh,
+    pub(crate) coarse_positions: Vec<DVec3>,
+    pub(crate) details: Vec<DVec3>,
+    pub(crate) order: FineOrder,
+    pub(crate) choices: Vec<SeedChoice>,
+    pub(crate) stats: ReverseStats,
 }
 
 impl DooReversal {
@@ -273,18 +273,6 @@ impl DooReversal {
             reconstruct_level(&self.coarse, &self.coarse_positions, &self.details, &self.order, self.rule, false)
                 .expect("internal: a reversal reconstructs");
         PolygonSoup { positions, offsets: mesh.offsets, indices: mesh.corner_vertex }
-    }
-
-    pub(crate) fn from_parts(
-        rule: FaceRule,
-        coarse: CornerMesh,
-        coarse_positions: Vec<DVec3>,
-        details: Vec<DVec3>,
-        order: FineOrder,
-        choices: Vec<SeedChoice>,
-        stats: ReverseStats,
-    ) -> Self {
-        Self { rule, coarse, coarse_positions, details, order, choices, stats }
     }
 
     pub(crate) fn into_parts(self) -> (CornerMesh, Vec<DVec3>, Vec<DVec3>, FineOrder, Vec<SeedChoice>) {
