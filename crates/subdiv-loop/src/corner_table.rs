@@ -20,7 +20,7 @@ use rayon::prelude::*;
 
 use crate::LoopError;
 use crate::forward::kernel;
-use crate::forward::topology::{BASE_BITS, INVALID as TOPOLOGY_INVALID, Topology};
+use crate::forward::topology::{BASE_BITS, INVALID as TOPOLOGY_INVALID, MeshTriangles, Topology};
 
 /// "No element": a boundary twin, an isolated vertex's corner.
 pub(crate) const NONE: u32 = u32::MAX;
@@ -144,23 +144,18 @@ impl CornerTable {
     /// [`LoopError::NotTriangle`] naming the first face that is not a triangle,
     /// [`LoopError::InteriorValenceTwo`] for two triangles glued along all their edges.
     pub(crate) fn from_mesh(mesh: &HalfedgeMesh) -> Result<Self, LoopError> {
-        let next_halfedge = mesh.raw_halfedge_next();
         let targets = mesh.raw_halfedge_targets();
         let faces = mesh.face_count();
-        let first_halfedges = mesh.raw_face_halfedges();
-        // Flat arrays only: `HalfedgeMesh::face` is a call per face across crates.
-        let face_halfedges = |f: u32| {
-            let h0 = first_halfedges[f as usize];
-            let h1 = next_halfedge[h0 as usize];
-            [h0, h1, next_halfedge[h1 as usize]]
-        };
-        if let Some(f) = (0..faces as u32).into_par_iter().find_first(|&f| {
-            let [h0, _, h2] = face_halfedges(f);
-            next_halfedge[h2 as usize] != h0
-        }) {
+        let mesh_triangles = MeshTriangles::new(mesh);
+        if let Some(f) =
+            (0..faces as u32).into_par_iter().find_first(|&f| mesh_triangles.halfedges(f as usize).is_none())
+        {
             let face = mesh.face(f as usize).expect("internal: face in range");
             return Err(LoopError::NotTriangle { face: f as usize, corners: mesh.face_degree(face) });
         }
+        let face_halfedges = |f: u32| {
+            mesh_triangles.halfedges(f as usize).unwrap_or_else(|| unreachable!("internal: every face is a triangle"))
+        };
         // The corner of every face half-edge: one pass over the faces, in face order, so
         // the writes follow the half-edge numbering (edges are numbered in face order).
         let mut corner_of_halfedge = vec![NONE; mesh.halfedge_count()];

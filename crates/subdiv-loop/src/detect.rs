@@ -56,6 +56,7 @@ use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::forward::LoopOptions;
 use crate::forward::kernel::PARALLEL_MIN_FACES;
+use crate::forward::topology::MeshTriangles;
 use crate::reverse::{CanonicalLevel, reverse_canonical};
 
 /// A fine-mesh element named by an error.
@@ -292,21 +293,14 @@ pub(crate) fn detect_mesh(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Resu
 /// The corners of face `f` of a half-edge mesh from its first corner, `None` if it is
 /// not a triangle.
 fn mesh_face_corners(fine: &HalfedgeMesh) -> impl Fn(usize) -> Option<[u32; 3]> + Sync + '_ {
-    let next_halfedge = fine.raw_halfedge_next();
+    let triangles = MeshTriangles::new(fine);
     let targets = fine.raw_halfedge_targets();
-    let face_halfedges = fine.raw_face_halfedges();
     // Called four times per group in the canonical pass: inlined there.
     #[inline(always)]
     move |f: usize| {
-        let h0 = *face_halfedges.get(f)?;
-        let h1 = next_halfedge[h0 as usize];
-        // Corner 0 is the origin of half-edge 0, the target of its twin (half-edges
-        // come in twin pairs `2e`, `2e + 1`); corners 1 and 2 are the targets of
-        // half-edges 0 and 1.
-        let corners = [targets[(h0 ^ 1) as usize], targets[h0 as usize], targets[h1 as usize]];
-        // The face is a triangle if its third half-edge ends at corner 0: a face never
-        // repeats a vertex, so its loop closes there.
-        (targets[next_halfedge[h1 as usize] as usize] == corners[0]).then_some(corners)
+        // Corner k is the origin of half-edge k: the target of half-edge k - 1.
+        let [h0, h1, h2] = triangles.halfedges(f)?;
+        Some([targets[h2 as usize], targets[h0 as usize], targets[h1 as usize]])
     }
 }
 

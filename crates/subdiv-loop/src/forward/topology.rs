@@ -24,7 +24,7 @@ use std::ops::Range;
 use std::sync::atomic::AtomicU32;
 use std::sync::atomic::Ordering::Relaxed;
 
-use mesh_topo::{FaceId, HalfedgeId, HalfedgeMesh, MeshError};
+use mesh_topo::{FaceId, HalfedgeMesh, MeshError};
 use rayon::prelude::*;
 
 use super::buffer::{Output, Slots};
@@ -118,6 +118,8 @@ impl Topology {
             return Err(MeshError::TooLarge { what: "edges", count: mesh.edge_count(), max: BASE_MASK as usize }.into());
         }
         let parallel = runs_in_parallel(face_count);
+        let mesh_triangles = MeshTriangles::new(mesh);
+        let targets = mesh.raw_halfedge_targets();
         let Self { triangles, links, vertex_halfedge, vertex_count, edge_count } = self;
         (*vertex_count, *edge_count) = (0, 0);
         let chunks = chunk_ranges(face_count);
@@ -133,20 +135,21 @@ impl Topology {
             map_chunks(parallel, pieces, |(range, mut piece)| {
                 let mut first_bad = None;
                 for fi in range {
-                    let f = face_at(mesh, fi);
-                    let Some((h0, h1, h2)) = face_halfedges(mesh, f) else {
+                    let Some([h0, h1, h2]) = mesh_triangles.halfedges(fi) else {
                         first_bad.get_or_insert(LoopError::NotTriangle {
                             face: fi,
-                            corners: mesh.face_halfedges(f).count(),
+                            corners: mesh.face_halfedges(face_at(mesh, fi)).count(),
                         });
                         piece.push([INVALID; 3]);
                         continue;
                     };
                     let base = 4 * fi as u32;
-                    piece.push([mesh.origin(h0).raw(), mesh.origin(h1).raw(), mesh.origin(h2).raw()]);
-                    compact[h0.index()].store(base, Relaxed);
-                    compact[h1.index()].store(base + 1, Relaxed);
-                    compact[h2.index()].store(base + 2, Relaxed);
+                    // The origin of a half-edge is its twin's target (twins are `h ^ 1`).
+                    let origin = |h: u32| targets[(h ^ 1) as usize];
+                    piece.push([origin(h0), origin(h1), origin(h2)]);
+                    compact[h0 as usize].store(base, Relaxed);
+                    compact[h1 as usize].store(base + 1, Relaxed);
+                    compact[h2 as usize].store(base + 2, Relaxed);
                 }
                 first_bad
             })
@@ -167,10 +170,10 @@ impl Topology {
                 let (mut edges, mut pillow) = (0u32, None);
                 for fi in range {
                     let base = 4 * fi as u32;
-                    let Some((h0, h1, h2)) = face_halfedges(mesh, face_at(mesh, fi)) else {
+                    let Some([h0, h1, h2]) = mesh_triangles.halfedges(fi) else {
                         unreachable!("internal: every face was checked to be a triangle");
                     };
-                    let twin = |h: HalfedgeId| compact[h.twin().index()].load(Relaxed);
+                    let twin = |h: u32| compact[(h ^ 1) as usize].load(Relaxed);
                     let [t0, t1, t2] = [twin(h0), twin(h1), twin(h2)];
                     let mask = u32::from(is_first(base, t0))
                         | u32::from(is_first(base + 1, t1)) << 1
@@ -293,14 +296,30 @@ fn face_at(mesh: &HalfedgeMesh, fi: usize) -> FaceId {
     mesh.face(fi).unwrap_or_else(|| unreachable!("internal: face {fi} out of range"))
 }
 
-/// The three half-edges of face `f`, found by `next` alone (no circulator: this is a
-/// large part of the work of a small first level), or `None` for a polygon.
-#[inline(always)]
-fn face_halfedges(mesh: &HalfedgeMesh, f: FaceId) -> Option<(HalfedgeId, HalfedgeId, HalfedgeId)> {
-    let h0 = mesh.face_halfedge(f);
-    let h1 = mesh.next(h0);
-    let h2 = mesh.next(h1);
-    if h1 != h0 && mesh.next(h2) == h0 { Some((h0, h1, h2)) } else { None }
+/// The triangles of a half-edge mesh read from its flat arrays: the one place that says
+/// how a face's three half-edges are found (the forward step's topology, the corner
+/// table and the canonical detection all read faces through it).
+#[derive(Clone, Copy)]
+pub(crate) struct MeshTriangles<'a> {
+    first_halfedge: &'a [u32],
+    next_halfedge: &'a [u32],
+}
+
+impl<'a> MeshTriangles<'a> {
+    pub(crate) fn new(mesh: &'a HalfedgeMesh) -> Self {
+        Self { first_halfedge: mesh.raw_face_halfedges(), next_halfedge: mesh.raw_halfedge_next() }
+    }
+
+    /// The three half-edges of face `f` from its first, found by `next` alone (no
+    /// circulator: this is a large part of the work of a small first level); `None` for
+    /// a polygon or a face index out of range.
+    #[inline(always)]
+    pub(crate) fn halfedges(self, f: usize) -> Option<[u32; 3]> {
+        let h0 = *self.first_halfedge.get(f)?;
+        let h1 = self.next_halfedge[h0 as usize];
+        let h2 = self.next_halfedge[h1 as usize];
+        (h1 != h0 && self.next_halfedge[h2 as usize] == h0).then_some([h0, h1, h2])
+    }
 }
 
 /// Sets `map` to `len` entries of [`INVALID`], keeping its memory.
