@@ -77,6 +77,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     let mut quads = 0u32;
     let mut quad_base = 0u32;
     let mut far_max = 0u32;
+    let mut on_boundary = false;
     let mut c = 0u32;
     while (c as usize) < vertices {
         let k = offsets.len() - 1;
@@ -94,6 +95,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
             let hb = h ^ 1;
             let g = face_of[hb as usize];
             if g == NONE {
+                on_boundary = true;
                 twins.push(NONE);
                 across.push(NONE);
             } else {
@@ -141,6 +143,13 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
             }
         }
         offsets.push(c);
+    }
+    // Without a seed, the choice is made here only on closed meshes with F_E quads and
+    // F_V faces (see [`automatic`]); anything else goes to the general path now, before
+    // the work below is done for nothing.
+    let automatic_choice = seed.is_none();
+    if automatic_choice && (on_boundary || quads == 0) {
+        return None;
     }
     let ff_count = offsets.len() - 1;
     let ff = ff_count as u32;
@@ -201,6 +210,9 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         fv_sizes.push(size);
     }
     let interior = vertex_corner.len();
+    if automatic_choice && interior == 0 {
+        return None;
+    }
     for c in 0..vertices as u32 {
         if labels[c as usize] != NONE {
             continue;
@@ -245,7 +257,8 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         vertex_count: coarse_vertex_count,
         vertex_corner: Some(vertex_corner),
     };
-    let closed = candidate_edges == vertices;
+    let closed = !on_boundary;
+    debug_assert_eq!(closed, candidate_edges == vertices, "internal: boundary corners have no twin");
     let by_vertex = if closed {
         // Every vertex is interior: its corners are those of its F_V face, sorted.
         let corners = if seed.is_some() { std::mem::take(&mut fv_vertices) } else { fv_vertices.clone() };
@@ -263,10 +276,9 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     // The detail energy of the lowest face read as F_F (for the automatic choice): its
     // groups are the F_V faces, in face order, each summed while its candidates are in
     // cache for the means.
-    let automatic_closed = seed.is_none() && closed && quads > 0 && interior > 0;
     let mut reading_energy = 0.0;
     let mut group_start = 0;
-    let (coarse_positions, details, vertex_energy) = if automatic_closed {
+    let (coarse_positions, details, vertex_energy) = if automatic_choice {
         means_and_details_with(&by_vertex, &candidates, |v| {
             let group = &fv_vertices[group_start..group_start + fv_sizes[v] as usize];
             group_start += group.len();
@@ -290,10 +302,6 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
             (SeedChoice::given(0, seed), stats)
         }
         None => {
-            if !automatic_closed {
-                // Boundaries and the other cases of the automatic choice: general path.
-                return None;
-            }
             let mut choice = automatic(fine, &maps, &coarse.offsets, reading_energy, &fv, quads, candidates)?;
             let visited = if choice.trials.len() == 1 { ff_count } else { ff_count + interior + 1 };
             let interpretations = choice.trials.iter().filter(|t| t.outcome.is_ok()).count();
