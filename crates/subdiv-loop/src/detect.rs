@@ -501,7 +501,7 @@ fn detect_canonical_faces(
     face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
 ) -> Option<Coarsening> {
     let groups = canonical_groups(faces, seed_vertex, face)?;
-    let (coarse, ()) = groups.into_table(vertex_count, |_, _| ())?;
+    let (coarse, _, ()) = groups.into_table(vertex_count, |_, _| ())?;
     Some(Coarsening::canonical(coarse))
 }
 
@@ -575,17 +575,23 @@ impl CanonicalGroups {
     /// `alongside(coarse_vertex, edge_point)` runs at the same time on another thread
     /// (when there is one), reading the same arrays: a second sequential pass, for
     /// work that follows the edges in order.
+    ///
+    /// Also returns, per coarse edge, the vertex opposite it in its second face (the
+    /// face of its second half-edge; [`NONE`] on the boundary): the pairing reads that
+    /// face anyway, and the edge rule needs the vertex, which edge by edge is a chain of
+    /// dependent loads through the twin.
     pub(crate) fn into_table<S: Send>(
         self,
         vertex_count: usize,
         alongside: impl FnOnce(&[u32], &[u32]) -> S + Send,
-    ) -> Option<(CornerTable, S)> {
+    ) -> Option<(CornerTable, Vec<u32>, S)> {
         let Self { coarse_vertex, edge_point: mut corner_edge, first_odd } = self;
         let corners = coarse_vertex.len();
         let edge_count = vertex_count - first_odd as usize;
         let pair_twins = || {
             let mut twin = vec![NONE; corners];
             let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
+            let mut opposite = vec![NONE; edge_count];
             for c in 0..corners as u32 {
                 let e = corner_edge[c as usize] - first_odd;
                 if e as usize == edge_corner.len() {
@@ -601,21 +607,22 @@ impl CanonicalGroups {
                 }
                 twin[t as usize] = c;
                 twin[c as usize] = t;
+                opposite[e as usize] = coarse_vertex[prev(c) as usize];
             }
-            (edge_corner.len() == edge_count).then_some((twin, edge_corner))
+            (edge_corner.len() == edge_count).then_some((twin, edge_corner, opposite))
         };
         let side = || alongside(&coarse_vertex, &corner_edge);
         // Below this size waking a second thread costs more than it saves.
         let (paired, side) =
             if corners / 3 >= PARALLEL_MIN_FACES { rayon::join(pair_twins, side) } else { (pair_twins(), side()) };
-        let (twin, edge_corner) = paired?;
+        let (twin, edge_corner, opposite) = paired?;
         if corners <= 3 * GROUP_CHUNK {
             corner_edge.iter_mut().for_each(|e| *e -= first_odd);
         } else {
             corner_edge.par_iter_mut().with_min_len(3 * GROUP_CHUNK).for_each(|e| *e -= first_odd);
         }
         let table = CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner);
-        Some((table, side))
+        Some((table, opposite, side))
     }
 }
 

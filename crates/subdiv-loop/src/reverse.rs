@@ -604,7 +604,7 @@ pub(crate) fn reverse_canonical(
         }
         (sum, valence, lower_ends)
     };
-    let (coarse, (mut sum, mut valence, lower_ends)) = groups.into_table(vertex_count, sum_edge_points)?;
+    let (coarse, opposite, (mut sum, mut valence, lower_ends)) = groups.into_table(vertex_count, sum_edge_points)?;
     // On the boundary only the boundary edges count, summed in edge order from zero:
     // boundary corners in corner order are the boundary edges in edge order.
     let (corner_vertex, twin, corner_edge) = (coarse.corner_vertices(), coarse.twins(), coarse.corner_edges());
@@ -628,7 +628,7 @@ pub(crate) fn reverse_canonical(
             let (n, flags) = (valence[v as usize] & !BOUNDARY, valence[v as usize] & BOUNDARY);
             coarse_position(fine[v as usize], sum[v as usize], n, flags != 0, rules, &weights)
         });
-        let (details, details_finite) = canonical_details(&coarse, &positions, edge_position)?;
+        let (details, details_finite) = canonical_details(&coarse, &opposite, &positions, edge_position)?;
         let finite = details_finite && crate::pyramid::all_finite(&positions);
         Some((positions, details, finite))
     };
@@ -653,9 +653,11 @@ const DETAIL_CHUNK: usize = 2048;
 /// The detail of every coarse edge, by chunks of faces (each edge at its first corner,
 /// so each chunk writes a contiguous run of edges), checking every face on the way
 /// (the face part of the coarse mesh check): `None` if one is not valid. The same
-/// formula as [`edge_rule`], on the face's three positions read once.
+/// formula as [`edge_rule`], on the face's three positions read once and the vertex
+/// `opposite[e]` across edge `e` (see [`CanonicalGroups::into_table`](crate::detect::CanonicalGroups::into_table)).
 fn canonical_details(
     coarse: &CornerTable,
+    opposite: &[u32],
     positions: &[DVec3],
     edge_position: impl Fn(u32) -> DVec3 + Sync,
 ) -> Option<(Vec<DVec3>, bool)> {
@@ -689,13 +691,13 @@ fn canonical_details(
                         continue;
                     }
                     let (a, b) = (p[k], p[(k + 1) % 3]);
+                    let e = (e0 + piece.written()) as u32;
                     let predicted = if t[k] == NONE {
                         0.5 * (a + b)
                     } else {
-                        let (r, s) = (p[(k + 2) % 3], positions[corner_vertex[prev(t[k]) as usize] as usize]);
+                        let (r, s) = (p[(k + 2) % 3], positions[opposite[e as usize] as usize]);
                         0.375 * (a + b) + 0.125 * (r + s)
                     };
-                    let e = (e0 + piece.written()) as u32;
                     let detail = edge_position(e) - predicted;
                     non_finite |= non_finite_bits(detail);
                     piece.push(detail);
