@@ -55,7 +55,7 @@ use mesh_topo::HalfedgeMesh;
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::forward::LoopOptions;
-use crate::forward::kernel::PARALLEL_MIN_FACES;
+use crate::forward::kernel;
 use crate::forward::topology::MeshTriangles;
 use crate::reverse::{CanonicalLevel, reverse_canonical};
 
@@ -501,7 +501,7 @@ fn detect_canonical_faces(
     face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
 ) -> Option<Coarsening> {
     let groups = canonical_groups(faces, seed_vertex, face)?;
-    let (coarse, _, ()) = groups.into_table(vertex_count, |_, _| ())?;
+    let (coarse, _, ()) = groups.into_table(vertex_count, (), |_, _, _| ())?;
     Some(Coarsening::canonical(coarse))
 }
 
@@ -572,9 +572,11 @@ impl CanonicalGroups {
     /// half-edge `c` has edge point `m_c = V + e_c`; in corner order an edge is new
     /// exactly when it is the next number, and an older one is its twin.
     ///
-    /// `alongside(coarse_vertex, edge_point)` runs at the same time on another thread
-    /// (when there is one), reading the same arrays: a second sequential pass, for
-    /// work that follows the edges in order.
+    /// `on_edge(state, ends, edge_point)` is called for every coarse edge in edge order
+    /// (`ends`: the vertices of its first half-edge, `edge_point`: its fine vertex):
+    /// in a second sequential pass over the corners that runs beside the pairing on
+    /// another thread when the pass is large and the pool has one, else inside the
+    /// pairing loop (one pass instead of two).
     ///
     /// Also returns, per coarse edge, the vertex opposite it in its second face (the
     /// face of its second half-edge; [`NONE`] on the boundary): the pairing reads that
@@ -583,38 +585,31 @@ impl CanonicalGroups {
     pub(crate) fn into_table<S: Send>(
         self,
         vertex_count: usize,
-        alongside: impl FnOnce(&[u32], &[u32]) -> S + Send,
+        mut state: S,
+        on_edge: impl Fn(&mut S, [u32; 2], u32) + Sync,
     ) -> Option<(CornerTable, Vec<u32>, S)> {
         let Self { coarse_vertex, edge_point: mut corner_edge, first_odd } = self;
         let corners = coarse_vertex.len();
         let edge_count = vertex_count - first_odd as usize;
-        let pair_twins = || {
-            let mut twin = vec![NONE; corners];
-            let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
-            let mut opposite = vec![NONE; edge_count];
-            for c in 0..corners as u32 {
-                let e = corner_edge[c as usize] - first_odd;
-                if e as usize == edge_corner.len() {
-                    edge_corner.push(c);
-                    continue;
+        let ends = |c: usize| [coarse_vertex[c], coarse_vertex[next(c as u32) as usize]];
+        let (paired, state) = if kernel::runs_in_parallel(corners / 3) {
+            let side = || {
+                let mut new_edge = first_odd;
+                for (c, &m) in corner_edge.iter().enumerate() {
+                    if m == new_edge {
+                        new_edge += 1;
+                        on_edge(&mut state, ends(c), m);
+                    }
                 }
-                let t = *edge_corner.get(e as usize)?;
-                if twin[t as usize] != NONE
-                    || coarse_vertex[t as usize] != coarse_vertex[next(c) as usize]
-                    || coarse_vertex[next(t) as usize] != coarse_vertex[c as usize]
-                {
-                    return None;
-                }
-                twin[t as usize] = c;
-                twin[c as usize] = t;
-                opposite[e as usize] = coarse_vertex[prev(c) as usize];
-            }
-            (edge_corner.len() == edge_count).then_some((twin, edge_corner, opposite))
+                state
+            };
+            rayon::join(|| pair_twins(&coarse_vertex, &corner_edge, first_odd, edge_count, |_| ()), side)
+        } else {
+            let paired = pair_twins(&coarse_vertex, &corner_edge, first_odd, edge_count, |c| {
+                on_edge(&mut state, ends(c), corner_edge[c]);
+            });
+            (paired, state)
         };
-        let side = || alongside(&coarse_vertex, &corner_edge);
-        // Below this size waking a second thread costs more than it saves.
-        let (paired, side) =
-            if corners / 3 >= PARALLEL_MIN_FACES { rayon::join(pair_twins, side) } else { (pair_twins(), side()) };
         let (twin, edge_corner, opposite) = paired?;
         if corners <= 3 * GROUP_CHUNK {
             corner_edge.iter_mut().for_each(|e| *e -= first_odd);
@@ -622,8 +617,44 @@ impl CanonicalGroups {
             corner_edge.par_iter_mut().with_min_len(3 * GROUP_CHUNK).for_each(|e| *e -= first_odd);
         }
         let table = CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner);
-        Some((table, opposite, side))
+        Some((table, opposite, state))
     }
+}
+
+/// The twin pairing of [`CanonicalGroups::into_table`]: the twins, the first corner
+/// of every edge and the vertex across it, or `None` if the edge points are not
+/// numbered in order of first appearance, or an edge has more than two half-edges or
+/// two in the same direction. `new_edge(c)` is called when corner `c` starts an edge.
+fn pair_twins(
+    coarse_vertex: &[u32],
+    corner_edge: &[u32],
+    first_odd: u32,
+    edge_count: usize,
+    mut new_edge: impl FnMut(usize),
+) -> Option<(Vec<u32>, Vec<u32>, Vec<u32>)> {
+    let corners = coarse_vertex.len();
+    let mut twin = vec![NONE; corners];
+    let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
+    let mut opposite = vec![NONE; edge_count];
+    for c in 0..corners as u32 {
+        let e = corner_edge[c as usize] - first_odd;
+        if e as usize == edge_corner.len() {
+            edge_corner.push(c);
+            new_edge(c as usize);
+            continue;
+        }
+        let t = *edge_corner.get(e as usize)?;
+        if twin[t as usize] != NONE
+            || coarse_vertex[t as usize] != coarse_vertex[next(c) as usize]
+            || coarse_vertex[next(t) as usize] != coarse_vertex[c as usize]
+        {
+            return None;
+        }
+        twin[t as usize] = c;
+        twin[c as usize] = t;
+        opposite[e as usize] = coarse_vertex[prev(c) as usize];
+    }
+    (edge_corner.len() == edge_count).then_some((twin, edge_corner, opposite))
 }
 
 /// Groups (or faces, vertices) per parallel work item of the linear passes.

@@ -566,8 +566,9 @@ pub(crate) struct CanonicalLevel {
 /// Passes: the groups of four faces (parallel); the coarse corners in order, which
 /// number the edges, pair the twins and sum the edge points around every coarse vertex
 /// in edge order (sequential: these sums are what [`reverse_positions`] adds, in the
-/// same order); the boundary edges, if any; the coarse positions (parallel); the
-/// details by chunks of coarse faces (parallel), which also check the faces.
+/// same order; on two threads a second pass beside the pairing, else in the same
+/// loop); the boundary edges, if any; the coarse positions (parallel); the details by
+/// chunks of coarse faces (parallel), which also check the faces.
 pub(crate) fn reverse_canonical(
     faces: usize,
     vertex_count: usize,
@@ -582,29 +583,19 @@ pub(crate) fn reverse_canonical(
     let nv = first_odd as usize;
     let edge_position = |e: u32| fine[(first_odd + e) as usize];
     // The edge points around every coarse vertex, summed in edge order (the order of
-    // `reverse_positions`), alongside the pairing of the twins.
-    let sum_edge_points = |coarse_vertex: &[u32], edge_point: &[u32]| {
-        let mut sum = vec![DVec3::ZERO; nv];
-        let mut valence = vec![0u32; nv];
-        // For the doubled-edge check: the edges by lower end point.
-        let mut lower_ends = vec![0u32; nv + 1];
-        let mut new_edge = first_odd;
-        for (c, &m) in edge_point.iter().enumerate() {
-            if m != new_edge {
-                continue;
-            }
-            new_edge += 1;
-            let point = fine[m as usize];
-            let ends = [coarse_vertex[c], coarse_vertex[next(c as u32) as usize]];
-            for v in ends {
-                sum[v as usize] += point;
-                valence[v as usize] += 1;
-            }
-            lower_ends[ends[0].min(ends[1]) as usize + 1] += 1;
+    // `reverse_positions`), beside the pairing of the twins or inside it, with the
+    // edges counted by lower end point for the doubled-edge check.
+    let sums = (vec![DVec3::ZERO; nv], vec![0u32; nv], vec![0u32; nv + 1]);
+    let sum_edge_point = |(sum, valence, lower_ends): &mut (Vec<DVec3>, Vec<u32>, Vec<u32>), ends: [u32; 2], m: u32| {
+        let point = fine[m as usize];
+        for v in ends {
+            sum[v as usize] += point;
+            valence[v as usize] += 1;
         }
-        (sum, valence, lower_ends)
+        lower_ends[ends[0].min(ends[1]) as usize + 1] += 1;
     };
-    let (coarse, opposite, (mut sum, mut valence, lower_ends)) = groups.into_table(vertex_count, sum_edge_points)?;
+    let (coarse, opposite, (mut sum, mut valence, lower_ends)) =
+        groups.into_table(vertex_count, sums, sum_edge_point)?;
     // On the boundary only the boundary edges count, summed in edge order from zero:
     // boundary corners in corner order are the boundary edges in edge order.
     let (corner_vertex, twin, corner_edge) = (coarse.corner_vertices(), coarse.twins(), coarse.corner_edges());
