@@ -209,21 +209,20 @@ pub(crate) fn reconstruct_levels<'a>(
                 // (sequential) sums of the details around the vertices run beside it.
                 let corrections = || VertexCorrections::new(&topology, details);
                 let step = || kernel::step_with_details(&topology, &positions, &kernel_rules, level < count, details);
-                let (corrections, step) = if kernel::runs_in_parallel(topology.face_count()) {
-                    rayon::join(corrections, step)
-                } else {
-                    (corrections(), step())
-                };
+                let parallel = kernel::runs_in_parallel(topology.face_count());
+                let (corrections, step) =
+                    if parallel { rayon::join(corrections, step) } else { (corrections(), step()) };
                 let nv = topology.vertex_count;
                 let mut fine = step.values;
                 let (vertex_points, edge_points) = fine.split_at_mut(nv);
                 // The finiteness check of the vertex points rides along (no pass of its
-                // own); small levels stay on the calling thread (no pool wake-up).
+                // own); a level the kernel ran on the calling thread stays there (no
+                // pool wake-up), by the kernel's own rule.
                 let apply = |(v, p): (usize, &mut DVec3)| {
                     corrections.apply(v, p, &kernel_rules);
                     p.is_finite()
                 };
-                let vertices_finite = if nv < PARALLEL_THRESHOLD {
+                let vertices_finite = if !parallel {
                     vertex_points.iter_mut().enumerate().map(apply).fold(true, |a, b| a & b)
                 } else {
                     vertex_points
