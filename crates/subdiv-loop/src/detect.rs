@@ -579,15 +579,15 @@ impl CanonicalGroups {
     /// pairing loop (one pass instead of two).
     ///
     /// Also returns, per coarse edge, the vertex opposite it in its second face (the
-    /// face of its second half-edge; [`NONE`] on the boundary): the pairing reads that
-    /// face anyway, and the edge rule needs the vertex, which edge by edge is a chain of
-    /// dependent loads through the twin.
+    /// face of its second half-edge; [`NONE`] on the boundary), in [`PairedEdge`]: the
+    /// pairing reads that face anyway, and the edge rule needs the vertex, which edge
+    /// by edge is a chain of dependent loads through the twin.
     pub(crate) fn into_table<S: Send>(
         self,
         vertex_count: usize,
         mut state: S,
         on_edge: impl Fn(&mut S, [u32; 2], u32) + Sync,
-    ) -> Option<(CornerTable, Vec<u32>, S)> {
+    ) -> Option<(CornerTable, Vec<PairedEdge>, S)> {
         let Self { coarse_vertex, edge_point: mut corner_edge, first_odd } = self;
         let corners = coarse_vertex.len();
         let edge_count = vertex_count - first_odd as usize;
@@ -603,58 +603,72 @@ impl CanonicalGroups {
                 }
                 state
             };
-            rayon::join(|| pair_twins(&coarse_vertex, &corner_edge, first_odd, edge_count, |_| ()), side)
+            rayon::join(|| pair_twins(&coarse_vertex, &corner_edge, first_odd, edge_count, |_, _| ()), side)
         } else {
-            let paired = pair_twins(&coarse_vertex, &corner_edge, first_odd, edge_count, |c| {
-                on_edge(&mut state, ends(c), corner_edge[c]);
+            let paired = pair_twins(&coarse_vertex, &corner_edge, first_odd, edge_count, |c, ends| {
+                on_edge(&mut state, ends, corner_edge[c]);
             });
             (paired, state)
         };
-        let (twin, edge_corner, opposite) = paired?;
+        let (twin, edge_corner, edges) = paired?;
         if corners <= 3 * GROUP_CHUNK {
             corner_edge.iter_mut().for_each(|e| *e -= first_odd);
         } else {
             corner_edge.par_iter_mut().with_min_len(3 * GROUP_CHUNK).for_each(|e| *e -= first_odd);
         }
         let table = CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner);
-        Some((table, opposite, state))
+        Some((table, edges, state))
     }
 }
 
+/// What the twin pairing of [`CanonicalGroups::into_table`] keeps per coarse edge,
+/// side by side, so that the second half-edge of an edge finds all it checks and
+/// writes in one place (not through the first corner, a chain of dependent loads).
+#[derive(Clone, Copy)]
+pub(crate) struct PairedEdge {
+    /// The vertices of the edge's first half-edge, from and to.
+    ends: [u32; 2],
+    /// The vertex across the edge in its second face, [`NONE`] on the boundary (and
+    /// until the second half-edge is seen).
+    pub(crate) opposite: u32,
+    /// The edge's first corner.
+    first: u32,
+}
+
 /// The twin pairing of [`CanonicalGroups::into_table`]: the twins, the first corner
-/// of every edge and the vertex across it, or `None` if the edge points are not
+/// of every edge and what [`PairedEdge`] keeps, or `None` if the edge points are not
 /// numbered in order of first appearance, or an edge has more than two half-edges or
-/// two in the same direction. `new_edge(c)` is called when corner `c` starts an edge.
+/// two in the same direction. `new_edge(c, ends)` is called when corner `c` starts an
+/// edge.
 fn pair_twins(
     coarse_vertex: &[u32],
     corner_edge: &[u32],
     first_odd: u32,
     edge_count: usize,
-    mut new_edge: impl FnMut(usize),
-) -> Option<(Vec<u32>, Vec<u32>, Vec<u32>)> {
+    mut new_edge: impl FnMut(usize, [u32; 2]),
+) -> Option<(Vec<u32>, Vec<u32>, Vec<PairedEdge>)> {
     let corners = coarse_vertex.len();
     let mut twin = vec![NONE; corners];
     let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
-    let mut opposite = vec![NONE; edge_count];
+    let mut edges: Vec<PairedEdge> = Vec::with_capacity(edge_count);
     for c in 0..corners as u32 {
         let e = corner_edge[c as usize] - first_odd;
-        if e as usize == edge_corner.len() {
+        let ends = [coarse_vertex[c as usize], coarse_vertex[next(c) as usize]];
+        if e as usize == edges.len() {
             edge_corner.push(c);
-            new_edge(c as usize);
+            edges.push(PairedEdge { ends, opposite: NONE, first: c });
+            new_edge(c as usize, ends);
             continue;
         }
-        let t = *edge_corner.get(e as usize)?;
-        if twin[t as usize] != NONE
-            || coarse_vertex[t as usize] != coarse_vertex[next(c) as usize]
-            || coarse_vertex[next(t) as usize] != coarse_vertex[c as usize]
-        {
+        let edge = edges.get_mut(e as usize)?;
+        if edge.opposite != NONE || edge.ends != [ends[1], ends[0]] {
             return None;
         }
-        twin[t as usize] = c;
-        twin[c as usize] = t;
-        opposite[e as usize] = coarse_vertex[prev(c) as usize];
+        edge.opposite = coarse_vertex[prev(c) as usize];
+        twin[edge.first as usize] = c;
+        twin[c as usize] = edge.first;
     }
-    (edge_corner.len() == edge_count).then_some((twin, edge_corner, opposite))
+    (edges.len() == edge_count).then_some((twin, edge_corner, edges))
 }
 
 /// Groups (or faces, vertices) per parallel work item of the linear passes.

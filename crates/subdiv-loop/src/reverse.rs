@@ -53,8 +53,8 @@ use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::detect::{
-    Coarsening, FineOrder, canonical_groups, coarse_edges_are_simple_counted, coarse_face_is_valid, detect_mesh,
-    detect_table, reverse_canonical_mesh, reverse_canonical_table,
+    Coarsening, FineOrder, PairedEdge, canonical_groups, coarse_edges_are_simple_counted, coarse_face_is_valid,
+    detect_mesh, detect_table, reverse_canonical_mesh, reverse_canonical_table,
 };
 use crate::forward::buffer::{Output, Slots};
 use crate::forward::kernel::{self, PARALLEL_MIN_FACES, Rules, loop_beta, warren_beta};
@@ -593,8 +593,7 @@ pub(crate) fn reverse_canonical(
         }
         lower_ends[ends[0].min(ends[1]) as usize + 1] += 1;
     };
-    let (coarse, opposite, (mut sum, mut valence, lower_ends)) =
-        groups.into_table(vertex_count, sums, sum_edge_point)?;
+    let (coarse, edges, (mut sum, mut valence, lower_ends)) = groups.into_table(vertex_count, sums, sum_edge_point)?;
     // On the boundary only the boundary edges count, summed in edge order from zero:
     // boundary corners in corner order are the boundary edges in edge order.
     let (corner_vertex, twin, corner_edge) = (coarse.corner_vertices(), coarse.twins(), coarse.corner_edges());
@@ -618,7 +617,7 @@ pub(crate) fn reverse_canonical(
             let (n, flags) = (valence[v as usize] & !BOUNDARY, valence[v as usize] & BOUNDARY);
             coarse_position(fine[v as usize], sum[v as usize], n, flags != 0, rules, &weights)
         });
-        let (details, details_finite) = canonical_details(&coarse, &opposite, &positions, edge_position)?;
+        let (details, details_finite) = canonical_details(&coarse, &edges, &positions, edge_position)?;
         let finite = details_finite && crate::pyramid::all_finite(&positions);
         Some((positions, details, finite))
     };
@@ -644,10 +643,10 @@ const DETAIL_CHUNK: usize = 2048;
 /// so each chunk writes a contiguous run of edges), checking every face on the way
 /// (the face part of the coarse mesh check): `None` if one is not valid. The same
 /// formula as [`edge_rule`], on the face's three positions read once and the vertex
-/// `opposite[e]` across edge `e` (see [`CanonicalGroups::into_table`](crate::detect::CanonicalGroups::into_table)).
+/// across edge `e`, `edges[e].opposite` (see [`CanonicalGroups::into_table`](crate::detect::CanonicalGroups::into_table)).
 fn canonical_details(
     coarse: &CornerTable,
-    opposite: &[u32],
+    edges: &[PairedEdge],
     positions: &[DVec3],
     edge_position: impl Fn(u32) -> DVec3 + Sync,
 ) -> Option<(Vec<DVec3>, bool)> {
@@ -685,7 +684,7 @@ fn canonical_details(
                     let predicted = if t[k] == NONE {
                         0.5 * (a + b)
                     } else {
-                        let (r, s) = (p[(k + 2) % 3], positions[opposite[e as usize] as usize]);
+                        let (r, s) = (p[(k + 2) % 3], positions[edges[e as usize].opposite as usize]);
                         0.375 * (a + b) + 0.125 * (r + s)
                     };
                     let detail = edge_position(e) - predicted;
