@@ -436,23 +436,43 @@ fn coarse_edges_are_simple(coarse: &CornerTable) -> bool {
 
 /// [`coarse_edges_are_simple`] given `lower_ends[v + 1]`, the number of edges whose
 /// lower end point is `v` (a pass that visits the edges anyway can count them).
-pub(crate) fn coarse_edges_are_simple_counted(coarse: &CornerTable, mut start: Vec<u32>) -> bool {
+pub(crate) fn coarse_edges_are_simple_counted(coarse: &CornerTable, start: Vec<u32>) -> bool {
     let corner_vertex = coarse.corner_vertices();
-    // Counting sort of the edges by lower end point, then look for a repeated upper end
-    // point within each bucket.
-    let nv = coarse.vertex_count();
-    debug_assert_eq!(start.len(), nv + 1);
     let ends = |e: u32| {
         let c = coarse.edge_corner(e);
-        let (a, b) = (corner_vertex[c as usize], corner_vertex[next(c) as usize]);
+        [corner_vertex[c as usize], corner_vertex[next(c) as usize]]
+    };
+    edges_are_simple(coarse.vertex_count(), coarse.edge_count(), ends, start)
+}
+
+/// [`coarse_edges_are_simple_counted`] on the edges of the twin pairing, whose end
+/// points it reads in edge order (no lookup through the first corner).
+pub(crate) fn paired_edges_are_simple(vertex_count: usize, edges: &[PairedEdge], start: Vec<u32>) -> bool {
+    edges_are_simple(vertex_count, edges.len(), |e| edges[e as usize].ends, start)
+}
+
+/// No two of the `edge_count` edges `ends(e)` join the same two of `vertex_count`
+/// vertices, given `start[v + 1]`, the number of edges whose lower end point is `v`.
+fn edges_are_simple(
+    vertex_count: usize,
+    edge_count: usize,
+    ends: impl Fn(u32) -> [u32; 2],
+    mut start: Vec<u32>,
+) -> bool {
+    // Counting sort of the edges by lower end point, then look for a repeated upper end
+    // point within each bucket.
+    let nv = vertex_count;
+    debug_assert_eq!(start.len(), nv + 1);
+    let ends = |e: u32| {
+        let [a, b] = ends(e);
         (a.min(b), a.max(b))
     };
     for v in 0..nv {
         start[v + 1] += start[v];
     }
     let mut fill = start.clone();
-    let mut upper = vec![0u32; coarse.edge_count()];
-    for e in 0..coarse.edge_count() as u32 {
+    let mut upper = vec![0u32; edge_count];
+    for e in 0..edge_count as u32 {
         let (lo, hi) = ends(e);
         upper[fill[lo as usize] as usize] = hi;
         fill[lo as usize] += 1;

@@ -53,8 +53,8 @@ use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::detect::{
-    Coarsening, FineOrder, PairedEdge, canonical_groups, coarse_edges_are_simple_counted, coarse_face_is_valid,
-    detect_mesh, detect_table, reverse_canonical_mesh, reverse_canonical_table,
+    Coarsening, FineOrder, PairedEdge, canonical_groups, coarse_face_is_valid, detect_mesh, detect_table,
+    paired_edges_are_simple, reverse_canonical_mesh, reverse_canonical_table,
 };
 use crate::forward::buffer::{Output, Slots};
 use crate::forward::kernel::{self, PARALLEL_MIN_FACES, Rules, loop_beta, warren_beta};
@@ -621,7 +621,7 @@ pub(crate) fn reverse_canonical(
         let finite = details_finite && crate::pyramid::all_finite(&positions);
         Some((positions, details, finite))
     };
-    let simple = || coarse_edges_are_simple_counted(&coarse, lower_ends);
+    let simple = || paired_edges_are_simple(nv, &edges, lower_ends);
     let (simple, reversed) =
         if coarse.face_count() >= PARALLEL_MIN_FACES { rayon::join(simple, reverse) } else { (simple(), reverse()) };
     let (positions, details, finite) = reversed.filter(|_| simple)?;
