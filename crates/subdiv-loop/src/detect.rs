@@ -55,7 +55,7 @@ use mesh_topo::HalfedgeMesh;
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::forward::LoopOptions;
-use crate::forward::kernel::PARALLEL_MIN_FACES;
+use crate::forward::kernel;
 use crate::forward::topology::MeshTriangles;
 use crate::reverse::{CanonicalLevel, reverse_canonical};
 
@@ -436,23 +436,43 @@ fn coarse_edges_are_simple(coarse: &CornerTable) -> bool {
 
 /// [`coarse_edges_are_simple`] given `lower_ends[v + 1]`, the number of edges whose
 /// lower end point is `v` (a pass that visits the edges anyway can count them).
-pub(crate) fn coarse_edges_are_simple_counted(coarse: &CornerTable, mut start: Vec<u32>) -> bool {
+pub(crate) fn coarse_edges_are_simple_counted(coarse: &CornerTable, start: Vec<u32>) -> bool {
     let corner_vertex = coarse.corner_vertices();
-    // Counting sort of the edges by lower end point, then look for a repeated upper end
-    // point within each bucket.
-    let nv = coarse.vertex_count();
-    debug_assert_eq!(start.len(), nv + 1);
     let ends = |e: u32| {
         let c = coarse.edge_corner(e);
-        let (a, b) = (corner_vertex[c as usize], corner_vertex[next(c) as usize]);
+        [corner_vertex[c as usize], corner_vertex[next(c) as usize]]
+    };
+    edges_are_simple(coarse.vertex_count(), coarse.edge_count(), ends, start)
+}
+
+/// [`coarse_edges_are_simple_counted`] on the edges of the twin pairing, whose end
+/// points it reads in edge order (no lookup through the first corner).
+pub(crate) fn paired_edges_are_simple(vertex_count: usize, edges: &[PairedEdge], start: Vec<u32>) -> bool {
+    edges_are_simple(vertex_count, edges.len(), |e| edges[e as usize].ends, start)
+}
+
+/// No two of the `edge_count` edges `ends(e)` join the same two of `vertex_count`
+/// vertices, given `start[v + 1]`, the number of edges whose lower end point is `v`.
+fn edges_are_simple(
+    vertex_count: usize,
+    edge_count: usize,
+    ends: impl Fn(u32) -> [u32; 2],
+    mut start: Vec<u32>,
+) -> bool {
+    // Counting sort of the edges by lower end point, then look for a repeated upper end
+    // point within each bucket.
+    let nv = vertex_count;
+    debug_assert_eq!(start.len(), nv + 1);
+    let ends = |e: u32| {
+        let [a, b] = ends(e);
         (a.min(b), a.max(b))
     };
     for v in 0..nv {
         start[v + 1] += start[v];
     }
     let mut fill = start.clone();
-    let mut upper = vec![0u32; coarse.edge_count()];
-    for e in 0..coarse.edge_count() as u32 {
+    let mut upper = vec![0u32; edge_count];
+    for e in 0..edge_count as u32 {
         let (lo, hi) = ends(e);
         upper[fill[lo as usize] as usize] = hi;
         fill[lo as usize] += 1;
@@ -501,7 +521,7 @@ fn detect_canonical_faces(
     face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
 ) -> Option<Coarsening> {
     let groups = canonical_groups(faces, seed_vertex, face)?;
-    let (coarse, ()) = groups.into_table(vertex_count, |_, _| ())?;
+    let (coarse, _, ()) = groups.into_table(vertex_count, (), |_, _, _| ())?;
     Some(Coarsening::canonical(coarse))
 }
 
@@ -572,51 +592,103 @@ impl CanonicalGroups {
     /// half-edge `c` has edge point `m_c = V + e_c`; in corner order an edge is new
     /// exactly when it is the next number, and an older one is its twin.
     ///
-    /// `alongside(coarse_vertex, edge_point)` runs at the same time on another thread
-    /// (when there is one), reading the same arrays: a second sequential pass, for
-    /// work that follows the edges in order.
+    /// `on_edge(state, ends, edge_point)` is called for every coarse edge in edge order
+    /// (`ends`: the vertices of its first half-edge, `edge_point`: its fine vertex):
+    /// in a second sequential pass over the corners that runs beside the pairing on
+    /// another thread when the pass is large and the pool has one, else inside the
+    /// pairing loop (one pass instead of two).
+    ///
+    /// Also returns, per coarse edge, the vertex opposite it in its second face (the
+    /// face of its second half-edge; [`NONE`] on the boundary), in [`PairedEdge`]: the
+    /// pairing reads that face anyway, and the edge rule needs the vertex, which edge
+    /// by edge is a chain of dependent loads through the twin.
     pub(crate) fn into_table<S: Send>(
         self,
         vertex_count: usize,
-        alongside: impl FnOnce(&[u32], &[u32]) -> S + Send,
-    ) -> Option<(CornerTable, S)> {
+        mut state: S,
+        on_edge: impl Fn(&mut S, [u32; 2], u32) + Sync,
+    ) -> Option<(CornerTable, Vec<PairedEdge>, S)> {
         let Self { coarse_vertex, edge_point: mut corner_edge, first_odd } = self;
         let corners = coarse_vertex.len();
         let edge_count = vertex_count - first_odd as usize;
-        let pair_twins = || {
-            let mut twin = vec![NONE; corners];
-            let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
-            for c in 0..corners as u32 {
-                let e = corner_edge[c as usize] - first_odd;
-                if e as usize == edge_corner.len() {
-                    edge_corner.push(c);
-                    continue;
+        let ends = |c: usize| [coarse_vertex[c], coarse_vertex[next(c as u32) as usize]];
+        let (paired, state) = if kernel::runs_in_parallel(corners / 3) {
+            let side = || {
+                let mut new_edge = first_odd;
+                for (c, &m) in corner_edge.iter().enumerate() {
+                    if m == new_edge {
+                        new_edge += 1;
+                        on_edge(&mut state, ends(c), m);
+                    }
                 }
-                let t = *edge_corner.get(e as usize)?;
-                if twin[t as usize] != NONE
-                    || coarse_vertex[t as usize] != coarse_vertex[next(c) as usize]
-                    || coarse_vertex[next(t) as usize] != coarse_vertex[c as usize]
-                {
-                    return None;
-                }
-                twin[t as usize] = c;
-                twin[c as usize] = t;
-            }
-            (edge_corner.len() == edge_count).then_some((twin, edge_corner))
+                state
+            };
+            rayon::join(|| pair_twins(&coarse_vertex, &corner_edge, first_odd, edge_count, |_, _| ()), side)
+        } else {
+            let paired = pair_twins(&coarse_vertex, &corner_edge, first_odd, edge_count, |c, ends| {
+                on_edge(&mut state, ends, corner_edge[c]);
+            });
+            (paired, state)
         };
-        let side = || alongside(&coarse_vertex, &corner_edge);
-        // Below this size waking a second thread costs more than it saves.
-        let (paired, side) =
-            if corners / 3 >= PARALLEL_MIN_FACES { rayon::join(pair_twins, side) } else { (pair_twins(), side()) };
-        let (twin, edge_corner) = paired?;
+        let (twin, edge_corner, edges) = paired?;
         if corners <= 3 * GROUP_CHUNK {
             corner_edge.iter_mut().for_each(|e| *e -= first_odd);
         } else {
             corner_edge.par_iter_mut().with_min_len(3 * GROUP_CHUNK).for_each(|e| *e -= first_odd);
         }
         let table = CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner);
-        Some((table, side))
+        Some((table, edges, state))
     }
+}
+
+/// What the twin pairing of [`CanonicalGroups::into_table`] keeps per coarse edge,
+/// side by side, so that the second half-edge of an edge finds all it checks and
+/// writes in one place (not through the first corner, a chain of dependent loads).
+#[derive(Clone, Copy)]
+pub(crate) struct PairedEdge {
+    /// The vertices of the edge's first half-edge, from and to.
+    ends: [u32; 2],
+    /// The vertex across the edge in its second face, [`NONE`] on the boundary (and
+    /// until the second half-edge is seen).
+    pub(crate) opposite: u32,
+    /// The edge's first corner.
+    first: u32,
+}
+
+/// The twin pairing of [`CanonicalGroups::into_table`]: the twins, the first corner
+/// of every edge and what [`PairedEdge`] keeps, or `None` if the edge points are not
+/// numbered in order of first appearance, or an edge has more than two half-edges or
+/// two in the same direction. `new_edge(c, ends)` is called when corner `c` starts an
+/// edge.
+fn pair_twins(
+    coarse_vertex: &[u32],
+    corner_edge: &[u32],
+    first_odd: u32,
+    edge_count: usize,
+    mut new_edge: impl FnMut(usize, [u32; 2]),
+) -> Option<(Vec<u32>, Vec<u32>, Vec<PairedEdge>)> {
+    let corners = coarse_vertex.len();
+    let mut twin = vec![NONE; corners];
+    let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
+    let mut edges: Vec<PairedEdge> = Vec::with_capacity(edge_count);
+    for c in 0..corners as u32 {
+        let e = corner_edge[c as usize] - first_odd;
+        let ends = [coarse_vertex[c as usize], coarse_vertex[next(c) as usize]];
+        if e as usize == edges.len() {
+            edge_corner.push(c);
+            edges.push(PairedEdge { ends, opposite: NONE, first: c });
+            new_edge(c as usize, ends);
+            continue;
+        }
+        let edge = edges.get_mut(e as usize)?;
+        if edge.opposite != NONE || edge.ends != [ends[1], ends[0]] {
+            return None;
+        }
+        edge.opposite = coarse_vertex[prev(c) as usize];
+        twin[edge.first as usize] = c;
+        twin[c as usize] = edge.first;
+    }
+    (edges.len() == edge_count).then_some((twin, edge_corner, edges))
 }
 
 /// Groups (or faces, vertices) per parallel work item of the linear passes.

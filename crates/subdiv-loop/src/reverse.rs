@@ -53,8 +53,8 @@ use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::detect::{
-    Coarsening, FineOrder, canonical_groups, coarse_edges_are_simple_counted, coarse_face_is_valid, detect_mesh,
-    detect_table, reverse_canonical_mesh, reverse_canonical_table,
+    Coarsening, FineOrder, PairedEdge, canonical_groups, coarse_face_is_valid, detect_mesh, detect_table,
+    paired_edges_are_simple, reverse_canonical_mesh, reverse_canonical_table,
 };
 use crate::forward::buffer::{Output, Slots};
 use crate::forward::kernel::{self, PARALLEL_MIN_FACES, Rules, loop_beta, warren_beta};
@@ -209,21 +209,20 @@ pub(crate) fn reconstruct_levels<'a>(
                 // (sequential) sums of the details around the vertices run beside it.
                 let corrections = || VertexCorrections::new(&topology, details);
                 let step = || kernel::step_with_details(&topology, &positions, &kernel_rules, level < count, details);
-                let (corrections, step) = if kernel::runs_in_parallel(topology.face_count()) {
-                    rayon::join(corrections, step)
-                } else {
-                    (corrections(), step())
-                };
+                let parallel = kernel::runs_in_parallel(topology.face_count());
+                let (corrections, step) =
+                    if parallel { rayon::join(corrections, step) } else { (corrections(), step()) };
                 let nv = topology.vertex_count;
                 let mut fine = step.values;
                 let (vertex_points, edge_points) = fine.split_at_mut(nv);
                 // The finiteness check of the vertex points rides along (no pass of its
-                // own); small levels stay on the calling thread (no pool wake-up).
+                // own); a level the kernel ran on the calling thread stays there (no
+                // pool wake-up), by the kernel's own rule.
                 let apply = |(v, p): (usize, &mut DVec3)| {
                     corrections.apply(v, p, &kernel_rules);
                     p.is_finite()
                 };
-                let vertices_finite = if nv < PARALLEL_THRESHOLD {
+                let vertices_finite = if !parallel {
                     vertex_points.iter_mut().enumerate().map(apply).fold(true, |a, b| a & b)
                 } else {
                     vertex_points
@@ -566,8 +565,9 @@ pub(crate) struct CanonicalLevel {
 /// Passes: the groups of four faces (parallel); the coarse corners in order, which
 /// number the edges, pair the twins and sum the edge points around every coarse vertex
 /// in edge order (sequential: these sums are what [`reverse_positions`] adds, in the
-/// same order); the boundary edges, if any; the coarse positions (parallel); the
-/// details by chunks of coarse faces (parallel), which also check the faces.
+/// same order; on two threads a second pass beside the pairing, else in the same
+/// loop); the boundary edges, if any; the coarse positions (parallel); the details by
+/// chunks of coarse faces (parallel), which also check the faces.
 pub(crate) fn reverse_canonical(
     faces: usize,
     vertex_count: usize,
@@ -582,29 +582,18 @@ pub(crate) fn reverse_canonical(
     let nv = first_odd as usize;
     let edge_position = |e: u32| fine[(first_odd + e) as usize];
     // The edge points around every coarse vertex, summed in edge order (the order of
-    // `reverse_positions`), alongside the pairing of the twins.
-    let sum_edge_points = |coarse_vertex: &[u32], edge_point: &[u32]| {
-        let mut sum = vec![DVec3::ZERO; nv];
-        let mut valence = vec![0u32; nv];
-        // For the doubled-edge check: the edges by lower end point.
-        let mut lower_ends = vec![0u32; nv + 1];
-        let mut new_edge = first_odd;
-        for (c, &m) in edge_point.iter().enumerate() {
-            if m != new_edge {
-                continue;
-            }
-            new_edge += 1;
-            let point = fine[m as usize];
-            let ends = [coarse_vertex[c], coarse_vertex[next(c as u32) as usize]];
-            for v in ends {
-                sum[v as usize] += point;
-                valence[v as usize] += 1;
-            }
-            lower_ends[ends[0].min(ends[1]) as usize + 1] += 1;
+    // `reverse_positions`), beside the pairing of the twins or inside it, with the
+    // edges counted by lower end point for the doubled-edge check.
+    let sums = (vec![DVec3::ZERO; nv], vec![0u32; nv], vec![0u32; nv + 1]);
+    let sum_edge_point = |(sum, valence, lower_ends): &mut (Vec<DVec3>, Vec<u32>, Vec<u32>), ends: [u32; 2], m: u32| {
+        let point = fine[m as usize];
+        for v in ends {
+            sum[v as usize] += point;
+            valence[v as usize] += 1;
         }
-        (sum, valence, lower_ends)
+        lower_ends[ends[0].min(ends[1]) as usize + 1] += 1;
     };
-    let (coarse, (mut sum, mut valence, lower_ends)) = groups.into_table(vertex_count, sum_edge_points)?;
+    let (coarse, edges, (mut sum, mut valence, lower_ends)) = groups.into_table(vertex_count, sums, sum_edge_point)?;
     // On the boundary only the boundary edges count, summed in edge order from zero:
     // boundary corners in corner order are the boundary edges in edge order.
     let (corner_vertex, twin, corner_edge) = (coarse.corner_vertices(), coarse.twins(), coarse.corner_edges());
@@ -628,11 +617,11 @@ pub(crate) fn reverse_canonical(
             let (n, flags) = (valence[v as usize] & !BOUNDARY, valence[v as usize] & BOUNDARY);
             coarse_position(fine[v as usize], sum[v as usize], n, flags != 0, rules, &weights)
         });
-        let (details, details_finite) = canonical_details(&coarse, &positions, edge_position)?;
+        let (details, details_finite) = canonical_details(&coarse, &edges, &positions, edge_position)?;
         let finite = details_finite && crate::pyramid::all_finite(&positions);
         Some((positions, details, finite))
     };
-    let simple = || coarse_edges_are_simple_counted(&coarse, lower_ends);
+    let simple = || paired_edges_are_simple(nv, &edges, lower_ends);
     let (simple, reversed) =
         if coarse.face_count() >= PARALLEL_MIN_FACES { rayon::join(simple, reverse) } else { (simple(), reverse()) };
     let (positions, details, finite) = reversed.filter(|_| simple)?;
@@ -653,9 +642,11 @@ const DETAIL_CHUNK: usize = 2048;
 /// The detail of every coarse edge, by chunks of faces (each edge at its first corner,
 /// so each chunk writes a contiguous run of edges), checking every face on the way
 /// (the face part of the coarse mesh check): `None` if one is not valid. The same
-/// formula as [`edge_rule`], on the face's three positions read once.
+/// formula as [`edge_rule`], on the face's three positions read once and the vertex
+/// across edge `e`, `edges[e].opposite` (see [`CanonicalGroups::into_table`](crate::detect::CanonicalGroups::into_table)).
 fn canonical_details(
     coarse: &CornerTable,
+    edges: &[PairedEdge],
     positions: &[DVec3],
     edge_position: impl Fn(u32) -> DVec3 + Sync,
 ) -> Option<(Vec<DVec3>, bool)> {
@@ -689,13 +680,13 @@ fn canonical_details(
                         continue;
                     }
                     let (a, b) = (p[k], p[(k + 1) % 3]);
+                    let e = (e0 + piece.written()) as u32;
                     let predicted = if t[k] == NONE {
                         0.5 * (a + b)
                     } else {
-                        let (r, s) = (p[(k + 2) % 3], positions[corner_vertex[prev(t[k]) as usize] as usize]);
+                        let (r, s) = (p[(k + 2) % 3], positions[edges[e as usize].opposite as usize]);
                         0.375 * (a + b) + 0.125 * (r + s)
                     };
-                    let e = (e0 + piece.written()) as u32;
                     let detail = edge_position(e) - predicted;
                     non_finite |= non_finite_bits(detail);
                     piece.push(detail);
