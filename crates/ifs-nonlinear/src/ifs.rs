@@ -49,65 +49,43 @@ pub trait Ifs: Sync {
     }
 }
 
-impl<I: Ifs + ?Sized> Ifs for &I {
-    fn map_count(&self) -> usize {
-        (**self).map_count()
-    }
-    fn state_len(&self) -> usize {
-        (**self).state_len()
-    }
-    fn point_dim(&self) -> usize {
-        (**self).point_dim()
-    }
-    fn apply(&self, map: usize, state: &[f64], out: &mut [f64]) -> bool {
-        (**self).apply(map, state, out)
-    }
-    fn point(&self, state: &[f64]) -> [f64; 3] {
-        (**self).point(state)
-    }
-    fn default_start(&self) -> Vec<f64> {
-        (**self).default_start()
-    }
-    fn determinants(&self) -> Vec<f64> {
-        (**self).determinants()
-    }
-    fn domain(&self) -> &'static str {
-        (**self).domain()
-    }
-    fn contractivity_report(&self) -> Option<ContractivityReport> {
-        (**self).contractivity_report()
-    }
+/// `Ifs` for references and boxes, forwarding every method (so that `&dyn Ifs` and
+/// `Box<dyn Ifs>` work wherever an `Ifs` is expected).
+macro_rules! forward_ifs {
+    ($($pointer:ty),*) => {$(
+        impl<I: Ifs + ?Sized> Ifs for $pointer {
+            fn map_count(&self) -> usize {
+                (**self).map_count()
+            }
+            fn state_len(&self) -> usize {
+                (**self).state_len()
+            }
+            fn point_dim(&self) -> usize {
+                (**self).point_dim()
+            }
+            fn apply(&self, map: usize, state: &[f64], out: &mut [f64]) -> bool {
+                (**self).apply(map, state, out)
+            }
+            fn point(&self, state: &[f64]) -> [f64; 3] {
+                (**self).point(state)
+            }
+            fn default_start(&self) -> Vec<f64> {
+                (**self).default_start()
+            }
+            fn determinants(&self) -> Vec<f64> {
+                (**self).determinants()
+            }
+            fn domain(&self) -> &'static str {
+                (**self).domain()
+            }
+            fn contractivity_report(&self) -> Option<ContractivityReport> {
+                (**self).contractivity_report()
+            }
+        }
+    )*};
 }
 
-impl<I: Ifs + ?Sized> Ifs for Box<I> {
-    fn map_count(&self) -> usize {
-        (**self).map_count()
-    }
-    fn state_len(&self) -> usize {
-        (**self).state_len()
-    }
-    fn point_dim(&self) -> usize {
-        (**self).point_dim()
-    }
-    fn apply(&self, map: usize, state: &[f64], out: &mut [f64]) -> bool {
-        (**self).apply(map, state, out)
-    }
-    fn point(&self, state: &[f64]) -> [f64; 3] {
-        (**self).point(state)
-    }
-    fn default_start(&self) -> Vec<f64> {
-        (**self).default_start()
-    }
-    fn determinants(&self) -> Vec<f64> {
-        (**self).determinants()
-    }
-    fn domain(&self) -> &'static str {
-        (**self).domain()
-    }
-    fn contractivity_report(&self) -> Option<ContractivityReport> {
-        (**self).contractivity_report()
-    }
-}
+forward_ifs!(&I, Box<I>);
 
 /// An affine map `x ↦ M x + t` of R^d (d ≤ 3; unused rows and columns are zero).
 #[derive(Debug, Clone, Copy, PartialEq)]

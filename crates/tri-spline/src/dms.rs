@@ -393,51 +393,22 @@ impl DmsBasis {
     /// As [`eval_basis`](Self::eval_basis) with caller-provided scratch and output.
     pub fn eval_basis_with(&self, u: DVec2, scratch: &mut DmsScratch, out: &mut Vec<(usize, f64)>) {
         out.clear();
-        let k = self.degree + 1;
         let nb = self.masks.len();
-        for &t in self.grid.candidates(u) {
-            let t = t as usize;
-            let [lo, hi] = self.boxes[t];
-            if u.x < lo.x || u.y < lo.y || u.x > hi.x || u.y > hi.y {
-                continue;
-            }
-            scratch.memo.reset(3 * k);
-            let mut rec = SimplexRecurrence {
-                knots: &self.tri_knots[t * 3 * k..(t + 1) * 3 * k],
-                u,
-                choice: WChoice::Widest,
-                memo: &mut scratch.memo,
-                degenerate: None,
-            };
+        self.for_each_triangle_at(u, &mut scratch.memo, |t, rec| {
             for (b, &mask) in self.masks.iter().enumerate() {
                 let m = rec.value(mask);
                 if m != 0.0 {
                     out.push((t * nb + b, self.scales[t * nb + b] * m));
                 }
             }
-            debug_assert!(rec.degenerate.is_none(), "internal: knots were checked to be in general position");
-        }
+        });
     }
 
     /// The non-zero basis functions at `u` with their gradients: `(index, value, d/dx, d/dy)`.
     pub fn eval_basis_gradient_with(&self, u: DVec2, scratch: &mut DmsScratch, out: &mut Vec<(usize, f64, DVec2)>) {
         out.clear();
-        let k = self.degree + 1;
         let nb = self.masks.len();
-        for &t in self.grid.candidates(u) {
-            let t = t as usize;
-            let [lo, hi] = self.boxes[t];
-            if u.x < lo.x || u.y < lo.y || u.x > hi.x || u.y > hi.y {
-                continue;
-            }
-            scratch.memo.reset(3 * k);
-            let mut rec = SimplexRecurrence {
-                knots: &self.tri_knots[t * 3 * k..(t + 1) * 3 * k],
-                u,
-                choice: WChoice::Widest,
-                memo: &mut scratch.memo,
-                degenerate: None,
-            };
+        self.for_each_triangle_at(u, &mut scratch.memo, |t, rec| {
             for (b, &mask) in self.masks.iter().enumerate() {
                 let scale = self.scales[t * nb + b];
                 let m = rec.value(mask);
@@ -447,24 +418,46 @@ impl DmsBasis {
                     out.push((t * nb + b, scale * m, DVec2::new(gx, gy) * scale));
                 }
             }
+        });
+    }
+
+    /// Calls `visit(t, recurrence)` for every domain triangle `t` whose bounding box holds
+    /// `u` (the only ones whose basis functions can be non-zero there), with the simplex
+    /// recurrence over that triangle's knot sets, its memo reset.
+    fn for_each_triangle_at(
+        &self,
+        u: DVec2,
+        memo: &mut Memo,
+        mut visit: impl FnMut(usize, &mut SimplexRecurrence<'_>),
+    ) {
+        for &t in self.grid.candidates(u) {
+            let t = t as usize;
+            let [lo, hi] = self.boxes[t];
+            if u.x < lo.x || u.y < lo.y || u.x > hi.x || u.y > hi.y {
+                continue;
+            }
+            memo.reset(3 * (self.degree + 1));
+            let mut rec =
+                SimplexRecurrence { knots: self.triangle_knots(t), u, choice: WChoice::Widest, memo, degenerate: None };
+            visit(t, &mut rec);
+            debug_assert!(rec.degenerate.is_none(), "internal: knots were checked to be in general position");
         }
+    }
+
+    /// The `3 (degree + 1)` knots of domain triangle `t`.
+    fn triangle_knots(&self, t: usize) -> &[DVec2] {
+        let k = self.degree + 1;
+        &self.tri_knots[t * 3 * k..(t + 1) * 3 * k]
     }
 
     /// Evaluates one basis function with a chosen `W` rule (for testing that the value
     /// does not depend on it).
     pub fn eval_one_with(&self, index: usize, u: DVec2, choice: WChoice) -> f64 {
-        let k = self.degree + 1;
         let nb = self.masks.len();
         let t = index / nb;
         let mut memo = Memo::default();
-        memo.reset(3 * k);
-        let mut rec = SimplexRecurrence {
-            knots: &self.tri_knots[t * 3 * k..(t + 1) * 3 * k],
-            u,
-            choice,
-            memo: &mut memo,
-            degenerate: None,
-        };
+        memo.reset(3 * (self.degree + 1));
+        let mut rec = SimplexRecurrence { knots: self.triangle_knots(t), u, choice, memo: &mut memo, degenerate: None };
         self.scales[index] * rec.value(self.masks[index % nb])
     }
 }

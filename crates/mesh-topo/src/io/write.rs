@@ -150,6 +150,13 @@ pub fn write_off(out: impl Write, soup: &PolygonSoup) -> Result<(), IoError> {
     let mut w = LineWriter::new(out);
     w.text(&format!("OFF\n{} {} 0", soup.vertex_count(), soup.face_count()));
     w.emit()?;
+    write_counted_body(&mut w, soup)?;
+    w.finish()
+}
+
+/// The body shared by OFF and ASCII PLY: one `x y z` line per vertex, then one line per
+/// face, its corner count first.
+fn write_counted_body<W: Write>(w: &mut LineWriter<W>, soup: &PolygonSoup) -> Result<(), IoError> {
     for p in &soup.positions {
         w.point(p.to_array());
         w.emit()?;
@@ -162,7 +169,7 @@ pub fn write_off(out: impl Write, soup: &PolygonSoup) -> Result<(), IoError> {
         }
         w.emit()?;
     }
-    w.finish()
+    Ok(())
 }
 
 /// Writes a soup as PLY: `double` coordinates, faces as `vertex_indices` lists of
@@ -185,18 +192,7 @@ pub fn write_ply(out: impl Write, soup: &PolygonSoup, encoding: PlyEncoding) -> 
     w.emit()?;
     match encoding {
         PlyEncoding::Ascii => {
-            for p in &soup.positions {
-                w.point(p.to_array());
-                w.emit()?;
-            }
-            for face in soup.faces() {
-                push_u32(&mut w.line, face.len() as u32);
-                for &v in face {
-                    w.line.push(b' ');
-                    push_u32(&mut w.line, v);
-                }
-                w.emit()?;
-            }
+            write_counted_body(&mut w, soup)?;
             w.finish()
         }
         PlyEncoding::BinaryLittleEndian | PlyEncoding::BinaryBigEndian => {
