@@ -597,14 +597,14 @@ struct Search<'a> {
     role: Vec<u8>,
     /// F_F faces of the current interpretation, in search order.
     queue: Vec<u32>,
-    /// Scratch of [`Self::energy`], per vertex (reset after each use): the F_F corner at
-    /// the vertex, whether its group was summed, its candidate.
+    /// Scratch of [`Self::energy`], per vertex (reset after each use): the rank of the
+    /// F_F corner at the vertex (F_F corners counted in memory order), whether its group
+    /// was summed; and the candidates, by rank.
     ff_corner_of_vertex: Vec<u32>,
     grouped: Vec<bool>,
     candidate: Vec<DVec3>,
-    /// Scratch of [`Self::energy`]: one face's points and their expansion, one group.
+    /// Scratch of [`Self::energy`]: one face's points, one group.
     points: Vec<DVec3>,
-    expanded: Vec<DVec3>,
     group: Vec<u32>,
     stats: ReverseStats,
 }
@@ -622,7 +622,6 @@ impl<'a> Search<'a> {
             grouped: Vec::new(),
             candidate: Vec::new(),
             points: Vec::new(),
-            expanded: Vec::new(),
             group: Vec::new(),
             stats: ReverseStats::default(),
         }
@@ -766,6 +765,13 @@ impl<'a> Search<'a> {
         if fc == self.fine.offsets[f] { self.fine.offsets[f + 1] - 1 } else { fc - 1 }
     }
 
+    /// The candidate of vertex `v` in [`Self::energy`] (stored by the rank of its F_F
+    /// corner); zero for a vertex on no F_F face (which the callers rule out first).
+    #[inline]
+    fn candidate_of_vertex(&self, v: u32) -> DVec3 {
+        self.candidate.get(self.ff_corner_of_vertex[v as usize] as usize).copied().unwrap_or(DVec3::ZERO)
+    }
+
     /// Total squared detail norm of the current interpretation of a component (whose F_F
     /// faces are `self.queue[queue_start..]`), and the component's size (bounding-box
     /// diagonal) for the zero test. Also checks that every vertex of the component is a
@@ -823,33 +829,47 @@ impl<'a> Search<'a> {
         // The F_F faces in memory order (the search order only decides which of two F_F
         // faces sharing a vertex is named: then the search order is replayed).
         let mut points = std::mem::take(&mut self.points);
-        let mut expanded = std::mem::take(&mut self.expanded);
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-        let mut ff_corners = 0;
         let mut shared = false;
+        // First the positions, gathered in F_F corner order (the rank of each F_F corner
+        // in memory order, kept per vertex): a tight loop whose scattered reads overlap.
+        // The candidates are then indexed by rank, written in order and read in face
+        // order. More F_F corners than vertices means a vertex on two F_F faces (`shared`
+        // is set then): nothing is written past the end.
+        let capacity = self.candidate.len();
+        let mut rank = 0usize;
         for f in component_faces.iter() {
             if self.role[f as usize] != FF {
                 continue;
             }
-            let (b, e) = (fine.offsets[f as usize], fine.offsets[f as usize + 1]);
-            points.clear();
-            for fc in b..e {
-                let v = fine.corner_vertex[fc as usize] as usize;
-                shared |= std::mem::replace(&mut self.ff_corner_of_vertex[v], fc) != NONE;
-                let p = positions[v];
+            let (b, e) = (fine.offsets[f as usize] as usize, fine.offsets[f as usize + 1] as usize);
+            for &v in &fine.corner_vertex[b..e] {
+                shared |= std::mem::replace(&mut self.ff_corner_of_vertex[v as usize], rank as u32) != NONE;
+                let p = positions[v as usize];
                 lo = lo.min(p);
                 hi = hi.max(p);
-                points.push(p);
+                if rank < capacity {
+                    self.candidate[rank] = p;
+                }
+                rank += 1;
             }
-            ff_corners += points.len();
-            expanded.resize(points.len(), DVec3::ZERO);
-            self.maps.inverse(&points, &mut expanded);
-            for (fc, &p) in (b..e).zip(&expanded) {
-                self.candidate[fine.corner_vertex[fc as usize] as usize] = p;
+        }
+        let ff_corners = rank;
+        if !shared {
+            // Each F_F face expanded in place.
+            let mut start = 0;
+            for f in component_faces.iter() {
+                if self.role[f as usize] != FF {
+                    continue;
+                }
+                let m = self.face_size(f as usize);
+                points.clear();
+                points.extend_from_slice(&self.candidate[start..start + m]);
+                self.maps.inverse(&points, &mut self.candidate[start..start + m]);
+                start += m;
             }
         }
         self.points = points;
-        self.expanded = expanded;
         if shared {
             self.ff_corner_of_vertex.fill(NONE);
             return Err(self.shared_vertex_in_search_order(queue_start));
@@ -875,9 +895,9 @@ impl<'a> Search<'a> {
             }
             let corners = fine.offsets[f as usize] as usize..fine.offsets[f as usize + 1] as usize;
             let vertices = &fine.corner_vertex[corners];
-            let mean = vertices.iter().map(|&v| self.candidate[v as usize]).sum::<DVec3>() / vertices.len() as f64;
+            let mean = vertices.iter().map(|&v| self.candidate_of_vertex(v)).sum::<DVec3>() / vertices.len() as f64;
             for &v in vertices {
-                energy += (self.candidate[v as usize] - mean).length_squared();
+                energy += (self.candidate_of_vertex(v) - mean).length_squared();
                 grouped += usize::from(!std::mem::replace(&mut self.grouped[v as usize], true));
             }
         }
@@ -918,7 +938,7 @@ impl<'a> Search<'a> {
                         c = d;
                     }
                 }
-                let candidate = |c: u32| self.candidate[fine.corner_vertex[c as usize] as usize];
+                let candidate = |c: u32| self.candidate_of_vertex(fine.corner_vertex[c as usize]);
                 let mean = group.iter().map(|&c| candidate(c)).sum::<DVec3>() / group.len() as f64;
                 energy += group.iter().map(|&c| (candidate(c) - mean).length_squared()).sum::<f64>();
             }
