@@ -337,6 +337,11 @@ pub(crate) struct Session<'a> {
     /// Per component: the F_F faces of its best automatic reading, kept from the ranking
     /// so that building it does not search again (empty for a given seed).
     best_ff_faces: Vec<Vec<u32>>,
+    /// Per component: the candidates of its best automatic reading, by coarse corner,
+    /// kept from the ranking when they are numbered as the coarse corners of the result
+    /// (a mesh of one component), so that the first build does not expand them again;
+    /// empty otherwise or once used.
+    best_candidates: Vec<Vec<DVec3>>,
     choices: Vec<SeedChoice>,
     /// The roles of the search are those of the given seed of a one-component mesh,
     /// found while checking that it has one component: the first build uses them.
@@ -371,14 +376,16 @@ impl<'a> Session<'a> {
         match options.seeds[..] {
             [] => {
                 if let Some(first) = search.first_reading_covers_all(faces) {
-                    let (choice, ranked, best) = search.choose(0, faces, fine.vertex_count, Some(first))?;
+                    let (choice, ranked, best, candidates) = search.choose(0, faces, fine.vertex_count, Some(first))?;
+                    let best = (best, candidates);
                     return Ok(Self::one_component(search, options.rule, NONE, ranked, best, choice, false));
                 }
             }
             [seed] if search.seed_covers_all(seed) => {
                 let choice = SeedChoice::given(0, seed);
                 let ranked = vec![(seed, f64::NAN)];
-                return Ok(Self::one_component(search, options.rule, seed as u32, ranked, Vec::new(), choice, true));
+                let best = (Vec::new(), Vec::new());
+                return Ok(Self::one_component(search, options.rule, seed as u32, ranked, best, choice, true));
             }
             _ => {}
         }
@@ -414,12 +421,14 @@ impl<'a> Session<'a> {
         let mut readings: Vec<Vec<(usize, f64)>> = Vec::with_capacity(component_count);
         let mut choices = Vec::with_capacity(component_count);
         let mut best_ff_faces = Vec::with_capacity(component_count);
+        let mut best_candidates = Vec::with_capacity(component_count);
         for k in 0..component_count {
             if given[k] != NONE {
                 let seed = given[k] as usize;
                 readings.push(vec![(seed, f64::NAN)]);
                 choices.push(SeedChoice::given(k, seed));
                 best_ff_faces.push(Vec::new());
+                best_candidates.push(Vec::new());
             } else {
                 let faces = if component_count == 1 {
                     faces
@@ -428,10 +437,11 @@ impl<'a> Session<'a> {
                         &faces_by_component[component_offsets[k] as usize..component_offsets[k + 1] as usize],
                     )
                 };
-                let (choice, ranked, best) = search.choose(k, faces, vertices_by_component[k], None)?;
+                let (choice, ranked, best, candidates) = search.choose(k, faces, vertices_by_component[k], None)?;
                 readings.push(ranked);
                 choices.push(choice);
                 best_ff_faces.push(best);
+                best_candidates.push(candidates);
             }
         }
         Ok(Self {
@@ -441,6 +451,7 @@ impl<'a> Session<'a> {
             given,
             readings,
             best_ff_faces,
+            best_candidates,
             choices,
             preclassified: false,
         })
@@ -451,7 +462,7 @@ impl<'a> Session<'a> {
         rule: FaceRule,
         given: u32,
         ranked: Ranked,
-        best: Vec<u32>,
+        (best, candidates): (Vec<u32>, Vec<DVec3>),
         choice: SeedChoice,
         preclassified: bool,
     ) -> Self {
@@ -462,6 +473,7 @@ impl<'a> Session<'a> {
             given: vec![given],
             readings: vec![ranked],
             best_ff_faces: vec![best],
+            best_candidates: vec![candidates],
             choices: vec![choice],
             preclassified,
         }
@@ -506,10 +518,16 @@ impl<'a> Session<'a> {
                     }
                 }
             }
-            // The candidates of the result are written into the energy scratch (no reading
-            // is evaluated after the ranking).
-            let buffer = std::mem::take(&mut search.candidate);
-            match search.finish(self.rule, &self.component_of_face, component_count, buffer) {
+            // The candidates of the result: those of the ranking for the best reading of a
+            // one-component mesh, else written into the energy scratch (no reading is
+            // evaluated after the ranking).
+            let ready = component_count == 1 && pick[0] == 0 && !self.best_candidates[0].is_empty();
+            let buffer = if ready {
+                std::mem::take(&mut self.best_candidates[0])
+            } else {
+                std::mem::take(&mut search.candidate)
+            };
+            match search.finish(self.rule, &self.component_of_face, component_count, buffer, ready) {
                 Ok((mut reversal, energies)) => {
                     for (k, choice) in choices.iter_mut().enumerate() {
                         let (seed, _) = self.readings[k][pick[k]];
@@ -598,8 +616,8 @@ struct Search<'a> {
     /// F_F faces of the current interpretation, in search order.
     queue: Vec<u32>,
     /// Scratch of [`Self::energy`], per vertex (reset after each use): the rank of the
-    /// F_F corner at the vertex (F_F corners counted in memory order), whether its group
-    /// was summed; and the candidates, by rank.
+    /// F_F corner at the vertex (F_F corners counted in memory order); by rank, whether
+    /// its group was summed and its candidate.
     ff_corner_of_vertex: Vec<u32>,
     grouped: Vec<bool>,
     candidate: Vec<DVec3>,
@@ -772,6 +790,15 @@ impl<'a> Search<'a> {
         self.candidate.get(self.ff_corner_of_vertex[v as usize] as usize).copied().unwrap_or(DVec3::ZERO)
     }
 
+    /// Whether the candidate of vertex `v` is in a group already in [`Self::energy`], marking
+    /// it so (by the rank of its F_F corner, as the candidates); `true` for a vertex on no
+    /// F_F face (which the callers rule out first).
+    #[inline]
+    fn mark_grouped(&mut self, v: u32) -> bool {
+        let rank = self.ff_corner_of_vertex[v as usize] as usize;
+        self.grouped.get_mut(rank).is_none_or(|grouped| std::mem::replace(grouped, true))
+    }
+
     /// Total squared detail norm of the current interpretation of a component (whose F_F
     /// faces are `self.queue[queue_start..]`), and the component's size (bounding-box
     /// diagonal) for the zero test. Also checks that every vertex of the component is a
@@ -809,8 +836,10 @@ impl<'a> Search<'a> {
             for &f in &self.queue[queue_start..] {
                 for fc in fine.offsets[f as usize]..fine.offsets[f as usize + 1] {
                     let v = fine.corner_vertex[fc as usize] as usize;
-                    self.ff_corner_of_vertex[v] = NONE;
-                    self.grouped[v] = false;
+                    let rank = std::mem::replace(&mut self.ff_corner_of_vertex[v], NONE);
+                    if let Some(grouped) = self.grouped.get_mut(rank as usize) {
+                        *grouped = false;
+                    }
                 }
             }
         }
@@ -898,7 +927,7 @@ impl<'a> Search<'a> {
             let mean = vertices.iter().map(|&v| self.candidate_of_vertex(v)).sum::<DVec3>() / vertices.len() as f64;
             for &v in vertices {
                 energy += (self.candidate_of_vertex(v) - mean).length_squared();
-                grouped += usize::from(!std::mem::replace(&mut self.grouped[v as usize], true));
+                grouped += usize::from(!self.mark_grouped(v));
             }
         }
         if grouped == ff_corners {
@@ -913,12 +942,11 @@ impl<'a> Search<'a> {
         for i in queue_start..self.queue.len() {
             let f = self.queue[i] as usize;
             for fc in fine.offsets[f]..fine.offsets[f + 1] {
-                if self.grouped[fine.corner_vertex[fc as usize] as usize] {
+                if self.mark_grouped(fine.corner_vertex[fc as usize]) {
                     continue;
                 }
                 group.clear();
                 group.push(fc);
-                self.grouped[fine.corner_vertex[fc as usize] as usize] = true;
                 for clockwise in [true, false] {
                     let mut c = fc;
                     loop {
@@ -929,11 +957,9 @@ impl<'a> Search<'a> {
                             self.across(self.corner_face[p as usize] as usize, p)?
                         };
                         let Some(d) = step else { break };
-                        let w = fine.corner_vertex[d as usize] as usize;
-                        if self.grouped[w] {
+                        if self.mark_grouped(fine.corner_vertex[d as usize]) {
                             break;
                         }
-                        self.grouped[w] = true;
                         group.push(d);
                         c = d;
                     }
@@ -1029,7 +1055,7 @@ impl<'a> Search<'a> {
         faces: FaceSet<'_>,
         vertices: usize,
         mut first: Option<(f64, f64)>,
-    ) -> Result<(SeedChoice, Ranked, Vec<u32>), DooError> {
+    ) -> Result<(SeedChoice, Ranked, Vec<u32>, Vec<DVec3>), DooError> {
         let lowest = faces.first() as usize;
         // A first trial made already is the whole queue.
         let queue_start = if first.is_some() { 0 } else { self.queue.len() };
@@ -1049,7 +1075,10 @@ impl<'a> Search<'a> {
                 }
             }
         }
-        let mut found: Vec<(usize, f64, Vec<u32>)> = Vec::new();
+        // Per valid reading: its seed, energy, F_F faces and, on a whole mesh, candidates
+        // (numbered by F_F corner in memory order: the coarse corners of the result).
+        let whole = matches!(faces, FaceSet::All(_));
+        let mut found: Vec<(usize, f64, Vec<u32>, Vec<DVec3>)> = Vec::new();
         let mut other_classes = Vec::new();
         let mut scale = 0.0;
         for (seed, class) in candidates {
@@ -1070,7 +1099,8 @@ impl<'a> Search<'a> {
                     if let Some(f) = fe {
                         other_classes.push((f as usize, "F_E"));
                     }
-                    found.push((seed, energy, self.queue[queue_start..].to_vec()));
+                    let candidates = if whole { std::mem::take(&mut self.candidate) } else { Vec::new() };
+                    found.push((seed, energy, self.queue[queue_start..].to_vec(), candidates));
                     self.reset(faces, queue_start);
                     break;
                 }
@@ -1091,7 +1121,8 @@ impl<'a> Search<'a> {
                 match result {
                     Ok((energy, _)) => {
                         trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Ok(energy) });
-                        found.push((seed, energy, self.queue[queue_start..].to_vec()));
+                        let candidates = if whole { std::mem::take(&mut self.candidate) } else { Vec::new() };
+                        found.push((seed, energy, self.queue[queue_start..].to_vec(), candidates));
                     }
                     Err(error) => {
                         trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Err(error.to_string()) })
@@ -1125,19 +1156,22 @@ impl<'a> Search<'a> {
         rank.sort_by(|&a, &b| found[a].1.total_cmp(&found[b].1));
         let ranked: Vec<(usize, f64)> = rank.iter().map(|&i| (found[i].0, found[i].1)).collect();
         let best_ff_faces = std::mem::take(&mut found[rank[0]].2);
+        let best_candidates = std::mem::take(&mut found[rank[0]].3);
         let choice = SeedChoice { component: k, seed_face: seed, given: false, trials, detail_energy: energy, reason };
-        Ok((choice, ranked, best_ff_faces))
+        Ok((choice, ranked, best_ff_faces, best_candidates))
     }
 
     /// Builds the coarse mesh, details and fine order from the roles of all components;
-    /// also returns the total squared detail norm of each component. `buffer` is reused
-    /// for the candidates.
+    /// also returns the total squared detail norm of each component. `buffer` holds the
+    /// candidates by coarse corner if `ready` (and has one per coarse corner), else it is
+    /// reused for them.
     fn finish(
         &self,
         rule: FaceRule,
         component_of_face: &[u32],
         component_count: usize,
         buffer: Vec<DVec3>,
+        ready: bool,
     ) -> Result<(DooReversal, Vec<f64>), DooError> {
         let fine = self.fine;
         let faces = fine.face_count();
@@ -1247,8 +1281,11 @@ impl<'a> Search<'a> {
             },
             || {
                 // Candidates, means and details.
-                let candidates =
-                    expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize], buffer);
+                let candidates = if ready && buffer.len() == vertex_of.len() {
+                    buffer
+                } else {
+                    expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize], buffer)
+                };
                 let (coarse_positions, details, vertex_energy) = means_and_details(&by_vertex, &candidates);
                 (coarse_positions, details, vertex_energy)
             },
