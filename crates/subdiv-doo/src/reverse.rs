@@ -737,8 +737,8 @@ impl<'a> Search<'a> {
             self.stats.visited_faces += 1;
             for fc in self.fine.offsets[f]..self.fine.offsets[f + 1] {
                 self.stats.edges_crossed += 1;
-                let Some(gt) = self.across(f, fc)? else { continue };
-                let g = self.corner_face[self.fine.corner_twin[fc as usize] as usize] as usize;
+                let Some((g, gt)) = self.across_quad(f, fc)? else { continue };
+                let g = g as usize;
                 match self.role[g] {
                     FF => {
                         return Err(Self::broken(
@@ -1184,10 +1184,13 @@ impl<'a> Search<'a> {
         // Fine vertex of each coarse corner; every fine vertex exactly once.
         let mut vertex_of = Vec::with_capacity(fine.vertex_count);
         let mut canonical_of_vertex = vec![NONE; fine.vertex_count];
-        for f in 0..faces {
+        // The coarse face of each F_F face (read in face order below, not by vertex).
+        let mut coarse_face_of = vec![NONE; faces];
+        for (f, coarse_face) in coarse_face_of.iter_mut().enumerate() {
             if self.role[f] != FF {
                 continue;
             }
+            *coarse_face = ff_faces.len() as u32;
             ff_faces.push(f as u32);
             for fc in fine.offsets[f]..fine.offsets[f + 1] {
                 let x = fine.corner_vertex[fc as usize];
@@ -1215,8 +1218,16 @@ impl<'a> Search<'a> {
             let first = coarse_offsets[k] as usize;
             for (c, fc) in (first..).zip(fine.offsets[f as usize]..fine.offsets[f as usize + 1]) {
                 if let Some((g, gt)) = self.across_quad(f as usize, fc)? {
-                    // Every fine vertex is on one F_F face: its coarse corner is that of `gt`.
-                    twins[c] = canonical_of_vertex[fine.corner_vertex[gt as usize] as usize];
+                    // The search made the face of `gt` an F_F face: its coarse corner is
+                    // the one of `gt`'s position in that face.
+                    // (Else, as every fine vertex is on one F_F face, the coarse corner of
+                    // its vertex.)
+                    let h = self.corner_face[gt as usize] as usize;
+                    twins[c] = match coarse_face_of[h] {
+                        NONE => canonical_of_vertex[fine.corner_vertex[gt as usize] as usize],
+                        k => coarse_offsets[k as usize] + (gt - fine.offsets[h]),
+                    };
+                    debug_assert_eq!(twins[c], canonical_of_vertex[fine.corner_vertex[gt as usize] as usize]);
                     quad_face[c] = g;
                     debug_assert_eq!(fine_corner_of[twins[c] as usize], gt, "internal: the far face is F_F");
                 }
