@@ -337,11 +337,10 @@ pub(crate) struct Session<'a> {
     /// Per component: the F_F faces of its best automatic reading, kept from the ranking
     /// so that building it does not search again (empty for a given seed).
     best_ff_faces: Vec<Vec<u32>>,
-    /// Per component: the candidates of its best automatic reading, by coarse corner,
-    /// kept from the ranking when they are numbered as the coarse corners of the result
-    /// (a mesh of one component), so that the first build does not expand them again;
-    /// empty otherwise or once used.
-    best_candidates: Vec<Vec<DVec3>>,
+    /// Per component: what the ranking (or the check of a given seed) found of its best
+    /// reading, when it is numbered as the result will be (a mesh of one component), so
+    /// that the first build does not find it again; empty otherwise or once used.
+    best_candidates: Vec<Kept>,
     choices: Vec<SeedChoice>,
     /// The roles of the search are those of the given seed of a one-component mesh,
     /// found while checking that it has one component: the first build uses them.
@@ -384,7 +383,8 @@ impl<'a> Session<'a> {
             [seed] if search.seed_covers_all(seed) => {
                 let choice = SeedChoice::given(0, seed);
                 let ranked = vec![(seed, f64::NAN)];
-                let best = (Vec::new(), Vec::new());
+                let kept = Kept { candidates: Vec::new(), corner_of_vertex: std::mem::take(&mut search.ranks) };
+                let best = (Vec::new(), kept);
                 return Ok(Self::one_component(search, options.rule, seed as u32, ranked, best, choice, true));
             }
             _ => {}
@@ -428,7 +428,7 @@ impl<'a> Session<'a> {
                 readings.push(vec![(seed, f64::NAN)]);
                 choices.push(SeedChoice::given(k, seed));
                 best_ff_faces.push(Vec::new());
-                best_candidates.push(Vec::new());
+                best_candidates.push(Kept::default());
             } else {
                 let faces = if component_count == 1 {
                     faces
@@ -462,7 +462,7 @@ impl<'a> Session<'a> {
         rule: FaceRule,
         given: u32,
         ranked: Ranked,
-        (best, candidates): (Vec<u32>, Vec<DVec3>),
+        (best, candidates): (Vec<u32>, Kept),
         choice: SeedChoice,
         preclassified: bool,
     ) -> Self {
@@ -521,13 +521,15 @@ impl<'a> Session<'a> {
             // The candidates of the result: those of the ranking for the best reading of a
             // one-component mesh, else written into the energy scratch (no reading is
             // evaluated after the ranking).
-            let ready = component_count == 1 && pick[0] == 0 && !self.best_candidates[0].is_empty();
-            let buffer = if ready {
+            let kept = if component_count == 1 && pick[0] == 0 {
                 std::mem::take(&mut self.best_candidates[0])
             } else {
-                std::mem::take(&mut search.candidate)
+                Kept::default()
             };
-            match search.finish(self.rule, &self.component_of_face, component_count, buffer, ready) {
+            let ready = !kept.candidates.is_empty();
+            let buffer = if ready { kept.candidates } else { std::mem::take(&mut search.candidate) };
+            let known = kept.corner_of_vertex;
+            match search.finish(self.rule, &self.component_of_face, component_count, (buffer, ready), known) {
                 Ok((mut reversal, energies)) => {
                     for (k, choice) in choices.iter_mut().enumerate() {
                         let (seed, _) = self.readings[k][pick[k]];
@@ -598,6 +600,15 @@ impl<'s> FaceSet<'s> {
     }
 }
 
+/// What a pass over the F_F faces of a reading of the whole mesh found, kept for
+/// [`Search::finish`]: the candidates by coarse corner (the F_F corners in memory order),
+/// and the coarse corner of each fine vertex (each empty when not kept).
+#[derive(Debug, Default)]
+struct Kept {
+    candidates: Vec<DVec3>,
+    corner_of_vertex: Vec<u32>,
+}
+
 /// Readings of one component: (seed face, detail energy), best first.
 type Ranked = Vec<(usize, f64)>;
 
@@ -621,6 +632,9 @@ struct Search<'a> {
     ff_corner_of_vertex: Vec<u32>,
     grouped: Vec<bool>,
     candidate: Vec<DVec3>,
+    /// The ranks of the last valid reading of the whole mesh ([`Self::energy`]) or of a
+    /// given seed that covers it ([`Self::seed_covers_all`]), by vertex.
+    ranks: Vec<u32>,
     /// Scratch of [`Self::energy`]: one face's points, one group.
     points: Vec<DVec3>,
     group: Vec<u32>,
@@ -639,6 +653,7 @@ impl<'a> Search<'a> {
             ff_corner_of_vertex: Vec::new(),
             grouped: Vec::new(),
             candidate: Vec::new(),
+            ranks: Vec::new(),
             points: Vec::new(),
             group: Vec::new(),
             stats: ReverseStats::default(),
@@ -819,15 +834,22 @@ impl<'a> Search<'a> {
         component_vertices: usize,
     ) -> Result<(f64, f64), DooError> {
         let fine = self.fine;
-        if self.ff_corner_of_vertex.is_empty() {
+        if self.ff_corner_of_vertex.len() != fine.vertex_count {
             self.ff_corner_of_vertex = vec![NONE; fine.vertex_count];
+        }
+        if self.grouped.len() != fine.vertex_count {
             self.grouped = vec![false; fine.vertex_count];
         }
         if self.candidate.len() != fine.vertex_count {
             self.candidate = vec![DVec3::ZERO; fine.vertex_count];
         }
         let result = self.energy_inner(queue_start, component_faces, component_vertices);
-        if 4 * component_vertices >= fine.vertex_count {
+        if result.is_ok() && matches!(component_faces, FaceSet::All(_)) {
+            // A valid reading of the whole mesh: the rank of each vertex's F_F corner is
+            // its coarse corner in the result, kept for it (see [`Self::choose`]).
+            self.ranks = std::mem::take(&mut self.ff_corner_of_vertex);
+            self.grouped.fill(false);
+        } else if 4 * component_vertices >= fine.vertex_count {
             // A large component: clearing everything (sequential) is cheaper than visiting
             // the F_F faces again (scattered).
             self.ff_corner_of_vertex.fill(NONE);
@@ -1022,18 +1044,22 @@ impl<'a> Search<'a> {
         let mut covers = self.classify(seed).is_ok()
             && self.queue.iter().map(|&f| self.face_size(f as usize)).sum::<usize>() == fine.vertex_count;
         if covers {
-            // As many F_F corners as vertices: each vertex once iff none twice.
-            if self.grouped.len() != fine.vertex_count {
-                self.grouped = vec![false; fine.vertex_count];
-            }
+            // As many F_F corners as vertices: each vertex once iff none twice. The rank of
+            // each vertex's F_F corner (in memory order) is its coarse corner in the
+            // result, kept for it.
+            let mut ranks = vec![NONE; fine.vertex_count];
+            let mut rank = 0u32;
             for f in 0..fine.face_count() {
                 if self.role[f] == FF {
-                    for fc in fine.offsets[f]..fine.offsets[f + 1] {
-                        covers &= !std::mem::replace(&mut self.grouped[fine.corner_vertex[fc as usize] as usize], true);
+                    for &v in &fine.corner_vertex[fine.offsets[f] as usize..fine.offsets[f + 1] as usize] {
+                        covers &= std::mem::replace(&mut ranks[v as usize], rank) == NONE;
+                        rank += 1;
                     }
                 }
             }
-            self.grouped.fill(false);
+            if covers {
+                self.ranks = ranks;
+            }
         }
         if !covers {
             self.stats = saved;
@@ -1055,7 +1081,7 @@ impl<'a> Search<'a> {
         faces: FaceSet<'_>,
         vertices: usize,
         mut first: Option<(f64, f64)>,
-    ) -> Result<(SeedChoice, Ranked, Vec<u32>, Vec<DVec3>), DooError> {
+    ) -> Result<(SeedChoice, Ranked, Vec<u32>, Kept), DooError> {
         let lowest = faces.first() as usize;
         // A first trial made already is the whole queue.
         let queue_start = if first.is_some() { 0 } else { self.queue.len() };
@@ -1078,7 +1104,7 @@ impl<'a> Search<'a> {
         // Per valid reading: its seed, energy, F_F faces and, on a whole mesh, candidates
         // (numbered by F_F corner in memory order: the coarse corners of the result).
         let whole = matches!(faces, FaceSet::All(_));
-        let mut found: Vec<(usize, f64, Vec<u32>, Vec<DVec3>)> = Vec::new();
+        let mut found: Vec<(usize, f64, Vec<u32>, Kept)> = Vec::new();
         let mut other_classes = Vec::new();
         let mut scale = 0.0;
         for (seed, class) in candidates {
@@ -1099,7 +1125,14 @@ impl<'a> Search<'a> {
                     if let Some(f) = fe {
                         other_classes.push((f as usize, "F_E"));
                     }
-                    let candidates = if whole { std::mem::take(&mut self.candidate) } else { Vec::new() };
+                    let candidates = if whole {
+                        Kept {
+                            candidates: std::mem::take(&mut self.candidate),
+                            corner_of_vertex: std::mem::take(&mut self.ranks),
+                        }
+                    } else {
+                        Kept::default()
+                    };
                     found.push((seed, energy, self.queue[queue_start..].to_vec(), candidates));
                     self.reset(faces, queue_start);
                     break;
@@ -1121,7 +1154,14 @@ impl<'a> Search<'a> {
                 match result {
                     Ok((energy, _)) => {
                         trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Ok(energy) });
-                        let candidates = if whole { std::mem::take(&mut self.candidate) } else { Vec::new() };
+                        let candidates = if whole {
+                            Kept {
+                                candidates: std::mem::take(&mut self.candidate),
+                                corner_of_vertex: std::mem::take(&mut self.ranks),
+                            }
+                        } else {
+                            Kept::default()
+                        };
                         found.push((seed, energy, self.queue[queue_start..].to_vec(), candidates));
                     }
                     Err(error) => {
@@ -1164,14 +1204,15 @@ impl<'a> Search<'a> {
     /// Builds the coarse mesh, details and fine order from the roles of all components;
     /// also returns the total squared detail norm of each component. `buffer` holds the
     /// candidates by coarse corner if `ready` (and has one per coarse corner), else it is
-    /// reused for them.
+    /// reused for them. `corner_of_vertex`: the coarse corner of each fine vertex, if a pass over the
+    /// same F_F faces in the same order found each vertex on exactly one (else empty).
     fn finish(
         &self,
         rule: FaceRule,
         component_of_face: &[u32],
         component_count: usize,
-        buffer: Vec<DVec3>,
-        ready: bool,
+        (buffer, ready): (Vec<DVec3>, bool),
+        corner_of_vertex: Vec<u32>,
     ) -> Result<(DooReversal, Vec<f64>), DooError> {
         let fine = self.fine;
         let faces = fine.face_count();
@@ -1183,7 +1224,8 @@ impl<'a> Search<'a> {
         let mut ff_faces = Vec::with_capacity(ff_count);
         // Fine vertex of each coarse corner; every fine vertex exactly once.
         let mut vertex_of = Vec::with_capacity(fine.vertex_count);
-        let mut canonical_of_vertex = vec![NONE; fine.vertex_count];
+        let known = corner_of_vertex.len() == fine.vertex_count;
+        let mut canonical_of_vertex = if known { corner_of_vertex } else { vec![NONE; fine.vertex_count] };
         // The coarse face of each F_F face (read in face order below, not by vertex).
         let mut coarse_face_of = vec![NONE; faces];
         for (f, coarse_face) in coarse_face_of.iter_mut().enumerate() {
@@ -1195,6 +1237,12 @@ impl<'a> Search<'a> {
             for fc in fine.offsets[f]..fine.offsets[f + 1] {
                 let x = fine.corner_vertex[fc as usize];
                 let c = vertex_of.len() as u32;
+                if known {
+                    debug_assert_eq!(canonical_of_vertex[x as usize], c, "internal: the ranks are the coarse corners");
+                    fine_corner_of.push(fc);
+                    vertex_of.push(x);
+                    continue;
+                }
                 let earlier = std::mem::replace(&mut canonical_of_vertex[x as usize], c);
                 if earlier != NONE {
                     let g = self.corner_face[fine_corner_of[earlier as usize] as usize] as usize;
@@ -1206,7 +1254,7 @@ impl<'a> Search<'a> {
             coarse_offsets.push(vertex_of.len() as u32);
         }
         let coarse_corners = fine_corner_of.len();
-        if let Some(x) = canonical_of_vertex.iter().position(|&c| c == NONE) {
+        if let Some(x) = (!known).then(|| canonical_of_vertex.iter().position(|&c| c == NONE)).flatten() {
             let f = self.corner_face[fine.first_corner(x) as usize] as usize;
             return Err(Self::broken(f, format!("its corner vertex {x} is on no F_F face")));
         }
