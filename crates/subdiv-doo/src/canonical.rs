@@ -78,10 +78,6 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     let mut quad_base = 0u32;
     let mut far_max = 0u32;
     let mut on_boundary = false;
-    // Whether every F_F face after the first has a neighbour before it: then the coarse
-    // mesh is connected (each face is linked to face 0 through lower faces), and the
-    // search for components is not needed.
-    let mut linked_back = true;
     let mut c = 0u32;
     while (c as usize) < vertices {
         let k = offsets.len() - 1;
@@ -93,7 +89,6 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         if to[(first ^ 1) as usize] != start {
             return None;
         }
-        let mut back = k == 0;
         let mut h = first;
         loop {
             // Corner `c` of the face, its half-edge `h` leaving vertex `c`.
@@ -131,7 +126,6 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
                     return None;
                 }
                 far_max = far_max.max(far_face);
-                back |= (far_face as usize) < k;
                 twins.push(t);
                 across.push(far_face);
             }
@@ -148,7 +142,6 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
                 return None;
             }
         }
-        linked_back &= back;
         offsets.push(c);
     }
     // Without a seed, the choice is made here only on closed meshes with F_E quads and
@@ -167,7 +160,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     if fv_first > faces {
         return None;
     }
-    if !linked_back && !connected(&offsets, &across) {
+    if !connected(&offsets, &across) {
         return None;
     }
     let coarse_next = next_of_corners(&offsets);
