@@ -271,7 +271,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
 
     let maps = FaceMaps::new(options.rule);
     let positions = fine.positions();
-    let candidates = expand_faces(&coarse.offsets, &maps, |c| positions[c], Vec::new());
+    let candidates = expand_in_order(&coarse.offsets, &maps, positions);
     let fv = FvFaces { first: fv_first, sizes_of: &fv_sizes, vertices: &fv_vertices };
     // The detail energy of the lowest face read as F_F (for the automatic choice): its
     // groups are the F_V faces, in face order, each summed while its candidates are in
@@ -320,6 +320,23 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         choices: vec![choice],
         stats,
     })
+}
+
+/// The candidates of the coarse faces (`offsets`) whose corners are the fine vertices in
+/// order (corner `c` at `positions[c]`): each face expanded straight from its slice of
+/// the positions into fresh memory, in face order. With several threads, the pieces of
+/// [`expand_faces`] run side by side instead (the same values).
+fn expand_in_order(offsets: &[u32], maps: &FaceMaps, positions: &[DVec3]) -> Vec<DVec3> {
+    if rayon::current_num_threads() > 1 {
+        return expand_faces(offsets, maps, |c| positions[c], Vec::new());
+    }
+    let mut out = Vec::with_capacity(offsets.last().map_or(0, |&n| n as usize));
+    for w in offsets.windows(2) {
+        let (b, e) = (w[0] as usize, w[1] as usize);
+        out.resize(e, DVec3::ZERO);
+        maps.inverse(&positions[b..e], &mut out[b..e]);
+    }
+    out
 }
 
 /// Whether the coarse faces (`offsets`) form one component across the coarse edges

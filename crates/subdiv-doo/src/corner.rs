@@ -610,7 +610,21 @@ where
     let corners = offsets.last().copied().unwrap_or(0) as usize;
     let mut out = buffer;
     out.resize(corners, DVec3::ZERO);
-    map_faces(offsets, &mut out, point, |points, out| maps.inverse(points, out));
+    // The points first, in one tight loop per run (scattered reads overlap), then each
+    // face expanded in place: the same values as gathering face by face.
+    for_face_runs(offsets, &mut out, |first, end, slice| {
+        let base = offsets[first] as usize;
+        for (c, out) in (base..).zip(slice.iter_mut()) {
+            *out = point(c);
+        }
+        let mut gathered: Vec<DVec3> = Vec::new();
+        for f in first..end {
+            let (b, e) = (offsets[f] as usize - base, offsets[f + 1] as usize - base);
+            gathered.clear();
+            gathered.extend_from_slice(&slice[b..e]);
+            maps.inverse(&gathered, &mut slice[b..e]);
+        }
+    });
     out
 }
 

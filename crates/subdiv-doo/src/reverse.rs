@@ -337,6 +337,10 @@ pub(crate) struct Session<'a> {
     /// Per component: the F_F faces of its best automatic reading, kept from the ranking
     /// so that building it does not search again (empty for a given seed).
     best_ff_faces: Vec<Vec<u32>>,
+    /// Per component: what the ranking (or the check of a given seed) found of its best
+    /// reading, when it is numbered as the result will be (a mesh of one component), so
+    /// that the first build does not find it again; empty otherwise or once used.
+    best_candidates: Vec<Kept>,
     choices: Vec<SeedChoice>,
     /// The roles of the search are those of the given seed of a one-component mesh,
     /// found while checking that it has one component: the first build uses them.
@@ -371,14 +375,17 @@ impl<'a> Session<'a> {
         match options.seeds[..] {
             [] => {
                 if let Some(first) = search.first_reading_covers_all(faces) {
-                    let (choice, ranked, best) = search.choose(0, faces, fine.vertex_count, Some(first))?;
+                    let (choice, ranked, best, candidates) = search.choose(0, faces, fine.vertex_count, Some(first))?;
+                    let best = (best, candidates);
                     return Ok(Self::one_component(search, options.rule, NONE, ranked, best, choice, false));
                 }
             }
             [seed] if search.seed_covers_all(seed) => {
                 let choice = SeedChoice::given(0, seed);
                 let ranked = vec![(seed, f64::NAN)];
-                return Ok(Self::one_component(search, options.rule, seed as u32, ranked, Vec::new(), choice, true));
+                let kept = Kept { candidates: Vec::new(), corner_of_vertex: std::mem::take(&mut search.ranks) };
+                let best = (Vec::new(), kept);
+                return Ok(Self::one_component(search, options.rule, seed as u32, ranked, best, choice, true));
             }
             _ => {}
         }
@@ -414,12 +421,14 @@ impl<'a> Session<'a> {
         let mut readings: Vec<Vec<(usize, f64)>> = Vec::with_capacity(component_count);
         let mut choices = Vec::with_capacity(component_count);
         let mut best_ff_faces = Vec::with_capacity(component_count);
+        let mut best_candidates = Vec::with_capacity(component_count);
         for k in 0..component_count {
             if given[k] != NONE {
                 let seed = given[k] as usize;
                 readings.push(vec![(seed, f64::NAN)]);
                 choices.push(SeedChoice::given(k, seed));
                 best_ff_faces.push(Vec::new());
+                best_candidates.push(Kept::default());
             } else {
                 let faces = if component_count == 1 {
                     faces
@@ -428,10 +437,11 @@ impl<'a> Session<'a> {
                         &faces_by_component[component_offsets[k] as usize..component_offsets[k + 1] as usize],
                     )
                 };
-                let (choice, ranked, best) = search.choose(k, faces, vertices_by_component[k], None)?;
+                let (choice, ranked, best, candidates) = search.choose(k, faces, vertices_by_component[k], None)?;
                 readings.push(ranked);
                 choices.push(choice);
                 best_ff_faces.push(best);
+                best_candidates.push(candidates);
             }
         }
         Ok(Self {
@@ -441,6 +451,7 @@ impl<'a> Session<'a> {
             given,
             readings,
             best_ff_faces,
+            best_candidates,
             choices,
             preclassified: false,
         })
@@ -451,7 +462,7 @@ impl<'a> Session<'a> {
         rule: FaceRule,
         given: u32,
         ranked: Ranked,
-        best: Vec<u32>,
+        (best, candidates): (Vec<u32>, Kept),
         choice: SeedChoice,
         preclassified: bool,
     ) -> Self {
@@ -462,6 +473,7 @@ impl<'a> Session<'a> {
             given: vec![given],
             readings: vec![ranked],
             best_ff_faces: vec![best],
+            best_candidates: vec![candidates],
             choices: vec![choice],
             preclassified,
         }
@@ -506,10 +518,18 @@ impl<'a> Session<'a> {
                     }
                 }
             }
-            // The candidates of the result are written into the energy scratch (no reading
-            // is evaluated after the ranking).
-            let buffer = std::mem::take(&mut search.candidate);
-            match search.finish(self.rule, &self.component_of_face, component_count, buffer) {
+            // The candidates of the result: those of the ranking for the best reading of a
+            // one-component mesh, else written into the energy scratch (no reading is
+            // evaluated after the ranking).
+            let kept = if component_count == 1 && pick[0] == 0 {
+                std::mem::take(&mut self.best_candidates[0])
+            } else {
+                Kept::default()
+            };
+            let ready = !kept.candidates.is_empty();
+            let buffer = if ready { kept.candidates } else { std::mem::take(&mut search.candidate) };
+            let known = kept.corner_of_vertex;
+            match search.finish(self.rule, &self.component_of_face, component_count, (buffer, ready), known) {
                 Ok((mut reversal, energies)) => {
                     for (k, choice) in choices.iter_mut().enumerate() {
                         let (seed, _) = self.readings[k][pick[k]];
@@ -580,6 +600,15 @@ impl<'s> FaceSet<'s> {
     }
 }
 
+/// What a pass over the F_F faces of a reading of the whole mesh found, kept for
+/// [`Search::finish`]: the candidates by coarse corner (the F_F corners in memory order),
+/// and the coarse corner of each fine vertex (each empty when not kept).
+#[derive(Debug, Default)]
+struct Kept {
+    candidates: Vec<DVec3>,
+    corner_of_vertex: Vec<u32>,
+}
+
 /// Readings of one component: (seed face, detail energy), best first.
 type Ranked = Vec<(usize, f64)>;
 
@@ -597,14 +626,17 @@ struct Search<'a> {
     role: Vec<u8>,
     /// F_F faces of the current interpretation, in search order.
     queue: Vec<u32>,
-    /// Scratch of [`Self::energy`], per vertex (reset after each use): the F_F corner at
-    /// the vertex, whether its group was summed, its candidate.
+    /// Scratch of [`Self::energy`], per vertex (reset after each use): the rank of the
+    /// F_F corner at the vertex (F_F corners counted in memory order); by rank, whether
+    /// its group was summed and its candidate.
     ff_corner_of_vertex: Vec<u32>,
     grouped: Vec<bool>,
     candidate: Vec<DVec3>,
-    /// Scratch of [`Self::energy`]: one face's points and their expansion, one group.
+    /// The ranks of the last valid reading of the whole mesh ([`Self::energy`]) or of a
+    /// given seed that covers it ([`Self::seed_covers_all`]), by vertex.
+    ranks: Vec<u32>,
+    /// Scratch of [`Self::energy`]: one face's points, one group.
     points: Vec<DVec3>,
-    expanded: Vec<DVec3>,
     group: Vec<u32>,
     stats: ReverseStats,
 }
@@ -621,8 +653,8 @@ impl<'a> Search<'a> {
             ff_corner_of_vertex: Vec::new(),
             grouped: Vec::new(),
             candidate: Vec::new(),
+            ranks: Vec::new(),
             points: Vec::new(),
-            expanded: Vec::new(),
             group: Vec::new(),
             stats: ReverseStats::default(),
         }
@@ -720,8 +752,8 @@ impl<'a> Search<'a> {
             self.stats.visited_faces += 1;
             for fc in self.fine.offsets[f]..self.fine.offsets[f + 1] {
                 self.stats.edges_crossed += 1;
-                let Some(gt) = self.across(f, fc)? else { continue };
-                let g = self.corner_face[self.fine.corner_twin[fc as usize] as usize] as usize;
+                let Some((g, gt)) = self.across_quad(f, fc)? else { continue };
+                let g = g as usize;
                 match self.role[g] {
                     FF => {
                         return Err(Self::broken(
@@ -766,6 +798,22 @@ impl<'a> Search<'a> {
         if fc == self.fine.offsets[f] { self.fine.offsets[f + 1] - 1 } else { fc - 1 }
     }
 
+    /// The candidate of vertex `v` in [`Self::energy`] (stored by the rank of its F_F
+    /// corner); zero for a vertex on no F_F face (which the callers rule out first).
+    #[inline]
+    fn candidate_of_vertex(&self, v: u32) -> DVec3 {
+        self.candidate.get(self.ff_corner_of_vertex[v as usize] as usize).copied().unwrap_or(DVec3::ZERO)
+    }
+
+    /// Whether the candidate of vertex `v` is in a group already in [`Self::energy`], marking
+    /// it so (by the rank of its F_F corner, as the candidates); `true` for a vertex on no
+    /// F_F face (which the callers rule out first).
+    #[inline]
+    fn mark_grouped(&mut self, v: u32) -> bool {
+        let rank = self.ff_corner_of_vertex[v as usize] as usize;
+        self.grouped.get_mut(rank).is_none_or(|grouped| std::mem::replace(grouped, true))
+    }
+
     /// Total squared detail norm of the current interpretation of a component (whose F_F
     /// faces are `self.queue[queue_start..]`), and the component's size (bounding-box
     /// diagonal) for the zero test. Also checks that every vertex of the component is a
@@ -786,15 +834,22 @@ impl<'a> Search<'a> {
         component_vertices: usize,
     ) -> Result<(f64, f64), DooError> {
         let fine = self.fine;
-        if self.ff_corner_of_vertex.is_empty() {
+        if self.ff_corner_of_vertex.len() != fine.vertex_count {
             self.ff_corner_of_vertex = vec![NONE; fine.vertex_count];
+        }
+        if self.grouped.len() != fine.vertex_count {
             self.grouped = vec![false; fine.vertex_count];
         }
         if self.candidate.len() != fine.vertex_count {
             self.candidate = vec![DVec3::ZERO; fine.vertex_count];
         }
         let result = self.energy_inner(queue_start, component_faces, component_vertices);
-        if 4 * component_vertices >= fine.vertex_count {
+        if result.is_ok() && matches!(component_faces, FaceSet::All(_)) {
+            // A valid reading of the whole mesh: the rank of each vertex's F_F corner is
+            // its coarse corner in the result, kept for it (see [`Self::choose`]).
+            self.ranks = std::mem::take(&mut self.ff_corner_of_vertex);
+            self.grouped.fill(false);
+        } else if 4 * component_vertices >= fine.vertex_count {
             // A large component: clearing everything (sequential) is cheaper than visiting
             // the F_F faces again (scattered).
             self.ff_corner_of_vertex.fill(NONE);
@@ -803,8 +858,10 @@ impl<'a> Search<'a> {
             for &f in &self.queue[queue_start..] {
                 for fc in fine.offsets[f as usize]..fine.offsets[f as usize + 1] {
                     let v = fine.corner_vertex[fc as usize] as usize;
-                    self.ff_corner_of_vertex[v] = NONE;
-                    self.grouped[v] = false;
+                    let rank = std::mem::replace(&mut self.ff_corner_of_vertex[v], NONE);
+                    if let Some(grouped) = self.grouped.get_mut(rank as usize) {
+                        *grouped = false;
+                    }
                 }
             }
         }
@@ -823,33 +880,47 @@ impl<'a> Search<'a> {
         // The F_F faces in memory order (the search order only decides which of two F_F
         // faces sharing a vertex is named: then the search order is replayed).
         let mut points = std::mem::take(&mut self.points);
-        let mut expanded = std::mem::take(&mut self.expanded);
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-        let mut ff_corners = 0;
         let mut shared = false;
+        // First the positions, gathered in F_F corner order (the rank of each F_F corner
+        // in memory order, kept per vertex): a tight loop whose scattered reads overlap.
+        // The candidates are then indexed by rank, written in order and read in face
+        // order. More F_F corners than vertices means a vertex on two F_F faces (`shared`
+        // is set then): nothing is written past the end.
+        let capacity = self.candidate.len();
+        let mut rank = 0usize;
         for f in component_faces.iter() {
             if self.role[f as usize] != FF {
                 continue;
             }
-            let (b, e) = (fine.offsets[f as usize], fine.offsets[f as usize + 1]);
-            points.clear();
-            for fc in b..e {
-                let v = fine.corner_vertex[fc as usize] as usize;
-                shared |= std::mem::replace(&mut self.ff_corner_of_vertex[v], fc) != NONE;
-                let p = positions[v];
+            let (b, e) = (fine.offsets[f as usize] as usize, fine.offsets[f as usize + 1] as usize);
+            for &v in &fine.corner_vertex[b..e] {
+                shared |= std::mem::replace(&mut self.ff_corner_of_vertex[v as usize], rank as u32) != NONE;
+                let p = positions[v as usize];
                 lo = lo.min(p);
                 hi = hi.max(p);
-                points.push(p);
+                if rank < capacity {
+                    self.candidate[rank] = p;
+                }
+                rank += 1;
             }
-            ff_corners += points.len();
-            expanded.resize(points.len(), DVec3::ZERO);
-            self.maps.inverse(&points, &mut expanded);
-            for (fc, &p) in (b..e).zip(&expanded) {
-                self.candidate[fine.corner_vertex[fc as usize] as usize] = p;
+        }
+        let ff_corners = rank;
+        if !shared {
+            // Each F_F face expanded in place.
+            let mut start = 0;
+            for f in component_faces.iter() {
+                if self.role[f as usize] != FF {
+                    continue;
+                }
+                let m = self.face_size(f as usize);
+                points.clear();
+                points.extend_from_slice(&self.candidate[start..start + m]);
+                self.maps.inverse(&points, &mut self.candidate[start..start + m]);
+                start += m;
             }
         }
         self.points = points;
-        self.expanded = expanded;
         if shared {
             self.ff_corner_of_vertex.fill(NONE);
             return Err(self.shared_vertex_in_search_order(queue_start));
@@ -875,10 +946,10 @@ impl<'a> Search<'a> {
             }
             let corners = fine.offsets[f as usize] as usize..fine.offsets[f as usize + 1] as usize;
             let vertices = &fine.corner_vertex[corners];
-            let mean = vertices.iter().map(|&v| self.candidate[v as usize]).sum::<DVec3>() / vertices.len() as f64;
+            let mean = vertices.iter().map(|&v| self.candidate_of_vertex(v)).sum::<DVec3>() / vertices.len() as f64;
             for &v in vertices {
-                energy += (self.candidate[v as usize] - mean).length_squared();
-                grouped += usize::from(!std::mem::replace(&mut self.grouped[v as usize], true));
+                energy += (self.candidate_of_vertex(v) - mean).length_squared();
+                grouped += usize::from(!self.mark_grouped(v));
             }
         }
         if grouped == ff_corners {
@@ -893,12 +964,11 @@ impl<'a> Search<'a> {
         for i in queue_start..self.queue.len() {
             let f = self.queue[i] as usize;
             for fc in fine.offsets[f]..fine.offsets[f + 1] {
-                if self.grouped[fine.corner_vertex[fc as usize] as usize] {
+                if self.mark_grouped(fine.corner_vertex[fc as usize]) {
                     continue;
                 }
                 group.clear();
                 group.push(fc);
-                self.grouped[fine.corner_vertex[fc as usize] as usize] = true;
                 for clockwise in [true, false] {
                     let mut c = fc;
                     loop {
@@ -909,16 +979,14 @@ impl<'a> Search<'a> {
                             self.across(self.corner_face[p as usize] as usize, p)?
                         };
                         let Some(d) = step else { break };
-                        let w = fine.corner_vertex[d as usize] as usize;
-                        if self.grouped[w] {
+                        if self.mark_grouped(fine.corner_vertex[d as usize]) {
                             break;
                         }
-                        self.grouped[w] = true;
                         group.push(d);
                         c = d;
                     }
                 }
-                let candidate = |c: u32| self.candidate[fine.corner_vertex[c as usize] as usize];
+                let candidate = |c: u32| self.candidate_of_vertex(fine.corner_vertex[c as usize]);
                 let mean = group.iter().map(|&c| candidate(c)).sum::<DVec3>() / group.len() as f64;
                 energy += group.iter().map(|&c| (candidate(c) - mean).length_squared()).sum::<f64>();
             }
@@ -976,18 +1044,22 @@ impl<'a> Search<'a> {
         let mut covers = self.classify(seed).is_ok()
             && self.queue.iter().map(|&f| self.face_size(f as usize)).sum::<usize>() == fine.vertex_count;
         if covers {
-            // As many F_F corners as vertices: each vertex once iff none twice.
-            if self.grouped.len() != fine.vertex_count {
-                self.grouped = vec![false; fine.vertex_count];
-            }
+            // As many F_F corners as vertices: each vertex once iff none twice. The rank of
+            // each vertex's F_F corner (in memory order) is its coarse corner in the
+            // result, kept for it.
+            let mut ranks = vec![NONE; fine.vertex_count];
+            let mut rank = 0u32;
             for f in 0..fine.face_count() {
                 if self.role[f] == FF {
-                    for fc in fine.offsets[f]..fine.offsets[f + 1] {
-                        covers &= !std::mem::replace(&mut self.grouped[fine.corner_vertex[fc as usize] as usize], true);
+                    for &v in &fine.corner_vertex[fine.offsets[f] as usize..fine.offsets[f + 1] as usize] {
+                        covers &= std::mem::replace(&mut ranks[v as usize], rank) == NONE;
+                        rank += 1;
                     }
                 }
             }
-            self.grouped.fill(false);
+            if covers {
+                self.ranks = ranks;
+            }
         }
         if !covers {
             self.stats = saved;
@@ -1009,7 +1081,7 @@ impl<'a> Search<'a> {
         faces: FaceSet<'_>,
         vertices: usize,
         mut first: Option<(f64, f64)>,
-    ) -> Result<(SeedChoice, Ranked, Vec<u32>), DooError> {
+    ) -> Result<(SeedChoice, Ranked, Vec<u32>, Kept), DooError> {
         let lowest = faces.first() as usize;
         // A first trial made already is the whole queue.
         let queue_start = if first.is_some() { 0 } else { self.queue.len() };
@@ -1029,7 +1101,10 @@ impl<'a> Search<'a> {
                 }
             }
         }
-        let mut found: Vec<(usize, f64, Vec<u32>)> = Vec::new();
+        // Per valid reading: its seed, energy, F_F faces and, on a whole mesh, candidates
+        // (numbered by F_F corner in memory order: the coarse corners of the result).
+        let whole = matches!(faces, FaceSet::All(_));
+        let mut found: Vec<(usize, f64, Vec<u32>, Kept)> = Vec::new();
         let mut other_classes = Vec::new();
         let mut scale = 0.0;
         for (seed, class) in candidates {
@@ -1050,7 +1125,15 @@ impl<'a> Search<'a> {
                     if let Some(f) = fe {
                         other_classes.push((f as usize, "F_E"));
                     }
-                    found.push((seed, energy, self.queue[queue_start..].to_vec()));
+                    let candidates = if whole {
+                        Kept {
+                            candidates: std::mem::take(&mut self.candidate),
+                            corner_of_vertex: std::mem::take(&mut self.ranks),
+                        }
+                    } else {
+                        Kept::default()
+                    };
+                    found.push((seed, energy, self.queue[queue_start..].to_vec(), candidates));
                     self.reset(faces, queue_start);
                     break;
                 }
@@ -1071,7 +1154,15 @@ impl<'a> Search<'a> {
                 match result {
                     Ok((energy, _)) => {
                         trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Ok(energy) });
-                        found.push((seed, energy, self.queue[queue_start..].to_vec()));
+                        let candidates = if whole {
+                            Kept {
+                                candidates: std::mem::take(&mut self.candidate),
+                                corner_of_vertex: std::mem::take(&mut self.ranks),
+                            }
+                        } else {
+                            Kept::default()
+                        };
+                        found.push((seed, energy, self.queue[queue_start..].to_vec(), candidates));
                     }
                     Err(error) => {
                         trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Err(error.to_string()) })
@@ -1105,19 +1196,23 @@ impl<'a> Search<'a> {
         rank.sort_by(|&a, &b| found[a].1.total_cmp(&found[b].1));
         let ranked: Vec<(usize, f64)> = rank.iter().map(|&i| (found[i].0, found[i].1)).collect();
         let best_ff_faces = std::mem::take(&mut found[rank[0]].2);
+        let best_candidates = std::mem::take(&mut found[rank[0]].3);
         let choice = SeedChoice { component: k, seed_face: seed, given: false, trials, detail_energy: energy, reason };
-        Ok((choice, ranked, best_ff_faces))
+        Ok((choice, ranked, best_ff_faces, best_candidates))
     }
 
     /// Builds the coarse mesh, details and fine order from the roles of all components;
-    /// also returns the total squared detail norm of each component. `buffer` is reused
-    /// for the candidates.
+    /// also returns the total squared detail norm of each component. `buffer` holds the
+    /// candidates by coarse corner if `ready` (and has one per coarse corner), else it is
+    /// reused for them. `corner_of_vertex`: the coarse corner of each fine vertex, if a pass over the
+    /// same F_F faces in the same order found each vertex on exactly one (else empty).
     fn finish(
         &self,
         rule: FaceRule,
         component_of_face: &[u32],
         component_count: usize,
-        buffer: Vec<DVec3>,
+        (buffer, ready): (Vec<DVec3>, bool),
+        corner_of_vertex: Vec<u32>,
     ) -> Result<(DooReversal, Vec<f64>), DooError> {
         let fine = self.fine;
         let faces = fine.face_count();
@@ -1129,15 +1224,25 @@ impl<'a> Search<'a> {
         let mut ff_faces = Vec::with_capacity(ff_count);
         // Fine vertex of each coarse corner; every fine vertex exactly once.
         let mut vertex_of = Vec::with_capacity(fine.vertex_count);
-        let mut canonical_of_vertex = vec![NONE; fine.vertex_count];
-        for f in 0..faces {
+        let known = corner_of_vertex.len() == fine.vertex_count;
+        let mut canonical_of_vertex = if known { corner_of_vertex } else { vec![NONE; fine.vertex_count] };
+        // The coarse face of each F_F face (read in face order below, not by vertex).
+        let mut coarse_face_of = vec![NONE; faces];
+        for (f, coarse_face) in coarse_face_of.iter_mut().enumerate() {
             if self.role[f] != FF {
                 continue;
             }
+            *coarse_face = ff_faces.len() as u32;
             ff_faces.push(f as u32);
             for fc in fine.offsets[f]..fine.offsets[f + 1] {
                 let x = fine.corner_vertex[fc as usize];
                 let c = vertex_of.len() as u32;
+                if known {
+                    debug_assert_eq!(canonical_of_vertex[x as usize], c, "internal: the ranks are the coarse corners");
+                    fine_corner_of.push(fc);
+                    vertex_of.push(x);
+                    continue;
+                }
                 let earlier = std::mem::replace(&mut canonical_of_vertex[x as usize], c);
                 if earlier != NONE {
                     let g = self.corner_face[fine_corner_of[earlier as usize] as usize] as usize;
@@ -1149,7 +1254,7 @@ impl<'a> Search<'a> {
             coarse_offsets.push(vertex_of.len() as u32);
         }
         let coarse_corners = fine_corner_of.len();
-        if let Some(x) = canonical_of_vertex.iter().position(|&c| c == NONE) {
+        if let Some(x) = (!known).then(|| canonical_of_vertex.iter().position(|&c| c == NONE)).flatten() {
             let f = self.corner_face[fine.first_corner(x) as usize] as usize;
             return Err(Self::broken(f, format!("its corner vertex {x} is on no F_F face")));
         }
@@ -1161,8 +1266,16 @@ impl<'a> Search<'a> {
             let first = coarse_offsets[k] as usize;
             for (c, fc) in (first..).zip(fine.offsets[f as usize]..fine.offsets[f as usize + 1]) {
                 if let Some((g, gt)) = self.across_quad(f as usize, fc)? {
-                    // Every fine vertex is on one F_F face: its coarse corner is that of `gt`.
-                    twins[c] = canonical_of_vertex[fine.corner_vertex[gt as usize] as usize];
+                    // The search made the face of `gt` an F_F face: its coarse corner is
+                    // the one of `gt`'s position in that face.
+                    // (Else, as every fine vertex is on one F_F face, the coarse corner of
+                    // its vertex.)
+                    let h = self.corner_face[gt as usize] as usize;
+                    twins[c] = match coarse_face_of[h] {
+                        NONE => canonical_of_vertex[fine.corner_vertex[gt as usize] as usize],
+                        k => coarse_offsets[k as usize] + (gt - fine.offsets[h]),
+                    };
+                    debug_assert_eq!(twins[c], canonical_of_vertex[fine.corner_vertex[gt as usize] as usize]);
                     quad_face[c] = g;
                     debug_assert_eq!(fine_corner_of[twins[c] as usize], gt, "internal: the far face is F_F");
                 }
@@ -1227,8 +1340,11 @@ impl<'a> Search<'a> {
             },
             || {
                 // Candidates, means and details.
-                let candidates =
-                    expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize], buffer);
+                let candidates = if ready && buffer.len() == vertex_of.len() {
+                    buffer
+                } else {
+                    expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize], buffer)
+                };
                 let (coarse_positions, details, vertex_energy) = means_and_details(&by_vertex, &candidates);
                 (coarse_positions, details, vertex_energy)
             },

@@ -278,6 +278,9 @@ impl FaceMaps {
         match m {
             3 => circulant_fixed::<3>(&self.inverse[3], points, out),
             4 => circulant_fixed::<4>(&self.inverse[4], points, out),
+            // The usual valences (F_V faces, and the F_F faces of their reading).
+            5 => circulant_fixed::<5>(&self.inverse[5], points, out),
+            6 => circulant_fixed::<6>(&self.inverse[6], points, out),
             _ if m <= DENSE_MAX => circulant(&self.inverse[m], points, out),
             _ => self.inverse_large(points, out),
         }
