@@ -798,6 +798,16 @@ impl<'a> Search<'a> {
         if fc == self.fine.offsets[f] { self.fine.offsets[f + 1] - 1 } else { fc - 1 }
     }
 
+    /// What [`Self::energy`] found of a valid reading, kept for the build when the reading
+    /// covers the whole mesh (`whole`): its candidates and the coarse corner of each
+    /// vertex. Nothing is kept for a reading of one component of several.
+    fn keep_reading(&mut self, whole: bool) -> Kept {
+        if !whole {
+            return Kept::default();
+        }
+        Kept { candidates: std::mem::take(&mut self.candidate), corner_of_vertex: std::mem::take(&mut self.ranks) }
+    }
+
     /// The candidate of vertex `v` in [`Self::energy`] (stored by the rank of its F_F
     /// corner); zero for a vertex on no F_F face (which the callers rule out first).
     #[inline]
@@ -1125,15 +1135,7 @@ impl<'a> Search<'a> {
                     if let Some(f) = fe {
                         other_classes.push((f as usize, "F_E"));
                     }
-                    let candidates = if whole {
-                        Kept {
-                            candidates: std::mem::take(&mut self.candidate),
-                            corner_of_vertex: std::mem::take(&mut self.ranks),
-                        }
-                    } else {
-                        Kept::default()
-                    };
-                    found.push((seed, energy, self.queue[queue_start..].to_vec(), candidates));
+                    found.push((seed, energy, self.queue[queue_start..].to_vec(), self.keep_reading(whole)));
                     self.reset(faces, queue_start);
                     break;
                 }
@@ -1154,15 +1156,7 @@ impl<'a> Search<'a> {
                 match result {
                     Ok((energy, _)) => {
                         trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Ok(energy) });
-                        let candidates = if whole {
-                            Kept {
-                                candidates: std::mem::take(&mut self.candidate),
-                                corner_of_vertex: std::mem::take(&mut self.ranks),
-                            }
-                        } else {
-                            Kept::default()
-                        };
-                        found.push((seed, energy, self.queue[queue_start..].to_vec(), candidates));
+                        found.push((seed, energy, self.queue[queue_start..].to_vec(), self.keep_reading(whole)));
                     }
                     Err(error) => {
                         trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Err(error.to_string()) })
