@@ -298,9 +298,12 @@ fn mesh_face_corners(fine: &HalfedgeMesh) -> impl Fn(usize) -> Option<[u32; 3]> 
     // Called four times per group in the canonical pass: inlined there.
     #[inline(always)]
     move |f: usize| {
-        // Corner k is the origin of half-edge k: the target of half-edge k - 1.
-        let [h0, h1, h2] = triangles.halfedges(f)?;
-        Some([targets[h2 as usize], targets[h0 as usize], targets[h1 as usize]])
+        // Corner k is the origin of half-edge k: the target of half-edge k - 1, or of
+        // its twin (`h ^ 1`, index arithmetic). The first corner is read through the
+        // twin of the first half-edge, beside its own target (the same cache line), so
+        // that no corner waits for the third `next` step, which only checks the face.
+        let [h0, h1, _] = triangles.halfedges(f)?;
+        Some([targets[(h0 ^ 1) as usize], targets[h0 as usize], targets[h1 as usize]])
     }
 }
 
@@ -467,8 +470,11 @@ fn edges_are_simple(
         let [a, b] = ends(e);
         (a.min(b), a.max(b))
     };
-    for v in 0..nv {
-        start[v + 1] += start[v];
+    // The running sum stays in a register (a sum through memory waits for each store).
+    let mut total = 0;
+    for count in &mut start {
+        total += *count;
+        *count = total;
     }
     let mut fill = start.clone();
     let mut upper = vec![0u32; edge_count];
