@@ -78,12 +78,16 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     let mut quad_base = 0u32;
     let mut far_max = 0u32;
     let mut on_boundary = false;
+    // Whether every F_F face after the first lies across an edge from an earlier one: then
+    // the coarse mesh is connected without a search (each face reaches face 0 downwards).
+    let mut each_reaches_lower = true;
     let mut c = 0u32;
     while (c as usize) < vertices {
         let k = offsets.len() - 1;
         if k >= faces {
             return None;
         }
+        let mut lowest_across = NONE;
         let first = face_halfedge[k];
         let start = c;
         if to[(first ^ 1) as usize] != start {
@@ -126,6 +130,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
                     return None;
                 }
                 far_max = far_max.max(far_face);
+                lowest_across = lowest_across.min(far_face);
                 twins.push(t);
                 across.push(far_face);
             }
@@ -142,6 +147,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
                 return None;
             }
         }
+        each_reaches_lower &= k == 0 || (lowest_across as usize) < k;
         offsets.push(c);
     }
     // Without a seed, the choice is made here only on closed meshes with F_E quads and
@@ -160,7 +166,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     if fv_first > faces {
         return None;
     }
-    if !connected(&offsets, &across) {
+    if !each_reaches_lower && !connected(&offsets, &across) {
         return None;
     }
     let coarse_next = next_of_corners(&offsets);
@@ -213,36 +219,52 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     if automatic_choice && interior == 0 {
         return None;
     }
-    for c in 0..vertices as u32 {
-        if labels[c as usize] != NONE {
-            continue;
-        }
-        let label = vertex_corner.len() as u32;
-        labels[c as usize] = label;
-        vertex_corner.push(c);
-        let mut x = c;
-        loop {
-            x = clockwise(x);
-            if x == NONE {
-                break;
-            }
-            if std::mem::replace(&mut labels[x as usize], label) != NONE {
-                // A closed orbit without its F_V face, or not a walk.
-                return None;
+    let closed = !on_boundary;
+    // The first check of the coarse manifold (no face visits a vertex twice), on a closed
+    // mesh made in the pass that sees that every corner has its vertex (every vertex is
+    // interior: a corner on no F_V face is on a closed orbit without one).
+    let mut stamp = Vec::new();
+    if closed {
+        stamp = vec![NONE; interior];
+        for (k, w) in offsets.windows(2).enumerate() {
+            for &v in &labels[w[0] as usize..w[1] as usize] {
+                if v == NONE || std::mem::replace(&mut stamp[v as usize], k as u32) == k as u32 {
+                    return None;
+                }
             }
         }
-        let mut x = c;
-        loop {
-            let mut p = x;
-            while coarse_next[p as usize] != x {
-                p = coarse_next[p as usize];
+    } else {
+        for c in 0..vertices as u32 {
+            if labels[c as usize] != NONE {
+                continue;
             }
-            x = twins[p as usize];
-            if x == NONE {
-                break;
+            let label = vertex_corner.len() as u32;
+            labels[c as usize] = label;
+            vertex_corner.push(c);
+            let mut x = c;
+            loop {
+                x = clockwise(x);
+                if x == NONE {
+                    break;
+                }
+                if std::mem::replace(&mut labels[x as usize], label) != NONE {
+                    // A closed orbit without its F_V face, or not a walk.
+                    return None;
+                }
             }
-            if std::mem::replace(&mut labels[x as usize], label) != NONE {
-                return None;
+            let mut x = c;
+            loop {
+                let mut p = x;
+                while coarse_next[p as usize] != x {
+                    p = coarse_next[p as usize];
+                }
+                x = twins[p as usize];
+                if x == NONE {
+                    break;
+                }
+                if std::mem::replace(&mut labels[x as usize], label) != NONE {
+                    return None;
+                }
             }
         }
     }
@@ -257,7 +279,6 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         vertex_count: coarse_vertex_count,
         vertex_corner: Some(vertex_corner),
     };
-    let closed = !on_boundary;
     debug_assert_eq!(closed, candidate_edges == vertices, "internal: boundary corners have no twin");
     let by_vertex = if closed {
         // Every vertex is interior: its corners are those of its F_V face, sorted.
@@ -266,8 +287,10 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     } else {
         corners_by_vertex(&coarse)
     };
-    let ff_faces: Vec<u32> = (0..ff).collect();
-    check_coarse_manifold(&coarse, &ff_faces, &by_vertex).ok()?;
+    if !closed {
+        let ff_faces: Vec<u32> = (0..ff).collect();
+        check_coarse_manifold(&coarse, &ff_faces, &by_vertex).ok()?;
+    }
 
     let maps = FaceMaps::new(options.rule);
     let positions = fine.positions();
@@ -278,18 +301,32 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     // cache for the means.
     let mut reading_energy = 0.0;
     let mut group_start = 0;
-    let (coarse_positions, details, vertex_energy) = if automatic_choice {
-        means_and_details_with(&by_vertex, &candidates, |v| {
-            let group = &fv_vertices[group_start..group_start + fv_sizes[v] as usize];
-            group_start += group.len();
-            let mean = group.iter().map(|&v| candidates[v as usize]).sum::<DVec3>() / group.len() as f64;
-            for &v in group {
-                reading_energy += (candidates[v as usize] - mean).length_squared();
+    // On a closed mesh the second check of the coarse manifold (no two edges join the
+    // same two vertices) is made in the same pass, on the corners of each vertex: the
+    // outgoing coarse half-edges of a vertex are its corners.
+    let mut manifold = true;
+    let (coarse_positions, details, vertex_energy) = if closed {
+        stamp.fill(NONE);
+        means_and_details_with(&by_vertex, &candidates, |u, corners| {
+            for &c in corners {
+                let w = coarse.corner_vertex[coarse.corner_next[c as usize] as usize];
+                manifold &= std::mem::replace(&mut stamp[w as usize], u as u32) != u as u32;
+            }
+            if automatic_choice {
+                let group = &fv_vertices[group_start..group_start + fv_sizes[u] as usize];
+                group_start += group.len();
+                let mean = group.iter().map(|&v| candidates[v as usize]).sum::<DVec3>() / group.len() as f64;
+                for &v in group {
+                    reading_energy += (candidates[v as usize] - mean).length_squared();
+                }
             }
         })
     } else {
         means_and_details(&by_vertex, &candidates)
     };
+    if !manifold {
+        return None;
+    }
     // Every fine position is in some coarse vertex's mean: a position that is not
     // finite makes a mean that is not (the general path reports it).
     if !coarse_positions.iter().all(|p| p.is_finite()) {
@@ -541,6 +578,23 @@ mod tests {
         }
         // The closed meshes that are not all quads: cube (dual reading tried) and torus.
         assert!(automatic >= 4, "{automatic}");
+    }
+
+    #[test]
+    fn a_face_with_no_lower_neighbour_is_searched_for_connectivity() {
+        // Face 1 of the coarse grid is swapped with the last one: it has no neighbour
+        // below it, so the connectivity is found by the search.
+        for kind in [CellKind::Quads, CellKind::Mixed] {
+            let grid = shapes::grid(5, 4, kind).unwrap();
+            let mut faces: Vec<Vec<u32>> = grid.faces().map(<[u32]>::to_vec).collect();
+            let last = faces.len() - 1;
+            faces.swap(1, last);
+            let soup = PolygonSoup::from_faces(grid.positions.clone(), faces);
+            let fine = refine(&soup, FaceRule::DooSabin);
+            let options = ReverseOptions::with_seed(FaceRule::DooSabin, 0);
+            let fast = reverse_canonical(&fine, &options).expect("canonical order");
+            assert_eq!(fast, general(&fine, &options));
+        }
     }
 
     #[test]

@@ -1429,22 +1429,23 @@ pub(crate) fn means_and_details(
     by_vertex: &CornersByVertex,
     candidates: &[DVec3],
 ) -> (Vec<DVec3>, Vec<DVec3>, Vec<f64>) {
-    means_and_details_with(by_vertex, candidates, |_| {})
+    means_and_details_with(by_vertex, candidates, |_, _| {})
 }
 
-/// [`means_and_details`], calling `before(v)` before vertex `v` is summed (so that a
-/// caller can read the same candidates while they are in cache).
+/// [`means_and_details`], calling `before(v, corners)` before vertex `v` (of corners
+/// `corners`) is summed (so that a caller can read the same candidates, or the same
+/// corners, while they are in cache).
 pub(crate) fn means_and_details_with(
     by_vertex: &CornersByVertex,
     candidates: &[DVec3],
-    mut before: impl FnMut(usize),
+    mut before: impl FnMut(usize, &[u32]),
 ) -> (Vec<DVec3>, Vec<DVec3>, Vec<f64>) {
     let vertices = by_vertex.offsets.len() - 1;
     let mut means = Vec::with_capacity(vertices);
     let mut details = Vec::with_capacity(by_vertex.corners.len() - vertices);
     let mut energies = Vec::with_capacity(vertices);
     for (v, corners) in by_vertex.iter().enumerate() {
-        before(v);
+        before(v, corners);
         let mean = corners.iter().map(|&c| candidates[c as usize]).sum::<DVec3>() / corners.len() as f64;
         means.push(mean);
         let mut prefix = DVec3::ZERO;
