@@ -589,15 +589,26 @@ where
 /// array is needed). Bit-identical for any thread count.
 pub(crate) fn face_points_in_place(offsets: &[u32], maps: &FaceMaps, points: &mut [DVec3]) {
     for_face_runs(offsets, points, |first, end, slice| {
-        let base = offsets[first] as usize;
-        let mut gathered: Vec<DVec3> = Vec::new();
-        for f in first..end {
-            let (b, e) = (offsets[f] as usize - base, offsets[f + 1] as usize - base);
-            gathered.clear();
-            gathered.extend_from_slice(&slice[b..e]);
-            maps.forward(&gathered, &mut slice[b..e]);
-        }
+        map_run_in_place(offsets, first..end, slice, |face, out| maps.forward(face, out));
     });
+}
+
+/// Each face of the run `faces` (its corners' points in `run`, from corner
+/// `offsets[faces.start]` on) replaced by `map(face points, out)`, in place.
+fn map_run_in_place(
+    offsets: &[u32],
+    faces: std::ops::Range<usize>,
+    run: &mut [DVec3],
+    map: impl Fn(&[DVec3], &mut [DVec3]),
+) {
+    let base = offsets[faces.start] as usize;
+    let mut gathered: Vec<DVec3> = Vec::new();
+    for f in faces {
+        let (b, e) = (offsets[f] as usize - base, offsets[f + 1] as usize - base);
+        gathered.clear();
+        gathered.extend_from_slice(&run[b..e]);
+        map(&gathered, &mut run[b..e]);
+    }
 }
 
 /// Per-face expansion (inverse map) of the points `point(c)` at the corners of the
@@ -617,13 +628,7 @@ where
         for (c, out) in (base..).zip(slice.iter_mut()) {
             *out = point(c);
         }
-        let mut gathered: Vec<DVec3> = Vec::new();
-        for f in first..end {
-            let (b, e) = (offsets[f] as usize - base, offsets[f + 1] as usize - base);
-            gathered.clear();
-            gathered.extend_from_slice(&slice[b..e]);
-            maps.inverse(&gathered, &mut slice[b..e]);
-        }
+        map_run_in_place(offsets, first..end, slice, |face, out| maps.inverse(face, out));
     });
     out
 }

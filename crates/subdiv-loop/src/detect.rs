@@ -428,28 +428,22 @@ pub(crate) fn coarse_face_is_valid([a, b, d]: [u32; 3], twins: [u32; 3]) -> bool
 
 /// The edge part of [`coarse_mesh_is_valid`]: no two edges join the same two vertices.
 fn coarse_edges_are_simple(coarse: &CornerTable) -> bool {
-    let mut lower_ends = vec![0u32; coarse.vertex_count() + 1];
-    for e in 0..coarse.edge_count() as u32 {
-        let c = coarse.edge_corner(e);
-        let (a, b) = (coarse.vertex(c), coarse.vertex(next(c)));
-        lower_ends[a.min(b) as usize + 1] += 1;
-    }
-    coarse_edges_are_simple_counted(coarse, lower_ends)
-}
-
-/// [`coarse_edges_are_simple`] given `lower_ends[v + 1]`, the number of edges whose
-/// lower end point is `v` (a pass that visits the edges anyway can count them).
-pub(crate) fn coarse_edges_are_simple_counted(coarse: &CornerTable, start: Vec<u32>) -> bool {
     let corner_vertex = coarse.corner_vertices();
     let ends = |e: u32| {
         let c = coarse.edge_corner(e);
         [corner_vertex[c as usize], corner_vertex[next(c) as usize]]
     };
-    edges_are_simple(coarse.vertex_count(), coarse.edge_count(), ends, start)
+    let mut lower_ends = vec![0u32; coarse.vertex_count() + 1];
+    for e in 0..coarse.edge_count() as u32 {
+        let [a, b] = ends(e);
+        lower_ends[a.min(b) as usize + 1] += 1;
+    }
+    edges_are_simple(coarse.vertex_count(), coarse.edge_count(), ends, lower_ends)
 }
 
-/// [`coarse_edges_are_simple_counted`] on the edges of the twin pairing, whose end
-/// points it reads in edge order (no lookup through the first corner).
+/// [`coarse_edges_are_simple`] on the edges of the twin pairing, whose end points it
+/// reads in edge order (no lookup through the first corner), given `start` as
+/// [`edges_are_simple`] takes it (the pairing counts the edges by lower end point).
 pub(crate) fn paired_edges_are_simple(vertex_count: usize, edges: &[PairedEdge], start: Vec<u32>) -> bool {
     edges_are_simple(vertex_count, edges.len(), |e| edges[e as usize].ends, start)
 }
