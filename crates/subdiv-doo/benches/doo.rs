@@ -6,7 +6,8 @@
 //! forward step of the same size; the throughput is in fine vertices, so a flat
 //! elements-per-second figure across sizes is linear time. The fine meshes are written
 //! by `subdivide`, so they are in the canonical order (the fast path of the reversal);
-//! `decompose_renumbered` times the general path on the same mesh renumbered.
+//! `decompose_renumbered` times the general path on the same mesh renumbered, and
+//! `forward_renumbered` the forward step of the coarse mesh renumbered the same way.
 //!
 //! "The forward Doo-Sabin step of the same size" is one level of subdivision of the
 //! coarse mesh, to the very fine mesh (connectivity and positions) that `decompose` takes
@@ -14,9 +15,12 @@
 //! (`subdivide`) and `decompose` start from a built `HalfedgeMesh`; `reconstruct` starts
 //! from the `DooPyramid`, whose base mesh is a polygon soup that it validates, so its
 //! counterpart is `forward_soup` (`subdivide_soup`: the coarse soup validated, then
-//! subdivided), as in the reverse Loop bench. Compare in the same run and with the same
-//! number of threads: `decompose*_1thread` with `forward_1thread`, `reconstruct_1thread`
-//! with `forward_soup_1thread` (and with `forward_1thread` for the stricter reading).
+//! subdivided), as in the reverse Loop bench; `reconstruct_prepared` starts from the
+//! pyramid with its base connectivity built (`DooPyramid::prepare`), so its counterpart
+//! is `forward`. Compare in the same run and with the same number of threads:
+//! `decompose*_1thread` with `forward_1thread`, `reconstruct_1thread` with
+//! `forward_soup_1thread`, `reconstruct_prepared_1thread` with `forward_1thread`, and
+//! `decompose_renumbered_1thread` with `forward_renumbered_1thread`.
 //!
 //! Run with `cargo bench -p subdiv-doo --bench doo`. The inputs are built before timing;
 //! the timed call is `subdivide` on an already built half-edge mesh (the counterpart of
@@ -138,6 +142,14 @@ fn multires(c: &mut Criterion) {
             &renumbered,
             |b, fine| b.iter(|| one.install(|| decompose(black_box(fine), &options).unwrap())),
         );
+        // Its forward counterpart: the coarse mesh renumbered the same way, subdivided
+        // (scattered reads on both sides).
+        let coarse_renumbered = HalfedgeMesh::from_soup(&scramble(coarse.to_soup(), 7, 0.0)).unwrap();
+        group.bench_with_input(
+            BenchmarkId::new("forward_renumbered_1thread", fine_vertices),
+            &coarse_renumbered,
+            |b, coarse| b.iter(|| one.install(|| subdivide(black_box(coarse), &forward_options).unwrap())),
+        );
         let coarse_soup = coarse.to_soup();
         group.bench_with_input(BenchmarkId::new("forward_soup_1thread", fine_vertices), &coarse_soup, |b, soup| {
             b.iter(|| one.install(|| subdivide_soup(black_box(soup), &forward_options).unwrap()))
@@ -145,6 +157,13 @@ fn multires(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("reconstruct_1thread", fine_vertices), &pyramid, |b, pyramid| {
             b.iter(|| one.install(|| black_box(pyramid).reconstruct(1, None).unwrap()))
         });
+        // The base connectivity built once, as `forward` starts from a built mesh.
+        let prepared = pyramid.prepare().unwrap();
+        group.bench_with_input(
+            BenchmarkId::new("reconstruct_prepared_1thread", fine_vertices),
+            &prepared,
+            |b, prepared| b.iter(|| one.install(|| black_box(prepared).reconstruct(1, None).unwrap())),
+        );
         group.bench_with_input(BenchmarkId::new("decompose", fine_vertices), &fine, |b, fine| {
             b.iter(|| decompose(black_box(fine), &options).unwrap())
         });

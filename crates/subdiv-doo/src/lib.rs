@@ -16,6 +16,8 @@ pub mod rule;
 pub use corner::{FaceKind, FaceOrigin};
 pub use error::DooError;
 pub use forward::{DooMesh, DooOptions, subdivide, subdivide_soup};
-pub use pyramid::{DecomposeOptions, Decomposition, Depth, DooPyramid, RateDistortion, decompose, is_doo_pyramid};
+pub use pyramid::{
+    DecomposeOptions, Decomposition, Depth, DooPyramid, PreparedPyramid, RateDistortion, decompose, is_doo_pyramid,
+};
 pub use reverse::{DooReversal, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial, reverse};
 pub use rule::FaceRule;

@@ -22,8 +22,6 @@
 //! [`PYRAMID_VERSION`], bincode payload of [`DooPyramid`]). Decoding checks every array
 //! length and permutation before use: a corrupted file is an error, never a panic.
 
-use std::borrow::Cow;
-
 use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
 use serde::{Deserialize, Serialize};
@@ -329,64 +327,63 @@ impl DooPyramid {
     /// Rebuilds level `level` (0 = the base mesh), keeping the fraction `keep` of the
     /// detail vectors (all if `None`; see the module docs for the ranking).
     ///
+    /// Each call builds the base mesh's connectivity from its polygon soup first; to
+    /// reconstruct several times from one pyramid, [`prepare`](Self::prepare) it once.
+    ///
     /// # Errors
     /// [`DooError::InvalidPyramid`] if `level` is out of range, `keep` is not in `[0, 1]`,
     /// or the pyramid is inconsistent (wrong array lengths, bad permutations).
     pub fn reconstruct(&self, level: usize, keep: Option<f64>) -> Result<PolygonSoup, DooError> {
+        let kept = self.check_request(level, keep)?;
+        self.prepare()?.reconstruct_checked(level, kept)
+    }
+
+    /// Builds and checks the base mesh's connectivity once, for any number of
+    /// reconstructions: the multiresolution counterpart of subdividing a mesh whose
+    /// connectivity is already built (a rate-distortion sweep, several levels, an editor
+    /// rebuilding after each change of a detail).
+    ///
+    /// ```
+    /// use subdiv_doo::pyramid::{DecomposeOptions, decompose};
+    /// use subdiv_doo::{DooOptions, FaceRule, subdivide};
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 2))?.to_mesh()?;
+    /// let pyramid = decompose(&fine, &DecomposeOptions::levels(FaceRule::DooSabin, 2))?.pyramid;
+    /// let prepared = pyramid.prepare()?;
+    /// for level in 0..=2 {
+    ///     assert_eq!(prepared.reconstruct(level, None)?, pyramid.reconstruct(level, None)?);
+    /// }
+    /// assert_eq!(prepared.reconstruct(2, Some(0.1))?, pyramid.reconstruct(2, Some(0.1))?);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`DooError::InvalidPyramid`] if the base mesh is not a valid polygon mesh;
+    /// [`DooError::NonFinite`] naming a base vertex that is NaN or infinite; the rule's
+    /// error if its parameter is out of range.
+    pub fn prepare(&self) -> Result<PreparedPyramid<'_>, DooError> {
+        self.rule.validate()?;
+        check_finite(&self.base.positions)?;
+        let (base, grouping) = CornerMesh::from_soup_grouped(&self.base)
+            .map_err(|e| DooError::InvalidPyramid(format!("base mesh: {e}")))?;
+        Ok(PreparedPyramid { pyramid: self, base, base_corners: CornersByVertex::from_parts(grouping) })
+    }
+
+    /// Checks a reconstruction request; for a `keep` fraction, which details it keeps.
+    fn check_request(&self, level: usize, keep: Option<f64>) -> Result<Option<Vec<Vec<bool>>>, DooError> {
         if level > self.levels.len() {
             return Err(DooError::InvalidPyramid(format!(
                 "level {level} requested, the pyramid has levels 0 to {}",
                 self.levels.len()
             )));
         }
-        let kept = match keep {
-            None => None,
-            Some(f) if (0.0..=1.0).contains(&f) => Some(self.kept_details(f)),
-            Some(f) => {
-                return Err(DooError::InvalidPyramid(format!("keep fraction {f} is not in [0, 1]")));
-            }
-        };
-        self.rule.validate()?;
-        check_finite(&self.base.positions)?;
-        let (mut mesh, grouping) = CornerMesh::from_soup_grouped(&self.base)
-            .map_err(|e| DooError::InvalidPyramid(format!("base mesh: {e}")))?;
-        // The base's corners by vertex come with its check; finer levels group their own.
-        let mut grouping = Some(CornersByVertex::from_parts(grouping));
-        let mut positions = Cow::Borrowed(&self.base.positions[..]);
-        for (k, data) in self.levels[..level].iter().enumerate() {
-            self.check_level(k, &mesh, data)?;
-            let filtered;
-            let details = match &kept {
-                None => &data.details,
-                Some(mask) => {
-                    filtered = data
-                        .details
-                        .iter()
-                        .zip(&mask[k])
-                        .map(|(&d, &keep)| if keep { d } else { DVec3::ZERO })
-                        .collect::<Vec<_>>();
-                    &filtered
-                }
-            };
-            let by_vertex = grouping.take().unwrap_or_else(|| corners_by_vertex(&mesh));
-            let (candidates, finite) = level_candidates(&by_vertex, &positions, details);
-            drop(by_vertex);
-            if !finite {
-                // Name the offending detail (a non-finite candidate may also come from an
-                // overflow, which is not an error).
-                check_finite(details).map_err(|e| DooError::InvalidPyramid(format!("level {}: detail {e}", k + 1)))?;
-            }
-            let with_adjacency = k + 1 < level;
-            let (fine, fine_positions) =
-                level_from_candidates(&mesh, candidates, &data.order, self.rule, with_adjacency)
-                    .map_err(|e| DooError::InvalidPyramid(format!("level {}: {e}", k + 1)))?;
-            mesh = fine;
-            positions = Cow::Owned(fine_positions);
+        match keep {
+            None => Ok(None),
+            Some(f) if (0.0..=1.0).contains(&f) => Ok(Some(self.kept_details(f))),
+            Some(f) => Err(DooError::InvalidPyramid(format!("keep fraction {f} is not in [0, 1]"))),
         }
-        if level == 0 {
-            return Ok(self.base.clone());
-        }
-        Ok(PolygonSoup { positions: positions.into_owned(), offsets: mesh.offsets, indices: mesh.corner_vertex })
     }
 
     /// For each level, which detail vectors the fraction `keep` keeps.
@@ -453,7 +450,9 @@ impl DooPyramid {
     /// As [`reconstruct`](Self::reconstruct).
     pub fn rate_distortion(&self, fractions: &[f64]) -> Result<Vec<RateDistortion>, DooError> {
         let finest = self.levels.len();
-        let exact = self.reconstruct(finest, None)?;
+        // The base connectivity is built once for all the reconstructions.
+        let prepared = self.prepare()?;
+        let exact = prepared.reconstruct(finest, None)?;
         let (lo, hi) =
             exact.positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
         let diagonal = (hi - lo).length().max(f64::MIN_POSITIVE);
@@ -461,7 +460,7 @@ impl DooPyramid {
         fractions
             .iter()
             .map(|&fraction| {
-                let approx = self.reconstruct(finest, Some(fraction))?;
+                let approx = prepared.reconstruct(finest, Some(fraction))?;
                 let (mut max, mut sum) = (0.0f64, 0.0f64);
                 for (a, b) in approx.positions.iter().zip(&exact.positions) {
                     let d = (*a - *b).length();
@@ -537,6 +536,74 @@ impl DooPyramid {
     }
 }
 
+/// A [`DooPyramid`] whose base connectivity is built and checked: reconstructions from it
+/// skip that step (see [`DooPyramid::prepare`]).
+#[derive(Debug)]
+pub struct PreparedPyramid<'a> {
+    pyramid: &'a DooPyramid,
+    base: CornerMesh,
+    /// The base's corners by vertex, which its check computes anyway.
+    base_corners: CornersByVertex,
+}
+
+impl PreparedPyramid<'_> {
+    /// [`DooPyramid::reconstruct`] without building the base connectivity again: the same
+    /// result, bit for bit.
+    ///
+    /// # Errors
+    /// As [`DooPyramid::reconstruct`], except the base mesh's errors, which
+    /// [`DooPyramid::prepare`] reported.
+    pub fn reconstruct(&self, level: usize, keep: Option<f64>) -> Result<PolygonSoup, DooError> {
+        let kept = self.pyramid.check_request(level, keep)?;
+        self.reconstruct_checked(level, kept)
+    }
+
+    fn reconstruct_checked(&self, level: usize, kept: Option<Vec<Vec<bool>>>) -> Result<PolygonSoup, DooError> {
+        let pyramid = self.pyramid;
+        if level == 0 {
+            return Ok(pyramid.base.clone());
+        }
+        // The finer levels' meshes; the base is borrowed.
+        let mut refined: Option<(CornerMesh, Vec<DVec3>)> = None;
+        for (k, data) in pyramid.levels[..level].iter().enumerate() {
+            let (mesh, positions) = match &refined {
+                Some((mesh, positions)) => (mesh, &positions[..]),
+                None => (&self.base, &pyramid.base.positions[..]),
+            };
+            pyramid.check_level(k, mesh, data)?;
+            let filtered;
+            let details = match &kept {
+                None => &data.details,
+                Some(mask) => {
+                    filtered = data
+                        .details
+                        .iter()
+                        .zip(&mask[k])
+                        .map(|(&d, &keep)| if keep { d } else { DVec3::ZERO })
+                        .collect::<Vec<_>>();
+                    &filtered
+                }
+            };
+            let (candidates, finite) = if k == 0 {
+                level_candidates(&self.base_corners, positions, details)
+            } else {
+                level_candidates(&corners_by_vertex(mesh), positions, details)
+            };
+            if !finite {
+                // Name the offending detail (a non-finite candidate may also come from an
+                // overflow, which is not an error).
+                check_finite(details).map_err(|e| DooError::InvalidPyramid(format!("level {}: detail {e}", k + 1)))?;
+            }
+            let with_adjacency = k + 1 < level;
+            let next = level_from_candidates(mesh, candidates, &data.order, pyramid.rule, with_adjacency)
+                .map_err(|e| DooError::InvalidPyramid(format!("level {}: {e}", k + 1)))?;
+            refined = Some(next);
+        }
+        let (mesh, positions) = refined.expect("internal: level > 0 refines at least once");
+        Ok(PolygonSoup { positions, offsets: mesh.offsets, indices: mesh.corner_vertex })
+    }
+}
+
 fn is_permutation(values: &[u32], n: usize) -> bool {
     if values.len() != n {
         return false;
@@ -576,12 +643,33 @@ mod tests {
     }
 
     #[test]
+    fn a_prepared_pyramid_reconstructs_the_same_and_checks_the_same() {
+        let pyramid = cube_pyramid();
+        let prepared = pyramid.prepare().unwrap();
+        for level in 0..=2 {
+            for keep in [None, Some(0.0), Some(0.3), Some(1.0)] {
+                assert_eq!(prepared.reconstruct(level, keep).unwrap(), pyramid.reconstruct(level, keep).unwrap());
+            }
+        }
+        for (level, keep) in [(3, None), (1, Some(1.5)), (1, Some(f64::NAN))] {
+            let plain = pyramid.reconstruct(level, keep).unwrap_err().to_string();
+            assert_eq!(prepared.reconstruct(level, keep).unwrap_err().to_string(), plain);
+        }
+        let mut broken = pyramid.clone();
+        broken.levels[1].details.pop();
+        let plain = broken.reconstruct(2, None).unwrap_err().to_string();
+        assert!(plain.contains("level 2: "), "{plain}");
+        assert_eq!(broken.prepare().unwrap().reconstruct(2, None).unwrap_err().to_string(), plain);
+    }
+
+    #[test]
     fn a_non_finite_base_vertex_is_named() {
         let mut pyramid = cube_pyramid();
         pyramid.base.positions[5].x = f64::NEG_INFINITY;
         for level in 0..=2 {
             assert!(matches!(pyramid.reconstruct(level, None), Err(DooError::NonFinite { vertex: 5, .. })));
         }
+        assert!(matches!(pyramid.prepare(), Err(DooError::NonFinite { vertex: 5, .. })));
     }
 
     #[test]
