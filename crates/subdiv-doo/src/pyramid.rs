@@ -363,12 +363,12 @@ impl DooPyramid {
     /// [`DooError::InvalidPyramid`] if the base mesh is not a valid polygon mesh;
     /// [`DooError::NonFinite`] naming a base vertex that is NaN or infinite; the rule's
     /// error if its parameter is out of range.
-    pub fn prepare(&self) -> Result<PreparedPyramid<'_>, DooError> {
+    pub fn prepare(&self) -> Result<PreparedDooPyramid<'_>, DooError> {
         self.rule.validate()?;
         check_finite(&self.base.positions)?;
         let (base, grouping) = CornerMesh::from_soup_grouped(&self.base)
             .map_err(|e| DooError::InvalidPyramid(format!("base mesh: {e}")))?;
-        Ok(PreparedPyramid { pyramid: self, base, base_corners: CornersByVertex::from_parts(grouping) })
+        Ok(PreparedDooPyramid { pyramid: self, base, base_corners: CornersByVertex::from_parts(grouping) })
     }
 
     /// Checks a reconstruction request; for a `keep` fraction, which details it keeps.
@@ -539,14 +539,14 @@ impl DooPyramid {
 /// A [`DooPyramid`] whose base connectivity is built and checked: reconstructions from it
 /// skip that step (see [`DooPyramid::prepare`]).
 #[derive(Debug)]
-pub struct PreparedPyramid<'a> {
+pub struct PreparedDooPyramid<'a> {
     pyramid: &'a DooPyramid,
     base: CornerMesh,
     /// The base's corners by vertex, which its check computes anyway.
     base_corners: CornersByVertex,
 }
 
-impl PreparedPyramid<'_> {
+impl PreparedDooPyramid<'_> {
     /// [`DooPyramid::reconstruct`] without building the base connectivity again: the same
     /// result, bit for bit.
     ///

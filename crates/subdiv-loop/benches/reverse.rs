@@ -16,6 +16,8 @@
 //! - `reconstruct` (pyramid, whose base is a soup, to the fine soup) against
 //!   `forward_soup` (Loop subdivision from the coarse soup, validated first as
 //!   `reconstruct` validates its base mesh).
+//! - `reconstruct_prepared` (pyramid with its base mesh built, `LoopPyramid::prepare`)
+//!   against `forward_mesh`.
 //!
 //! What each side writes: `decompose` a pyramid (the base soup, one detail per coarse
 //! edge of every level), `forward_mesh` and `forward_soup` a `LoopMesh` (fine positions
@@ -25,7 +27,8 @@
 //!
 //! Ratios are only meaningful within one run (the machine is shared): group `levelL`
 //! times the four operations of size `L` back to back; compare `levelL/decompose` with
-//! `levelL/forward_mesh` and `levelL/reconstruct` with `levelL/forward_soup`.
+//! `levelL/forward_mesh`, `levelL/reconstruct` with `levelL/forward_soup` and
+//! `levelL/reconstruct_prepared` with `levelL/forward_mesh`.
 
 use std::hint::black_box;
 
@@ -97,6 +100,10 @@ fn benches(c: &mut Criterion) {
         });
         group.bench_function("forward_soup", |b| {
             b.iter(|| subdivide_soup(black_box(&base), level as u32, &rules).expect("valid"))
+        });
+        let prepared = pyramid.prepare().expect("valid pyramid");
+        group.bench_function("reconstruct_prepared", |b| {
+            b.iter(|| black_box(&prepared).reconstruct(level).expect("valid pyramid"))
         });
         group.finish();
     }

@@ -258,15 +258,48 @@ impl LoopPyramid {
     ///
     /// [`level_count`]: Self::level_count
     pub fn reconstruct(&self, level: usize) -> Result<PolygonSoup, LoopError> {
+        self.check_level_request(level)?;
+        self.reconstruct_on(&HalfedgeMesh::from_soup(&self.base)?, level)
+    }
+
+    /// Builds and checks the base mesh's half-edge connectivity once, for any number of
+    /// reconstructions (several levels, edited details, a rate-distortion sweep): the
+    /// multiresolution counterpart of subdividing a mesh that is already built.
+    ///
+    /// ```
+    /// use mesh_topo::shapes;
+    /// use subdiv_loop::pyramid::LoopPyramid;
+    /// use subdiv_loop::forward::LoopOptions;
+    ///
+    /// let mut pyramid = LoopPyramid::smooth(shapes::octahedron(), LoopOptions::default(), 2)?;
+    /// pyramid.levels[1].details[5] = glam::DVec3::new(0.0, 0.0, 0.1);
+    /// let prepared = pyramid.prepare()?;
+    /// for level in 0..=2 {
+    ///     assert_eq!(prepared.reconstruct(level)?, pyramid.reconstruct(level)?);
+    /// }
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`LoopError::Mesh`] if the base mesh is not a valid polygon mesh.
+    pub fn prepare(&self) -> Result<PreparedLoopPyramid<'_>, LoopError> {
+        Ok(PreparedLoopPyramid { pyramid: self, base: HalfedgeMesh::from_soup(&self.base)? })
+    }
+
+    fn check_level_request(&self, level: usize) -> Result<(), LoopError> {
         if level > self.levels.len() {
             return Err(LoopError::InvalidParameter {
                 name: "level",
                 reason: format!("{level}: the pyramid has {} levels", self.levels.len()),
             });
         }
-        let base = HalfedgeMesh::from_soup(&self.base)?;
+        Ok(())
+    }
+
+    /// Level `level` from `base`, this pyramid's base mesh already built.
+    fn reconstruct_on(&self, base: &HalfedgeMesh, level: usize) -> Result<PolygonSoup, LoopError> {
         let steps = self.levels[..level].iter().map(|l| (&l.details[..], l.order.as_ref()));
-        reconstruct_levels(&base, steps, &self.rules)
+        reconstruct_levels(base, steps, &self.rules)
     }
 
     /// A copy keeping only the largest `fraction` of the details (see the
@@ -323,7 +356,9 @@ impl LoopPyramid {
     /// As [`compressed`](Self::compressed) and [`reconstruct`](Self::reconstruct).
     pub fn rate_distortion(&self, fractions: &[f64]) -> Result<Vec<RateDistortion>, LoopError> {
         let finest = self.levels.len();
-        let exact = self.reconstruct(finest)?;
+        // The base is built once for all the reconstructions (a compressed copy keeps it).
+        let prepared = self.prepare()?;
+        let exact = prepared.reconstruct(finest)?;
         let diagonal = bounding_box_diagonal(&exact.positions);
         let scale = if diagonal > 0.0 { 1.0 / diagonal } else { 1.0 };
         let total = self.detail_count();
@@ -332,7 +367,7 @@ impl LoopPyramid {
             .map(|&fraction| {
                 let compressed = self.compressed(fraction)?;
                 let kept = compressed.levels.iter().flat_map(|l| &l.details).filter(|d| **d != DVec3::ZERO).count();
-                let approx = compressed.reconstruct(finest)?;
+                let approx = compressed.reconstruct_on(&prepared.base, finest)?;
                 let (mut max, mut sum) = (0.0f64, 0.0f64);
                 for (p, q) in approx.positions.iter().zip(&exact.positions) {
                     let d = p.distance_squared(*q);
@@ -398,6 +433,27 @@ impl LoopPyramid {
     }
 }
 
+/// A [`LoopPyramid`] whose base mesh is built and checked: reconstructions from it skip
+/// that step (see [`LoopPyramid::prepare`]).
+#[derive(Debug)]
+pub struct PreparedLoopPyramid<'a> {
+    pyramid: &'a LoopPyramid,
+    base: HalfedgeMesh,
+}
+
+impl PreparedLoopPyramid<'_> {
+    /// [`LoopPyramid::reconstruct`] without building the base mesh again: the same
+    /// result, bit for bit.
+    ///
+    /// # Errors
+    /// As [`LoopPyramid::reconstruct`], except the base mesh's errors, which
+    /// [`LoopPyramid::prepare`] reported.
+    pub fn reconstruct(&self, level: usize) -> Result<PolygonSoup, LoopError> {
+        self.pyramid.check_level_request(level)?;
+        self.pyramid.reconstruct_on(&self.base, level)
+    }
+}
+
 /// The connectivity of the next level (validated inputs).
 fn next_table(table: &CornerTable, order: Option<&FineOrder>) -> CornerTable {
     let canonical = table.refine();
@@ -425,6 +481,27 @@ mod tests {
 
     fn mesh(soup: &PolygonSoup) -> HalfedgeMesh {
         HalfedgeMesh::from_soup(soup).expect("valid test mesh")
+    }
+
+    #[test]
+    fn a_prepared_pyramid_reconstructs_the_same() {
+        let base = shapes::icosahedron();
+        let mut pyramid = LoopPyramid::smooth(base, LoopOptions::default(), 2).unwrap();
+        pyramid.levels[0].details[3] = DVec3::new(0.1, -0.2, 0.05);
+        pyramid.levels[1].details[17] = DVec3::new(0.0, 0.0, 0.3);
+        let prepared = pyramid.prepare().unwrap();
+        for level in 0..=2 {
+            assert_eq!(prepared.reconstruct(level).unwrap(), pyramid.reconstruct(level).unwrap());
+        }
+        assert_eq!(prepared.reconstruct(3).unwrap_err().to_string(), pyramid.reconstruct(3).unwrap_err().to_string());
+        let mut broken = pyramid.clone();
+        broken.levels[1].details.pop();
+        let plain = broken.reconstruct(2).unwrap_err();
+        assert!(matches!(plain, LoopError::InvalidDetails { .. }), "{plain}");
+        assert_eq!(broken.prepare().unwrap().reconstruct(2).unwrap_err().to_string(), plain.to_string());
+        let mut bad_base = pyramid.clone();
+        bad_base.base.indices[0] = 1_000;
+        assert_eq!(bad_base.prepare().unwrap_err().to_string(), bad_base.reconstruct(1).unwrap_err().to_string());
     }
 
     fn max_levels(rules: LoopOptions) -> DecomposeOptions {
