@@ -73,7 +73,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         Some(ff_faces) => ff_faces,
         None => walk_ff_faces(fine)?,
     };
-    let FfFaces { offsets, twins, across, quads, on_boundary, each_reaches_lower, layout } = ff_faces;
+    let FfFaces { offsets, twins, across, quads, on_boundary, unreached, layout } = ff_faces;
     // Without a seed, the choice is made here only on closed meshes with F_E quads and
     // F_V faces (see [`automatic`]); anything else goes to the general path now, before
     // the work below is done for nothing.
@@ -90,13 +90,13 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     if fv_first > faces {
         return None;
     }
-    if !each_reaches_lower {
+    let coarse_next = next_of_corners(&offsets);
+    if !unreached.iter().all(|&k| reaches_lower_in_two(&offsets, &twins, &coarse_next, k)) {
         let across = if layout { across_of_twins(&offsets, &twins) } else { across };
         if !connected(&offsets, &across) {
             return None;
         }
     }
-    let coarse_next = next_of_corners(&offsets);
     debug_assert!(
         twins.iter().enumerate().all(|(c, &t)| t == NONE || twins[t as usize] == c as u32),
         "internal: canonical twins are an involution"
@@ -300,10 +300,10 @@ struct FfFaces {
     /// The number of F_E quads, the faces right after the F_F faces.
     quads: u32,
     on_boundary: bool,
-    /// Whether every F_F face after the first lies across an edge from an earlier one:
-    /// then the coarse mesh is connected without a search (each face reaches face 0
-    /// downwards).
-    each_reaches_lower: bool,
+    /// The F_F faces after the first that lie across no edge from an earlier one (when
+    /// each of them lies across an edge from a face that does, the coarse mesh is
+    /// connected without a search: see [`reaches_lower_in_two`]).
+    unreached: Vec<u32>,
     /// Whether the half-edges are numbered as [`HalfedgeMesh::from_soup`] numbers those
     /// of a soup in the canonical order (see [`stream_ff_faces`]).
     layout: bool,
@@ -359,7 +359,7 @@ fn stream_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
     let mut twins = Vec::with_capacity(vertices);
     let mut quads = 0u32;
     let mut on_boundary = false;
-    let mut each_reaches_lower = true;
+    let mut unreached = Vec::new();
     // The current F_F face's first corner and its lowest twin.
     let mut start = 0u32;
     let mut lowest = NONE;
@@ -409,7 +409,9 @@ fn stream_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
             if n != 2 * start || k >= faces || face_halfedge[k] != 2 * start {
                 return None;
             }
-            each_reaches_lower &= k == 0 || lowest < start;
+            if k > 0 && lowest >= start {
+                unreached.push(k as u32);
+            }
             offsets.push(c + 1);
             start = c + 1;
             lowest = NONE;
@@ -423,7 +425,7 @@ fn stream_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
     if !quad_faces.iter().zip((v2..).step_by(4)).all(|(&h, expected)| h == expected) {
         return None;
     }
-    Some(FfFaces { offsets, twins, across: Vec::new(), quads, on_boundary, each_reaches_lower, layout: true })
+    Some(FfFaces { offsets, twins, across: Vec::new(), quads, on_boundary, unreached, layout: true })
 }
 
 /// The F_F faces and the coarse twins of a mesh in the canonical order, whatever its
@@ -445,7 +447,7 @@ fn walk_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
     let mut quad_base = 0u32;
     let mut far_max = 0u32;
     let mut on_boundary = false;
-    let mut each_reaches_lower = true;
+    let mut unreached = Vec::new();
     let mut c = 0u32;
     while (c as usize) < vertices {
         let k = offsets.len() - 1;
@@ -512,14 +514,40 @@ fn walk_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
                 return None;
             }
         }
-        each_reaches_lower &= k == 0 || (lowest_across as usize) < k;
+        if k > 0 && lowest_across as usize >= k {
+            unreached.push(k as u32);
+        }
         offsets.push(c);
     }
     let ff = offsets.len() as u32 - 1;
     if far_max >= ff || (quads > 0 && quad_base != ff) {
         return None;
     }
-    Some(FfFaces { offsets, twins, across, quads, on_boundary, each_reaches_lower, layout: false })
+    Some(FfFaces { offsets, twins, across, quads, on_boundary, unreached, layout: false })
+}
+
+/// Whether F_F face `k` lies across an edge from a face that lies across an edge from a
+/// face below `k`. If every face after the first lies across an edge from a face below it
+/// or does this, the coarse mesh is connected: by induction on `k`, each face is joined
+/// to face 0 (through a face below it, directly or through one neighbour).
+fn reaches_lower_in_two(offsets: &[u32], twins: &[u32], next: &[u32], k: u32) -> bool {
+    let (start, end) = (offsets[k as usize], offsets[k as usize + 1]);
+    twins[start as usize..end as usize].iter().any(|&t| {
+        if t == NONE {
+            return false;
+        }
+        // Around the face of the twin.
+        let mut x = t;
+        loop {
+            if twins[x as usize] < start {
+                return true;
+            }
+            x = next[x as usize];
+            if x == t {
+                return false;
+            }
+        }
+    })
 }
 
 /// The F_F face across each corner's edge ([`NONE`] on the boundary), from the F_F faces
@@ -772,7 +800,7 @@ mod tests {
             assert_eq!(streamed.twins, walked.twins);
             assert_eq!(streamed.quads, walked.quads);
             assert_eq!(streamed.on_boundary, walked.on_boundary);
-            assert_eq!(streamed.each_reaches_lower, walked.each_reaches_lower);
+            assert_eq!(streamed.unreached, walked.unreached);
             assert_eq!(across_of_twins(&streamed.offsets, &streamed.twins), walked.across);
         }
         // Off the layout: both give up on another order, the walk alone on nothing here.
@@ -800,10 +828,26 @@ mod tests {
             faces.swap(1, last);
             let soup = PolygonSoup::from_faces(grid.positions.clone(), faces);
             let fine = refine(&soup, FaceRule::DooSabin);
+            let ff = stream_ff_faces(&fine).expect("the layout of a canonical mesh");
+            let next = next_of_corners(&ff.offsets);
+            assert!(!ff.unreached.iter().all(|&k| reaches_lower_in_two(&ff.offsets, &ff.twins, &next, k)));
             let options = ReverseOptions::with_seed(FaceRule::DooSabin, 0);
             let fast = reverse_canonical(&fine, &options).expect("canonical order");
             assert_eq!(fast, general(&fine, &options));
         }
+    }
+
+    #[test]
+    fn a_face_reached_through_a_neighbour_needs_no_search() {
+        // In the triangle torus, the first triangle of some cells has neighbours above it
+        // only, one of which (its cell's other triangle) has one below it.
+        let fine = refine(&shapes::torus(6, 4, CellKind::Triangles).unwrap(), FaceRule::DooSabin);
+        let ff = stream_ff_faces(&fine).expect("the layout of a canonical mesh");
+        let next = next_of_corners(&ff.offsets);
+        assert!(!ff.unreached.is_empty());
+        assert!(ff.unreached.iter().all(|&k| reaches_lower_in_two(&ff.offsets, &ff.twins, &next, k)));
+        // Not through the face itself: a face whose neighbours reach below only through it.
+        assert!(!reaches_lower_in_two(&[0, 3, 6], &[NONE, 4, NONE, NONE, 1, NONE], &[1, 2, 0, 4, 5, 3], 1));
     }
 
     #[test]
