@@ -73,7 +73,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         Some(ff_faces) => ff_faces,
         None => walk_ff_faces(fine)?,
     };
-    let FfFaces { offsets, twins, across, quads, on_boundary, unreached, layout } = ff_faces;
+    let FfFaces { offsets, next: coarse_next, twins, across, quads, on_boundary, unreached, layout } = ff_faces;
     // Without a seed, the choice is made here only on closed meshes with F_E quads and
     // F_V faces (see [`automatic`]); anything else goes to the general path now, before
     // the work below is done for nothing.
@@ -90,7 +90,6 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     if fv_first > faces {
         return None;
     }
-    let coarse_next = next_of_corners(&offsets);
     if !unreached.iter().all(|&k| reaches_lower_in_two(&offsets, &twins, &coarse_next, k)) {
         let across = if layout { across_of_twins(&offsets, &twins) } else { across };
         if !connected(&offsets, &across) {
@@ -154,12 +153,9 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     // interior: a corner on no F_V face is on a closed orbit without one).
     let mut stamp = Vec::new();
     if closed {
-        stamp = vec![NONE; interior];
         for (k, w) in offsets.windows(2).enumerate() {
-            for &v in &labels[w[0] as usize..w[1] as usize] {
-                if v == NONE || std::mem::replace(&mut stamp[v as usize], k as u32) == k as u32 {
-                    return None;
-                }
+            if !distinct(&labels[w[0] as usize..w[1] as usize], &mut stamp, interior, k as u32) {
+                return None;
             }
         }
     } else {
@@ -236,11 +232,20 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     let mut manifold = true;
     let (coarse_positions, details, vertex_energy) = if closed {
         stamp.fill(NONE);
+        // The far ends of each vertex's outgoing coarse half-edges.
+        let mut short_ends = [NONE; SHORT];
+        let mut long_ends = Vec::new();
         means_and_details_with(&by_vertex, &candidates, |u, corners| {
-            for &c in corners {
-                let w = coarse.corner_vertex[coarse.corner_next[c as usize] as usize];
-                manifold &= std::mem::replace(&mut stamp[w as usize], u as u32) != u as u32;
+            let ends = if corners.len() <= SHORT {
+                &mut short_ends[..corners.len()]
+            } else {
+                long_ends.resize(corners.len(), NONE);
+                &mut long_ends[..]
+            };
+            for (end, &c) in ends.iter_mut().zip(corners) {
+                *end = coarse.corner_vertex[coarse.corner_next[c as usize] as usize];
             }
+            manifold &= distinct(ends, &mut stamp, interior, u as u32);
             if automatic_choice {
                 let group = &fv_vertices[group_start..group_start + fv_sizes[u] as usize];
                 group_start += group.len();
@@ -292,6 +297,8 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
 struct FfFaces {
     /// The F_F faces' corner ranges: fine vertex `c` is coarse corner `c`.
     offsets: Vec<u32>,
+    /// The next corner of each corner in its F_F face.
+    next: Vec<u32>,
     /// The coarse twin of each corner ([`NONE`] on the boundary).
     twins: Vec<u32>,
     /// The F_F face across each corner's edge ([`NONE`] on the boundary); empty when
@@ -357,6 +364,7 @@ fn stream_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
     let mut offsets = Vec::with_capacity(vertices / 3 + 2);
     offsets.push(0u32);
     let mut twins = Vec::with_capacity(vertices);
+    let mut coarse_next = Vec::with_capacity(vertices);
     let mut quads = 0u32;
     let mut on_boundary = false;
     let mut unreached = Vec::new();
@@ -403,7 +411,9 @@ fn stream_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
             }
         }
         let n = next[h as usize];
-        if n != h + 2 {
+        if n == h + 2 {
+            coarse_next.push(c + 1);
+        } else {
             // The face closes here.
             let k = offsets.len() - 1;
             if n != 2 * start || k >= faces || face_halfedge[k] != 2 * start {
@@ -413,6 +423,7 @@ fn stream_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
                 unreached.push(k as u32);
             }
             offsets.push(c + 1);
+            coarse_next.push(start);
             start = c + 1;
             lowest = NONE;
         }
@@ -425,7 +436,8 @@ fn stream_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
     if !quad_faces.iter().zip((v2..).step_by(4)).all(|(&h, expected)| h == expected) {
         return None;
     }
-    Some(FfFaces { offsets, twins, across: Vec::new(), quads, on_boundary, unreached, layout: true })
+    let next = coarse_next;
+    Some(FfFaces { offsets, next, twins, across: Vec::new(), quads, on_boundary, unreached, layout: true })
 }
 
 /// The F_F faces and the coarse twins of a mesh in the canonical order, whatever its
@@ -523,7 +535,8 @@ fn walk_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
     if far_max >= ff || (quads > 0 && quad_base != ff) {
         return None;
     }
-    Some(FfFaces { offsets, twins, across, quads, on_boundary, unreached, layout: false })
+    let next = next_of_corners(&offsets);
+    Some(FfFaces { offsets, next, twins, across, quads, on_boundary, unreached, layout: false })
 }
 
 /// Whether F_F face `k` lies across an edge from a face that lies across an edge from a
@@ -558,6 +571,22 @@ fn across_of_twins(offsets: &[u32], twins: &[u32]) -> Vec<u32> {
         face_of_corner.resize(w[1] as usize, k as u32);
     }
     twins.iter().map(|&t| if t == NONE { NONE } else { face_of_corner[t as usize] }).collect()
+}
+
+/// Lists up to this long are checked for repeats by comparing their entries pairwise.
+const SHORT: usize = 8;
+
+/// Whether the `values` (each below `slots`, or [`NONE`]) are all different and none is
+/// [`NONE`]: short lists pairwise, longer ones by marking each value's slot of `stamp`
+/// (made on first use, `slots` long) with `mark`, which must differ between calls.
+fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark: u32) -> bool {
+    if values.len() <= SHORT {
+        return values.iter().enumerate().all(|(i, &v)| v != NONE && !values[..i].contains(&v));
+    }
+    if stamp.is_empty() {
+        *stamp = vec![NONE; slots];
+    }
+    values.iter().all(|&v| v != NONE && std::mem::replace(&mut stamp[v as usize], mark) != mark)
 }
 
 /// The candidates of the coarse faces (`offsets`) whose corners are the fine vertices in
@@ -797,6 +826,7 @@ mod tests {
             let walked = walk_ff_faces(&fine).expect("a canonical mesh");
             assert!(streamed.layout && !walked.layout);
             assert_eq!(streamed.offsets, walked.offsets);
+            assert_eq!(streamed.next, walked.next);
             assert_eq!(streamed.twins, walked.twins);
             assert_eq!(streamed.quads, walked.quads);
             assert_eq!(streamed.on_boundary, walked.on_boundary);
@@ -815,6 +845,23 @@ mod tests {
         // The raw coarse cube (its faces share edges): no F_F faces.
         let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
         assert!(stream_ff_faces(&cube).is_none() && walk_ff_faces(&cube).is_none());
+    }
+
+    #[test]
+    fn repeats_are_found_in_short_and_long_lists() {
+        let mut stamp = Vec::new();
+        assert!(distinct(&[3, 1, 2], &mut stamp, 20, 0));
+        assert!(!distinct(&[3, 1, 3], &mut stamp, 20, 1));
+        assert!(!distinct(&[3, NONE, 2], &mut stamp, 20, 2));
+        assert!(stamp.is_empty());
+        let long: Vec<u32> = (0..12).collect();
+        assert!(distinct(&long, &mut stamp, 20, 3));
+        assert!(distinct(&long, &mut stamp, 20, 4));
+        let mut repeated = long.clone();
+        repeated[11] = 5;
+        assert!(!distinct(&repeated, &mut stamp, 20, 5));
+        repeated[11] = NONE;
+        assert!(!distinct(&repeated, &mut stamp, 20, 6));
     }
 
     #[test]
