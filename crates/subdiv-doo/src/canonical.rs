@@ -579,6 +579,7 @@ const SHORT: usize = 8;
 /// Whether the `values` (each below `slots`, or [`NONE`]) are all different and none is
 /// [`NONE`]: short lists pairwise, longer ones by marking each value's slot of `stamp`
 /// (made on first use, `slots` long) with `mark`, which must differ between calls.
+#[inline(always)]
 fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark: u32) -> bool {
     if values.len() <= SHORT {
         return values.iter().enumerate().all(|(i, &v)| v != NONE && !values[..i].contains(&v));
@@ -694,21 +695,29 @@ fn automatic(
     let mut dual = scratch;
     debug_assert_eq!(dual.len(), positions.len());
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    let (mut points, mut expanded) = (Vec::new(), Vec::new());
+    // Faces of up to [`SHORT`] sides are gathered on the stack (no growing push in the
+    // gathering loop, whose bounds then stay in registers).
+    let (mut short_points, mut short_expanded) = ([DVec3::ZERO; SHORT], [DVec3::ZERO; SHORT]);
+    let (mut long_points, mut long_expanded) = (Vec::new(), Vec::new());
     let mut b = 0;
     for &m in fv.sizes_of {
         let face = &fv.vertices[b..b + m as usize];
         b += m as usize;
-        points.clear();
-        for &v in face {
+        let (points, expanded) = if face.len() <= SHORT {
+            (&mut short_points[..face.len()], &mut short_expanded[..face.len()])
+        } else {
+            long_points.resize(face.len(), DVec3::ZERO);
+            long_expanded.resize(face.len(), DVec3::ZERO);
+            (&mut long_points[..], &mut long_expanded[..])
+        };
+        for (slot, &v) in points.iter_mut().zip(face) {
             let p = positions[v as usize];
             lo = lo.min(p);
             hi = hi.max(p);
-            points.push(p);
+            *slot = p;
         }
-        expanded.resize(points.len(), DVec3::ZERO);
-        maps.inverse(&points, &mut expanded);
-        for (&v, &p) in face.iter().zip(&expanded) {
+        maps.inverse(points, expanded);
+        for (&v, &p) in face.iter().zip(expanded.iter()) {
             dual[v as usize] = p;
         }
     }
