@@ -582,7 +582,19 @@ const SHORT: usize = 8;
 #[inline(always)]
 fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark: u32) -> bool {
     if values.len() <= SHORT {
-        return values.iter().enumerate().all(|(i, &v)| v != NONE && !values[..i].contains(&v));
+        // Plain loops: they are inlined where iterator adaptors were not.
+        for i in 0..values.len() {
+            let v = values[i];
+            if v == NONE {
+                return false;
+            }
+            for &u in &values[..i] {
+                if u == v {
+                    return false;
+                }
+            }
+        }
+        return true;
     }
     if stamp.is_empty() {
         *stamp = vec![NONE; slots];
