@@ -60,7 +60,6 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     options.rule.validate().ok()?;
     let to = fine.raw_halfedge_targets();
     let next = fine.raw_halfedge_next();
-    let face_of = fine.raw_halfedge_faces();
     let face_halfedge = fine.raw_face_halfedges();
     let vertices = fine.vertex_count();
     let faces = face_halfedge.len();
@@ -68,88 +67,13 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         return None;
     }
 
-    // F_F faces and coarse twins, one walk around each F_F face.
-    let mut offsets = Vec::with_capacity(vertices / 3 + 2);
-    offsets.push(0u32);
-    let mut twins = Vec::with_capacity(vertices);
-    // The F_F face across each coarse edge (for the connectivity check).
-    let mut across = Vec::with_capacity(vertices);
-    let mut quads = 0u32;
-    let mut quad_base = 0u32;
-    let mut far_max = 0u32;
-    let mut on_boundary = false;
-    // Whether every F_F face after the first lies across an edge from an earlier one: then
-    // the coarse mesh is connected without a search (each face reaches face 0 downwards).
-    let mut each_reaches_lower = true;
-    let mut c = 0u32;
-    while (c as usize) < vertices {
-        let k = offsets.len() - 1;
-        if k >= faces {
-            return None;
-        }
-        let mut lowest_across = NONE;
-        let first = face_halfedge[k];
-        let start = c;
-        if to[(first ^ 1) as usize] != start {
-            return None;
-        }
-        let mut h = first;
-        loop {
-            // Corner `c` of the face, its half-edge `h` leaving vertex `c`.
-            let hb = h ^ 1;
-            let g = face_of[hb as usize];
-            if g == NONE {
-                on_boundary = true;
-                twins.push(NONE);
-                across.push(NONE);
-            } else {
-                let q1 = next[hb as usize];
-                let hf = next[q1 as usize];
-                let q3 = next[hf as usize];
-                if next[q3 as usize] != hb || hf == hb {
-                    // Not a 4-cycle.
-                    return None;
-                }
-                let far_face = face_of[(hf ^ 1) as usize];
-                if far_face == NONE {
-                    return None;
-                }
-                let t = to[hf as usize];
-                if t > c {
-                    // The quad is claimed from its smaller corner, in corner order.
-                    if quads == 0 {
-                        quad_base = g;
-                    } else if g != quad_base.wrapping_add(quads) {
-                        return None;
-                    }
-                    if face_halfedge[g as usize] != q1 {
-                        return None;
-                    }
-                    quads += 1;
-                } else if t == c {
-                    return None;
-                }
-                far_max = far_max.max(far_face);
-                lowest_across = lowest_across.min(far_face);
-                twins.push(t);
-                across.push(far_face);
-            }
-            let target = to[h as usize];
-            h = next[h as usize];
-            c += 1;
-            if h == first {
-                if target != start {
-                    return None;
-                }
-                break;
-            }
-            if target != c || c as usize >= vertices {
-                return None;
-            }
-        }
-        each_reaches_lower &= k == 0 || (lowest_across as usize) < k;
-        offsets.push(c);
-    }
+    // F_F faces and coarse twins: from the half-edge layout in streaming passes, or else
+    // one walk around each F_F face.
+    let ff_faces = match stream_ff_faces(fine) {
+        Some(ff_faces) => ff_faces,
+        None => walk_ff_faces(fine)?,
+    };
+    let FfFaces { offsets, next: coarse_next, twins, across, quads, on_boundary, unreached, layout } = ff_faces;
     // Without a seed, the choice is made here only on closed meshes with F_E quads and
     // F_V faces (see [`automatic`]); anything else goes to the general path now, before
     // the work below is done for nothing.
@@ -159,17 +83,19 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     }
     let ff_count = offsets.len() - 1;
     let ff = ff_count as u32;
-    if seed.is_some_and(|seed| seed >= ff_count) || far_max >= ff || (quads > 0 && quad_base != ff) {
+    if seed.is_some_and(|seed| seed >= ff_count) {
         return None;
     }
     let fv_first = ff_count + quads as usize;
     if fv_first > faces {
         return None;
     }
-    if !each_reaches_lower && !connected(&offsets, &across) {
-        return None;
+    if !unreached.iter().all(|&k| reaches_lower_in_two(&offsets, &twins, &coarse_next, k)) {
+        let across = if layout { across_of_twins(&offsets, &twins) } else { across };
+        if !connected(&offsets, &across) {
+            return None;
+        }
     }
-    let coarse_next = next_of_corners(&offsets);
     debug_assert!(
         twins.iter().enumerate().all(|(c, &t)| t == NONE || twins[t as usize] == c as u32),
         "internal: canonical twins are an involution"
@@ -181,9 +107,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         NONE => NONE,
         t => coarse_next[t as usize],
     };
-    // The connectivity array is done with: its memory holds the labels.
-    let mut labels = across;
-    labels.fill(NONE);
+    let mut labels = vec![NONE; vertices];
     let mut vertex_corner = Vec::with_capacity(faces - fv_first + 1);
     // The corners of the F_V faces in order, kept for the automatic choice.
     let mut fv_vertices = Vec::with_capacity(vertices);
@@ -195,10 +119,13 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         let mut size = 0u32;
         loop {
             let x = to[(h ^ 1) as usize];
+            // With the layout checked, every half-edge here is the twin of a quad's side,
+            // from `clockwise(y)` to `y`: the face is a clockwise orbit walked backwards,
+            // and the orbit is checked only off the layout.
             if std::mem::replace(&mut labels[x as usize], i as u32) != NONE || x < x0 {
                 return None;
             }
-            if size > 0 && clockwise(x) != previous {
+            if !layout && size > 0 && clockwise(x) != previous {
                 return None;
             }
             previous = x;
@@ -209,9 +136,10 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
                 break;
             }
         }
-        if size < 3 || clockwise(x0) != previous {
+        if size < 3 || (!layout && clockwise(x0) != previous) {
             return None;
         }
+        debug_assert!(clockwise(x0) == previous, "internal: an F_V face of the layout is an orbit");
         vertex_corner.push(x0);
         fv_sizes.push(size);
     }
@@ -225,12 +153,9 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     // interior: a corner on no F_V face is on a closed orbit without one).
     let mut stamp = Vec::new();
     if closed {
-        stamp = vec![NONE; interior];
         for (k, w) in offsets.windows(2).enumerate() {
-            for &v in &labels[w[0] as usize..w[1] as usize] {
-                if v == NONE || std::mem::replace(&mut stamp[v as usize], k as u32) == k as u32 {
-                    return None;
-                }
+            if !distinct(&labels[w[0] as usize..w[1] as usize], &mut stamp, interior, k as u32) {
+                return None;
             }
         }
     } else {
@@ -307,11 +232,20 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     let mut manifold = true;
     let (coarse_positions, details, vertex_energy) = if closed {
         stamp.fill(NONE);
+        // The far ends of each vertex's outgoing coarse half-edges.
+        let mut short_ends = [NONE; SHORT];
+        let mut long_ends = Vec::new();
         means_and_details_with(&by_vertex, &candidates, |u, corners| {
-            for &c in corners {
-                let w = coarse.corner_vertex[coarse.corner_next[c as usize] as usize];
-                manifold &= std::mem::replace(&mut stamp[w as usize], u as u32) != u as u32;
+            let ends = if corners.len() <= SHORT {
+                &mut short_ends[..corners.len()]
+            } else {
+                long_ends.resize(corners.len(), NONE);
+                &mut long_ends[..]
+            };
+            for (end, &c) in ends.iter_mut().zip(corners) {
+                *end = coarse.corner_vertex[coarse.corner_next[c as usize] as usize];
             }
+            manifold &= distinct(ends, &mut stamp, interior, u as u32);
             if automatic_choice {
                 let group = &fv_vertices[group_start..group_start + fv_sizes[u] as usize];
                 group_start += group.len();
@@ -357,6 +291,315 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         choices: vec![choice],
         stats,
     })
+}
+
+/// The F_F faces of a canonical mesh and its coarse twins (see [`reverse_canonical`]).
+struct FfFaces {
+    /// The F_F faces' corner ranges: fine vertex `c` is coarse corner `c`.
+    offsets: Vec<u32>,
+    /// The next corner of each corner in its F_F face.
+    next: Vec<u32>,
+    /// The coarse twin of each corner ([`NONE`] on the boundary).
+    twins: Vec<u32>,
+    /// The F_F face across each corner's edge ([`NONE`] on the boundary); empty when
+    /// read from the layout (then found from the twins if needed).
+    across: Vec<u32>,
+    /// The number of F_E quads, the faces right after the F_F faces.
+    quads: u32,
+    on_boundary: bool,
+    /// The F_F faces after the first that lie across no edge from an earlier one (when
+    /// each of them lies across an edge from a face that does, the coarse mesh is
+    /// connected without a search: see [`reaches_lower_in_two`]).
+    unreached: Vec<u32>,
+    /// Whether the half-edges are numbered as [`HalfedgeMesh::from_soup`] numbers those
+    /// of a soup in the canonical order (see [`stream_ff_faces`]).
+    layout: bool,
+}
+
+/// The F_F faces and the coarse twins of a mesh whose half-edges are laid out as
+/// [`HalfedgeMesh::from_soup`] lays out a soup in the canonical order, checked in one
+/// pass over the corners that reads the half-edge arrays in order; `None` at the first
+/// entry off that layout (the walk of [`walk_ff_faces`] then decides).
+///
+/// `from_soup` numbers the edges in order of first appearance, side by side in corner
+/// order, an edge's half-edges being `2e` (the first side met) and `2e + 1`. In the
+/// canonical order of `V` fine vertices the F_F faces come first and share no edge, so
+/// the side leaving corner `c` is half-edge `2c`, its twin `2c + 1` lies on an F_E quad
+/// (or on the boundary). Quad `j`, `(c, next(t), t, next(c))` for its smaller corner
+/// `c`, adds two edges, its sides `2V + 4j` (from `c`) and `2V + 4j + 2` (from `t`),
+/// so that it is the 4-cycle `2V + 4j -> 2t + 1 -> 2V + 4j + 2 -> 2c + 1`; the F_V faces
+/// add none: they are made of the quads' sides' twins `2V + 4j + 1` and `2V + 4j + 3`.
+///
+/// The checks made, and why they are the walk's:
+/// - `to[2c + 1] == c` and `next[2c]` is `2c + 2` or, closing the face, twice its first
+///   corner, the face's first half-edge: the F_F faces, in order (the mesh's own
+///   invariants give the targets: a half-edge ends where its next one starts);
+/// - `next[2c + 1]` is `2V + 4j` with `j` the number of quads claimed so far (corner `c`
+///   claims quad `j`, whose `next[2V + 4j] = 2t + 1` names the twin `t > c` and whose
+///   `next[2V + 4j + 2] = 2c + 1`), or `2V + 4j + 2` for a quad already claimed whose
+///   `next[2V + 4j]` is `2c + 1` (corner `c` is its `t`, `next[2V + 4j + 2]` names the
+///   twin): each quad is the 4-cycle above, its far side is the F_F side of the twin, the
+///   twins are an involution, and the quads are claimed from their smaller corner in
+///   corner order;
+/// - the half-edges are exactly those (`4 * quads` after the `2V` of the F_F edges) and
+///   face `ff + j` starts at `2V + 4j`: the quads are the faces right after the F_F
+///   faces, in order, unrotated, and every face after them is made of the quads' sides'
+///   twins.
+///
+/// A valid mesh is assumed (as `HalfedgeMesh` guarantees): `next` is a permutation
+/// whose cycles are the faces and boundary loops.
+fn stream_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
+    let to = fine.raw_halfedge_targets();
+    let next = fine.raw_halfedge_next();
+    let face_of = fine.raw_halfedge_faces();
+    let face_halfedge = fine.raw_face_halfedges();
+    let vertices = fine.vertex_count();
+    let faces = face_halfedge.len();
+    let halfedges = to.len();
+    if halfedges >= NONE as usize || halfedges < 2 * vertices || !(halfedges - 2 * vertices).is_multiple_of(4) {
+        return None;
+    }
+    let all_quads = ((halfedges - 2 * vertices) / 4) as u32;
+    let v2 = 2 * vertices as u32;
+    let mut offsets = Vec::with_capacity(vertices / 3 + 2);
+    offsets.push(0u32);
+    let mut twins = Vec::with_capacity(vertices);
+    let mut coarse_next = Vec::with_capacity(vertices);
+    let mut quads = 0u32;
+    let mut on_boundary = false;
+    let mut unreached = Vec::new();
+    // The current F_F face's first corner and its lowest twin.
+    let mut start = 0u32;
+    let mut lowest = NONE;
+    for c in 0..vertices as u32 {
+        let (h, hb) = (2 * c, 2 * c + 1);
+        if to[hb as usize] != c {
+            return None;
+        }
+        if face_of[hb as usize] == NONE {
+            on_boundary = true;
+            twins.push(NONE);
+        } else {
+            let slot = next[hb as usize].wrapping_sub(v2);
+            let j = slot / 4;
+            if j >= all_quads {
+                return None;
+            }
+            let q = (v2 + (slot & !3)) as usize;
+            let (n0, n2) = (next[q], next[q + 2]);
+            let t = n0 / 2;
+            match slot % 4 {
+                0 => {
+                    // `c` claims quad `j`: its far side is the twin's F_F side.
+                    if j != quads || n2 != hb || n0 % 2 == 0 || t <= c || t as usize >= vertices {
+                        return None;
+                    }
+                    quads += 1;
+                    twins.push(t);
+                }
+                2 => {
+                    // `c` is the larger corner of a quad claimed before (whose
+                    // `next[q + 2]` was checked to be its smaller corner's twin side).
+                    if j >= quads || n0 != hb {
+                        return None;
+                    }
+                    let t = n2 / 2;
+                    lowest = lowest.min(t);
+                    twins.push(t);
+                }
+                _ => return None,
+            }
+        }
+        let n = next[h as usize];
+        if n == h + 2 {
+            coarse_next.push(c + 1);
+        } else {
+            // The face closes here.
+            let k = offsets.len() - 1;
+            if n != 2 * start || k >= faces || face_halfedge[k] != 2 * start {
+                return None;
+            }
+            if k > 0 && lowest >= start {
+                unreached.push(k as u32);
+            }
+            offsets.push(c + 1);
+            coarse_next.push(start);
+            start = c + 1;
+            lowest = NONE;
+        }
+    }
+    let ff = offsets.len() - 1;
+    if start as usize != vertices || quads != all_quads || ff + quads as usize > faces {
+        return None;
+    }
+    let quad_faces = &face_halfedge[ff..ff + quads as usize];
+    if !quad_faces.iter().zip((v2..).step_by(4)).all(|(&h, expected)| h == expected) {
+        return None;
+    }
+    let next = coarse_next;
+    Some(FfFaces { offsets, next, twins, across: Vec::new(), quads, on_boundary, unreached, layout: true })
+}
+
+/// The F_F faces and the coarse twins of a mesh in the canonical order, whatever its
+/// half-edge numbering: one walk around each F_F face, through the F_E quad across each
+/// edge (the checks of [`reverse_canonical`]); `None` at the first mismatch.
+fn walk_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
+    let to = fine.raw_halfedge_targets();
+    let next = fine.raw_halfedge_next();
+    let face_of = fine.raw_halfedge_faces();
+    let face_halfedge = fine.raw_face_halfedges();
+    let vertices = fine.vertex_count();
+    let faces = face_halfedge.len();
+    let mut offsets = Vec::with_capacity(vertices / 3 + 2);
+    offsets.push(0u32);
+    let mut twins = Vec::with_capacity(vertices);
+    // The F_F face across each coarse edge (for the connectivity check).
+    let mut across = Vec::with_capacity(vertices);
+    let mut quads = 0u32;
+    let mut quad_base = 0u32;
+    let mut far_max = 0u32;
+    let mut on_boundary = false;
+    let mut unreached = Vec::new();
+    let mut c = 0u32;
+    while (c as usize) < vertices {
+        let k = offsets.len() - 1;
+        if k >= faces {
+            return None;
+        }
+        let mut lowest_across = NONE;
+        let first = face_halfedge[k];
+        let start = c;
+        if to[(first ^ 1) as usize] != start {
+            return None;
+        }
+        let mut h = first;
+        loop {
+            // Corner `c` of the face, its half-edge `h` leaving vertex `c`.
+            let hb = h ^ 1;
+            let g = face_of[hb as usize];
+            if g == NONE {
+                on_boundary = true;
+                twins.push(NONE);
+                across.push(NONE);
+            } else {
+                let q1 = next[hb as usize];
+                let hf = next[q1 as usize];
+                let q3 = next[hf as usize];
+                if next[q3 as usize] != hb || hf == hb {
+                    // Not a 4-cycle.
+                    return None;
+                }
+                let far_face = face_of[(hf ^ 1) as usize];
+                if far_face == NONE {
+                    return None;
+                }
+                let t = to[hf as usize];
+                if t > c {
+                    // The quad is claimed from its smaller corner, in corner order.
+                    if quads == 0 {
+                        quad_base = g;
+                    } else if g != quad_base.wrapping_add(quads) {
+                        return None;
+                    }
+                    if face_halfedge[g as usize] != q1 {
+                        return None;
+                    }
+                    quads += 1;
+                } else if t == c {
+                    return None;
+                }
+                far_max = far_max.max(far_face);
+                lowest_across = lowest_across.min(far_face);
+                twins.push(t);
+                across.push(far_face);
+            }
+            let target = to[h as usize];
+            h = next[h as usize];
+            c += 1;
+            if h == first {
+                if target != start {
+                    return None;
+                }
+                break;
+            }
+            if target != c || c as usize >= vertices {
+                return None;
+            }
+        }
+        if k > 0 && lowest_across as usize >= k {
+            unreached.push(k as u32);
+        }
+        offsets.push(c);
+    }
+    let ff = offsets.len() as u32 - 1;
+    if far_max >= ff || (quads > 0 && quad_base != ff) {
+        return None;
+    }
+    let next = next_of_corners(&offsets);
+    Some(FfFaces { offsets, next, twins, across, quads, on_boundary, unreached, layout: false })
+}
+
+/// Whether F_F face `k` lies across an edge from a face that lies across an edge from a
+/// face below `k`. If every face after the first lies across an edge from a face below it
+/// or does this, the coarse mesh is connected: by induction on `k`, each face is joined
+/// to face 0 (through a face below it, directly or through one neighbour).
+fn reaches_lower_in_two(offsets: &[u32], twins: &[u32], next: &[u32], k: u32) -> bool {
+    let (start, end) = (offsets[k as usize], offsets[k as usize + 1]);
+    twins[start as usize..end as usize].iter().any(|&t| {
+        if t == NONE {
+            return false;
+        }
+        // Around the face of the twin.
+        let mut x = t;
+        loop {
+            if twins[x as usize] < start {
+                return true;
+            }
+            x = next[x as usize];
+            if x == t {
+                return false;
+            }
+        }
+    })
+}
+
+/// The F_F face across each corner's edge ([`NONE`] on the boundary), from the F_F faces
+/// (`offsets`) and the coarse twins.
+fn across_of_twins(offsets: &[u32], twins: &[u32]) -> Vec<u32> {
+    let mut face_of_corner = Vec::with_capacity(twins.len());
+    for (k, w) in offsets.windows(2).enumerate() {
+        face_of_corner.resize(w[1] as usize, k as u32);
+    }
+    twins.iter().map(|&t| if t == NONE { NONE } else { face_of_corner[t as usize] }).collect()
+}
+
+/// Lists up to this long are checked for repeats by comparing their entries pairwise.
+const SHORT: usize = 8;
+
+/// Whether the `values` (each below `slots`, or [`NONE`]) are all different and none is
+/// [`NONE`]: short lists pairwise, longer ones by marking each value's slot of `stamp`
+/// (made on first use, `slots` long) with `mark`, which must differ between calls.
+#[inline(always)]
+fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark: u32) -> bool {
+    if values.len() <= SHORT {
+        // Plain loops: they are inlined where iterator adaptors were not.
+        for i in 0..values.len() {
+            let v = values[i];
+            if v == NONE {
+                return false;
+            }
+            for &u in &values[..i] {
+                if u == v {
+                    return false;
+                }
+            }
+        }
+        return true;
+    }
+    if stamp.is_empty() {
+        *stamp = vec![NONE; slots];
+    }
+    values.iter().all(|&v| v != NONE && std::mem::replace(&mut stamp[v as usize], mark) != mark)
 }
 
 /// The candidates of the coarse faces (`offsets`) whose corners are the fine vertices in
@@ -464,21 +707,29 @@ fn automatic(
     let mut dual = scratch;
     debug_assert_eq!(dual.len(), positions.len());
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    let (mut points, mut expanded) = (Vec::new(), Vec::new());
+    // Faces of up to [`SHORT`] sides are gathered on the stack (no growing push in the
+    // gathering loop, whose bounds then stay in registers).
+    let (mut short_points, mut short_expanded) = ([DVec3::ZERO; SHORT], [DVec3::ZERO; SHORT]);
+    let (mut long_points, mut long_expanded) = (Vec::new(), Vec::new());
     let mut b = 0;
     for &m in fv.sizes_of {
         let face = &fv.vertices[b..b + m as usize];
         b += m as usize;
-        points.clear();
-        for &v in face {
+        let (points, expanded) = if face.len() <= SHORT {
+            (&mut short_points[..face.len()], &mut short_expanded[..face.len()])
+        } else {
+            long_points.resize(face.len(), DVec3::ZERO);
+            long_expanded.resize(face.len(), DVec3::ZERO);
+            (&mut long_points[..], &mut long_expanded[..])
+        };
+        for (slot, &v) in points.iter_mut().zip(face) {
             let p = positions[v as usize];
             lo = lo.min(p);
             hi = hi.max(p);
-            points.push(p);
+            *slot = p;
         }
-        expanded.resize(points.len(), DVec3::ZERO);
-        maps.inverse(&points, &mut expanded);
-        for (&v, &p) in face.iter().zip(&expanded) {
+        maps.inverse(points, expanded);
+        for (&v, &p) in face.iter().zip(expanded.iter()) {
             dual[v as usize] = p;
         }
     }
@@ -581,6 +832,60 @@ mod tests {
     }
 
     #[test]
+    fn the_layout_pass_reads_what_the_walk_finds() {
+        let soups = [
+            shapes::cube(),
+            shapes::tetrahedron(),
+            shapes::torus(7, 5, CellKind::Triangles).unwrap(),
+            shapes::torus(6, 4, CellKind::Mixed).unwrap(),
+            shapes::grid(4, 3, CellKind::Quads).unwrap(),
+            shapes::grid(5, 4, CellKind::Mixed).unwrap(),
+        ];
+        for soup in &soups {
+            let fine = refine(soup, FaceRule::DooSabin);
+            let streamed = stream_ff_faces(&fine).expect("the layout of a canonical mesh");
+            let walked = walk_ff_faces(&fine).expect("a canonical mesh");
+            assert!(streamed.layout && !walked.layout);
+            assert_eq!(streamed.offsets, walked.offsets);
+            assert_eq!(streamed.next, walked.next);
+            assert_eq!(streamed.twins, walked.twins);
+            assert_eq!(streamed.quads, walked.quads);
+            assert_eq!(streamed.on_boundary, walked.on_boundary);
+            assert_eq!(streamed.unreached, walked.unreached);
+            assert_eq!(across_of_twins(&streamed.offsets, &streamed.twins), walked.across);
+        }
+        // Off the layout: both give up on another order, the walk alone on nothing here.
+        let soup = subdivide_soup(&shapes::cube(), &DooOptions::default()).unwrap().into_soup();
+        let scrambled = HalfedgeMesh::from_soup(&scramble(soup.clone(), 3, 0.0)).unwrap();
+        assert!(stream_ff_faces(&scrambled).is_none() && walk_ff_faces(&scrambled).is_none());
+        // An F_E quad rotated: its sides are numbered in another order.
+        let mut faces: Vec<Vec<u32>> = soup.faces().map(<[u32]>::to_vec).collect();
+        faces[6].rotate_left(1);
+        let rotated = HalfedgeMesh::from_soup(&PolygonSoup::from_faces(soup.positions.clone(), faces)).unwrap();
+        assert!(stream_ff_faces(&rotated).is_none() && walk_ff_faces(&rotated).is_none());
+        // The raw coarse cube (its faces share edges): no F_F faces.
+        let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
+        assert!(stream_ff_faces(&cube).is_none() && walk_ff_faces(&cube).is_none());
+    }
+
+    #[test]
+    fn repeats_are_found_in_short_and_long_lists() {
+        let mut stamp = Vec::new();
+        assert!(distinct(&[3, 1, 2], &mut stamp, 20, 0));
+        assert!(!distinct(&[3, 1, 3], &mut stamp, 20, 1));
+        assert!(!distinct(&[3, NONE, 2], &mut stamp, 20, 2));
+        assert!(stamp.is_empty());
+        let long: Vec<u32> = (0..12).collect();
+        assert!(distinct(&long, &mut stamp, 20, 3));
+        assert!(distinct(&long, &mut stamp, 20, 4));
+        let mut repeated = long.clone();
+        repeated[11] = 5;
+        assert!(!distinct(&repeated, &mut stamp, 20, 5));
+        repeated[11] = NONE;
+        assert!(!distinct(&repeated, &mut stamp, 20, 6));
+    }
+
+    #[test]
     fn a_face_with_no_lower_neighbour_is_searched_for_connectivity() {
         // Face 1 of the coarse grid is swapped with the last one: it has no neighbour
         // below it, so the connectivity is found by the search.
@@ -591,10 +896,26 @@ mod tests {
             faces.swap(1, last);
             let soup = PolygonSoup::from_faces(grid.positions.clone(), faces);
             let fine = refine(&soup, FaceRule::DooSabin);
+            let ff = stream_ff_faces(&fine).expect("the layout of a canonical mesh");
+            let next = next_of_corners(&ff.offsets);
+            assert!(!ff.unreached.iter().all(|&k| reaches_lower_in_two(&ff.offsets, &ff.twins, &next, k)));
             let options = ReverseOptions::with_seed(FaceRule::DooSabin, 0);
             let fast = reverse_canonical(&fine, &options).expect("canonical order");
             assert_eq!(fast, general(&fine, &options));
         }
+    }
+
+    #[test]
+    fn a_face_reached_through_a_neighbour_needs_no_search() {
+        // In the triangle torus, the first triangle of some cells has neighbours above it
+        // only, one of which (its cell's other triangle) has one below it.
+        let fine = refine(&shapes::torus(6, 4, CellKind::Triangles).unwrap(), FaceRule::DooSabin);
+        let ff = stream_ff_faces(&fine).expect("the layout of a canonical mesh");
+        let next = next_of_corners(&ff.offsets);
+        assert!(!ff.unreached.is_empty());
+        assert!(ff.unreached.iter().all(|&k| reaches_lower_in_two(&ff.offsets, &ff.twins, &next, k)));
+        // Not through the face itself: a face whose neighbours reach below only through it.
+        assert!(!reaches_lower_in_two(&[0, 3, 6], &[NONE, 4, NONE, NONE, 1, NONE], &[1, 2, 0, 4, 5, 3], 1));
     }
 
     #[test]
