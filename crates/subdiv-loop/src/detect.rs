@@ -543,14 +543,14 @@ pub(crate) fn canonical_groups(
         return None;
     }
     let groups = faces / 4;
-    // Every slot is written once (no zeroing first).
-    let mut coarse_vertex = Output::<u32>::new(3 * groups);
-    let mut edge_point = Output::<u32>::new(3 * groups);
+    // Every group is written once (no zeroing first).
+    let mut coarse_vertex = Output::<[u32; 3]>::new(groups);
+    let mut edge_point = Output::<[u32; 3]>::new(groups);
     let (largest_x, first_odd) = {
         let (mut xs, mut ms) = (coarse_vertex.slots(), edge_point.slots());
         // Chunks of whole groups, each a plain loop: the largest `x` and smallest `m`,
         // or `None` for a mismatch.
-        let chunk = |(range, mut xs, mut ms): (Range<usize>, Slots<'_, u32>, Slots<'_, u32>)| {
+        let chunk = |(range, mut xs, mut ms): (Range<usize>, Slots<'_, [u32; 3]>, Slots<'_, [u32; 3]>)| {
             let (mut largest, mut smallest) = (0u32, u32::MAX);
             for g in range {
                 let m = face(4 * g + 3)?;
@@ -562,10 +562,8 @@ pub(crate) fn canonical_groups(
                     }
                     *x = corner;
                 }
-                for k in 0..3 {
-                    xs.push(x[k]);
-                    ms.push(m[k]);
-                }
+                xs.push(x);
+                ms.push(m);
                 largest = largest.max(x[0].max(x[1]).max(x[2]));
                 smallest = smallest.min(m[0].min(m[1]).min(m[2]));
             }
@@ -579,13 +577,14 @@ pub(crate) fn canonical_groups(
                 .step_by(GROUP_CHUNK)
                 .map(|g0| {
                     let n = GROUP_CHUNK.min(groups - g0);
-                    (g0..g0 + n, xs.take_front(3 * n), ms.take_front(3 * n))
+                    (g0..g0 + n, xs.take_front(n), ms.take_front(n))
                 })
                 .collect();
             pieces.into_par_iter().map(chunk).try_reduce(|| (0, u32::MAX), |a, b| Some((a.0.max(b.0), a.1.min(b.1))))?
         }
     };
-    let (coarse_vertex, edge_point) = (coarse_vertex.into_vec(), edge_point.into_vec());
+    let (coarse_vertex, edge_point) =
+        (coarse_vertex.into_vec().into_flattened(), edge_point.into_vec().into_flattened());
     if largest_x >= first_odd || seed_vertex.is_some_and(|s| s >= first_odd) {
         return None;
     }

@@ -731,7 +731,9 @@ fn canonical_details(
             })
             .collect();
         let run = |(range, e0, mut piece): (std::ops::Range<usize>, usize, Slots<'_, DVec3>)| {
-            let mut non_finite = 0;
+            // Zero times every detail, summed: zero (of either sign) unless a detail is
+            // not finite (`0 * inf` and `0 * NaN` are NaN), in two instructions a detail.
+            let mut zeros = DVec3::ZERO;
             for f in range {
                 let c0 = 3 * f;
                 let x = [corner_vertex[c0], corner_vertex[c0 + 1], corner_vertex[c0 + 2]];
@@ -754,11 +756,11 @@ fn canonical_details(
                         0.375 * (a + b) + 0.125 * (r + s)
                     };
                     let detail = edge_position(e) - predicted;
-                    non_finite |= non_finite_bits(detail);
+                    zeros += 0.0 * detail;
                     piece.push(detail);
                 }
             }
-            Some(non_finite == 0)
+            Some(zeros.is_finite())
         };
         let both = |a: bool, b: bool| Some(a && b);
         if faces >= PARALLEL_THRESHOLD / 4 {
