@@ -45,6 +45,7 @@
 //! connectivity at all. Any other numbering is recorded as a [`FineOrder`].
 
 use std::fmt;
+use std::ops::Range;
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -55,6 +56,7 @@ use mesh_topo::HalfedgeMesh;
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::forward::LoopOptions;
+use crate::forward::buffer::{Output, Slots};
 use crate::forward::kernel;
 use crate::forward::topology::MeshTriangles;
 use crate::reverse::{CanonicalLevel, reverse_canonical};
@@ -441,13 +443,6 @@ fn coarse_edges_are_simple(coarse: &CornerTable) -> bool {
     edges_are_simple(coarse.vertex_count(), coarse.edge_count(), ends, lower_ends)
 }
 
-/// [`coarse_edges_are_simple`] on the edges of the twin pairing, whose end points it
-/// reads in edge order (no lookup through the first corner), given `start` as
-/// [`edges_are_simple`] takes it (the pairing counts the edges by lower end point).
-pub(crate) fn paired_edges_are_simple(vertex_count: usize, edges: &[PairedEdge], start: Vec<u32>) -> bool {
-    edges_are_simple(vertex_count, edges.len(), |e| edges[e as usize].ends, start)
-}
-
 /// No two of the `edge_count` edges `ends(e)` join the same two of `vertex_count`
 /// vertices, given `start[v + 1]`, the number of edges whose lower end point is `v`.
 fn edges_are_simple(
@@ -547,40 +542,49 @@ pub(crate) fn canonical_groups(
     if faces == 0 || !faces.is_multiple_of(4) {
         return None;
     }
-    let corners = 3 * (faces / 4);
-    let mut coarse_vertex = vec![0u32; corners];
-    let mut edge_point = vec![0u32; corners];
-    // Chunks of whole groups, each a plain loop: the largest `x` and smallest `m`, or
-    // `None` for a mismatch.
-    let chunk = |(c, (xs, ms)): (usize, (&mut [u32], &mut [u32]))| {
-        let (mut largest, mut smallest) = (0u32, u32::MAX);
-        for (i, (xs, ms)) in xs.chunks_exact_mut(3).zip(ms.chunks_exact_mut(3)).enumerate() {
-            let g = c * GROUP_CHUNK + i;
-            let m = face(4 * g + 3)?;
-            for k in 0..3 {
-                let [x, a, b] = face(4 * g + k)?;
-                if a != m[k] || b != m[(k + 2) % 3] {
-                    return None;
+    let groups = faces / 4;
+    // Every group is written once (no zeroing first).
+    let mut coarse_vertex = Output::<[u32; 3]>::new(groups);
+    let mut edge_point = Output::<[u32; 3]>::new(groups);
+    let (largest_x, first_odd) = {
+        let (mut xs, mut ms) = (coarse_vertex.slots(), edge_point.slots());
+        // Chunks of whole groups, each a plain loop: the largest `x` and smallest `m`,
+        // or `None` for a mismatch.
+        let chunk = |(range, mut xs, mut ms): (Range<usize>, Slots<'_, [u32; 3]>, Slots<'_, [u32; 3]>)| {
+            let (mut largest, mut smallest) = (0u32, u32::MAX);
+            for g in range {
+                let m = face(4 * g + 3)?;
+                let mut x = [0; 3];
+                for (k, x) in x.iter_mut().enumerate() {
+                    let [corner, a, b] = face(4 * g + k)?;
+                    if a != m[k] || b != m[(k + 2) % 3] {
+                        return None;
+                    }
+                    *x = corner;
                 }
-                xs[k] = x;
+                xs.push(x);
+                ms.push(m);
+                largest = largest.max(x[0].max(x[1]).max(x[2]));
+                smallest = smallest.min(m[0].min(m[1]).min(m[2]));
             }
-            ms.copy_from_slice(&m);
-            largest = largest.max(xs[0].max(xs[1]).max(xs[2]));
-            smallest = smallest.min(m[0].min(m[1]).min(m[2]));
+            Some((largest, smallest))
+        };
+        // One chunk is read on the calling thread: handing it to the pool costs a wake-up.
+        if groups <= GROUP_CHUNK {
+            chunk((0..groups, xs, ms))?
+        } else {
+            let pieces: Vec<_> = (0..groups)
+                .step_by(GROUP_CHUNK)
+                .map(|g0| {
+                    let n = GROUP_CHUNK.min(groups - g0);
+                    (g0..g0 + n, xs.take_front(n), ms.take_front(n))
+                })
+                .collect();
+            pieces.into_par_iter().map(chunk).try_reduce(|| (0, u32::MAX), |a, b| Some((a.0.max(b.0), a.1.min(b.1))))?
         }
-        Some((largest, smallest))
     };
-    // One chunk is read on the calling thread: handing it to the pool costs a wake-up.
-    let (largest_x, first_odd) = if corners <= 3 * GROUP_CHUNK {
-        chunk((0, (&mut coarse_vertex[..], &mut edge_point[..])))?
-    } else {
-        coarse_vertex
-            .par_chunks_mut(3 * GROUP_CHUNK)
-            .zip(edge_point.par_chunks_mut(3 * GROUP_CHUNK))
-            .enumerate()
-            .map(chunk)
-            .try_reduce(|| (0, u32::MAX), |a, b| Some((a.0.max(b.0), a.1.min(b.1))))?
-    };
+    let (coarse_vertex, edge_point) =
+        (coarse_vertex.into_vec().into_flattened(), edge_point.into_vec().into_flattened());
     if largest_x >= first_odd || seed_vertex.is_some_and(|s| s >= first_odd) {
         return None;
     }
@@ -612,7 +616,7 @@ impl CanonicalGroups {
         let corners = coarse_vertex.len();
         let edge_count = vertex_count - first_odd as usize;
         let ends = |c: usize| [coarse_vertex[c], coarse_vertex[next(c as u32) as usize]];
-        let (paired, state) = if kernel::runs_in_parallel(corners / 3) {
+        let (twin, edge_corner, edges, state) = if kernel::runs_in_parallel(corners / 3) {
             let side = || {
                 let mut new_edge = first_odd;
                 for (c, &m) in corner_edge.iter().enumerate() {
@@ -623,19 +627,19 @@ impl CanonicalGroups {
                 }
                 state
             };
-            rayon::join(|| pair_twins(&coarse_vertex, &corner_edge, first_odd, edge_count, |_, _| ()), side)
-        } else {
-            let paired = pair_twins(&coarse_vertex, &corner_edge, first_odd, edge_count, |c, ends| {
-                on_edge(&mut state, ends, corner_edge[c]);
-            });
-            (paired, state)
-        };
-        let (twin, edge_corner, edges) = paired?;
-        if corners <= 3 * GROUP_CHUNK {
-            corner_edge.iter_mut().for_each(|e| *e -= first_odd);
-        } else {
+            let pair = || pair_twins(&coarse_vertex, &corner_edge[..], first_odd, edge_count, |_, _| ());
+            let (paired, state) = rayon::join(pair, side);
+            let (twin, edge_corner, edges) = paired?;
             corner_edge.par_iter_mut().with_min_len(3 * GROUP_CHUNK).for_each(|e| *e -= first_odd);
-        }
+            (twin, edge_corner, edges, state)
+        } else {
+            // The edge points become the edges as the pairing reads them (no pass of
+            // their own).
+            let pair_and_sum = |ends, m| on_edge(&mut state, ends, m);
+            let (twin, edge_corner, edges) =
+                pair_twins(&coarse_vertex, &mut corner_edge[..], first_odd, edge_count, pair_and_sum)?;
+            (twin, edge_corner, edges, state)
+        };
         let table = CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner);
         Some((table, edges, state))
     }
@@ -655,29 +659,53 @@ pub(crate) struct PairedEdge {
     first: u32,
 }
 
+/// The edge points of the coarse corners as the twin pairing reads them, corner by
+/// corner: read only, or turned into edge numbers in place.
+trait CornerEdgePoints {
+    /// The edge of corner `c`: its edge point minus `first_odd`.
+    fn edge(&mut self, c: usize, first_odd: u32) -> u32;
+}
+
+impl CornerEdgePoints for &[u32] {
+    #[inline(always)]
+    fn edge(&mut self, c: usize, first_odd: u32) -> u32 {
+        self[c] - first_odd
+    }
+}
+
+/// Each entry is replaced by its edge as it is read.
+impl CornerEdgePoints for &mut [u32] {
+    #[inline(always)]
+    fn edge(&mut self, c: usize, first_odd: u32) -> u32 {
+        let e = self[c] - first_odd;
+        self[c] = e;
+        e
+    }
+}
+
 /// The twin pairing of [`CanonicalGroups::into_table`]: the twins, the first corner
 /// of every edge and what [`PairedEdge`] keeps, or `None` if the edge points are not
 /// numbered in order of first appearance, or an edge has more than two half-edges or
-/// two in the same direction. `new_edge(c, ends)` is called when corner `c` starts an
-/// edge.
+/// two in the same direction. `new_edge(ends, edge_point)` is called when a corner
+/// starts an edge.
 fn pair_twins(
     coarse_vertex: &[u32],
-    corner_edge: &[u32],
+    mut corner_edge: impl CornerEdgePoints,
     first_odd: u32,
     edge_count: usize,
-    mut new_edge: impl FnMut(usize, [u32; 2]),
+    mut new_edge: impl FnMut([u32; 2], u32),
 ) -> Option<(Vec<u32>, Vec<u32>, Vec<PairedEdge>)> {
     let corners = coarse_vertex.len();
     let mut twin = vec![NONE; corners];
     let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
     let mut edges: Vec<PairedEdge> = Vec::with_capacity(edge_count);
     for c in 0..corners as u32 {
-        let e = corner_edge[c as usize] - first_odd;
+        let e = corner_edge.edge(c as usize, first_odd);
         let ends = [coarse_vertex[c as usize], coarse_vertex[next(c) as usize]];
         if e as usize == edges.len() {
             edge_corner.push(c);
             edges.push(PairedEdge { ends, opposite: NONE, first: c });
-            new_edge(c as usize, ends);
+            new_edge(ends, first_odd + e);
             continue;
         }
         let edge = edges.get_mut(e as usize)?;

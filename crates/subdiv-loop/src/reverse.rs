@@ -54,10 +54,10 @@ use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::detect::{
     Coarsening, FineOrder, PairedEdge, canonical_groups, coarse_face_is_valid, detect_mesh, detect_table,
-    paired_edges_are_simple, reverse_canonical_mesh, reverse_canonical_table,
+    reverse_canonical_mesh, reverse_canonical_table,
 };
 use crate::forward::buffer::{Output, Slots};
-use crate::forward::kernel::{self, PARALLEL_MIN_FACES, Rules, loop_beta, warren_beta};
+use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
 use crate::forward::topology::{BASE_MASK, INVALID as TOPOLOGY_INVALID, MAX_FACES, NEXT, Topology, is_first};
 use crate::forward::{LoopOptions, VertexWeights};
 
@@ -566,8 +566,9 @@ pub(crate) struct CanonicalLevel {
 /// number the edges, pair the twins and sum the edge points around every coarse vertex
 /// in edge order (sequential: these sums are what [`reverse_positions`] adds, in the
 /// same order; on two threads a second pass beside the pairing, else in the same
-/// loop); the boundary edges, if any; the coarse positions (parallel); the details by
-/// chunks of coarse faces (parallel), which also check the faces.
+/// loop), checking on the way that no two edges join the same two vertices; the
+/// boundary edges, if any; the coarse positions (parallel); the details by chunks of
+/// coarse faces (parallel), which also check the faces.
 pub(crate) fn reverse_canonical(
     faces: usize,
     vertex_count: usize,
@@ -576,24 +577,19 @@ pub(crate) fn reverse_canonical(
     fine: &[DVec3],
     rules: &LoopOptions,
 ) -> Option<CanonicalLevel> {
-    const BOUNDARY: u32 = 1 << 31;
     let groups = canonical_groups(faces, seed_vertex, face)?;
     let first_odd = groups.first_odd;
     let nv = first_odd as usize;
     let edge_position = |e: u32| fine[(first_odd + e) as usize];
     // The edge points around every coarse vertex, summed in edge order (the order of
     // `reverse_positions`), beside the pairing of the twins or inside it, with the
-    // edges counted by lower end point for the doubled-edge check.
-    let sums = (vec![DVec3::ZERO; nv], vec![0u32; nv], vec![0u32; nv + 1]);
-    let sum_edge_point = |(sum, valence, lower_ends): &mut (Vec<DVec3>, Vec<u32>, Vec<u32>), ends: [u32; 2], m: u32| {
-        let point = fine[m as usize];
-        for v in ends {
-            sum[v as usize] += point;
-            valence[v as usize] += 1;
-        }
-        lower_ends[ends[0].min(ends[1]) as usize + 1] += 1;
-    };
-    let (coarse, edges, (mut sum, mut valence, lower_ends)) = groups.into_table(vertex_count, sums, sum_edge_point)?;
+    // doubled-edge check on the way.
+    let sum_edge_point = |sums: &mut EdgeSums, ends: [u32; 2], m: u32| sums.add_edge(ends, fine[m as usize]);
+    let (coarse, edges, mut sums) = groups.into_table(vertex_count, EdgeSums::new(nv), sum_edge_point)?;
+    if !sums.edges_are_simple() {
+        return None;
+    }
+    let mut records = sums.records;
     // On the boundary only the boundary edges count, summed in edge order from zero:
     // boundary corners in corner order are the boundary edges in edge order.
     let (corner_vertex, twin, corner_edge) = (coarse.corner_vertices(), coarse.twins(), coarse.corner_edges());
@@ -601,31 +597,101 @@ pub(crate) fn reverse_canonical(
         for c in (0..twin.len() as u32).filter(|&c| twin[c as usize] == NONE) {
             let point = edge_position(corner_edge[c as usize]);
             for v in [corner_vertex[c as usize], corner_vertex[next(c) as usize]] {
-                let v = v as usize;
-                if valence[v] & BOUNDARY == 0 {
-                    sum[v] = DVec3::ZERO;
-                    valence[v] |= BOUNDARY;
+                let record = &mut records[v as usize];
+                if record.valence & VertexRecord::BOUNDARY == 0 {
+                    record.sum = DVec3::ZERO;
+                    record.valence |= VertexRecord::BOUNDARY;
                 }
-                sum[v] += point;
+                record.sum += point;
             }
         }
     }
-    // The (sequential) check for doubled edges runs beside the (parallel) reversal.
-    let reverse = || {
-        let weights = InverseWeights::new(rules.weights);
-        let positions = map_indices(nv, |v| {
-            let (n, flags) = (valence[v as usize] & !BOUNDARY, valence[v as usize] & BOUNDARY);
-            coarse_position(fine[v as usize], sum[v as usize], n, flags != 0, rules, &weights)
-        });
-        let (details, details_finite) = canonical_details(&coarse, &edges, &positions, edge_position)?;
-        let finite = details_finite && crate::pyramid::all_finite(&positions);
-        Some((positions, details, finite))
-    };
-    let simple = || paired_edges_are_simple(nv, &edges, lower_ends);
-    let (simple, reversed) =
-        if coarse.face_count() >= PARALLEL_MIN_FACES { rayon::join(simple, reverse) } else { (simple(), reverse()) };
-    let (positions, details, finite) = reversed.filter(|_| simple)?;
+    let weights = InverseWeights::new(rules.weights);
+    let positions = map_indices(nv, |v| {
+        let VertexRecord { sum, valence, .. } = records[v as usize];
+        let (n, flags) = (valence & !VertexRecord::BOUNDARY, valence & VertexRecord::BOUNDARY);
+        coarse_position(fine[v as usize], sum, n, flags != 0, rules, &weights)
+    });
+    drop(records);
+    let (details, details_finite) = canonical_details(&coarse, &edges, &positions, edge_position)?;
+    let finite = details_finite && crate::pyramid::all_finite(&positions);
     Some(CanonicalLevel { coarse, positions, details, finite })
+}
+
+/// Upper end points kept in each [`VertexRecord`] (the others go to
+/// [`EdgeSums::overflow`]): a record fills one cache line.
+const UPPER_SLOTS: usize = 8;
+
+/// What the pass over the coarse edges in edge order gathers per coarse vertex, side by
+/// side (one cache line per vertex in a scattered pass): the sum of the edge points of
+/// its edges and their number (as [`reverse_positions`] computes them), and the upper
+/// end points of the edges whose lower end point it is, so that a doubled edge shows
+/// when it is added.
+#[derive(Clone, Copy)]
+#[repr(C, align(64))]
+struct VertexRecord {
+    /// Sum of the edge points of its edges (of its boundary edges on the boundary, once
+    /// those are summed).
+    sum: DVec3,
+    /// Number of edges at the vertex, [`VertexRecord::BOUNDARY`] set on the boundary.
+    valence: u32,
+    /// Number of edges whose lower end point is the vertex.
+    lower: u32,
+    /// The upper end points of the first [`UPPER_SLOTS`] of those edges, [`NONE`] in the
+    /// slots not used yet (no vertex is numbered [`NONE`]).
+    upper: [u32; UPPER_SLOTS],
+}
+
+impl VertexRecord {
+    const BOUNDARY: u32 = 1 << 31;
+    const EMPTY: Self = Self { sum: DVec3::ZERO, valence: 0, lower: 0, upper: [NONE; UPPER_SLOTS] };
+}
+
+/// The state of the pass over the coarse edges in [`reverse_canonical`]: the sums of
+/// the edge points, and the doubled-edge check of the coarse mesh (no two edges join the
+/// same two vertices), done as the edges come instead of by a sort afterwards.
+struct EdgeSums {
+    records: Vec<VertexRecord>,
+    /// `[lower, upper]` end points of the edges beyond their lower end point's slots.
+    overflow: Vec<[u32; 2]>,
+    /// True once an edge joined two vertices that an earlier edge in the slots joins.
+    doubled: bool,
+}
+
+impl EdgeSums {
+    fn new(vertex_count: usize) -> Self {
+        Self { records: vec![VertexRecord::EMPTY; vertex_count], overflow: Vec::new(), doubled: false }
+    }
+
+    /// Adds edge `[a, b]` with edge point `point` (edges in edge order).
+    #[inline(always)]
+    fn add_edge(&mut self, [a, b]: [u32; 2], point: DVec3) {
+        for v in [a, b] {
+            let record = &mut self.records[v as usize];
+            record.sum += point;
+            record.valence += 1;
+        }
+        let (lower, upper) = (a.min(b), a.max(b));
+        let record = &mut self.records[lower as usize];
+        // All slots at once (unused ones hold NONE): a compare the compiler vectorises.
+        self.doubled |= record.upper.iter().fold(false, |seen, &u| seen | (u == upper));
+        match record.upper.get_mut(record.lower as usize) {
+            Some(slot) => *slot = upper,
+            None => self.overflow.push([lower, upper]),
+        }
+        record.lower += 1;
+    }
+
+    /// True if no two edges join the same two vertices. An edge beyond its lower end
+    /// point's slots was compared with all of them when it was added, so only the
+    /// overflow is left to compare with itself.
+    fn edges_are_simple(&mut self) -> bool {
+        if self.doubled {
+            return false;
+        }
+        self.overflow.sort_unstable();
+        self.overflow.windows(2).all(|w| w[0] != w[1])
+    }
 }
 
 /// Non-zero if a coordinate of `p` is not finite (branch-free, so loops over it vectorise).
@@ -665,7 +731,9 @@ fn canonical_details(
             })
             .collect();
         let run = |(range, e0, mut piece): (std::ops::Range<usize>, usize, Slots<'_, DVec3>)| {
-            let mut non_finite = 0;
+            // Zero times every detail, summed: zero (of either sign) unless a detail is
+            // not finite (`0 * inf` and `0 * NaN` are NaN), in two instructions a detail.
+            let mut zeros = DVec3::ZERO;
             for f in range {
                 let c0 = 3 * f;
                 let x = [corner_vertex[c0], corner_vertex[c0 + 1], corner_vertex[c0 + 2]];
@@ -688,11 +756,11 @@ fn canonical_details(
                         0.375 * (a + b) + 0.125 * (r + s)
                     };
                     let detail = edge_position(e) - predicted;
-                    non_finite |= non_finite_bits(detail);
+                    zeros += 0.0 * detail;
                     piece.push(detail);
                 }
             }
-            Some(non_finite == 0)
+            Some(zeros.is_finite())
         };
         let both = |a: bool, b: bool| Some(a && b);
         if faces >= PARALLEL_THRESHOLD / 4 {
@@ -961,6 +1029,29 @@ mod tests {
         assert_eq!(pyramid.level_count(), 3);
         assert!(relative_distance(&pyramid.base, &base.to_soup()) < TOLERANCE);
         assert!(pyramid.levels.iter().all(|l| l.order.is_none()));
+    }
+
+    /// The doubled-edge check of the fused path: repeats within a vertex's slots, between
+    /// its slots and the overflow, and within the overflow; the sums beside it.
+    #[test]
+    fn edge_sums_find_doubled_edges_in_the_slots_and_the_overflow() {
+        let simple = |edges: &[[u32; 2]]| {
+            let mut sums = EdgeSums::new(40);
+            for (i, &ends) in edges.iter().enumerate() {
+                sums.add_edge(ends, DVec3::splat(i as f64));
+            }
+            (sums.edges_are_simple(), sums.records[0].sum, sums.records[0].valence)
+        };
+        // 19 edges whose lower end point is vertex 0: 11 of them overflow its slots.
+        let fan: Vec<[u32; 2]> = (1..20).map(|v| if v % 2 == 0 { [0, v] } else { [v, 0] }).collect();
+        assert_eq!(simple(&fan), (true, DVec3::splat((0..19).sum::<u32>() as f64), 19));
+        for repeat in [[3, 0], [0, 8], [0, 9], [15, 0], [0, 19]] {
+            let mut doubled = fan.clone();
+            doubled.push(repeat);
+            assert!(!simple(&doubled).0, "{repeat:?}");
+        }
+        assert!(!simple(&[[1, 2], [3, 4], [2, 1]]).0);
+        assert!(simple(&[[1, 2], [2, 3], [3, 1]]).0);
     }
 
     #[test]
