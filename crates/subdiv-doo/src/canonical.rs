@@ -58,11 +58,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         _ => return None,
     };
     options.rule.validate().ok()?;
-    let to = fine.raw_halfedge_targets();
-    let next = fine.raw_halfedge_next();
-    let face_halfedge = fine.raw_face_halfedges();
-    let vertices = fine.vertex_count();
-    let faces = face_halfedge.len();
+    let HalfedgeArrays { to, next, face_halfedge, vertices, faces, .. } = HalfedgeArrays::of(fine);
     if vertices == 0 || vertices >= NONE as usize || faces >= NONE as usize {
         return None;
     }
@@ -293,6 +289,34 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     })
 }
 
+/// The flat arrays of a half-edge mesh that the canonical passes read, and its sizes.
+struct HalfedgeArrays<'a> {
+    /// Target vertex of each half-edge.
+    to: &'a [u32],
+    /// Next half-edge around its face or boundary loop.
+    next: &'a [u32],
+    /// Face of each half-edge ([`NONE`] on the boundary).
+    face_of: &'a [u32],
+    /// The half-edge leaving the first corner of each face.
+    face_halfedge: &'a [u32],
+    vertices: usize,
+    faces: usize,
+}
+
+impl<'a> HalfedgeArrays<'a> {
+    fn of(mesh: &'a HalfedgeMesh) -> Self {
+        let face_halfedge = mesh.raw_face_halfedges();
+        Self {
+            to: mesh.raw_halfedge_targets(),
+            next: mesh.raw_halfedge_next(),
+            face_of: mesh.raw_halfedge_faces(),
+            face_halfedge,
+            vertices: mesh.vertex_count(),
+            faces: face_halfedge.len(),
+        }
+    }
+}
+
 /// The F_F faces of a canonical mesh and its coarse twins (see [`reverse_canonical`]).
 struct FfFaces {
     /// The F_F faces' corner ranges: fine vertex `c` is coarse corner `c`.
@@ -349,12 +373,7 @@ struct FfFaces {
 /// A valid mesh is assumed (as `HalfedgeMesh` guarantees): `next` is a permutation
 /// whose cycles are the faces and boundary loops.
 fn stream_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
-    let to = fine.raw_halfedge_targets();
-    let next = fine.raw_halfedge_next();
-    let face_of = fine.raw_halfedge_faces();
-    let face_halfedge = fine.raw_face_halfedges();
-    let vertices = fine.vertex_count();
-    let faces = face_halfedge.len();
+    let HalfedgeArrays { to, next, face_of, face_halfedge, vertices, faces } = HalfedgeArrays::of(fine);
     let halfedges = to.len();
     if halfedges >= NONE as usize || halfedges < 2 * vertices || !(halfedges - 2 * vertices).is_multiple_of(4) {
         return None;
@@ -444,12 +463,7 @@ fn stream_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
 /// half-edge numbering: one walk around each F_F face, through the F_E quad across each
 /// edge (the checks of [`reverse_canonical`]); `None` at the first mismatch.
 fn walk_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
-    let to = fine.raw_halfedge_targets();
-    let next = fine.raw_halfedge_next();
-    let face_of = fine.raw_halfedge_faces();
-    let face_halfedge = fine.raw_face_halfedges();
-    let vertices = fine.vertex_count();
-    let faces = face_halfedge.len();
+    let HalfedgeArrays { to, next, face_of, face_halfedge, vertices, faces } = HalfedgeArrays::of(fine);
     let mut offsets = Vec::with_capacity(vertices / 3 + 2);
     offsets.push(0u32);
     let mut twins = Vec::with_capacity(vertices);
