@@ -20,7 +20,7 @@ use mesh_topo::HalfedgeMesh;
 use glam::DVec3;
 
 use crate::DooError;
-use crate::corner::{CornerMesh, NONE, expand_faces, next_of_corners};
+use crate::corner::{CornerMesh, NONE, expand_faces, faces_of_corners, next_of_corners};
 use crate::reverse::{
     CornersByVertex, DooReversal, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial,
     check_coarse_manifold, corners_by_vertex, means_and_details, means_and_details_with,
@@ -580,10 +580,7 @@ fn reaches_lower_in_two(offsets: &[u32], twins: &[u32], next: &[u32], k: u32) ->
 /// The F_F face across each corner's edge ([`NONE`] on the boundary), from the F_F faces
 /// (`offsets`) and the coarse twins.
 fn across_of_twins(offsets: &[u32], twins: &[u32]) -> Vec<u32> {
-    let mut face_of_corner = Vec::with_capacity(twins.len());
-    for (k, w) in offsets.windows(2).enumerate() {
-        face_of_corner.resize(w[1] as usize, k as u32);
-    }
+    let face_of_corner = faces_of_corners(offsets);
     twins.iter().map(|&t| if t == NONE { NONE } else { face_of_corner[t as usize] }).collect()
 }
 
