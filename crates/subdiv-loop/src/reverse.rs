@@ -58,7 +58,7 @@ use crate::detect::{
 };
 use crate::forward::buffer::{Output, Slots};
 use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
-use crate::forward::topology::{BASE_MASK, INVALID as TOPOLOGY_INVALID, MAX_FACES, NEXT, Topology, is_first};
+use crate::forward::topology::{BASE_BITS, BASE_MASK, INVALID as TOPOLOGY_INVALID, MAX_FACES, NEXT, Topology, edge_at};
 use crate::forward::{LoopOptions, VertexWeights};
 
 /// `β_n` of the forward step's interior vertex rule (the very same numbers).
@@ -205,37 +205,15 @@ pub(crate) fn reconstruct_levels<'a>(
         }
         match order {
             None => {
-                // The kernel adds the details to the edge points as it makes them; the
-                // (sequential) sums of the details around the vertices run beside it.
-                let corrections = || VertexCorrections::new(&topology, details);
-                let step = || kernel::step_with_details(&topology, &positions, &kernel_rules, level < count, details);
-                let parallel = kernel::runs_in_parallel(topology.face_count());
-                let (corrections, step) =
-                    if parallel { rayon::join(corrections, step) } else { (corrections(), step()) };
-                let nv = topology.vertex_count;
-                let mut fine = step.values;
-                let (vertex_points, edge_points) = fine.split_at_mut(nv);
-                // The finiteness check of the vertex points rides along (no pass of its
-                // own); a level the kernel ran on the calling thread stays there (no
-                // pool wake-up), by the kernel's own rule.
-                let apply = |(v, p): (usize, &mut DVec3)| {
-                    corrections.apply(v, p, &kernel_rules);
-                    p.is_finite()
-                };
-                let vertices_finite = if !parallel {
-                    vertex_points.iter_mut().enumerate().map(apply).fold(true, |a, b| a & b)
-                } else {
-                    vertex_points
-                        .par_iter_mut()
-                        .with_min_len(4096)
-                        .enumerate()
-                        .map(apply)
-                        .reduce(|| true, |a, b| a && b)
-                };
-                // Only the last step's verdict is read after the loop: the edge points
-                // are checked there alone.
-                known_finite = vertices_finite && (level < count || crate::pyramid::all_finite(edge_points));
-                positions = fine;
+                // The kernel adds the details to the values as it makes them; only the
+                // last step's values are tested for finiteness (a non-finite value
+                // carries over to every later level).
+                let last = level == count;
+                let sums = detail_sums(&topology, details);
+                let additions = kernel::Details::new(details, &sums, last);
+                let step = kernel::step_with_details(&topology, &positions, &kernel_rules, !last, &additions);
+                known_finite = !last || additions.all_finite();
+                positions = step.values;
                 topology = step.topology;
             }
             Some(order) => {
@@ -265,76 +243,61 @@ pub(crate) fn reconstruct_levels<'a>(
     })
 }
 
-/// What the details add to each vertex point (see [`reconstruct_levels`]): the sums of
-/// the details around every vertex, by one pass over the edges of the coarse topology,
-/// applied in place to the vertex points (no array of corrections).
-struct VertexCorrections {
-    /// Per vertex, side by side (one cache line per vertex in the scattered pass).
-    vertices: Vec<VertexSum>,
-}
-
-/// What [`VertexCorrections`] keeps per vertex.
-#[derive(Clone, Copy)]
-struct VertexSum {
-    /// The sum of the details of its boundary edges if it has any, else of all its
-    /// edges (the two cases of the correction).
-    sum: DVec3,
-    /// Number of edges at the vertex, [`VertexCorrections::BOUNDARY`] set on the
-    /// boundary.
-    valence: u32,
-}
-
-impl VertexCorrections {
-    const BOUNDARY: u32 = 1 << 31;
-
-    fn new(topology: &Topology, details: &[DVec3]) -> Self {
-        let nv = topology.vertex_count;
-        let mut vertices = vec![VertexSum { sum: DVec3::ZERO, valence: 0 }; nv];
-        let mut e = 0usize;
-        for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
-            for k in 0..3 {
-                let twin = link[k];
-                if !is_first((4 * f + k) as u32, twin) {
-                    continue;
-                }
-                let d = details[e];
-                e += 1;
-                let on_boundary = twin == TOPOLOGY_INVALID;
-                for v in [corners[k], corners[NEXT[k]]] {
-                    let vertex = &mut vertices[v as usize];
-                    let seen_boundary = vertex.valence & Self::BOUNDARY != 0;
-                    vertex.valence += 1;
-                    if on_boundary {
-                        if !seen_boundary {
-                            // The first boundary edge: from now on only boundary edges count.
-                            vertex.sum = DVec3::ZERO;
-                            vertex.valence |= Self::BOUNDARY;
-                        }
-                        vertex.sum += d;
-                    } else if !seen_boundary {
-                        vertex.sum += d;
-                    }
-                }
-            }
-        }
-        debug_assert_eq!(e, details.len());
-        Self { vertices }
-    }
-
-    /// Adds the correction of vertex `v` to its vertex point (`β` from the forward
-    /// kernel's table: the very numbers of the forward step).
-    #[inline]
-    fn apply(&self, v: usize, point: &mut DVec3, rules: &Rules) {
-        let VertexSum { sum, valence } = self.vertices[v];
-        let n = (valence & !Self::BOUNDARY) as usize;
-        *point += if valence & Self::BOUNDARY != 0 {
-            if rules.is_fixed_corner(n) { DVec3::ZERO } else { 0.25 * sum }
-        } else if n == 0 {
-            DVec3::ZERO
-        } else {
-            (1.6 * rules.interior(n).1) * sum
+/// Per vertex of `topology`, the sum of the details of its edges, or of its two
+/// boundary edges on the boundary: what the vertex point's correction scales (see
+/// [`kernel::Details`]). Each sum starts from zero and follows the edge order, so that
+/// its bits depend on nothing else.
+///
+/// One sequential pass over the faces adds to each corner the details of the face's two
+/// edges at it, in edge order (edges are numbered by faces); an edge that the face does
+/// not number adds zero instead, which leaves a sum unchanged (a sum that starts at +0
+/// is never −0), so the pass has no branch on which edges the face numbers. The
+/// boundary vertices' sums are then made again from their boundary edges alone.
+fn detail_sums(topology: &Topology, details: &[DVec3]) -> Vec<[f64; 3]> {
+    // Zeroed memory from the allocator, not a pass of writes where it can.
+    let mut sums = vec![[0.0f64; 3]; topology.vertex_count];
+    let mut boundary_faces = Vec::new();
+    let add = |sum: &mut [f64; 3], first: DVec3, second: DVec3| {
+        *sum = (DVec3::from_array(*sum) + first + second).to_array();
+    };
+    for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
+        let info = link[3];
+        let detail = |k: u32| {
+            // When the face does not number its edge `k`, detail 0 is read and masked
+            // to zero (by arithmetic, not a branch on the unpredictable mask).
+            let numbered = u64::from((info >> (BASE_BITS + k)) & 1);
+            let d = details[edge_at(info, k) as usize * numbered as usize];
+            let keep = |x: f64| f64::from_bits(x.to_bits() & numbered.wrapping_neg());
+            DVec3::new(keep(d.x), keep(d.y), keep(d.z))
         };
+        let (d0, d1, d2) = (detail(0), detail(1), detail(2));
+        add(&mut sums[corners[0] as usize], d0, d2);
+        add(&mut sums[corners[1] as usize], d0, d1);
+        add(&mut sums[corners[2] as usize], d1, d2);
+        if link[0].max(link[1]).max(link[2]) == TOPOLOGY_INVALID {
+            boundary_faces.push(f);
+        }
     }
+    let boundary_edges = || {
+        boundary_faces.iter().flat_map(|&f| {
+            let (corners, link) = (topology.triangles[f], topology.links[f]);
+            (0..3)
+                .filter(move |&k| link[k] == TOPOLOGY_INVALID)
+                .map(move |k| (edge_at(link[3], k as u32) as usize, [corners[k], corners[NEXT[k]]]))
+        })
+    };
+    for (_, ends) in boundary_edges() {
+        for v in ends {
+            sums[v as usize] = [0.0; 3];
+        }
+    }
+    for (e, ends) in boundary_edges() {
+        for v in ends {
+            let sum = &mut sums[v as usize];
+            *sum = (DVec3::from_array(*sum) + details[e]).to_array();
+        }
+    }
+    sums
 }
 
 /// Checks that `details` and `order` fit the coarse table (level numbers errors).

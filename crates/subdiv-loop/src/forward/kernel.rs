@@ -6,6 +6,9 @@
 //! Every output element is written by exactly one chunk with a fixed formula, so results
 //! are bit-identical for any number of threads.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use glam::DVec3;
 use rayon::prelude::*;
 
 use super::attribute::Attribute;
@@ -169,18 +172,17 @@ pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, r
     step_into(topo, values, rules, refine_topology, Buffers::default())
 }
 
-/// [`step`] with `details[e]` added to the edge point of every edge `e` as it is
-/// computed (`point += detail`, the same operation as adding them afterwards, without
-/// another pass over the edge points).
-pub(crate) fn step_with_details<T: Attribute>(
+/// [`step`] with the details of a reconstruction added as the values are computed (see
+/// [`Details`]).
+pub(crate) fn step_with_details(
     topo: &Topology,
-    values: &[T],
+    values: &[DVec3],
     rules: &Rules,
     refine_topology: bool,
-    details: &[T],
-) -> Step<T> {
-    debug_assert_eq!(details.len(), topo.edge_count, "internal: one detail per edge");
-    step_impl(topo, values, rules, refine_topology, Buffers::default(), Some(details))
+    details: &Details<'_>,
+) -> Step<DVec3> {
+    debug_assert_eq!(details.details.len(), topo.edge_count, "internal: one detail per edge");
+    step_impl(topo, values, rules, refine_topology, Buffers::default(), details)
 }
 
 /// [`step`] writing into the memory of `buffers` (bit-identical results).
@@ -196,17 +198,17 @@ pub(crate) fn step_into<T: Attribute>(
     refine_topology: bool,
     buffers: Buffers<T>,
 ) -> Step<T> {
-    step_impl(topo, values, rules, refine_topology, buffers, None)
+    step_impl(topo, values, rules, refine_topology, buffers, &Plain)
 }
 
-/// [`step_into`], adding `details` (one per edge) to the edge points if given.
-fn step_impl<T: Attribute>(
+/// [`step_into`], with `additions` made to the values it computes.
+fn step_impl<T: Attribute, A: Additions<T>>(
     topo: &Topology,
     values: &[T],
     rules: &Rules,
     refine_topology: bool,
     buffers: Buffers<T>,
-    details: Option<&[T]>,
+    additions: &A,
 ) -> Step<T> {
     let nv = topo.vertex_count;
     let ne = topo.edge_count;
@@ -226,11 +228,11 @@ fn step_impl<T: Attribute>(
     let run = |work: Work<'_, T>| match work {
         Work::Faces(mut w) => {
             if even < nv {
-                odd_chunk(topo, values, rules, &mut w, refine_topology);
+                odd_chunk(topo, values, rules, additions, &mut w, refine_topology);
             }
-            face_chunk(topo, values, details, w, refine_topology);
+            face_chunk(topo, values, additions, w, refine_topology);
         }
-        Work::Vertices(w) => vertex_chunk(topo, values, rules, w, refine_topology),
+        Work::Vertices(w) => vertex_chunk(topo, values, rules, additions, w, refine_topology),
     };
     {
         let slots = (fine_values.slots(), fine_triangles.slots(), fine_links.slots(), fine_starts.slots());
@@ -325,10 +327,18 @@ fn split_work<'a, T>(
 /// vertices of its group and the other two centre vertices of the group across the edge;
 /// on the boundary it has valence 4 and boundary neighbours `c_k, c_{k+1}`.
 #[inline(never)]
-fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut FaceWork<'_, T>, refine: bool) {
+fn odd_chunk<T: Attribute, A: Additions<T>>(
+    topo: &Topology,
+    values: &[T],
+    rules: &Rules,
+    additions: &A,
+    w: &mut FaceWork<'_, T>,
+    refine: bool,
+) {
     let tri = &topo.triangles[..];
     let links = &topo.links[..];
     let (alpha, beta) = rules.interior(6);
+    let mut probe = A::Probe::default();
     for g in w.faces.start / 4..w.faces.end / 4 {
         let centre = tri[4 * g + 3];
         for k in 0..3usize {
@@ -345,6 +355,10 @@ fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut
             if across == INVALID {
                 let mut point = p.scaled(0.75);
                 point.add_scaled(&ends, 0.125);
+                if A::ACTIVE {
+                    additions.boundary_vertex_point(&mut point, m, 4, rules);
+                    additions.probe(&mut probe, &point);
+                }
                 w.odd_values.push(point);
                 if refine {
                     w.odd_starts.push(first_half(second_half(corner_face as u32)));
@@ -363,6 +377,10 @@ fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut
                 sum.add(&values[other[NEXT[j]] as usize]);
                 let mut point = p.scaled(alpha);
                 point.add_scaled(&sum, beta);
+                if A::ACTIVE {
+                    additions.interior_vertex_point(&mut point, m, 6, rules);
+                    additions.probe(&mut probe, &point);
+                }
                 w.odd_values.push(point);
                 if refine {
                     w.odd_starts.push(first_half((4 * corner_face + 1) as u32));
@@ -370,6 +388,7 @@ fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut
             }
         }
     }
+    additions.report(probe);
 }
 
 /// Edge points, fine faces and (optionally) fine links of one chunk of faces.
@@ -380,13 +399,14 @@ fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut
 /// `4f + k`, `(4f + k, 1)` runs `m_k -> m_{k-1}`, `(4f + k, 2)` is the second half of
 /// `4f + k - 1`, `(4f + 3, j)` runs `m_j -> m_{j+1}`.
 #[inline(never)]
-fn face_chunk<T: Attribute>(
+fn face_chunk<T: Attribute, A: Additions<T>>(
     topo: &Topology,
     values: &[T],
-    details: Option<&[T]>,
+    additions: &A,
     mut w: FaceWork<'_, T>,
     refine_topology: bool,
 ) {
+    let mut probe = A::Probe::default();
     let nv = topo.vertex_count as u32;
     let tri = &topo.triangles[..];
     let links = &topo.links[..];
@@ -418,8 +438,9 @@ fn face_chunk<T: Attribute>(
                     point.add_scaled(&wings, 0.125);
                     point
                 };
-                if let Some(details) = details {
-                    point.add(&details[e as usize]);
+                if A::ACTIVE {
+                    additions.edge_point(&mut point, e);
+                    additions.probe(&mut probe, &point);
                 }
                 w.edge_values.push(point);
             } else {
@@ -453,14 +474,27 @@ fn face_chunk<T: Attribute>(
             w.links.push([base + 5, base + 9, base + 1, edges]);
         }
     }
+    additions.report(probe);
 }
 
 /// Vertex points (and, with `refine_topology`, start half-edges) of a chunk of even
 /// vertices.
 #[inline(never)]
-fn vertex_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, mut w: VertexWork<'_, T>, refine: bool) {
+fn vertex_chunk<T: Attribute, A: Additions<T>>(
+    topo: &Topology,
+    values: &[T],
+    rules: &Rules,
+    additions: &A,
+    mut w: VertexWork<'_, T>,
+    refine: bool,
+) {
+    let mut probe = A::Probe::default();
     for v in w.first..w.first + w.values.len() {
-        w.values.push(vertex_point(topo, values, rules, v as u32));
+        let point = vertex_point(topo, values, rules, additions, v as u32);
+        if A::ACTIVE {
+            additions.probe(&mut probe, &point);
+        }
+        w.values.push(point);
         if refine {
             // Corner k of face f becomes corner 0 of child 4f + k: the outgoing half-edge
             // becomes its first half, with the same boundary status.
@@ -468,18 +502,30 @@ fn vertex_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, mut 
             w.starts.push(if h == INVALID { INVALID } else { first_half(h) });
         }
     }
+    additions.report(probe);
 }
 
-/// The vertex point of even vertex `v`, by a walk around its one-ring.
+/// The vertex point of even vertex `v`, by a walk around its one-ring (with the
+/// addition of `additions`).
 ///
 /// The walk is a chain of dependent loads (half-edge, the link of its predecessor, the
 /// next half-edge), so it works on the flat arrays with the corner arithmetic inline.
 #[inline]
-fn vertex_point<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, v: u32) -> T {
+fn vertex_point<T: Attribute, A: Additions<T>>(
+    topo: &Topology,
+    values: &[T],
+    rules: &Rules,
+    additions: &A,
+    v: u32,
+) -> T {
     let start = topo.vertex_halfedge[v as usize];
     let p = &values[v as usize];
     if start == INVALID {
-        return p.clone();
+        let mut point = p.clone();
+        if A::ACTIVE {
+            additions.isolated_vertex_point(&mut point);
+        }
+        return point;
     }
     let tri = topo.triangles.as_flattened();
     let links = topo.links.as_flattened();
@@ -495,14 +541,19 @@ fn vertex_point<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, v: u
         if t == INVALID {
             // Boundary: the fan ends here; the two boundary neighbours are the target of
             // the first and the origin of the last fan half-edge.
-            if rules.is_fixed_corner(valence + 1) {
-                return p.clone();
+            let mut point = if rules.is_fixed_corner(valence + 1) {
+                p.clone()
+            } else {
+                let last = tri[3 * (h >> 2) as usize + PREV[(h & 3) as usize]];
+                let mut ends = values[target(start) as usize].clone();
+                ends.add(&values[last as usize]);
+                let mut point = p.scaled(0.75);
+                point.add_scaled(&ends, 0.125);
+                point
+            };
+            if A::ACTIVE {
+                additions.boundary_vertex_point(&mut point, v, valence + 1, rules);
             }
-            let last = tri[3 * (h >> 2) as usize + PREV[(h & 3) as usize]];
-            let mut ends = values[target(start) as usize].clone();
-            ends.add(&values[last as usize]);
-            let mut point = p.scaled(0.75);
-            point.add_scaled(&ends, 0.125);
             return point;
         }
         if t == start || valence > topo.triangles.len() {
@@ -516,5 +567,119 @@ fn vertex_point<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, v: u
     let (alpha, beta) = rules.interior(valence);
     let mut point = p.scaled(alpha);
     point.add_scaled(&sum, beta);
+    if A::ACTIVE {
+        additions.interior_vertex_point(&mut point, v, valence, rules);
+    }
     point
+}
+
+/// What a step adds to the values it computes: nothing ([`Plain`], subdivision) or the
+/// details of a reconstruction ([`Details`]). The chunks call it as they write each
+/// value, so that it needs no pass over the values of its own.
+pub(crate) trait Additions<T>: Sync {
+    /// False when nothing is added: the chunks then skip the calls.
+    const ACTIVE: bool;
+    /// A running test of the finiteness of the values a chunk wrote.
+    type Probe: Default;
+    /// Adds to the edge point of edge `edge`.
+    fn edge_point(&self, point: &mut T, edge: u32);
+    /// Adds to the vertex point of interior vertex `v` with `valence` edges.
+    fn interior_vertex_point(&self, point: &mut T, v: u32, valence: usize, rules: &Rules);
+    /// Adds to the vertex point of boundary vertex `v` with `valence` edges.
+    fn boundary_vertex_point(&self, point: &mut T, v: u32, valence: usize, rules: &Rules);
+    /// Adds to the vertex point of an isolated vertex.
+    fn isolated_vertex_point(&self, point: &mut T);
+    /// Takes a written value into the chunk's probe.
+    fn probe(&self, probe: &mut Self::Probe, value: &T);
+    /// The verdict of a chunk's probe.
+    fn report(&self, probe: Self::Probe);
+}
+
+/// Nothing added: Loop subdivision.
+struct Plain;
+
+impl<T> Additions<T> for Plain {
+    const ACTIVE: bool = false;
+    type Probe = ();
+    #[inline(always)]
+    fn edge_point(&self, _point: &mut T, _edge: u32) {}
+    #[inline(always)]
+    fn interior_vertex_point(&self, _point: &mut T, _v: u32, _valence: usize, _rules: &Rules) {}
+    #[inline(always)]
+    fn boundary_vertex_point(&self, _point: &mut T, _v: u32, _valence: usize, _rules: &Rules) {}
+    #[inline(always)]
+    fn isolated_vertex_point(&self, _point: &mut T) {}
+    #[inline(always)]
+    fn probe(&self, _probe: &mut (), _value: &T) {}
+    #[inline(always)]
+    fn report(&self, _probe: ()) {}
+}
+
+/// The details of one reconstruction step (see `reverse::reconstruct_levels`): `D_e` is
+/// added to the edge point of edge `e`, and to each vertex point the change that the
+/// inverse relation implies from `sums`, one per vertex: `8β_n/5` times the sum of the
+/// details of its `n` edges inside, a quarter of the sum of its two boundary edges' on
+/// the boundary, nothing at a fixed corner or an isolated vertex.
+///
+/// With `check_finite`, every value written is tested (a running sum of zero times each
+/// value, which stays zero unless one is not finite): see [`Details::all_finite`].
+pub(crate) struct Details<'a> {
+    details: &'a [DVec3],
+    sums: &'a [[f64; 3]],
+    check_finite: bool,
+    non_finite: AtomicBool,
+}
+
+impl<'a> Details<'a> {
+    /// One detail per edge and one sum per vertex of the coarse level.
+    pub(crate) fn new(details: &'a [DVec3], sums: &'a [[f64; 3]], check_finite: bool) -> Self {
+        Self { details, sums, check_finite, non_finite: AtomicBool::new(false) }
+    }
+
+    /// With `check_finite`: true if every value the step wrote is finite.
+    pub(crate) fn all_finite(&self) -> bool {
+        !self.non_finite.load(Ordering::Relaxed)
+    }
+
+    #[inline(always)]
+    fn sum(&self, v: u32) -> DVec3 {
+        DVec3::from_array(self.sums[v as usize])
+    }
+}
+
+impl Additions<DVec3> for Details<'_> {
+    const ACTIVE: bool = true;
+    type Probe = DVec3;
+
+    #[inline(always)]
+    fn edge_point(&self, point: &mut DVec3, edge: u32) {
+        *point += self.details[edge as usize];
+    }
+
+    #[inline(always)]
+    fn interior_vertex_point(&self, point: &mut DVec3, v: u32, valence: usize, rules: &Rules) {
+        *point += (1.6 * rules.interior(valence).1) * self.sum(v);
+    }
+
+    #[inline(always)]
+    fn boundary_vertex_point(&self, point: &mut DVec3, v: u32, valence: usize, rules: &Rules) {
+        *point += if rules.is_fixed_corner(valence) { DVec3::ZERO } else { 0.25 * self.sum(v) };
+    }
+
+    #[inline(always)]
+    fn isolated_vertex_point(&self, point: &mut DVec3) {
+        *point += DVec3::ZERO;
+    }
+
+    #[inline(always)]
+    fn probe(&self, probe: &mut DVec3, value: &DVec3) {
+        *probe += *value * 0.0;
+    }
+
+    #[inline(always)]
+    fn report(&self, probe: DVec3) {
+        if self.check_finite && probe.x + probe.y + probe.z != 0.0 {
+            self.non_finite.store(true, Ordering::Relaxed);
+        }
+    }
 }
