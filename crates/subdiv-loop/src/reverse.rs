@@ -58,7 +58,7 @@ use crate::detect::{
 };
 use crate::forward::buffer::{Output, Slots};
 use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
-use crate::forward::topology::{BASE_BITS, BASE_MASK, INVALID as TOPOLOGY_INVALID, MAX_FACES, NEXT, Topology, edge_at};
+use crate::forward::topology::{BASE_MASK, MAX_FACES, Topology};
 use crate::forward::{LoopOptions, VertexWeights};
 
 /// `β_n` of the forward step's interior vertex rule (the very same numbers).
@@ -209,8 +209,7 @@ pub(crate) fn reconstruct_levels<'a>(
                 // last step's values are tested for finiteness (a non-finite value
                 // carries over to every later level).
                 let last = level == count;
-                let sums = detail_sums(&topology, details);
-                let additions = kernel::Details::new(details, &sums, last);
+                let additions = kernel::Details::new(details, last);
                 let step = kernel::step_with_details(&topology, &positions, &kernel_rules, !last, &additions);
                 known_finite = !last || additions.all_finite();
                 positions = step.values;
@@ -241,63 +240,6 @@ pub(crate) fn reconstruct_levels<'a>(
         offsets: crate::forward::triangle_offsets(topology.triangles.len()),
         indices: topology.triangles.into_flattened(),
     })
-}
-
-/// Per vertex of `topology`, the sum of the details of its edges, or of its two
-/// boundary edges on the boundary: what the vertex point's correction scales (see
-/// [`kernel::Details`]). Each sum starts from zero and follows the edge order, so that
-/// its bits depend on nothing else.
-///
-/// One sequential pass over the faces adds to each corner the details of the face's two
-/// edges at it, in edge order (edges are numbered by faces); an edge that the face does
-/// not number adds zero instead, which leaves a sum unchanged (a sum that starts at +0
-/// is never −0), so the pass has no branch on which edges the face numbers. The
-/// boundary vertices' sums are then made again from their boundary edges alone.
-fn detail_sums(topology: &Topology, details: &[DVec3]) -> Vec<[f64; 3]> {
-    // Zeroed memory from the allocator, not a pass of writes where it can.
-    let mut sums = vec![[0.0f64; 3]; topology.vertex_count];
-    let mut boundary_faces = Vec::new();
-    let add = |sum: &mut [f64; 3], first: DVec3, second: DVec3| {
-        *sum = (DVec3::from_array(*sum) + first + second).to_array();
-    };
-    for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
-        let info = link[3];
-        let detail = |k: u32| {
-            // When the face does not number its edge `k`, detail 0 is read and masked
-            // to zero (by arithmetic, not a branch on the unpredictable mask).
-            let numbered = u64::from((info >> (BASE_BITS + k)) & 1);
-            let d = details[edge_at(info, k) as usize * numbered as usize];
-            let keep = |x: f64| f64::from_bits(x.to_bits() & numbered.wrapping_neg());
-            DVec3::new(keep(d.x), keep(d.y), keep(d.z))
-        };
-        let (d0, d1, d2) = (detail(0), detail(1), detail(2));
-        add(&mut sums[corners[0] as usize], d0, d2);
-        add(&mut sums[corners[1] as usize], d0, d1);
-        add(&mut sums[corners[2] as usize], d1, d2);
-        if link[0].max(link[1]).max(link[2]) == TOPOLOGY_INVALID {
-            boundary_faces.push(f);
-        }
-    }
-    let boundary_edges = || {
-        boundary_faces.iter().flat_map(|&f| {
-            let (corners, link) = (topology.triangles[f], topology.links[f]);
-            (0..3)
-                .filter(move |&k| link[k] == TOPOLOGY_INVALID)
-                .map(move |k| (edge_at(link[3], k as u32) as usize, [corners[k], corners[NEXT[k]]]))
-        })
-    };
-    for (_, ends) in boundary_edges() {
-        for v in ends {
-            sums[v as usize] = [0.0; 3];
-        }
-    }
-    for (e, ends) in boundary_edges() {
-        for v in ends {
-            let sum = &mut sums[v as usize];
-            *sum = (DVec3::from_array(*sum) + details[e]).to_array();
-        }
-    }
-    sums
 }
 
 /// Checks that `details` and `order` fit the coarse table (level numbers errors).
@@ -1066,6 +1008,87 @@ mod tests {
         let mut fine = reconstruct(&coarse, &zeros, None, &rules).unwrap();
         fine.positions_mut()[4].x = f64::NAN;
         assert!(matches!(reverse(&fine, &ReverseOptions::default()), Err(LoopError::Mesh(_))));
+    }
+
+    /// The two-pass formulation of a canonical step that the kernel's additions replace:
+    /// Loop's step, then each detail added to its edge point and, to each vertex point,
+    /// its correction from the sum of its details (of its boundary edges on the
+    /// boundary) accumulated edge by edge from zero.
+    fn two_pass_step(topology: &Topology, positions: &[DVec3], details: &[DVec3], rules: &LoopOptions) -> Vec<DVec3> {
+        let kernel_rules = Rules::new(rules);
+        let mut fine = kernel::step(topology, positions, &kernel_rules, false).values;
+        let nv = topology.vertex_count;
+        let (mut sums, mut valences, mut boundary) = (vec![DVec3::ZERO; nv], vec![0usize; nv], vec![false; nv]);
+        let mut e = 0;
+        for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
+            for k in 0..3 {
+                if link[k] < (4 * f + k) as u32 {
+                    continue;
+                }
+                let on_boundary = link[k] == crate::forward::topology::INVALID;
+                for v in [corners[k], corners[(k + 1) % 3]].map(|v| v as usize) {
+                    valences[v] += 1;
+                    if on_boundary && !boundary[v] {
+                        boundary[v] = true;
+                        sums[v] = DVec3::ZERO;
+                    }
+                    if on_boundary || !boundary[v] {
+                        sums[v] += details[e];
+                    }
+                }
+                fine[nv + e] += details[e];
+                e += 1;
+            }
+        }
+        for v in 0..nv {
+            let n = valences[v];
+            fine[v] += if boundary[v] {
+                if kernel_rules.is_fixed_corner(n) { DVec3::ZERO } else { 0.25 * sums[v] }
+            } else if n == 0 {
+                DVec3::ZERO
+            } else {
+                (1.6 * kernel_rules.interior(n).1) * sums[v]
+            };
+        }
+        fine
+    }
+
+    /// Reconstruction adds the details inside the forward kernel, from per-vertex sums
+    /// made by a branch-free pass: bit for bit the two-pass formulation, at the first
+    /// level (walks around every vertex) and the next (odd vertices from their groups),
+    /// on closed meshes, boundaries, fixed corners and an isolated vertex, on one thread
+    /// and on two (a mesh large enough for the parallel path).
+    #[test]
+    fn in_kernel_details_equal_the_two_pass_formulation_bit_for_bit() {
+        let mut shapes = test_shapes();
+        let mut lonely = shapes::grid(2, 2, CellKind::Triangles).unwrap();
+        lonely.positions.push(DVec3::new(5.0, -1.0, 0.5));
+        shapes.push(("grid with an isolated vertex".to_string(), lonely));
+        shapes.push(("grid 48x48".to_string(), shapes::grid(48, 48, CellKind::Triangles).unwrap()));
+        let mut rng = crate::reference::Rng::new(99);
+        let two_threads = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for (name, soup) in shapes {
+            let base = mesh(&soup);
+            for rules in all_rules() {
+                // Expected: two levels by the two-pass formulation.
+                let mut topology = Topology::from_mesh(&base).unwrap();
+                let mut positions = base.positions().to_vec();
+                let mut levels = Vec::new();
+                for _ in 0..2 {
+                    let details: Vec<DVec3> = (0..topology.edge_count).map(|_| 0.1 * rng.vector()).collect();
+                    positions = two_pass_step(&topology, &positions, &details, &rules);
+                    topology = kernel::refine_topology(&topology);
+                    levels.push(details);
+                }
+                let bits = |p: &[DVec3]| p.iter().flat_map(|q| q.to_array().map(f64::to_bits)).collect::<Vec<_>>();
+                let steps = || levels.iter().map(|d| (&d[..], None));
+                let one = reconstruct_levels(&base, steps(), &rules).unwrap();
+                assert_eq!(bits(&one.positions), bits(&positions), "{name} {rules:?}: one thread");
+                let two = two_threads.install(|| reconstruct_levels(&base, steps(), &rules)).unwrap();
+                assert_eq!(bits(&two.positions), bits(&positions), "{name} {rules:?}: two threads");
+                assert_eq!(one.indices, two.indices);
+            }
+        }
     }
 
     /// Non-finite details are named by level and index whether the levels fit their

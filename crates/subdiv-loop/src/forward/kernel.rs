@@ -6,6 +6,7 @@
 //! Every output element is written by exactly one chunk with a fixed formula, so results
 //! are bit-identical for any number of threads.
 
+use std::sync::OnceLock;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::DVec3;
@@ -230,18 +231,37 @@ fn step_impl<T: Attribute, A: Additions<T>>(
             if even < nv {
                 odd_chunk(topo, values, rules, additions, &mut w, refine_topology);
             }
-            face_chunk(topo, values, additions, w, refine_topology);
+            face_chunk(topo, values, additions, &mut w, refine_topology);
         }
         Work::Vertices(w) => vertex_chunk(topo, values, rules, additions, w, refine_topology),
     };
     {
         let slots = (fine_values.slots(), fine_triangles.slots(), fine_links.slots(), fine_starts.slots());
         if !runs_in_parallel(nf) {
+            additions.prepare(topo);
             split_work(topo, refine_topology, slots, run);
         } else {
             let mut work = Vec::with_capacity(nf.div_ceil(FACE_CHUNK) + even.div_ceil(VERTEX_CHUNK));
             split_work(topo, refine_topology, slots, |w| work.push(w));
-            work.into_par_iter().for_each(run);
+            if A::ACTIVE {
+                // The edge points, faces and links need nothing prepared: they run
+                // beside the preparation, the vertex points after it.
+                let edges = |work: &mut Work<'_, T>| {
+                    if let Work::Faces(w) = work {
+                        face_chunk(topo, values, additions, w, refine_topology);
+                    }
+                };
+                rayon::join(|| additions.prepare(topo), || work.par_iter_mut().for_each(edges));
+                work.into_par_iter().for_each(|work| match work {
+                    Work::Faces(mut w) if even < nv => {
+                        odd_chunk(topo, values, rules, additions, &mut w, refine_topology)
+                    }
+                    Work::Faces(_) => {}
+                    Work::Vertices(w) => vertex_chunk(topo, values, rules, additions, w, refine_topology),
+                });
+            } else {
+                work.into_par_iter().for_each(run);
+            }
         }
     }
 
@@ -403,7 +423,7 @@ fn face_chunk<T: Attribute, A: Additions<T>>(
     topo: &Topology,
     values: &[T],
     additions: &A,
-    mut w: FaceWork<'_, T>,
+    w: &mut FaceWork<'_, T>,
     refine_topology: bool,
 ) {
     let mut probe = A::Probe::default();
@@ -579,6 +599,9 @@ fn vertex_point<T: Attribute, A: Additions<T>>(
 pub(crate) trait Additions<T>: Sync {
     /// False when nothing is added: the chunks then skip the calls.
     const ACTIVE: bool;
+    /// What the vertex points need from the coarse level, made before any of them
+    /// (beside the edge points when the step runs in parallel).
+    fn prepare(&self, topo: &Topology);
     /// A running test of the finiteness of the values a chunk wrote.
     type Probe: Default;
     /// Adds to the edge point of edge `edge`.
@@ -602,6 +625,8 @@ impl<T> Additions<T> for Plain {
     const ACTIVE: bool = false;
     type Probe = ();
     #[inline(always)]
+    fn prepare(&self, _topo: &Topology) {}
+    #[inline(always)]
     fn edge_point(&self, _point: &mut T, _edge: u32) {}
     #[inline(always)]
     fn interior_vertex_point(&self, _point: &mut T, _v: u32, _valence: usize, _rules: &Rules) {}
@@ -617,23 +642,24 @@ impl<T> Additions<T> for Plain {
 
 /// The details of one reconstruction step (see `reverse::reconstruct_levels`): `D_e` is
 /// added to the edge point of edge `e`, and to each vertex point the change that the
-/// inverse relation implies from `sums`, one per vertex: `8β_n/5` times the sum of the
-/// details of its `n` edges inside, a quarter of the sum of its two boundary edges' on
-/// the boundary, nothing at a fixed corner or an isolated vertex.
+/// inverse relation implies: `8β_n/5` times the sum of the details of its `n` edges
+/// inside, a quarter of the sum of its two boundary edges' on the boundary, nothing at a
+/// fixed corner or an isolated vertex (the sums: [`detail_sums`]).
 ///
 /// With `check_finite`, every value written is tested (a running sum of zero times each
 /// value, which stays zero unless one is not finite): see [`Details::all_finite`].
 pub(crate) struct Details<'a> {
     details: &'a [DVec3],
-    sums: &'a [[f64; 3]],
+    /// One per coarse vertex, made by [`Additions::prepare`].
+    sums: OnceLock<Vec<[f64; 3]>>,
     check_finite: bool,
     non_finite: AtomicBool,
 }
 
 impl<'a> Details<'a> {
-    /// One detail per edge and one sum per vertex of the coarse level.
-    pub(crate) fn new(details: &'a [DVec3], sums: &'a [[f64; 3]], check_finite: bool) -> Self {
-        Self { details, sums, check_finite, non_finite: AtomicBool::new(false) }
+    /// One detail per edge of the coarse level.
+    pub(crate) fn new(details: &'a [DVec3], check_finite: bool) -> Self {
+        Self { details, sums: OnceLock::new(), check_finite, non_finite: AtomicBool::new(false) }
     }
 
     /// With `check_finite`: true if every value the step wrote is finite.
@@ -643,13 +669,75 @@ impl<'a> Details<'a> {
 
     #[inline(always)]
     fn sum(&self, v: u32) -> DVec3 {
-        DVec3::from_array(self.sums[v as usize])
+        DVec3::from_array(self.sums.get().expect("internal: detail sums made before the vertex points")[v as usize])
     }
+}
+
+/// Per vertex of `topology`, the sum of the details of its edges, or of its two
+/// boundary edges on the boundary: what the vertex point's correction scales (see
+/// [`Details`]). Each sum starts from zero and follows the edge order, so that its bits
+/// depend on nothing else (not on the thread count).
+///
+/// One sequential pass over the faces adds to each corner the details of the face's two
+/// edges at it, in edge order (edges are numbered by faces); an edge that the face does
+/// not number adds zero instead, which leaves a sum unchanged (a sum that starts at +0
+/// is never −0), so the pass has no branch on which edges the face numbers. The
+/// boundary vertices' sums are then made again from their boundary edges alone.
+fn detail_sums(topology: &Topology, details: &[DVec3]) -> Vec<[f64; 3]> {
+    // Zeroed memory from the allocator, not a pass of writes where it can.
+    let mut sums = vec![[0.0f64; 3]; topology.vertex_count];
+    let mut boundary_faces = Vec::new();
+    let add = |sum: &mut [f64; 3], first: DVec3, second: DVec3| {
+        *sum = (DVec3::from_array(*sum) + first + second).to_array();
+    };
+    for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
+        let info = link[3];
+        let detail = |k: u32| {
+            // When the face does not number its edge `k`, detail 0 is read and masked
+            // to zero (by arithmetic, not a branch on the unpredictable mask).
+            let numbered = u64::from((info >> (BASE_BITS + k)) & 1);
+            let d = details[edge_at(info, k) as usize * numbered as usize];
+            let keep = |x: f64| f64::from_bits(x.to_bits() & numbered.wrapping_neg());
+            DVec3::new(keep(d.x), keep(d.y), keep(d.z))
+        };
+        let (d0, d1, d2) = (detail(0), detail(1), detail(2));
+        add(&mut sums[corners[0] as usize], d0, d2);
+        add(&mut sums[corners[1] as usize], d0, d1);
+        add(&mut sums[corners[2] as usize], d1, d2);
+        if link[0].max(link[1]).max(link[2]) == INVALID {
+            boundary_faces.push(f);
+        }
+    }
+    let boundary_edges = || {
+        boundary_faces.iter().flat_map(|&f| {
+            let (corners, link) = (topology.triangles[f], topology.links[f]);
+            (0..3)
+                .filter(move |&k| link[k] == INVALID)
+                .map(move |k| (edge_at(link[3], k as u32) as usize, [corners[k], corners[NEXT[k]]]))
+        })
+    };
+    for (_, ends) in boundary_edges() {
+        for v in ends {
+            sums[v as usize] = [0.0; 3];
+        }
+    }
+    for (e, ends) in boundary_edges() {
+        for v in ends {
+            let sum = &mut sums[v as usize];
+            *sum = (DVec3::from_array(*sum) + details[e]).to_array();
+        }
+    }
+    sums
 }
 
 impl Additions<DVec3> for Details<'_> {
     const ACTIVE: bool = true;
     type Probe = DVec3;
+
+    fn prepare(&self, topo: &Topology) {
+        debug_assert_eq!(self.details.len(), topo.edge_count, "internal: one detail per edge");
+        self.sums.get_or_init(|| detail_sums(topo, self.details));
+    }
 
     #[inline(always)]
     fn edge_point(&self, point: &mut DVec3, edge: u32) {
