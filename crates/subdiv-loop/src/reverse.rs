@@ -44,6 +44,8 @@
 //!   weights the coarse mesh differs and the details are not zero, but reconstruction
 //!   with the same options is still exact.
 
+use std::borrow::Cow;
+
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -180,7 +182,8 @@ pub(crate) fn reconstruct_levels<'a>(
 ) -> Result<PolygonSoup, LoopError> {
     crate::pyramid::check_input_positions(coarse.positions())?;
     let mut topology = Topology::from_mesh(coarse)?;
-    let mut positions = coarse.positions().to_vec();
+    // The base positions are read in place (copied only when no step follows).
+    let mut positions = Cow::Borrowed(coarse.positions());
     let kernel_rules = Rules::new(rules);
     let levels: Vec<_> = levels.collect();
     let count = levels.len();
@@ -212,14 +215,14 @@ pub(crate) fn reconstruct_levels<'a>(
                 let additions = kernel::Details::new(details, last);
                 let step = kernel::step_with_details(&topology, &positions, &kernel_rules, !last, &additions);
                 known_finite = !last || additions.all_finite();
-                positions = step.values;
+                positions = Cow::Owned(step.values);
                 topology = step.topology;
             }
             Some(order) => {
                 let table = CornerTable::from_topology(&topology);
                 let (fine_table, fine_positions) = refine_level(&table, &positions, details, Some(order), rules);
                 topology = fine_table.to_topology();
-                positions = fine_positions;
+                positions = Cow::Owned(fine_positions);
                 known_finite = false;
             }
         }
@@ -236,7 +239,7 @@ pub(crate) fn reconstruct_levels<'a>(
     // The triangles' memory becomes the indices (no copy); the offsets are filled in
     // parallel, as for the forward subdivision's soups.
     Ok(PolygonSoup {
-        positions,
+        positions: positions.into_owned(),
         offsets: crate::forward::triangle_offsets(topology.triangles.len()),
         indices: topology.triangles.into_flattened(),
     })

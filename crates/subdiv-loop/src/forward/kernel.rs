@@ -690,8 +690,8 @@ fn detail_sums(topology: &Topology, details: &[DVec3]) -> Vec<[f64; 3]> {
     let add = |sum: &mut [f64; 3], first: DVec3, second: DVec3| {
         *sum = (DVec3::from_array(*sum) + first + second).to_array();
     };
-    for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
-        let info = link[3];
+    // The details of the three edges of a face, zero for those it does not number.
+    let face_details = |info: u32| {
         let detail = |k: u32| {
             // When the face does not number its edge `k`, detail 0 is read and masked
             // to zero (by arithmetic, not a branch on the unpredictable mask).
@@ -700,12 +700,44 @@ fn detail_sums(topology: &Topology, details: &[DVec3]) -> Vec<[f64; 3]> {
             let keep = |x: f64| f64::from_bits(x.to_bits() & numbered.wrapping_neg());
             DVec3::new(keep(d.x), keep(d.y), keep(d.z))
         };
-        let (d0, d1, d2) = (detail(0), detail(1), detail(2));
-        add(&mut sums[corners[0] as usize], d0, d2);
-        add(&mut sums[corners[1] as usize], d0, d1);
-        add(&mut sums[corners[2] as usize], d1, d2);
-        if link[0].max(link[1]).max(link[2]) == INVALID {
-            boundary_faces.push(f);
+        [detail(0), detail(1), detail(2)]
+    };
+    let on_boundary = |link: &[u32; 4]| link[0].max(link[1]).max(link[2]) == INVALID;
+    if topology.vertex_halfedge.len() < topology.vertex_count {
+        // A refined level: groups of four faces, corner faces `(c_k, m_k, m_{k-1})` and
+        // the centre face `(m_0, m_1, m_2)`, which numbers none of its edges (they are
+        // the corner faces' inner edges) and adds nothing. Each vertex's additions
+        // within the group are made in one go, in the order of the faces: the
+        // corner's two edges in face `k`, and the edge point `m_k`'s edges 0 and 1 in
+        // face `k`, 1 and 2 in face `k + 1`.
+        for g in 0..topology.triangles.len() / 4 {
+            let faces = 4 * g..4 * g + 3;
+            let links = &topology.links[4 * g..4 * g + 3];
+            let d = [face_details(links[0][3]), face_details(links[1][3]), face_details(links[2][3])];
+            let centre = topology.triangles[4 * g + 3];
+            for k in 0..3 {
+                add(&mut sums[topology.triangles[4 * g + k][0] as usize], d[k][0], d[k][2]);
+                let n = NEXT[k];
+                let sum = &mut sums[centre[k] as usize];
+                if k < n {
+                    add(sum, d[k][0], d[k][1]);
+                    add(sum, d[n][1], d[n][2]);
+                } else {
+                    add(sum, d[n][1], d[n][2]);
+                    add(sum, d[k][0], d[k][1]);
+                }
+            }
+            boundary_faces.extend(faces.filter(|&f| on_boundary(&topology.links[f])));
+        }
+    } else {
+        for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
+            let [d0, d1, d2] = face_details(link[3]);
+            add(&mut sums[corners[0] as usize], d0, d2);
+            add(&mut sums[corners[1] as usize], d0, d1);
+            add(&mut sums[corners[2] as usize], d1, d2);
+            if on_boundary(link) {
+                boundary_faces.push(f);
+            }
         }
     }
     let boundary_edges = || {
