@@ -44,6 +44,8 @@
 //!   weights the coarse mesh differs and the details are not zero, but reconstruction
 //!   with the same options is still exact.
 
+use std::borrow::Cow;
+
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -58,7 +60,7 @@ use crate::detect::{
 };
 use crate::forward::buffer::{Output, Slots};
 use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
-use crate::forward::topology::{BASE_MASK, INVALID as TOPOLOGY_INVALID, MAX_FACES, NEXT, Topology, is_first};
+use crate::forward::topology::{BASE_MASK, MAX_FACES, Topology};
 use crate::forward::{LoopOptions, VertexWeights};
 
 /// `β_n` of the forward step's interior vertex rule (the very same numbers).
@@ -180,7 +182,8 @@ pub(crate) fn reconstruct_levels<'a>(
 ) -> Result<PolygonSoup, LoopError> {
     crate::pyramid::check_input_positions(coarse.positions())?;
     let mut topology = Topology::from_mesh(coarse)?;
-    let mut positions = coarse.positions().to_vec();
+    // The base positions are read in place (copied only when no step follows).
+    let mut positions = Cow::Borrowed(coarse.positions());
     let kernel_rules = Rules::new(rules);
     let levels: Vec<_> = levels.collect();
     let count = levels.len();
@@ -205,44 +208,21 @@ pub(crate) fn reconstruct_levels<'a>(
         }
         match order {
             None => {
-                // The kernel adds the details to the edge points as it makes them; the
-                // (sequential) sums of the details around the vertices run beside it.
-                let corrections = || VertexCorrections::new(&topology, details);
-                let step = || kernel::step_with_details(&topology, &positions, &kernel_rules, level < count, details);
-                let parallel = kernel::runs_in_parallel(topology.face_count());
-                let (corrections, step) =
-                    if parallel { rayon::join(corrections, step) } else { (corrections(), step()) };
-                let nv = topology.vertex_count;
-                let mut fine = step.values;
-                let (vertex_points, edge_points) = fine.split_at_mut(nv);
-                // The finiteness check of the vertex points rides along (no pass of its
-                // own); a level the kernel ran on the calling thread stays there (no
-                // pool wake-up), by the kernel's own rule.
-                let apply = |(v, p): (usize, &mut DVec3)| {
-                    corrections.apply(v, p, &kernel_rules);
-                    p.is_finite()
-                };
-                let vertices_finite = if !parallel {
-                    vertex_points.iter_mut().enumerate().map(apply).fold(true, |a, b| a & b)
-                } else {
-                    vertex_points
-                        .par_iter_mut()
-                        .with_min_len(4096)
-                        .enumerate()
-                        .map(apply)
-                        .reduce(|| true, |a, b| a && b)
-                };
-                // Only the last step's verdict is read after the loop: the edge points
-                // are checked there alone.
-                known_finite = vertices_finite && (level < count || crate::pyramid::all_finite(edge_points));
-                positions = fine;
+                // The kernel adds the details to the values as it makes them; only the
+                // last step's values are tested for finiteness (a non-finite value
+                // carries over to every later level).
+                let last = level == count;
+                let additions = kernel::Details::new(details, last);
+                let step = kernel::step_with_details(&topology, &positions, &kernel_rules, !last, &additions);
+                known_finite = !last || additions.all_finite();
+                positions = Cow::Owned(step.values);
                 topology = step.topology;
             }
             Some(order) => {
                 let table = CornerTable::from_topology(&topology);
                 let (fine_table, fine_positions) = refine_level(&table, &positions, details, Some(order), rules);
                 topology = fine_table.to_topology();
-                positions = fine_positions;
+                positions = Cow::Owned(fine_positions);
                 known_finite = false;
             }
         }
@@ -259,82 +239,10 @@ pub(crate) fn reconstruct_levels<'a>(
     // The triangles' memory becomes the indices (no copy); the offsets are filled in
     // parallel, as for the forward subdivision's soups.
     Ok(PolygonSoup {
-        positions,
+        positions: positions.into_owned(),
         offsets: crate::forward::triangle_offsets(topology.triangles.len()),
         indices: topology.triangles.into_flattened(),
     })
-}
-
-/// What the details add to each vertex point (see [`reconstruct_levels`]): the sums of
-/// the details around every vertex, by one pass over the edges of the coarse topology,
-/// applied in place to the vertex points (no array of corrections).
-struct VertexCorrections {
-    /// Per vertex, side by side (one cache line per vertex in the scattered pass).
-    vertices: Vec<VertexSum>,
-}
-
-/// What [`VertexCorrections`] keeps per vertex.
-#[derive(Clone, Copy)]
-struct VertexSum {
-    /// The sum of the details of its boundary edges if it has any, else of all its
-    /// edges (the two cases of the correction).
-    sum: DVec3,
-    /// Number of edges at the vertex, [`VertexCorrections::BOUNDARY`] set on the
-    /// boundary.
-    valence: u32,
-}
-
-impl VertexCorrections {
-    const BOUNDARY: u32 = 1 << 31;
-
-    fn new(topology: &Topology, details: &[DVec3]) -> Self {
-        let nv = topology.vertex_count;
-        let mut vertices = vec![VertexSum { sum: DVec3::ZERO, valence: 0 }; nv];
-        let mut e = 0usize;
-        for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
-            for k in 0..3 {
-                let twin = link[k];
-                if !is_first((4 * f + k) as u32, twin) {
-                    continue;
-                }
-                let d = details[e];
-                e += 1;
-                let on_boundary = twin == TOPOLOGY_INVALID;
-                for v in [corners[k], corners[NEXT[k]]] {
-                    let vertex = &mut vertices[v as usize];
-                    let seen_boundary = vertex.valence & Self::BOUNDARY != 0;
-                    vertex.valence += 1;
-                    if on_boundary {
-                        if !seen_boundary {
-                            // The first boundary edge: from now on only boundary edges count.
-                            vertex.sum = DVec3::ZERO;
-                            vertex.valence |= Self::BOUNDARY;
-                        }
-                        vertex.sum += d;
-                    } else if !seen_boundary {
-                        vertex.sum += d;
-                    }
-                }
-            }
-        }
-        debug_assert_eq!(e, details.len());
-        Self { vertices }
-    }
-
-    /// Adds the correction of vertex `v` to its vertex point (`β` from the forward
-    /// kernel's table: the very numbers of the forward step).
-    #[inline]
-    fn apply(&self, v: usize, point: &mut DVec3, rules: &Rules) {
-        let VertexSum { sum, valence } = self.vertices[v];
-        let n = (valence & !Self::BOUNDARY) as usize;
-        *point += if valence & Self::BOUNDARY != 0 {
-            if rules.is_fixed_corner(n) { DVec3::ZERO } else { 0.25 * sum }
-        } else if n == 0 {
-            DVec3::ZERO
-        } else {
-            (1.6 * rules.interior(n).1) * sum
-        };
-    }
 }
 
 /// Checks that `details` and `order` fit the coarse table (level numbers errors).
@@ -1103,6 +1011,87 @@ mod tests {
         let mut fine = reconstruct(&coarse, &zeros, None, &rules).unwrap();
         fine.positions_mut()[4].x = f64::NAN;
         assert!(matches!(reverse(&fine, &ReverseOptions::default()), Err(LoopError::Mesh(_))));
+    }
+
+    /// The two-pass formulation of a canonical step that the kernel's additions replace:
+    /// Loop's step, then each detail added to its edge point and, to each vertex point,
+    /// its correction from the sum of its details (of its boundary edges on the
+    /// boundary) accumulated edge by edge from zero.
+    fn two_pass_step(topology: &Topology, positions: &[DVec3], details: &[DVec3], rules: &LoopOptions) -> Vec<DVec3> {
+        let kernel_rules = Rules::new(rules);
+        let mut fine = kernel::step(topology, positions, &kernel_rules, false).values;
+        let nv = topology.vertex_count;
+        let (mut sums, mut valences, mut boundary) = (vec![DVec3::ZERO; nv], vec![0usize; nv], vec![false; nv]);
+        let mut e = 0;
+        for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
+            for k in 0..3 {
+                if link[k] < (4 * f + k) as u32 {
+                    continue;
+                }
+                let on_boundary = link[k] == crate::forward::topology::INVALID;
+                for v in [corners[k], corners[(k + 1) % 3]].map(|v| v as usize) {
+                    valences[v] += 1;
+                    if on_boundary && !boundary[v] {
+                        boundary[v] = true;
+                        sums[v] = DVec3::ZERO;
+                    }
+                    if on_boundary || !boundary[v] {
+                        sums[v] += details[e];
+                    }
+                }
+                fine[nv + e] += details[e];
+                e += 1;
+            }
+        }
+        for v in 0..nv {
+            let n = valences[v];
+            fine[v] += if boundary[v] {
+                if kernel_rules.is_fixed_corner(n) { DVec3::ZERO } else { 0.25 * sums[v] }
+            } else if n == 0 {
+                DVec3::ZERO
+            } else {
+                (1.6 * kernel_rules.interior(n).1) * sums[v]
+            };
+        }
+        fine
+    }
+
+    /// Reconstruction adds the details inside the forward kernel, from per-vertex sums
+    /// made by a branch-free pass: bit for bit the two-pass formulation, at the first
+    /// level (walks around every vertex) and the next (odd vertices from their groups),
+    /// on closed meshes, boundaries, fixed corners and an isolated vertex, on one thread
+    /// and on two (a mesh large enough for the parallel path).
+    #[test]
+    fn in_kernel_details_equal_the_two_pass_formulation_bit_for_bit() {
+        let mut shapes = test_shapes();
+        let mut lonely = shapes::grid(2, 2, CellKind::Triangles).unwrap();
+        lonely.positions.push(DVec3::new(5.0, -1.0, 0.5));
+        shapes.push(("grid with an isolated vertex".to_string(), lonely));
+        shapes.push(("grid 48x48".to_string(), shapes::grid(48, 48, CellKind::Triangles).unwrap()));
+        let mut rng = crate::reference::Rng::new(99);
+        let two_threads = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for (name, soup) in shapes {
+            let base = mesh(&soup);
+            for rules in all_rules() {
+                // Expected: two levels by the two-pass formulation.
+                let mut topology = Topology::from_mesh(&base).unwrap();
+                let mut positions = base.positions().to_vec();
+                let mut levels = Vec::new();
+                for _ in 0..2 {
+                    let details: Vec<DVec3> = (0..topology.edge_count).map(|_| 0.1 * rng.vector()).collect();
+                    positions = two_pass_step(&topology, &positions, &details, &rules);
+                    topology = kernel::refine_topology(&topology);
+                    levels.push(details);
+                }
+                let bits = |p: &[DVec3]| p.iter().flat_map(|q| q.to_array().map(f64::to_bits)).collect::<Vec<_>>();
+                let steps = || levels.iter().map(|d| (&d[..], None));
+                let one = reconstruct_levels(&base, steps(), &rules).unwrap();
+                assert_eq!(bits(&one.positions), bits(&positions), "{name} {rules:?}: one thread");
+                let two = two_threads.install(|| reconstruct_levels(&base, steps(), &rules)).unwrap();
+                assert_eq!(bits(&two.positions), bits(&positions), "{name} {rules:?}: two threads");
+                assert_eq!(one.indices, two.indices);
+            }
+        }
     }
 
     /// Non-finite details are named by level and index whether the levels fit their

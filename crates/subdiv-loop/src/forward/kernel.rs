@@ -6,6 +6,10 @@
 //! Every output element is written by exactly one chunk with a fixed formula, so results
 //! are bit-identical for any number of threads.
 
+use std::sync::OnceLock;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use glam::DVec3;
 use rayon::prelude::*;
 
 use super::attribute::Attribute;
@@ -169,18 +173,17 @@ pub(crate) fn step<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, r
     step_into(topo, values, rules, refine_topology, Buffers::default())
 }
 
-/// [`step`] with `details[e]` added to the edge point of every edge `e` as it is
-/// computed (`point += detail`, the same operation as adding them afterwards, without
-/// another pass over the edge points).
-pub(crate) fn step_with_details<T: Attribute>(
+/// [`step`] with the details of a reconstruction added as the values are computed (see
+/// [`Details`]).
+pub(crate) fn step_with_details(
     topo: &Topology,
-    values: &[T],
+    values: &[DVec3],
     rules: &Rules,
     refine_topology: bool,
-    details: &[T],
-) -> Step<T> {
-    debug_assert_eq!(details.len(), topo.edge_count, "internal: one detail per edge");
-    step_impl(topo, values, rules, refine_topology, Buffers::default(), Some(details))
+    details: &Details<'_>,
+) -> Step<DVec3> {
+    debug_assert_eq!(details.details.len(), topo.edge_count, "internal: one detail per edge");
+    step_impl(topo, values, rules, refine_topology, Buffers::default(), details)
 }
 
 /// [`step`] writing into the memory of `buffers` (bit-identical results).
@@ -196,17 +199,17 @@ pub(crate) fn step_into<T: Attribute>(
     refine_topology: bool,
     buffers: Buffers<T>,
 ) -> Step<T> {
-    step_impl(topo, values, rules, refine_topology, buffers, None)
+    step_impl(topo, values, rules, refine_topology, buffers, &Plain)
 }
 
-/// [`step_into`], adding `details` (one per edge) to the edge points if given.
-fn step_impl<T: Attribute>(
+/// [`step_into`], with `additions` made to the values it computes.
+fn step_impl<T: Attribute, A: Additions<T>>(
     topo: &Topology,
     values: &[T],
     rules: &Rules,
     refine_topology: bool,
     buffers: Buffers<T>,
-    details: Option<&[T]>,
+    additions: &A,
 ) -> Step<T> {
     let nv = topo.vertex_count;
     let ne = topo.edge_count;
@@ -226,20 +229,39 @@ fn step_impl<T: Attribute>(
     let run = |work: Work<'_, T>| match work {
         Work::Faces(mut w) => {
             if even < nv {
-                odd_chunk(topo, values, rules, &mut w, refine_topology);
+                odd_chunk(topo, values, rules, additions, &mut w, refine_topology);
             }
-            face_chunk(topo, values, details, w, refine_topology);
+            face_chunk(topo, values, additions, &mut w, refine_topology);
         }
-        Work::Vertices(w) => vertex_chunk(topo, values, rules, w, refine_topology),
+        Work::Vertices(w) => vertex_chunk(topo, values, rules, additions, w, refine_topology),
     };
     {
         let slots = (fine_values.slots(), fine_triangles.slots(), fine_links.slots(), fine_starts.slots());
         if !runs_in_parallel(nf) {
+            additions.prepare(topo);
             split_work(topo, refine_topology, slots, run);
         } else {
             let mut work = Vec::with_capacity(nf.div_ceil(FACE_CHUNK) + even.div_ceil(VERTEX_CHUNK));
             split_work(topo, refine_topology, slots, |w| work.push(w));
-            work.into_par_iter().for_each(run);
+            if A::ACTIVE {
+                // The edge points, faces and links need nothing prepared: they run
+                // beside the preparation, the vertex points after it.
+                let edges = |work: &mut Work<'_, T>| {
+                    if let Work::Faces(w) = work {
+                        face_chunk(topo, values, additions, w, refine_topology);
+                    }
+                };
+                rayon::join(|| additions.prepare(topo), || work.par_iter_mut().for_each(edges));
+                work.into_par_iter().for_each(|work| match work {
+                    Work::Faces(mut w) if even < nv => {
+                        odd_chunk(topo, values, rules, additions, &mut w, refine_topology)
+                    }
+                    Work::Faces(_) => {}
+                    Work::Vertices(w) => vertex_chunk(topo, values, rules, additions, w, refine_topology),
+                });
+            } else {
+                work.into_par_iter().for_each(run);
+            }
         }
     }
 
@@ -325,10 +347,18 @@ fn split_work<'a, T>(
 /// vertices of its group and the other two centre vertices of the group across the edge;
 /// on the boundary it has valence 4 and boundary neighbours `c_k, c_{k+1}`.
 #[inline(never)]
-fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut FaceWork<'_, T>, refine: bool) {
+fn odd_chunk<T: Attribute, A: Additions<T>>(
+    topo: &Topology,
+    values: &[T],
+    rules: &Rules,
+    additions: &A,
+    w: &mut FaceWork<'_, T>,
+    refine: bool,
+) {
     let tri = &topo.triangles[..];
     let links = &topo.links[..];
     let (alpha, beta) = rules.interior(6);
+    let mut probe = A::Probe::default();
     for g in w.faces.start / 4..w.faces.end / 4 {
         let centre = tri[4 * g + 3];
         for k in 0..3usize {
@@ -345,6 +375,10 @@ fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut
             if across == INVALID {
                 let mut point = p.scaled(0.75);
                 point.add_scaled(&ends, 0.125);
+                if A::ACTIVE {
+                    additions.boundary_vertex_point(&mut point, m, 4, rules);
+                    additions.probe(&mut probe, &point);
+                }
                 w.odd_values.push(point);
                 if refine {
                     w.odd_starts.push(first_half(second_half(corner_face as u32)));
@@ -363,6 +397,10 @@ fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut
                 sum.add(&values[other[NEXT[j]] as usize]);
                 let mut point = p.scaled(alpha);
                 point.add_scaled(&sum, beta);
+                if A::ACTIVE {
+                    additions.interior_vertex_point(&mut point, m, 6, rules);
+                    additions.probe(&mut probe, &point);
+                }
                 w.odd_values.push(point);
                 if refine {
                     w.odd_starts.push(first_half((4 * corner_face + 1) as u32));
@@ -370,6 +408,7 @@ fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut
             }
         }
     }
+    additions.report(probe);
 }
 
 /// Edge points, fine faces and (optionally) fine links of one chunk of faces.
@@ -380,13 +419,14 @@ fn odd_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, w: &mut
 /// `4f + k`, `(4f + k, 1)` runs `m_k -> m_{k-1}`, `(4f + k, 2)` is the second half of
 /// `4f + k - 1`, `(4f + 3, j)` runs `m_j -> m_{j+1}`.
 #[inline(never)]
-fn face_chunk<T: Attribute>(
+fn face_chunk<T: Attribute, A: Additions<T>>(
     topo: &Topology,
     values: &[T],
-    details: Option<&[T]>,
-    mut w: FaceWork<'_, T>,
+    additions: &A,
+    w: &mut FaceWork<'_, T>,
     refine_topology: bool,
 ) {
+    let mut probe = A::Probe::default();
     let nv = topo.vertex_count as u32;
     let tri = &topo.triangles[..];
     let links = &topo.links[..];
@@ -418,8 +458,9 @@ fn face_chunk<T: Attribute>(
                     point.add_scaled(&wings, 0.125);
                     point
                 };
-                if let Some(details) = details {
-                    point.add(&details[e as usize]);
+                if A::ACTIVE {
+                    additions.edge_point(&mut point, e);
+                    additions.probe(&mut probe, &point);
                 }
                 w.edge_values.push(point);
             } else {
@@ -453,14 +494,27 @@ fn face_chunk<T: Attribute>(
             w.links.push([base + 5, base + 9, base + 1, edges]);
         }
     }
+    additions.report(probe);
 }
 
 /// Vertex points (and, with `refine_topology`, start half-edges) of a chunk of even
 /// vertices.
 #[inline(never)]
-fn vertex_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, mut w: VertexWork<'_, T>, refine: bool) {
+fn vertex_chunk<T: Attribute, A: Additions<T>>(
+    topo: &Topology,
+    values: &[T],
+    rules: &Rules,
+    additions: &A,
+    mut w: VertexWork<'_, T>,
+    refine: bool,
+) {
+    let mut probe = A::Probe::default();
     for v in w.first..w.first + w.values.len() {
-        w.values.push(vertex_point(topo, values, rules, v as u32));
+        let point = vertex_point(topo, values, rules, additions, v as u32);
+        if A::ACTIVE {
+            additions.probe(&mut probe, &point);
+        }
+        w.values.push(point);
         if refine {
             // Corner k of face f becomes corner 0 of child 4f + k: the outgoing half-edge
             // becomes its first half, with the same boundary status.
@@ -468,18 +522,30 @@ fn vertex_chunk<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, mut 
             w.starts.push(if h == INVALID { INVALID } else { first_half(h) });
         }
     }
+    additions.report(probe);
 }
 
-/// The vertex point of even vertex `v`, by a walk around its one-ring.
+/// The vertex point of even vertex `v`, by a walk around its one-ring (with the
+/// addition of `additions`).
 ///
 /// The walk is a chain of dependent loads (half-edge, the link of its predecessor, the
 /// next half-edge), so it works on the flat arrays with the corner arithmetic inline.
 #[inline]
-fn vertex_point<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, v: u32) -> T {
+fn vertex_point<T: Attribute, A: Additions<T>>(
+    topo: &Topology,
+    values: &[T],
+    rules: &Rules,
+    additions: &A,
+    v: u32,
+) -> T {
     let start = topo.vertex_halfedge[v as usize];
     let p = &values[v as usize];
     if start == INVALID {
-        return p.clone();
+        let mut point = p.clone();
+        if A::ACTIVE {
+            additions.isolated_vertex_point(&mut point);
+        }
+        return point;
     }
     let tri = topo.triangles.as_flattened();
     let links = topo.links.as_flattened();
@@ -495,14 +561,19 @@ fn vertex_point<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, v: u
         if t == INVALID {
             // Boundary: the fan ends here; the two boundary neighbours are the target of
             // the first and the origin of the last fan half-edge.
-            if rules.is_fixed_corner(valence + 1) {
-                return p.clone();
+            let mut point = if rules.is_fixed_corner(valence + 1) {
+                p.clone()
+            } else {
+                let last = tri[3 * (h >> 2) as usize + PREV[(h & 3) as usize]];
+                let mut ends = values[target(start) as usize].clone();
+                ends.add(&values[last as usize]);
+                let mut point = p.scaled(0.75);
+                point.add_scaled(&ends, 0.125);
+                point
+            };
+            if A::ACTIVE {
+                additions.boundary_vertex_point(&mut point, v, valence + 1, rules);
             }
-            let last = tri[3 * (h >> 2) as usize + PREV[(h & 3) as usize]];
-            let mut ends = values[target(start) as usize].clone();
-            ends.add(&values[last as usize]);
-            let mut point = p.scaled(0.75);
-            point.add_scaled(&ends, 0.125);
             return point;
         }
         if t == start || valence > topo.triangles.len() {
@@ -516,5 +587,219 @@ fn vertex_point<T: Attribute>(topo: &Topology, values: &[T], rules: &Rules, v: u
     let (alpha, beta) = rules.interior(valence);
     let mut point = p.scaled(alpha);
     point.add_scaled(&sum, beta);
+    if A::ACTIVE {
+        additions.interior_vertex_point(&mut point, v, valence, rules);
+    }
     point
+}
+
+/// What a step adds to the values it computes: nothing ([`Plain`], subdivision) or the
+/// details of a reconstruction ([`Details`]). The chunks call it as they write each
+/// value, so that it needs no pass over the values of its own.
+pub(crate) trait Additions<T>: Sync {
+    /// False when nothing is added: the chunks then skip the calls.
+    const ACTIVE: bool;
+    /// What the vertex points need from the coarse level, made before any of them
+    /// (beside the edge points when the step runs in parallel).
+    fn prepare(&self, topo: &Topology);
+    /// A running test of the finiteness of the values a chunk wrote.
+    type Probe: Default;
+    /// Adds to the edge point of edge `edge`.
+    fn edge_point(&self, point: &mut T, edge: u32);
+    /// Adds to the vertex point of interior vertex `v` with `valence` edges.
+    fn interior_vertex_point(&self, point: &mut T, v: u32, valence: usize, rules: &Rules);
+    /// Adds to the vertex point of boundary vertex `v` with `valence` edges.
+    fn boundary_vertex_point(&self, point: &mut T, v: u32, valence: usize, rules: &Rules);
+    /// Adds to the vertex point of an isolated vertex.
+    fn isolated_vertex_point(&self, point: &mut T);
+    /// Takes a written value into the chunk's probe.
+    fn probe(&self, probe: &mut Self::Probe, value: &T);
+    /// The verdict of a chunk's probe.
+    fn report(&self, probe: Self::Probe);
+}
+
+/// Nothing added: Loop subdivision.
+struct Plain;
+
+impl<T> Additions<T> for Plain {
+    const ACTIVE: bool = false;
+    type Probe = ();
+    #[inline(always)]
+    fn prepare(&self, _topo: &Topology) {}
+    #[inline(always)]
+    fn edge_point(&self, _point: &mut T, _edge: u32) {}
+    #[inline(always)]
+    fn interior_vertex_point(&self, _point: &mut T, _v: u32, _valence: usize, _rules: &Rules) {}
+    #[inline(always)]
+    fn boundary_vertex_point(&self, _point: &mut T, _v: u32, _valence: usize, _rules: &Rules) {}
+    #[inline(always)]
+    fn isolated_vertex_point(&self, _point: &mut T) {}
+    #[inline(always)]
+    fn probe(&self, _probe: &mut (), _value: &T) {}
+    #[inline(always)]
+    fn report(&self, _probe: ()) {}
+}
+
+/// The details of one reconstruction step (see `reverse::reconstruct_levels`): `D_e` is
+/// added to the edge point of edge `e`, and to each vertex point the change that the
+/// inverse relation implies: `8β_n/5` times the sum of the details of its `n` edges
+/// inside, a quarter of the sum of its two boundary edges' on the boundary, nothing at a
+/// fixed corner or an isolated vertex (the sums: [`detail_sums`]).
+///
+/// With `check_finite`, every value written is tested (a running sum of zero times each
+/// value, which stays zero unless one is not finite): see [`Details::all_finite`].
+pub(crate) struct Details<'a> {
+    details: &'a [DVec3],
+    /// One per coarse vertex, made by [`Additions::prepare`].
+    sums: OnceLock<Vec<[f64; 3]>>,
+    check_finite: bool,
+    non_finite: AtomicBool,
+}
+
+impl<'a> Details<'a> {
+    /// One detail per edge of the coarse level.
+    pub(crate) fn new(details: &'a [DVec3], check_finite: bool) -> Self {
+        Self { details, sums: OnceLock::new(), check_finite, non_finite: AtomicBool::new(false) }
+    }
+
+    /// With `check_finite`: true if every value the step wrote is finite.
+    pub(crate) fn all_finite(&self) -> bool {
+        !self.non_finite.load(Ordering::Relaxed)
+    }
+
+    #[inline(always)]
+    fn sum(&self, v: u32) -> DVec3 {
+        DVec3::from_array(self.sums.get().expect("internal: detail sums made before the vertex points")[v as usize])
+    }
+}
+
+/// Per vertex of `topology`, the sum of the details of its edges, or of its two
+/// boundary edges on the boundary: what the vertex point's correction scales (see
+/// [`Details`]). Each sum starts from zero and follows the edge order, so that its bits
+/// depend on nothing else (not on the thread count).
+///
+/// One sequential pass over the faces adds to each corner the details of the face's two
+/// edges at it, in edge order (edges are numbered by faces); an edge that the face does
+/// not number adds zero instead, which leaves a sum unchanged (a sum that starts at +0
+/// is never −0), so the pass has no branch on which edges the face numbers. The
+/// boundary vertices' sums are then made again from their boundary edges alone.
+fn detail_sums(topology: &Topology, details: &[DVec3]) -> Vec<[f64; 3]> {
+    // Zeroed memory from the allocator, not a pass of writes where it can.
+    let mut sums = vec![[0.0f64; 3]; topology.vertex_count];
+    let mut boundary_faces = Vec::new();
+    let add = |sum: &mut [f64; 3], first: DVec3, second: DVec3| {
+        *sum = (DVec3::from_array(*sum) + first + second).to_array();
+    };
+    // The details of the three edges of a face, zero for those it does not number.
+    let face_details = |info: u32| {
+        let detail = |k: u32| {
+            // When the face does not number its edge `k`, detail 0 is read and masked
+            // to zero (by arithmetic, not a branch on the unpredictable mask).
+            let numbered = u64::from((info >> (BASE_BITS + k)) & 1);
+            let d = details[edge_at(info, k) as usize * numbered as usize];
+            let keep = |x: f64| f64::from_bits(x.to_bits() & numbered.wrapping_neg());
+            DVec3::new(keep(d.x), keep(d.y), keep(d.z))
+        };
+        [detail(0), detail(1), detail(2)]
+    };
+    let on_boundary = |link: &[u32; 4]| link[0].max(link[1]).max(link[2]) == INVALID;
+    if topology.vertex_halfedge.len() < topology.vertex_count {
+        // A refined level: groups of four faces, corner faces `(c_k, m_k, m_{k-1})` and
+        // the centre face `(m_0, m_1, m_2)`, which numbers none of its edges (they are
+        // the corner faces' inner edges) and adds nothing. Each vertex's additions
+        // within the group are made in one go, in the order of the faces: the
+        // corner's two edges in face `k`, and the edge point `m_k`'s edges 0 and 1 in
+        // face `k`, 1 and 2 in face `k + 1`.
+        for g in 0..topology.triangles.len() / 4 {
+            let faces = 4 * g..4 * g + 3;
+            let links = &topology.links[4 * g..4 * g + 3];
+            let d = [face_details(links[0][3]), face_details(links[1][3]), face_details(links[2][3])];
+            let centre = topology.triangles[4 * g + 3];
+            for k in 0..3 {
+                add(&mut sums[topology.triangles[4 * g + k][0] as usize], d[k][0], d[k][2]);
+                let n = NEXT[k];
+                let sum = &mut sums[centre[k] as usize];
+                if k < n {
+                    add(sum, d[k][0], d[k][1]);
+                    add(sum, d[n][1], d[n][2]);
+                } else {
+                    add(sum, d[n][1], d[n][2]);
+                    add(sum, d[k][0], d[k][1]);
+                }
+            }
+            boundary_faces.extend(faces.filter(|&f| on_boundary(&topology.links[f])));
+        }
+    } else {
+        for (f, (corners, link)) in topology.triangles.iter().zip(&topology.links).enumerate() {
+            let [d0, d1, d2] = face_details(link[3]);
+            add(&mut sums[corners[0] as usize], d0, d2);
+            add(&mut sums[corners[1] as usize], d0, d1);
+            add(&mut sums[corners[2] as usize], d1, d2);
+            if on_boundary(link) {
+                boundary_faces.push(f);
+            }
+        }
+    }
+    let boundary_edges = || {
+        boundary_faces.iter().flat_map(|&f| {
+            let (corners, link) = (topology.triangles[f], topology.links[f]);
+            (0..3)
+                .filter(move |&k| link[k] == INVALID)
+                .map(move |k| (edge_at(link[3], k as u32) as usize, [corners[k], corners[NEXT[k]]]))
+        })
+    };
+    for (_, ends) in boundary_edges() {
+        for v in ends {
+            sums[v as usize] = [0.0; 3];
+        }
+    }
+    for (e, ends) in boundary_edges() {
+        for v in ends {
+            let sum = &mut sums[v as usize];
+            *sum = (DVec3::from_array(*sum) + details[e]).to_array();
+        }
+    }
+    sums
+}
+
+impl Additions<DVec3> for Details<'_> {
+    const ACTIVE: bool = true;
+    type Probe = DVec3;
+
+    fn prepare(&self, topo: &Topology) {
+        debug_assert_eq!(self.details.len(), topo.edge_count, "internal: one detail per edge");
+        self.sums.get_or_init(|| detail_sums(topo, self.details));
+    }
+
+    #[inline(always)]
+    fn edge_point(&self, point: &mut DVec3, edge: u32) {
+        *point += self.details[edge as usize];
+    }
+
+    #[inline(always)]
+    fn interior_vertex_point(&self, point: &mut DVec3, v: u32, valence: usize, rules: &Rules) {
+        *point += (1.6 * rules.interior(valence).1) * self.sum(v);
+    }
+
+    #[inline(always)]
+    fn boundary_vertex_point(&self, point: &mut DVec3, v: u32, valence: usize, rules: &Rules) {
+        *point += if rules.is_fixed_corner(valence) { DVec3::ZERO } else { 0.25 * self.sum(v) };
+    }
+
+    #[inline(always)]
+    fn isolated_vertex_point(&self, point: &mut DVec3) {
+        *point += DVec3::ZERO;
+    }
+
+    #[inline(always)]
+    fn probe(&self, probe: &mut DVec3, value: &DVec3) {
+        *probe += *value * 0.0;
+    }
+
+    #[inline(always)]
+    fn report(&self, probe: DVec3) {
+        if self.check_finite && probe.x + probe.y + probe.z != 0.0 {
+            self.non_finite.store(true, Ordering::Relaxed);
+        }
+    }
 }
