@@ -60,7 +60,8 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         _ => return None,
     };
     options.rule.validate().ok()?;
-    let HalfedgeArrays { to, next, face_halfedge, vertices, faces, .. } = HalfedgeArrays::of(fine);
+    let arrays = HalfedgeArrays::of(fine);
+    let HalfedgeArrays { to, next, face_halfedge, vertices, faces, .. } = arrays;
     if vertices == 0 || vertices >= NONE as usize || faces >= NONE as usize {
         return None;
     }
@@ -105,47 +106,56 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         NONE => NONE,
         t => coarse_next[t as usize],
     };
-    let mut labels = vec![NONE; vertices];
-    let mut vertex_corner = Vec::with_capacity(faces - fv_first + 1);
-    // The corners of the F_V faces in order, kept for the automatic choice.
-    let mut fv_vertices = Vec::with_capacity(vertices);
-    let mut fv_sizes = Vec::with_capacity(faces - fv_first);
-    for (i, &first) in face_halfedge[fv_first..].iter().enumerate() {
-        let x0 = to[(first ^ 1) as usize];
-        let mut previous = x0;
-        let mut h = first;
-        let mut size = 0u32;
-        loop {
-            let x = to[(h ^ 1) as usize];
-            // With the layout checked, every half-edge here is the twin of a quad's side,
-            // from `clockwise(y)` to `y`: the face is a clockwise orbit walked backwards,
-            // and the orbit is checked only off the layout.
-            if std::mem::replace(&mut labels[x as usize], i as u32) != NONE || x < x0 {
-                return None;
+    let closed = !on_boundary;
+    // On a closed mesh of the layout the F_V faces are read in one stream; else (or if
+    // that finds a mismatch) by one walk around each.
+    let streamed = if layout && closed { stream_fv_faces(&arrays, fv_first, quads as usize) } else { None };
+    let (mut labels, mut vertex_corner, fv_sizes, fv_vertices) = match streamed {
+        Some((labels, vertex_corner, sizes)) => (labels, vertex_corner, sizes, None),
+        None => {
+            let mut labels = vec![NONE; vertices];
+            let mut vertex_corner = Vec::with_capacity(faces - fv_first + 1);
+            // The corners of the F_V faces in order.
+            let mut fv_vertices = Vec::with_capacity(vertices);
+            let mut fv_sizes = Vec::with_capacity(faces - fv_first);
+            for (i, &first) in face_halfedge[fv_first..].iter().enumerate() {
+                let x0 = to[(first ^ 1) as usize];
+                let mut previous = x0;
+                let mut h = first;
+                let mut size = 0u32;
+                loop {
+                    let x = to[(h ^ 1) as usize];
+                    // With the layout checked, every half-edge here is the twin of a quad's side,
+                    // from `clockwise(y)` to `y`: the face is a clockwise orbit walked backwards,
+                    // and the orbit is checked only off the layout.
+                    if std::mem::replace(&mut labels[x as usize], i as u32) != NONE || x < x0 {
+                        return None;
+                    }
+                    if !layout && size > 0 && clockwise(x) != previous {
+                        return None;
+                    }
+                    previous = x;
+                    size += 1;
+                    fv_vertices.push(x);
+                    h = next[h as usize];
+                    if h == first {
+                        break;
+                    }
+                }
+                if size < 3 || (!layout && clockwise(x0) != previous) {
+                    return None;
+                }
+                debug_assert!(clockwise(x0) == previous, "internal: an F_V face of the layout is an orbit");
+                vertex_corner.push(x0);
+                fv_sizes.push(size);
             }
-            if !layout && size > 0 && clockwise(x) != previous {
-                return None;
-            }
-            previous = x;
-            size += 1;
-            fv_vertices.push(x);
-            h = next[h as usize];
-            if h == first {
-                break;
-            }
+            (labels, vertex_corner, fv_sizes, Some(fv_vertices))
         }
-        if size < 3 || (!layout && clockwise(x0) != previous) {
-            return None;
-        }
-        debug_assert!(clockwise(x0) == previous, "internal: an F_V face of the layout is an orbit");
-        vertex_corner.push(x0);
-        fv_sizes.push(size);
-    }
+    };
     let interior = vertex_corner.len();
     if automatic_choice && interior == 0 {
         return None;
     }
-    let closed = !on_boundary;
     // The first check of the coarse manifold (no face visits a vertex twice), on a closed
     // mesh made in the pass that sees that every corner has its vertex (every vertex is
     // interior: a corner on no F_V face is on a closed orbit without one).
@@ -205,8 +215,10 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     debug_assert_eq!(closed, candidate_edges == vertices, "internal: boundary corners have no twin");
     let by_vertex = if closed {
         // Every vertex is interior: its corners are those of its F_V face, sorted.
-        let corners = if seed.is_some() { std::mem::take(&mut fv_vertices) } else { fv_vertices.clone() };
-        by_vertex_of_fv_faces(&fv_sizes, corners)
+        match fv_vertices {
+            Some(corners) => by_vertex_of_fv_faces(&fv_sizes, corners),
+            None => by_vertex_of_labels(&fv_sizes, &coarse.corner_vertex),
+        }
     } else {
         corners_by_vertex(&coarse)
     };
@@ -218,7 +230,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     let maps = FaceMaps::new(options.rule);
     let positions = fine.positions();
     let (candidates, scale) = expand_in_order(&coarse.offsets, &maps, positions, automatic_choice);
-    let fv = FvFaces { first: fv_first, sizes_of: &fv_sizes, vertices: &fv_vertices };
+    let fv = FvFaces { first: fv_first, sizes_of: &fv_sizes };
     // On a closed mesh the second check of the coarse manifold (no two edges join the
     // same two vertices) is made in the same pass, on the corners of each vertex: the
     // outgoing coarse half-edges of a vertex are its corners.
@@ -667,6 +679,72 @@ fn connected(offsets: &[u32], across: &[u32]) -> bool {
     count == faces
 }
 
+/// The F_V faces of a closed mesh with the layout of [`stream_ff_faces`], read in one
+/// pass over the quads instead of a walk around each: the new sides of quad `j`,
+/// half-edges `2V + 4j` and `2V + 4j + 2`, end at the corners whose F_V faces hold their
+/// twins. Every half-edge is an F_F side (`V` of them), a quad side (4 per quad) or an
+/// F_V side: with `V + 6 * quads` half-edges and every quad twin on an F_V face, the quad
+/// twins are all the F_V sides, and a corner labelled twice or a count of `2 * quads`
+/// other than `V` is a mismatch. Returns each corner's F_V face (the coarse vertex), each
+/// face's first corner (checked to be its smallest, as the walk checks it) and the face
+/// sizes; `None` on any mismatch (the walk then decides).
+fn stream_fv_faces(
+    arrays: &HalfedgeArrays<'_>,
+    fv_first: usize,
+    quads: usize,
+) -> Option<(Vec<u32>, Vec<u32>, Vec<u32>)> {
+    let HalfedgeArrays { to, face_of, face_halfedge, vertices, faces, .. } = *arrays;
+    let fv_count = faces - fv_first;
+    if to.len() != vertices + 6 * quads || 2 * quads != vertices {
+        return None;
+    }
+    let mut labels = vec![NONE; vertices];
+    let mut sizes = vec![0u32; fv_count];
+    let sides = &to[2 * vertices..];
+    let twin_faces = &face_of[2 * vertices..];
+    // Quad sides at even offsets, each followed by its twin.
+    for (&corner, &face) in sides.iter().zip(twin_faces.iter().skip(1)).step_by(2) {
+        // The twin's face (NONE on the boundary wraps to a large index).
+        let i = (face as usize).wrapping_sub(fv_first);
+        if i >= fv_count || std::mem::replace(&mut labels[corner as usize], i as u32) != NONE {
+            return None;
+        }
+        sizes[i] += 1;
+    }
+    // As many F_V sides as corners, none labelled twice: every corner is labelled once.
+    if sizes.iter().any(|&m| m < 3) {
+        return None;
+    }
+    let first_corners: Vec<u32> = face_halfedge[fv_first..].iter().map(|&h| to[(h ^ 1) as usize]).collect();
+    for (c, &i) in labels.iter().enumerate() {
+        if (c as u32) < first_corners[i as usize] {
+            return None;
+        }
+    }
+    Some((labels, first_corners, sizes))
+}
+
+/// The corners of each coarse vertex in increasing order when every vertex is interior
+/// (vertex `i` has `sizes[i]` corners; `labels[c]`: the vertex of corner `c`), by a
+/// counting sort of the corners in order.
+fn by_vertex_of_labels(sizes: &[u32], labels: &[u32]) -> CornersByVertex {
+    let mut offsets = Vec::with_capacity(sizes.len() + 1);
+    offsets.push(0u32);
+    let mut end = 0;
+    for &m in sizes {
+        end += m;
+        offsets.push(end);
+    }
+    let mut cursor = offsets[..sizes.len()].to_vec();
+    let mut corners = vec![0u32; labels.len()];
+    for (c, &u) in labels.iter().enumerate() {
+        let slot = &mut cursor[u as usize];
+        corners[*slot as usize] = c as u32;
+        *slot += 1;
+    }
+    CornersByVertex::from_parts((offsets, corners))
+}
+
 /// The corners of each coarse vertex in increasing order when every vertex is interior:
 /// vertex `i` has the corners of F_V face `i` (of sizes `sizes`, corners `corners`,
 /// sorted in place).
@@ -683,11 +761,10 @@ fn by_vertex_of_fv_faces(sizes: &[u32], mut corners: Vec<u32>) -> CornersByVerte
     CornersByVertex::from_parts((offsets, corners))
 }
 
-/// The F_V faces of a canonical mesh: faces `first..`, their sizes and their corners.
+/// The F_V faces of a canonical mesh: faces `first..` and their sizes.
 struct FvFaces<'a> {
     first: usize,
     sizes_of: &'a [u32],
-    vertices: &'a [u32],
 }
 
 /// The automatic choice of the general path on a closed canonical mesh, made as it makes
@@ -746,19 +823,14 @@ fn automatic(
     }
     // The dual reading: its candidates are the F_V faces expanded (every vertex is on
     // one F_V face), its groups the F_F faces.
-    let mut fv_offsets = Vec::with_capacity(fv.sizes_of.len() + 1);
-    fv_offsets.push(0u32);
-    let mut end = 0;
-    for &m in fv.sizes_of {
-        end += m;
-        fv_offsets.push(end);
-    }
+    let HalfedgeArrays { to, next, face_halfedge, .. } = HalfedgeArrays::of(fine);
     debug_assert_eq!(dual.len(), positions.len());
     let mut expanded = vec![false; fv.sizes_of.len()];
     // Faces of up to [`SHORT`] sides are gathered on the stack (no growing push in the
     // gathering loop, whose bounds then stay in registers).
     let (mut short_points, mut short_expanded) = ([DVec3::ZERO; SHORT], [DVec3::ZERO; SHORT]);
     let (mut long_points, mut long_expanded) = (Vec::new(), Vec::new());
+    let (mut short_face, mut long_face) = ([NONE; SHORT], Vec::new());
     let mut group_corners = Vec::new();
     let mut dual_energy = 0.0;
     let mut stopped = false;
@@ -768,17 +840,25 @@ fn automatic(
             if std::mem::replace(&mut expanded[u as usize], true) {
                 continue;
             }
-            let face = &fv.vertices[fv_offsets[u as usize] as usize..fv_offsets[u as usize + 1] as usize];
-            let (points, out) = if face.len() <= SHORT {
-                (&mut short_points[..face.len()], &mut short_expanded[..face.len()])
+            // The face's corners in its own order (the walk of [`reverse_canonical`]).
+            let m = fv.sizes_of[u as usize] as usize;
+            let (points, out, face) = if m <= SHORT {
+                (&mut short_points[..m], &mut short_expanded[..m], &mut short_face[..m])
             } else {
-                long_points.resize(face.len(), DVec3::ZERO);
-                long_expanded.resize(face.len(), DVec3::ZERO);
-                (&mut long_points[..], &mut long_expanded[..])
+                long_points.resize(m, DVec3::ZERO);
+                long_expanded.resize(m, DVec3::ZERO);
+                long_face.resize(m, NONE);
+                (&mut long_points[..], &mut long_expanded[..], &mut long_face[..])
             };
-            for (slot, &v) in points.iter_mut().zip(face) {
+            let first = face_halfedge[fv.first + u as usize];
+            let mut h = first;
+            for (slot, corner) in points.iter_mut().zip(face.iter_mut()) {
+                let v = to[(h ^ 1) as usize];
+                *corner = v;
                 *slot = positions[v as usize];
+                h = next[h as usize];
             }
+            debug_assert_eq!(h, first, "internal: an F_V face has its counted size");
             maps.inverse(points, out);
             for (&v, &p) in face.iter().zip(out.iter()) {
                 dual[v as usize] = p;
@@ -950,6 +1030,43 @@ mod tests {
         // The raw coarse cube (its faces share edges): no F_F faces.
         let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
         assert!(stream_ff_faces(&cube).is_none() && walk_ff_faces(&cube).is_none());
+    }
+
+    #[test]
+    fn the_fv_stream_reads_what_the_walk_finds() {
+        for soup in [
+            shapes::cube(),
+            shapes::torus(7, 5, CellKind::Triangles).unwrap(),
+            shapes::torus(6, 4, CellKind::Mixed).unwrap(),
+        ] {
+            let fine = refine(&soup, FaceRule::DooSabin);
+            let arrays = HalfedgeArrays::of(&fine);
+            let ff = stream_ff_faces(&fine).expect("the layout of a soup in the canonical order");
+            let fv_first = ff.offsets.len() - 1 + ff.quads as usize;
+            let (labels, first, sizes) = stream_fv_faces(&arrays, fv_first, ff.quads as usize).expect("closed");
+            let mut walked = Vec::new();
+            for (i, &h0) in arrays.face_halfedge[fv_first..].iter().enumerate() {
+                let start = walked.len();
+                let mut h = h0;
+                loop {
+                    walked.push(arrays.to[(h ^ 1) as usize]);
+                    h = arrays.next[h as usize];
+                    if h == h0 {
+                        break;
+                    }
+                }
+                let face = &walked[start..];
+                assert_eq!((first[i], sizes[i] as usize), (face[0], face.len()));
+                assert!(face.iter().all(|&c| labels[c as usize] == i as u32 && c >= face[0]));
+            }
+            assert_eq!(walked.len(), fine.vertex_count());
+            assert_eq!(by_vertex_of_labels(&sizes, &labels), by_vertex_of_fv_faces(&sizes, walked));
+        }
+        // With a boundary the F_V sides are not all quad twins: the walk decides.
+        let open = refine(&shapes::grid(4, 3, CellKind::Quads).unwrap(), FaceRule::DooSabin);
+        let ff = stream_ff_faces(&open).expect("layout");
+        let fv_first = ff.offsets.len() - 1 + ff.quads as usize;
+        assert!(stream_fv_faces(&HalfedgeArrays::of(&open), fv_first, ff.quads as usize).is_none());
     }
 
     #[test]

@@ -1501,7 +1501,7 @@ fn corner_groups(offsets: &[u32], next: &[u32], twins: &[u32]) -> (Vec<u32>, usi
 }
 
 /// Corners of each coarse vertex, in increasing corner order (CSR).
-#[derive(Debug)]
+#[derive(Debug, PartialEq)]
 pub(crate) struct CornersByVertex {
     offsets: Vec<u32>,
     corners: Vec<u32>,
