@@ -217,7 +217,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         // Every vertex is interior: its corners are those of its F_V face, sorted.
         match fv_vertices {
             Some(corners) => by_vertex_of_fv_faces(&fv_sizes, corners),
-            None => by_vertex_of_labels(&fv_sizes, &coarse.corner_vertex),
+            None => by_vertex_of_labels(&fv_sizes, &coarse.corner_vertex, coarse.vertex_corner.as_deref()?)?,
         }
     } else {
         corners_by_vertex(&coarse)
@@ -686,8 +686,9 @@ fn connected(offsets: &[u32], across: &[u32]) -> bool {
 /// F_V side: with `V + 6 * quads` half-edges and every quad twin on an F_V face, the quad
 /// twins are all the F_V sides, and a corner labelled twice or a count of `2 * quads`
 /// other than `V` is a mismatch. Returns each corner's F_V face (the coarse vertex), each
-/// face's first corner (checked to be its smallest, as the walk checks it) and the face
-/// sizes; `None` on any mismatch (the walk then decides).
+/// face's first corner and the face sizes; `None` on any mismatch (the walk then
+/// decides). That each face starts at its smallest corner, which the walk checks, is
+/// left to the caller (see [`by_vertex_of_labels`]).
 fn stream_fv_faces(
     arrays: &HalfedgeArrays<'_>,
     fv_first: usize,
@@ -716,18 +717,14 @@ fn stream_fv_faces(
         return None;
     }
     let first_corners: Vec<u32> = face_halfedge[fv_first..].iter().map(|&h| to[(h ^ 1) as usize]).collect();
-    for (c, &i) in labels.iter().enumerate() {
-        if (c as u32) < first_corners[i as usize] {
-            return None;
-        }
-    }
     Some((labels, first_corners, sizes))
 }
 
 /// The corners of each coarse vertex in increasing order when every vertex is interior
 /// (vertex `i` has `sizes[i]` corners; `labels[c]`: the vertex of corner `c`), by a
-/// counting sort of the corners in order.
-fn by_vertex_of_labels(sizes: &[u32], labels: &[u32]) -> CornersByVertex {
+/// counting sort of the corners in order; `None` unless the smallest corner of each vertex
+/// is `first[i]` (the F_V face starts at it, as in the canonical order).
+fn by_vertex_of_labels(sizes: &[u32], labels: &[u32], first: &[u32]) -> Option<CornersByVertex> {
     let mut offsets = Vec::with_capacity(sizes.len() + 1);
     offsets.push(0u32);
     let mut end = 0;
@@ -742,7 +739,10 @@ fn by_vertex_of_labels(sizes: &[u32], labels: &[u32]) -> CornersByVertex {
         corners[*slot as usize] = c as u32;
         *slot += 1;
     }
-    CornersByVertex::from_parts((offsets, corners))
+    if offsets.iter().zip(first).any(|(&b, &x)| corners[b as usize] != x) {
+        return None;
+    }
+    Some(CornersByVertex::from_parts((offsets, corners)))
 }
 
 /// The corners of each coarse vertex in increasing order when every vertex is interior:
@@ -1057,10 +1057,14 @@ mod tests {
                 }
                 let face = &walked[start..];
                 assert_eq!((first[i], sizes[i] as usize), (face[0], face.len()));
-                assert!(face.iter().all(|&c| labels[c as usize] == i as u32 && c >= face[0]));
+                assert!(face.iter().all(|&c| labels[c as usize] == i as u32));
             }
             assert_eq!(walked.len(), fine.vertex_count());
-            assert_eq!(by_vertex_of_labels(&sizes, &labels), by_vertex_of_fv_faces(&sizes, walked));
+            assert_eq!(by_vertex_of_labels(&sizes, &labels, &first), Some(by_vertex_of_fv_faces(&sizes, walked)));
+            // A face that does not start at its smallest corner is a mismatch.
+            let mut rotated = first.clone();
+            rotated[0] += 1;
+            assert!(by_vertex_of_labels(&sizes, &labels, &rotated).is_none());
         }
         // With a boundary the F_V sides are not all quad twins: the walk decides.
         let open = refine(&shapes::grid(4, 3, CellKind::Quads).unwrap(), FaceRule::DooSabin);
