@@ -23,9 +23,11 @@ use crate::DooError;
 use crate::corner::{CornerMesh, NONE, expand_faces, faces_of_corners, next_of_corners};
 use crate::reverse::{
     CornersByVertex, DooReversal, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial,
-    check_coarse_manifold, corners_by_vertex, means_and_details, means_and_details_with,
+    check_coarse_manifold, corners_by_vertex, insertion_sort, insertion_sort_by_key, means_and_details,
+    means_and_details_with, ranking_reason,
 };
 use crate::rule::FaceMaps;
+use rayon::prelude::*;
 
 /// The reversal of `fine` with the one given seed of `options` (or none, see
 /// [`automatic`]), if every position is finite and `fine` is a valid
@@ -58,7 +60,8 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         _ => return None,
     };
     options.rule.validate().ok()?;
-    let HalfedgeArrays { to, next, face_halfedge, vertices, faces, .. } = HalfedgeArrays::of(fine);
+    let arrays = HalfedgeArrays::of(fine);
+    let HalfedgeArrays { to, next, face_halfedge, vertices, faces, .. } = arrays;
     if vertices == 0 || vertices >= NONE as usize || faces >= NONE as usize {
         return None;
     }
@@ -103,47 +106,56 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         NONE => NONE,
         t => coarse_next[t as usize],
     };
-    let mut labels = vec![NONE; vertices];
-    let mut vertex_corner = Vec::with_capacity(faces - fv_first + 1);
-    // The corners of the F_V faces in order, kept for the automatic choice.
-    let mut fv_vertices = Vec::with_capacity(vertices);
-    let mut fv_sizes = Vec::with_capacity(faces - fv_first);
-    for (i, &first) in face_halfedge[fv_first..].iter().enumerate() {
-        let x0 = to[(first ^ 1) as usize];
-        let mut previous = x0;
-        let mut h = first;
-        let mut size = 0u32;
-        loop {
-            let x = to[(h ^ 1) as usize];
-            // With the layout checked, every half-edge here is the twin of a quad's side,
-            // from `clockwise(y)` to `y`: the face is a clockwise orbit walked backwards,
-            // and the orbit is checked only off the layout.
-            if std::mem::replace(&mut labels[x as usize], i as u32) != NONE || x < x0 {
-                return None;
+    let closed = !on_boundary;
+    // On a closed mesh of the layout the F_V faces are read in one stream; else (or if
+    // that finds a mismatch) by one walk around each.
+    let streamed = if layout && closed { stream_fv_faces(&arrays, fv_first, quads as usize) } else { None };
+    let (mut labels, mut vertex_corner, fv_sizes, fv_vertices) = match streamed {
+        Some((labels, vertex_corner, sizes)) => (labels, vertex_corner, sizes, None),
+        None => {
+            let mut labels = vec![NONE; vertices];
+            let mut vertex_corner = Vec::with_capacity(faces - fv_first + 1);
+            // The corners of the F_V faces in order.
+            let mut fv_vertices = Vec::with_capacity(vertices);
+            let mut fv_sizes = Vec::with_capacity(faces - fv_first);
+            for (i, &first) in face_halfedge[fv_first..].iter().enumerate() {
+                let x0 = to[(first ^ 1) as usize];
+                let mut previous = x0;
+                let mut h = first;
+                let mut size = 0u32;
+                loop {
+                    let x = to[(h ^ 1) as usize];
+                    // With the layout checked, every half-edge here is the twin of a quad's side,
+                    // from `clockwise(y)` to `y`: the face is a clockwise orbit walked backwards,
+                    // and the orbit is checked only off the layout.
+                    if std::mem::replace(&mut labels[x as usize], i as u32) != NONE || x < x0 {
+                        return None;
+                    }
+                    if !layout && size > 0 && clockwise(x) != previous {
+                        return None;
+                    }
+                    previous = x;
+                    size += 1;
+                    fv_vertices.push(x);
+                    h = next[h as usize];
+                    if h == first {
+                        break;
+                    }
+                }
+                if size < 3 || (!layout && clockwise(x0) != previous) {
+                    return None;
+                }
+                debug_assert!(clockwise(x0) == previous, "internal: an F_V face of the layout is an orbit");
+                vertex_corner.push(x0);
+                fv_sizes.push(size);
             }
-            if !layout && size > 0 && clockwise(x) != previous {
-                return None;
-            }
-            previous = x;
-            size += 1;
-            fv_vertices.push(x);
-            h = next[h as usize];
-            if h == first {
-                break;
-            }
+            (labels, vertex_corner, fv_sizes, Some(fv_vertices))
         }
-        if size < 3 || (!layout && clockwise(x0) != previous) {
-            return None;
-        }
-        debug_assert!(clockwise(x0) == previous, "internal: an F_V face of the layout is an orbit");
-        vertex_corner.push(x0);
-        fv_sizes.push(size);
-    }
+    };
     let interior = vertex_corner.len();
     if automatic_choice && interior == 0 {
         return None;
     }
-    let closed = !on_boundary;
     // The first check of the coarse manifold (no face visits a vertex twice), on a closed
     // mesh made in the pass that sees that every corner has its vertex (every vertex is
     // interior: a corner on no F_V face is on a closed orbit without one).
@@ -203,8 +215,10 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     debug_assert_eq!(closed, candidate_edges == vertices, "internal: boundary corners have no twin");
     let by_vertex = if closed {
         // Every vertex is interior: its corners are those of its F_V face, sorted.
-        let corners = if seed.is_some() { std::mem::take(&mut fv_vertices) } else { fv_vertices.clone() };
-        by_vertex_of_fv_faces(&fv_sizes, corners)
+        match fv_vertices {
+            Some(corners) => by_vertex_of_fv_faces(&fv_sizes, corners),
+            None => by_vertex_of_labels(&fv_sizes, &coarse.corner_vertex, coarse.vertex_corner.as_deref()?)?,
+        }
     } else {
         corners_by_vertex(&coarse)
     };
@@ -215,13 +229,8 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
 
     let maps = FaceMaps::new(options.rule);
     let positions = fine.positions();
-    let candidates = expand_in_order(&coarse.offsets, &maps, positions);
-    let fv = FvFaces { first: fv_first, sizes_of: &fv_sizes, vertices: &fv_vertices };
-    // The detail energy of the lowest face read as F_F (for the automatic choice): its
-    // groups are the F_V faces, in face order, each summed while its candidates are in
-    // cache for the means.
-    let mut reading_energy = 0.0;
-    let mut group_start = 0;
+    let (candidates, scale) = expand_in_order(&coarse.offsets, &maps, positions, automatic_choice);
+    let fv = FvFaces { first: fv_first, sizes_of: &fv_sizes };
     // On a closed mesh the second check of the coarse manifold (no two edges join the
     // same two vertices) is made in the same pass, on the corners of each vertex: the
     // outgoing coarse half-edges of a vertex are its corners.
@@ -242,14 +251,6 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
                 *end = coarse.corner_vertex[coarse.corner_next[c as usize] as usize];
             }
             manifold &= distinct(ends, &mut stamp, interior, u as u32);
-            if automatic_choice {
-                let group = &fv_vertices[group_start..group_start + fv_sizes[u] as usize];
-                group_start += group.len();
-                let mean = group.iter().map(|&v| candidates[v as usize]).sum::<DVec3>() / group.len() as f64;
-                for &v in group {
-                    reading_energy += (candidates[v as usize] - mean).length_squared();
-                }
-            }
         })
     } else {
         means_and_details(&by_vertex, &candidates)
@@ -262,6 +263,10 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     if !coarse_positions.iter().all(|p| p.is_finite()) {
         return None;
     }
+    // The detail energy of the lowest face read as F_F (for the automatic choice): the
+    // general path sums its groups (the F_V faces, in face order: the coarse vertices) as
+    // the result sums its vertices.
+    let detail_energy = vertex_energy.iter().sum();
     let (mut choice, stats) = match seed {
         Some(seed) => {
             let stats =
@@ -269,15 +274,28 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
             (SeedChoice::given(0, seed), stats)
         }
         None => {
-            let mut choice = automatic(fine, &maps, &coarse.offsets, reading_energy, &fv, quads, candidates)?;
+            let mut choice = automatic(
+                fine,
+                &maps,
+                &coarse.offsets,
+                &coarse.corner_vertex,
+                detail_energy,
+                scale,
+                &fv,
+                quads,
+                candidates,
+            )?;
             let visited = if choice.trials.len() == 1 { ff_count } else { ff_count + interior + 1 };
-            let interpretations = choice.trials.iter().filter(|t| t.outcome.is_ok()).count();
-            let edges_crossed = interpretations * vertices + choice.trials.len() - interpretations;
+            // Every valid reading was searched in full; the ones whose sum stopped early
+            // are not counted as evaluated.
+            let valid = choice.trials.iter().filter(|t| t.outcome.is_ok()).count();
+            let interpretations = choice.trials.iter().filter(|t| t.outcome.is_ok() && !t.stopped_early).count();
+            let edges_crossed = valid * vertices + choice.trials.len() - valid;
             choice.component = 0;
             (choice, ReverseStats { visited_faces: visited, edges_crossed, candidate_edges, interpretations })
         }
     };
-    choice.detail_energy = vertex_energy.iter().sum();
+    choice.detail_energy = detail_energy;
     Some(DooReversal {
         rule: options.rule,
         coarse,
@@ -617,17 +635,29 @@ fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark: u32) -> bo
 /// order (corner `c` at `positions[c]`): each face expanded straight from its slice of
 /// the positions into fresh memory, in face order. With several threads, the pieces of
 /// [`expand_faces`] run side by side instead (the same values).
-fn expand_in_order(offsets: &[u32], maps: &FaceMaps, positions: &[DVec3]) -> Vec<DVec3> {
+///
+/// With `diagonal`, also the length of the bounding-box diagonal of all positions (the
+/// scale of the automatic choice's zero test), on one thread from the slices while they
+/// are in cache; else zero.
+fn expand_in_order(offsets: &[u32], maps: &FaceMaps, positions: &[DVec3], diagonal: bool) -> (Vec<DVec3>, f64) {
     if rayon::current_num_threads() > 1 {
-        return expand_faces(offsets, maps, |c| positions[c], Vec::new());
+        let candidates = expand_faces(offsets, maps, |c| positions[c], Vec::new());
+        return (candidates, if diagonal { diagonal_of(positions) } else { 0.0 });
     }
     let mut out = Vec::with_capacity(offsets.last().map_or(0, |&n| n as usize));
+    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for w in offsets.windows(2) {
         let (b, e) = (w[0] as usize, w[1] as usize);
         out.resize(e, DVec3::ZERO);
         maps.inverse(&positions[b..e], &mut out[b..e]);
+        if diagonal {
+            for &p in &positions[b..e] {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
     }
-    out
+    (out, if diagonal { (hi - lo).length() } else { 0.0 })
 }
 
 /// Whether the coarse faces (`offsets`) form one component across the coarse edges
@@ -649,6 +679,72 @@ fn connected(offsets: &[u32], across: &[u32]) -> bool {
     count == faces
 }
 
+/// The F_V faces of a closed mesh with the layout of [`stream_ff_faces`], read in one
+/// pass over the quads instead of a walk around each: the new sides of quad `j`,
+/// half-edges `2V + 4j` and `2V + 4j + 2`, end at the corners whose F_V faces hold their
+/// twins. Every half-edge is an F_F side (`V` of them), a quad side (4 per quad) or an
+/// F_V side: with `V + 6 * quads` half-edges and every quad twin on an F_V face, the quad
+/// twins are all the F_V sides, and a corner labelled twice or a count of `2 * quads`
+/// other than `V` is a mismatch. Returns each corner's F_V face (the coarse vertex), each
+/// face's first corner and the face sizes; `None` on any mismatch (the walk then
+/// decides). That each face starts at its smallest corner, which the walk checks, is
+/// left to the caller (see [`by_vertex_of_labels`]).
+fn stream_fv_faces(
+    arrays: &HalfedgeArrays<'_>,
+    fv_first: usize,
+    quads: usize,
+) -> Option<(Vec<u32>, Vec<u32>, Vec<u32>)> {
+    let HalfedgeArrays { to, face_of, face_halfedge, vertices, faces, .. } = *arrays;
+    let fv_count = faces - fv_first;
+    if to.len() != vertices + 6 * quads || 2 * quads != vertices {
+        return None;
+    }
+    let mut labels = vec![NONE; vertices];
+    let mut sizes = vec![0u32; fv_count];
+    let sides = &to[2 * vertices..];
+    let twin_faces = &face_of[2 * vertices..];
+    // Quad sides at even offsets, each followed by its twin.
+    for (&corner, &face) in sides.iter().zip(twin_faces.iter().skip(1)).step_by(2) {
+        // The twin's face (NONE on the boundary wraps to a large index).
+        let i = (face as usize).wrapping_sub(fv_first);
+        if i >= fv_count || std::mem::replace(&mut labels[corner as usize], i as u32) != NONE {
+            return None;
+        }
+        sizes[i] += 1;
+    }
+    // As many F_V sides as corners, none labelled twice: every corner is labelled once.
+    if sizes.iter().any(|&m| m < 3) {
+        return None;
+    }
+    let first_corners: Vec<u32> = face_halfedge[fv_first..].iter().map(|&h| to[(h ^ 1) as usize]).collect();
+    Some((labels, first_corners, sizes))
+}
+
+/// The corners of each coarse vertex in increasing order when every vertex is interior
+/// (vertex `i` has `sizes[i]` corners; `labels[c]`: the vertex of corner `c`), by a
+/// counting sort of the corners in order; `None` unless the smallest corner of each vertex
+/// is `first[i]` (the F_V face starts at it, as in the canonical order).
+fn by_vertex_of_labels(sizes: &[u32], labels: &[u32], first: &[u32]) -> Option<CornersByVertex> {
+    let mut offsets = Vec::with_capacity(sizes.len() + 1);
+    offsets.push(0u32);
+    let mut end = 0;
+    for &m in sizes {
+        end += m;
+        offsets.push(end);
+    }
+    let mut cursor = offsets[..sizes.len()].to_vec();
+    let mut corners = vec![0u32; labels.len()];
+    for (c, &u) in labels.iter().enumerate() {
+        let slot = &mut cursor[u as usize];
+        corners[*slot as usize] = c as u32;
+        *slot += 1;
+    }
+    if offsets.iter().zip(first).any(|(&b, &x)| corners[b as usize] != x) {
+        return None;
+    }
+    Some(CornersByVertex::from_parts((offsets, corners)))
+}
+
 /// The corners of each coarse vertex in increasing order when every vertex is interior:
 /// vertex `i` has the corners of F_V face `i` (of sizes `sizes`, corners `corners`,
 /// sorted in place).
@@ -658,51 +754,51 @@ fn by_vertex_of_fv_faces(sizes: &[u32], mut corners: Vec<u32>) -> CornersByVerte
     let mut b = 0;
     for &m in sizes {
         let e = b + m as usize;
-        let group = &mut corners[b..e];
-        // Small groups (the valences): insertion sort.
-        for i in 1..group.len() {
-            let x = group[i];
-            let mut j = i;
-            while j > 0 && group[j - 1] > x {
-                group[j] = group[j - 1];
-                j -= 1;
-            }
-            group[j] = x;
-        }
+        insertion_sort(&mut corners[b..e]);
         offsets.push(e as u32);
         b = e;
     }
     CornersByVertex::from_parts((offsets, corners))
 }
 
-/// The F_V faces of a canonical mesh: faces `first..`, their sizes and their corners.
+/// The F_V faces of a canonical mesh: faces `first..` and their sizes.
 struct FvFaces<'a> {
     first: usize,
     sizes_of: &'a [u32],
-    vertices: &'a [u32],
 }
 
 /// The automatic choice of the general path on a closed canonical mesh, made as it makes
 /// it (the same readings in the same order, the same sums in the same order, the same
 /// report): the lowest face as F_F (`energy`, summed by the caller over its groups, the
-/// F_V faces), then, unless its details are all zero,
-/// the lowest F_V face as F_F (the dual reading: valid on a closed connected mesh, its
-/// groups are the F_F faces) and the lowest F_E quad as F_F (rejected at once when the
-/// face across its first edge is not a quad). `None` when that reading needs the full
-/// search, or when the dual reading wins (the general path builds it).
+/// F_V faces), then, unless its details are all zero, the lowest F_F face of the dual
+/// reading, and the lowest F_E quad as F_F (rejected at once when the face across its
+/// first edge is not a quad). The dual reading (the lowest F_V face as F_F: valid on a
+/// closed connected mesh) groups its candidates by the F_F faces; its sum runs over them
+/// in face order, each F_V face expanded when a group first needs it, and stops as soon
+/// as it reaches `energy` (the dual reading cannot win then), so that a mesh whose
+/// details are small in its first reading expands only a few F_V faces. `None` when the
+/// F_E reading needs the full search, or when the dual reading wins (the general path
+/// builds it).
+///
+/// `coarse_vertex[c]`: the coarse vertex of corner `c` (interior vertex `i` is F_V face
+/// `i`); `scale`: the bounding-box diagonal of all vertices (the scale of the zero test);
+/// `dual`: scratch, one entry per fine vertex.
+#[allow(clippy::too_many_arguments)]
 fn automatic(
     fine: &HalfedgeMesh,
     maps: &FaceMaps,
     ff_offsets: &[u32],
+    coarse_vertex: &[u32],
     energy: f64,
+    scale: f64,
     fv: &FvFaces<'_>,
     quads: u32,
-    scratch: Vec<DVec3>,
+    mut dual: Vec<DVec3>,
 ) -> Option<SeedChoice> {
     let positions = fine.positions();
     let ff_count = ff_offsets.len() - 1;
     let faces = fine.face_count();
-    let mut trials = vec![SeedTrial { seed_face: 0, class: "F_F".into(), outcome: Ok(energy) }];
+    let mut trials = vec![SeedTrial::valid(0, "F_F", energy, false)];
     let zero_choice = |trials| {
         let reason =
             "face 0 as F_F gives all details zero (exact Doo-Sabin refinement); no other reading tried".to_string();
@@ -712,39 +808,6 @@ fn automatic(
         // Zero at any scale.
         return zero_choice(trials);
     }
-    // The dual reading: the F_V faces expanded (every vertex is on one F_V face, so
-    // each entry of `scratch` is written), to be grouped by the F_F faces. The same pass
-    // gives the bounding box of all vertices, the scale of the zero test.
-    let mut dual = scratch;
-    debug_assert_eq!(dual.len(), positions.len());
-    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    // Faces of up to [`SHORT`] sides are gathered on the stack (no growing push in the
-    // gathering loop, whose bounds then stay in registers).
-    let (mut short_points, mut short_expanded) = ([DVec3::ZERO; SHORT], [DVec3::ZERO; SHORT]);
-    let (mut long_points, mut long_expanded) = (Vec::new(), Vec::new());
-    let mut b = 0;
-    for &m in fv.sizes_of {
-        let face = &fv.vertices[b..b + m as usize];
-        b += m as usize;
-        let (points, expanded) = if face.len() <= SHORT {
-            (&mut short_points[..face.len()], &mut short_expanded[..face.len()])
-        } else {
-            long_points.resize(face.len(), DVec3::ZERO);
-            long_expanded.resize(face.len(), DVec3::ZERO);
-            (&mut long_points[..], &mut long_expanded[..])
-        };
-        for (slot, &v) in points.iter_mut().zip(face) {
-            let p = positions[v as usize];
-            lo = lo.min(p);
-            hi = hi.max(p);
-            *slot = p;
-        }
-        maps.inverse(points, expanded);
-        for (&v, &p) in face.iter().zip(expanded.iter()) {
-            dual[v as usize] = p;
-        }
-    }
-    let scale = (hi - lo).length();
     if energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * faces as f64 {
         return zero_choice(trials);
     }
@@ -758,29 +821,95 @@ fn automatic(
     if across_size == 4 {
         return None;
     }
+    // The dual reading: its candidates are the F_V faces expanded (every vertex is on
+    // one F_V face), its groups the F_F faces.
+    let HalfedgeArrays { to, next, face_halfedge, .. } = HalfedgeArrays::of(fine);
+    debug_assert_eq!(dual.len(), positions.len());
+    let mut expanded = vec![false; fv.sizes_of.len()];
+    // Faces of up to [`SHORT`] sides are gathered on the stack (no growing push in the
+    // gathering loop, whose bounds then stay in registers).
+    let (mut short_points, mut short_expanded) = ([DVec3::ZERO; SHORT], [DVec3::ZERO; SHORT]);
+    let (mut long_points, mut long_expanded) = (Vec::new(), Vec::new());
+    let (mut short_face, mut long_face) = ([NONE; SHORT], Vec::new());
+    let mut group_corners = Vec::new();
     let mut dual_energy = 0.0;
+    let mut stopped = false;
     for w in ff_offsets.windows(2) {
-        let group = &dual[w[0] as usize..w[1] as usize];
-        let mean = group.iter().copied().sum::<DVec3>() / group.len() as f64;
-        for &c in group {
-            dual_energy += (c - mean).length_squared();
+        let (b, e) = (w[0] as usize, w[1] as usize);
+        for &u in &coarse_vertex[b..e] {
+            if std::mem::replace(&mut expanded[u as usize], true) {
+                continue;
+            }
+            // The face's corners in its own order (the walk of [`reverse_canonical`]).
+            let m = fv.sizes_of[u as usize] as usize;
+            let (points, out, face) = if m <= SHORT {
+                (&mut short_points[..m], &mut short_expanded[..m], &mut short_face[..m])
+            } else {
+                long_points.resize(m, DVec3::ZERO);
+                long_expanded.resize(m, DVec3::ZERO);
+                long_face.resize(m, NONE);
+                (&mut long_points[..], &mut long_expanded[..], &mut long_face[..])
+            };
+            let first = face_halfedge[fv.first + u as usize];
+            let mut h = first;
+            for (slot, corner) in points.iter_mut().zip(face.iter_mut()) {
+                let v = to[(h ^ 1) as usize];
+                *corner = v;
+                *slot = positions[v as usize];
+                h = next[h as usize];
+            }
+            debug_assert_eq!(h, first, "internal: an F_V face has its counted size");
+            maps.inverse(points, out);
+            for (&v, &p) in face.iter().zip(out.iter()) {
+                dual[v as usize] = p;
+            }
+        }
+        // Summed in the order of the dual reading's coarse corners, which number the F_V
+        // faces' corners in face order: by F_V face, as no face has two corners on one.
+        group_corners.clear();
+        group_corners.extend(b as u32..e as u32);
+        insertion_sort_by_key(&mut group_corners, |c| coarse_vertex[c as usize]);
+        let mean = group_corners.iter().map(|&c| dual[c as usize]).sum::<DVec3>() / group_corners.len() as f64;
+        let mut group_energy = 0.0;
+        for &c in &group_corners {
+            group_energy += (dual[c as usize] - mean).length_squared();
+        }
+        dual_energy += group_energy;
+        if dual_energy >= energy {
+            stopped = true;
+            break;
         }
     }
-    if dual_energy < energy {
+    if !stopped {
+        // The dual reading is better.
         return None;
     }
     let fv_seed = fv.first;
-    trials.push(SeedTrial { seed_face: fv_seed, class: "F_V".into(), outcome: Ok(dual_energy) });
+    trials.push(SeedTrial::valid(fv_seed, "F_V", dual_energy, true));
     let error = DooError::NotDooConnectivity {
         face: across,
         reason: format!("it lies across an edge of F_F face {quad} but has {across_size} sides, not 4"),
     };
-    trials.push(SeedTrial { seed_face: quad, class: "F_E".into(), outcome: Err(error.to_string()) });
-    let reason = format!(
-        "smallest total squared detail norm among 2 valid readings: {energy:.6e} against {:.6e} (seed {fv_seed})",
-        dual_energy
-    );
+    trials.push(SeedTrial::invalid(quad, "F_E", &error));
+    let reason = ranking_reason(energy, &[(fv_seed, dual_energy, true)]);
     Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason })
+}
+
+/// The length of the bounding-box diagonal of `points` (split among the threads on large
+/// meshes: min and max do not depend on the order).
+fn diagonal_of(points: &[DVec3]) -> f64 {
+    let bounds = |(lo, hi): (DVec3, DVec3), p: &DVec3| (lo.min(*p), hi.max(*p));
+    let empty = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let (lo, hi) = if rayon::current_num_threads() > 1 && points.len() >= 1 << 16 {
+        points
+            .par_iter()
+            .with_min_len(1 << 14)
+            .fold(|| empty, bounds)
+            .reduce(|| empty, |(a, b), (c, d)| (a.min(c), b.max(d)))
+    } else {
+        points.iter().fold(empty, bounds)
+    };
+    (hi - lo).length()
 }
 
 #[cfg(test)]
@@ -843,6 +972,30 @@ mod tests {
     }
 
     #[test]
+    fn the_dual_reading_stops_once_it_cannot_win() {
+        // Moved vertices: the first reading has small details, the dual one larger.
+        let soup = shapes::torus(7, 5, CellKind::Triangles).unwrap();
+        let fine = refine(&soup, FaceRule::DooSabin);
+        let auto = ReverseOptions::auto(FaceRule::DooSabin);
+        let fast = reverse_canonical(&fine, &auto).expect("the first reading wins");
+        assert_eq!(fast, general(&fine, &auto));
+        let choice = &fast.choices()[0];
+        // The winner's sum is the detail energy of the result, bit for bit.
+        assert_eq!(choice.trials[0].outcome, Ok(choice.detail_energy));
+        let dual = &choice.trials[1];
+        assert!(dual.stopped_early && dual.class == "F_V", "{dual:?}");
+        assert!(!choice.trials[0].stopped_early && !choice.trials[2].stopped_early);
+        // The partial sum has reached the winner's and is at most the dual reading's total.
+        let partial = *dual.outcome.as_ref().unwrap();
+        let whole = general(&fine, &ReverseOptions::with_seed(FaceRule::DooSabin, dual.seed_face));
+        let total = whole.choices()[0].detail_energy;
+        assert!(choice.detail_energy <= partial && partial <= total, "{partial} {total} {choice:?}");
+        assert!(choice.reason.contains(&format!("at least {partial:.6e}")), "{}", choice.reason);
+        // Only the winner counts as evaluated in full; both readings were searched.
+        assert_eq!(fast.stats().interpretations, 1);
+    }
+
+    #[test]
     fn the_layout_pass_reads_what_the_walk_finds() {
         let soups = [
             shapes::cube(),
@@ -877,6 +1030,47 @@ mod tests {
         // The raw coarse cube (its faces share edges): no F_F faces.
         let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
         assert!(stream_ff_faces(&cube).is_none() && walk_ff_faces(&cube).is_none());
+    }
+
+    #[test]
+    fn the_fv_stream_reads_what_the_walk_finds() {
+        for soup in [
+            shapes::cube(),
+            shapes::torus(7, 5, CellKind::Triangles).unwrap(),
+            shapes::torus(6, 4, CellKind::Mixed).unwrap(),
+        ] {
+            let fine = refine(&soup, FaceRule::DooSabin);
+            let arrays = HalfedgeArrays::of(&fine);
+            let ff = stream_ff_faces(&fine).expect("the layout of a soup in the canonical order");
+            let fv_first = ff.offsets.len() - 1 + ff.quads as usize;
+            let (labels, first, sizes) = stream_fv_faces(&arrays, fv_first, ff.quads as usize).expect("closed");
+            let mut walked = Vec::new();
+            for (i, &h0) in arrays.face_halfedge[fv_first..].iter().enumerate() {
+                let start = walked.len();
+                let mut h = h0;
+                loop {
+                    walked.push(arrays.to[(h ^ 1) as usize]);
+                    h = arrays.next[h as usize];
+                    if h == h0 {
+                        break;
+                    }
+                }
+                let face = &walked[start..];
+                assert_eq!((first[i], sizes[i] as usize), (face[0], face.len()));
+                assert!(face.iter().all(|&c| labels[c as usize] == i as u32));
+            }
+            assert_eq!(walked.len(), fine.vertex_count());
+            assert_eq!(by_vertex_of_labels(&sizes, &labels, &first), Some(by_vertex_of_fv_faces(&sizes, walked)));
+            // A face that does not start at its smallest corner is a mismatch.
+            let mut rotated = first.clone();
+            rotated[0] += 1;
+            assert!(by_vertex_of_labels(&sizes, &labels, &rotated).is_none());
+        }
+        // With a boundary the F_V sides are not all quad twins: the walk decides.
+        let open = refine(&shapes::grid(4, 3, CellKind::Quads).unwrap(), FaceRule::DooSabin);
+        let ff = stream_ff_faces(&open).expect("layout");
+        let fv_first = ff.offsets.len() - 1 + ff.quads as usize;
+        assert!(stream_fv_faces(&HalfedgeArrays::of(&open), fv_first, ff.quads as usize).is_none());
     }
 
     #[test]

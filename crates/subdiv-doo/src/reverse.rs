@@ -45,7 +45,14 @@
 //! lowest face that this reading calls an F_V face; then the lowest F_E quad) and keeps
 //! the valid interpretation with the **smallest total squared detail norm**
 //! `Σ |d_i|²`, the earliest on ties. An interpretation whose details are all zero to
-//! `1e-12` of the component's size is accepted at once (nothing can beat it).
+//! `1e-12` of the component's size is accepted at once (nothing can beat it). The sum of
+//! a later reading runs over its coarse vertices in order (each summed as the result sums
+//! it, so that a reading's sum is the detail energy of its result, bit for bit) and stops
+//! as soon as it reaches the smallest total found before: that reading cannot win (ties
+//! go to the earliest), and its trial reports the partial sum as a lower bound
+//! ([`SeedTrial::stopped_early`]). A reading stopped this way was searched and its
+//! candidates formed, but its boundary groups (if any) were not walked; it ranks after
+//! the winner, and should the winner fail the full check, it is checked in full then.
 //! [`DooReversal::choices`] reports what was tried and why the winner won.
 //!
 //! # Cost
@@ -62,9 +69,11 @@
 //! groups of the result are walks around the coarse vertices, numbered through their F_V
 //! faces by a counting sort; the automatic mode keeps
 //! the F_F faces of its best reading instead of searching again, and the final checks run
-//! beside the geometry when rayon has more than one thread. The automatic mode evaluates
-//! every valid class (usually two readings, F_F and F_V), so it costs about twice a
-//! reversal with a given seed.
+//! beside the geometry when rayon has more than one thread. The automatic mode searches
+//! every valid class (usually two readings, F_F and F_V) and sums the details of each
+//! until it cannot win, so it costs up to twice a reversal with a given seed: less the
+//! sooner the losing readings' sums pass the winner's (on a closed mesh in the canonical
+//! order, the losing dual reading is expanded only as far as its sum goes).
 //!
 //! A mesh in the *canonical order* (as written by [`crate::subdivide`] or rebuilt by a
 //! pyramid: identity [`FineOrder`]) of one connected coarse mesh is reversed without the
@@ -165,8 +174,45 @@ pub struct SeedTrial {
     /// The role of that face in the first interpretation found (`"F_F"`, `"F_V"`,
     /// `"F_E"`), or `"neighbour"` while looking for a first valid one.
     pub class: String,
-    /// Total squared detail norm of the interpretation, or why it is not valid.
+    /// Total squared detail norm of the interpretation, or why it is not valid; a lower
+    /// bound of it when [`Self::stopped_early`].
     pub outcome: Result<f64, String>,
+    /// True when the sum of the squared detail norms was stopped as soon as it reached
+    /// the smallest total found before: the reading cannot win any more (ties go to the
+    /// earliest), so `outcome` is the partial sum, a lower bound of the total, and the
+    /// checks that would come after the sum (the boundary groups) were not made.
+    #[serde(default)]
+    pub stopped_early: bool,
+}
+
+impl SeedTrial {
+    pub(crate) fn valid(seed_face: usize, class: &str, energy: f64, stopped_early: bool) -> Self {
+        SeedTrial { seed_face, class: class.into(), outcome: Ok(energy), stopped_early }
+    }
+
+    pub(crate) fn invalid(seed_face: usize, class: &str, error: &DooError) -> Self {
+        SeedTrial { seed_face, class: class.into(), outcome: Err(error.to_string()), stopped_early: false }
+    }
+}
+
+/// Why the automatic mode kept a reading of total squared detail norm `energy` against
+/// the other valid ones (`others`: seed face, total or partial sum, stopped early).
+pub(crate) fn ranking_reason(energy: f64, others: &[(usize, f64, bool)]) -> String {
+    let others: Vec<String> = others
+        .iter()
+        .map(|&(seed, other, stopped)| {
+            if stopped {
+                format!("at least {other:.6e} (seed {seed}, its sum stopped there)")
+            } else {
+                format!("{other:.6e} (seed {seed})")
+            }
+        })
+        .collect();
+    format!(
+        "smallest total squared detail norm among {} valid readings: {energy:.6e} against {}",
+        others.len() + 1,
+        others.join(", ")
+    )
 }
 
 /// Which seed a component was reversed with, and why.
@@ -327,6 +373,30 @@ pub(crate) fn reverse_corner_mesh(
 /// The valid readings of a fine mesh, ranked per component, from which reversals are
 /// built on demand (the best one, or alternatives when a multi-level decomposition
 /// needs another reading to go on).
+/// What [`Search::energy`] finds of a reading.
+#[derive(Debug, Clone, Copy)]
+struct Energy {
+    /// Total squared detail norm, or its partial sum if `stopped_early`.
+    energy: f64,
+    /// Bounding-box diagonal of the component (the scale of the zero test).
+    size: f64,
+    /// Whether the sum stopped when it reached the cutoff.
+    stopped_early: bool,
+}
+
+/// The cutoff of a sum that must not stop (no comparison with NaN holds).
+const NO_CUTOFF: f64 = f64::NAN;
+
+/// A valid reading found by [`Search::choose`].
+struct Found {
+    seed: usize,
+    energy: f64,
+    stopped_early: bool,
+    /// Its F_F faces (empty when stopped early: it is never the best).
+    ff_faces: Vec<u32>,
+    kept: Kept,
+}
+
 pub(crate) struct Session<'a> {
     search: Search<'a>,
     rule: FaceRule,
@@ -556,11 +626,7 @@ impl<'a> Session<'a> {
                     if self.given[k] != NONE || pick[k] + 1 >= self.readings[k].len() {
                         return Err(error);
                     }
-                    choices[k].trials.push(SeedTrial {
-                        seed_face: self.readings[k][pick[k]].0,
-                        class: "full check".into(),
-                        outcome: Err(error.to_string()),
-                    });
+                    choices[k].trials.push(SeedTrial::invalid(self.readings[k][pick[k]].0, "full check", &error));
                     pick[k] += 1;
                 }
             }
@@ -638,6 +704,8 @@ struct Search<'a> {
     /// Scratch of [`Self::energy`]: one face's points, one group.
     points: Vec<DVec3>,
     group: Vec<u32>,
+    /// Scratch of [`Self::energy`]: the ranks of the candidates of one group.
+    ranks_in_group: Vec<u32>,
     stats: ReverseStats,
 }
 
@@ -656,6 +724,7 @@ impl<'a> Search<'a> {
             ranks: Vec::new(),
             points: Vec::new(),
             group: Vec::new(),
+            ranks_in_group: Vec::new(),
             stats: ReverseStats::default(),
         }
     }
@@ -808,11 +877,20 @@ impl<'a> Search<'a> {
         Kept { candidates: std::mem::take(&mut self.candidate), corner_of_vertex: std::mem::take(&mut self.ranks) }
     }
 
-    /// The candidate of vertex `v` in [`Self::energy`] (stored by the rank of its F_F
-    /// corner); zero for a vertex on no F_F face (which the callers rule out first).
-    #[inline]
-    fn candidate_of_vertex(&self, v: u32) -> DVec3 {
-        self.candidate.get(self.ff_corner_of_vertex[v as usize] as usize).copied().unwrap_or(DVec3::ZERO)
+    /// The squared detail norm of one coarse vertex whose candidates have the ranks
+    /// `ranks` (sorted here): summed in rank order, as [`means_and_details`] sums the
+    /// vertex in the result (the same operations in the same order). A rank past the
+    /// candidates (a vertex on no F_F face, which the callers rule out first) counts as
+    /// a zero candidate.
+    fn group_energy(&self, ranks: &mut [u32]) -> f64 {
+        insertion_sort(ranks);
+        let candidate = |r: u32| self.candidate.get(r as usize).copied().unwrap_or(DVec3::ZERO);
+        let mean = ranks.iter().map(|&r| candidate(r)).sum::<DVec3>() / ranks.len() as f64;
+        let mut energy = 0.0;
+        for &r in ranks.iter() {
+            energy += (candidate(r) - mean).length_squared();
+        }
+        energy
     }
 
     /// Whether the candidate of vertex `v` is in a group already in [`Self::energy`], marking
@@ -837,12 +915,17 @@ impl<'a> Search<'a> {
     /// by walking across the F_E quads around their coarse vertex. A reading that is not
     /// valid may get a meaningless energy here; the full check of [`Self::finish`]
     /// rejects it before it is used.
+    ///
+    /// The groups are summed in face order, and the sum stops as soon as it reaches
+    /// `cutoff` (the smallest total of the readings before: this one cannot win, ties go
+    /// to the earliest); the third value says whether it stopped.
     fn energy(
         &mut self,
         queue_start: usize,
         component_faces: FaceSet<'_>,
         component_vertices: usize,
-    ) -> Result<(f64, f64), DooError> {
+        cutoff: f64,
+    ) -> Result<Energy, DooError> {
         let fine = self.fine;
         if self.ff_corner_of_vertex.len() != fine.vertex_count {
             self.ff_corner_of_vertex = vec![NONE; fine.vertex_count];
@@ -853,7 +936,7 @@ impl<'a> Search<'a> {
         if self.candidate.len() != fine.vertex_count {
             self.candidate = vec![DVec3::ZERO; fine.vertex_count];
         }
-        let result = self.energy_inner(queue_start, component_faces, component_vertices);
+        let result = self.energy_inner(queue_start, component_faces, component_vertices, cutoff);
         if result.is_ok() && matches!(component_faces, FaceSet::All(_)) {
             // A valid reading of the whole mesh: the rank of each vertex's F_F corner is
             // its coarse corner in the result, kept for it (see [`Self::choose`]).
@@ -883,7 +966,8 @@ impl<'a> Search<'a> {
         queue_start: usize,
         component_faces: FaceSet<'_>,
         component_vertices: usize,
-    ) -> Result<(f64, f64), DooError> {
+        cutoff: f64,
+    ) -> Result<Energy, DooError> {
         let fine = self.fine;
         let positions = self.positions;
         // Every vertex on one F_F face at most; candidates by expansion of each F_F face.
@@ -947,25 +1031,33 @@ impl<'a> Search<'a> {
                 }
             }
         }
-        // Groups of interior coarse vertices: the corners of the other faces.
+        // Groups of interior coarse vertices: the corners of the other faces. Each group is
+        // summed in the order of its coarse corners (the ranks), as the result sums its
+        // coarse vertex, so that the energy of a whole reading is its detail energy.
         let mut energy = 0.0;
         let mut grouped = 0;
+        let mut ranks = std::mem::take(&mut self.ranks_in_group);
         for f in component_faces.iter() {
             if self.role[f as usize] != UNKNOWN {
                 continue;
             }
             let corners = fine.offsets[f as usize] as usize..fine.offsets[f as usize + 1] as usize;
-            let vertices = &fine.corner_vertex[corners];
-            let mean = vertices.iter().map(|&v| self.candidate_of_vertex(v)).sum::<DVec3>() / vertices.len() as f64;
-            for &v in vertices {
-                energy += (self.candidate_of_vertex(v) - mean).length_squared();
+            ranks.clear();
+            for &v in &fine.corner_vertex[corners] {
+                ranks.push(self.ff_corner_of_vertex[v as usize]);
                 grouped += usize::from(!self.mark_grouped(v));
+            }
+            energy += self.group_energy(&mut ranks);
+            if energy >= cutoff {
+                self.ranks_in_group = ranks;
+                return Ok(Energy { energy, size: (hi - lo).length(), stopped_early: true });
             }
         }
         if grouped == ff_corners {
             // No boundary: every candidate is in a group already.
+            self.ranks_in_group = ranks;
             self.stats.interpretations += 1;
-            return Ok((energy, (hi - lo).length()));
+            return Ok(Energy { energy, size: (hi - lo).length(), stopped_early: false });
         }
         // Groups of boundary coarse vertices: walk both ways around the coarse vertex
         // (clockwise: across the quad, then the next corner; counter-clockwise: the
@@ -996,14 +1088,20 @@ impl<'a> Search<'a> {
                         c = d;
                     }
                 }
-                let candidate = |c: u32| self.candidate_of_vertex(fine.corner_vertex[c as usize]);
-                let mean = group.iter().map(|&c| candidate(c)).sum::<DVec3>() / group.len() as f64;
-                energy += group.iter().map(|&c| (candidate(c) - mean).length_squared()).sum::<f64>();
+                ranks.clear();
+                ranks.extend(group.iter().map(|&c| self.ff_corner_of_vertex[fine.corner_vertex[c as usize] as usize]));
+                energy += self.group_energy(&mut ranks);
+                if energy >= cutoff {
+                    self.group = group;
+                    self.ranks_in_group = ranks;
+                    return Ok(Energy { energy, size: (hi - lo).length(), stopped_early: true });
+                }
             }
         }
         self.group = group;
+        self.ranks_in_group = ranks;
         self.stats.interpretations += 1;
-        Ok((energy, (hi - lo).length()))
+        Ok(Energy { energy, size: (hi - lo).length(), stopped_early: false })
     }
 
     /// The first vertex on two F_F faces met in search order (some vertex is), as an error.
@@ -1031,9 +1129,9 @@ impl<'a> Search<'a> {
     /// every vertex of the mesh once: then the mesh has one component. Returns its
     /// detail energy and size, with the search state as [`Self::choose`] leaves it after
     /// a first trial; otherwise restores the state as it was.
-    fn first_reading_covers_all(&mut self, faces: FaceSet<'_>) -> Option<(f64, f64)> {
+    fn first_reading_covers_all(&mut self, faces: FaceSet<'_>) -> Option<Energy> {
         let saved = self.stats;
-        let result = self.classify(0).and_then(|()| self.energy(0, faces, self.fine.vertex_count));
+        let result = self.classify(0).and_then(|()| self.energy(0, faces, self.fine.vertex_count, NO_CUTOFF));
         match result {
             Ok(reading) => Some(reading),
             Err(_) => {
@@ -1090,7 +1188,7 @@ impl<'a> Search<'a> {
         k: usize,
         faces: FaceSet<'_>,
         vertices: usize,
-        mut first: Option<(f64, f64)>,
+        mut first: Option<Energy>,
     ) -> Result<(SeedChoice, Ranked, Vec<u32>, Kept), DooError> {
         let lowest = faces.first() as usize;
         // A first trial made already is the whole queue.
@@ -1111,21 +1209,22 @@ impl<'a> Search<'a> {
                 }
             }
         }
-        // Per valid reading: its seed, energy, F_F faces and, on a whole mesh, candidates
-        // (numbered by F_F corner in memory order: the coarse corners of the result).
+        // Per valid reading: its seed, energy (a lower bound if its sum stopped early), F_F
+        // faces and, on a whole mesh, candidates (numbered by F_F corner in memory order:
+        // the coarse corners of the result).
         let whole = matches!(faces, FaceSet::All(_));
-        let mut found: Vec<(usize, f64, Vec<u32>, Kept)> = Vec::new();
+        let mut found: Vec<Found> = Vec::new();
         let mut other_classes = Vec::new();
         let mut scale = 0.0;
         for (seed, class) in candidates {
             let result = match first.take() {
                 Some(reading) => Ok(reading),
-                None => self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices)),
+                None => self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices, NO_CUTOFF)),
             };
             match result {
-                Ok((energy, size)) => {
+                Ok(Energy { energy, size, .. }) => {
                     scale = size;
-                    trials.push(SeedTrial { seed_face: seed, class: "F_F".into(), outcome: Ok(energy) });
+                    trials.push(SeedTrial::valid(seed, "F_F", energy, false));
                     // The other classes of this reading.
                     let fv = faces.iter().find(|&f| self.role[f as usize] == UNKNOWN);
                     let fe = faces.iter().find(|&f| self.role[f as usize] == FE);
@@ -1135,12 +1234,13 @@ impl<'a> Search<'a> {
                     if let Some(f) = fe {
                         other_classes.push((f as usize, "F_E"));
                     }
-                    found.push((seed, energy, self.queue[queue_start..].to_vec(), self.keep_reading(whole)));
+                    let ff_faces = self.queue[queue_start..].to_vec();
+                    found.push(Found { seed, energy, stopped_early: false, ff_faces, kept: self.keep_reading(whole) });
                     self.reset(faces, queue_start);
                     break;
                 }
                 Err(error) => {
-                    trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Err(error.to_string()) });
+                    trials.push(SeedTrial::invalid(seed, class, &error));
                     first_error.get_or_insert(error);
                     self.reset(faces, queue_start);
                 }
@@ -1150,17 +1250,23 @@ impl<'a> Search<'a> {
             return Err(first_error.expect("internal: a failed search leaves an error"));
         };
         let zero = |energy: f64| energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * faces.len() as f64;
-        if !zero(first.1) {
+        if !zero(first.energy) {
+            // The smallest total so far: a reading whose sum reaches it cannot win.
+            let mut cutoff = first.energy;
             for (seed, class) in other_classes {
-                let result = self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices));
+                let result = self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices, cutoff));
                 match result {
-                    Ok((energy, _)) => {
-                        trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Ok(energy) });
-                        found.push((seed, energy, self.queue[queue_start..].to_vec(), self.keep_reading(whole)));
+                    Ok(Energy { energy, stopped_early, .. }) => {
+                        trials.push(SeedTrial::valid(seed, class, energy, stopped_early));
+                        // A reading stopped early is never the best: nothing of it is kept.
+                        let kept = self.keep_reading(whole && !stopped_early);
+                        let ff_faces = if stopped_early { Vec::new() } else { self.queue[queue_start..].to_vec() };
+                        found.push(Found { seed, energy, stopped_early, ff_faces, kept });
+                        if !stopped_early {
+                            cutoff = cutoff.min(energy);
+                        }
                     }
-                    Err(error) => {
-                        trials.push(SeedTrial { seed_face: seed, class: class.into(), outcome: Err(error.to_string()) })
-                    }
+                    Err(error) => trials.push(SeedTrial::invalid(seed, class, &error)),
                 }
                 self.reset(faces, queue_start);
             }
@@ -1168,29 +1274,26 @@ impl<'a> Search<'a> {
         // Smallest energy, earliest on ties (the sort below is stable).
         let mut best = 0;
         for (i, f) in found.iter().enumerate() {
-            if f.1 < found[best].1 {
+            if f.energy < found[best].energy {
                 best = i;
             }
         }
-        let (seed, energy) = (found[best].0, found[best].1);
+        let (seed, energy) = (found[best].seed, found[best].energy);
+        debug_assert!(!found[best].stopped_early, "internal: a reading stopped early is never the best");
         let reason = if found.len() == 1 && zero(energy) {
             format!("face {seed} as F_F gives all details zero (exact Doo-Sabin refinement); no other reading tried")
         } else if found.len() == 1 {
             format!("face {seed} as F_F is the only valid reading found")
         } else {
-            let others: Vec<String> =
-                found.iter().filter(|f| f.0 != seed).map(|f| format!("{:.6e} (seed {})", f.1, f.0)).collect();
-            format!(
-                "smallest total squared detail norm among {} valid readings: {energy:.6e} against {}",
-                found.len(),
-                others.join(", ")
-            )
+            let others: Vec<(usize, f64, bool)> =
+                found.iter().filter(|f| f.seed != seed).map(|f| (f.seed, f.energy, f.stopped_early)).collect();
+            ranking_reason(energy, &others)
         };
         let mut rank: Vec<usize> = (0..found.len()).collect();
-        rank.sort_by(|&a, &b| found[a].1.total_cmp(&found[b].1));
-        let ranked: Vec<(usize, f64)> = rank.iter().map(|&i| (found[i].0, found[i].1)).collect();
-        let best_ff_faces = std::mem::take(&mut found[rank[0]].2);
-        let best_candidates = std::mem::take(&mut found[rank[0]].3);
+        rank.sort_by(|&a, &b| found[a].energy.total_cmp(&found[b].energy));
+        let ranked: Vec<(usize, f64)> = rank.iter().map(|&i| (found[i].seed, found[i].energy)).collect();
+        let best_ff_faces = std::mem::take(&mut found[rank[0]].ff_faces);
+        let best_candidates = std::mem::take(&mut found[rank[0]].kept);
         let choice = SeedChoice { component: k, seed_face: seed, given: false, trials, detail_energy: energy, reason };
         Ok((choice, ranked, best_ff_faces, best_candidates))
     }
@@ -1398,7 +1501,7 @@ fn corner_groups(offsets: &[u32], next: &[u32], twins: &[u32]) -> (Vec<u32>, usi
 }
 
 /// Corners of each coarse vertex, in increasing corner order (CSR).
-#[derive(Debug)]
+#[derive(Debug, PartialEq)]
 pub(crate) struct CornersByVertex {
     offsets: Vec<u32>,
     corners: Vec<u32>,
@@ -1855,6 +1958,25 @@ fn apply_order(
         mesh.vertex_corner = Some(vertex_corner);
     }
     (mesh, positions)
+}
+
+/// Sorts a short list (a coarse vertex's corners: its valence) in place.
+pub(crate) fn insertion_sort(values: &mut [u32]) {
+    insertion_sort_by_key(values, |x| x);
+}
+
+/// Sorts a short list in place by `key` (stable).
+pub(crate) fn insertion_sort_by_key(values: &mut [u32], key: impl Fn(u32) -> u32) {
+    for i in 1..values.len() {
+        let x = values[i];
+        let k = key(x);
+        let mut j = i;
+        while j > 0 && key(values[j - 1]) > k {
+            values[j] = values[j - 1];
+            j -= 1;
+        }
+        values[j] = x;
+    }
 }
 
 #[cfg(test)]

@@ -139,6 +139,46 @@ proptest! {
         prop_assert!(max_distance(&rebuilt.positions, moved.positions()) <= 1e-12 * scale);
     }
 
+    /// The automatic choice keeps the reading of smallest total detail energy: every valid
+    /// reading it tried, reversed again with its seed given, has at least the winner's
+    /// energy, and its reported sum is that total (or, if the sum stopped early, at most it).
+    #[test]
+    fn automatic_choice_has_the_smallest_detail_energy(
+        soup in arb_mesh(),
+        rule in rule_strategy(),
+        seed in any::<u64>(),
+        amount in 0.0f64..0.2,
+    ) {
+        let soup = used_only(soup);
+        let mut fine = subdivide_soup(&soup, &DooOptions::new(rule, 1)).unwrap().to_mesh().unwrap();
+        let scale = diagonal(fine.positions()).max(1e-9);
+        let mut state = seed | 1;
+        for p in fine.positions_mut() {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let r = (state >> 11) as f64 / (1u64 << 53) as f64;
+            *p += amount * scale * DVec3::new(r - 0.5, (7.0 * r).sin(), (13.0 * r).cos());
+        }
+        let automatic = reverse(&fine, &ReverseOptions::auto(rule)).unwrap();
+        let mut compared = 0;
+        for choice in automatic.choices() {
+            for trial in &choice.trials {
+                let Ok(sum) = trial.outcome else { continue };
+                // A reading the full check rejects has no total to compare with.
+                let Ok(given) = reverse(&fine, &ReverseOptions::with_seed(rule, trial.seed_face)) else { continue };
+                let total = given.choices()[choice.component].detail_energy;
+                let slack = 1e-9 * total.max(1e-30);
+                prop_assert!(choice.detail_energy <= total + slack, "{choice:?} against {total}");
+                if trial.stopped_early {
+                    prop_assert!(sum <= total + slack && sum >= choice.detail_energy - slack, "{trial:?} {total}");
+                } else {
+                    prop_assert!((sum - total).abs() <= slack, "{trial:?} {total}");
+                }
+                compared += 1;
+            }
+        }
+        prop_assert!(compared >= automatic.choices().len());
+    }
+
     /// Random damage (a face removed, an edge flipped) and moved vertices: reverse never
     /// panics; it fails, or finds another valid reading that reconstructs exactly.
     #[test]
