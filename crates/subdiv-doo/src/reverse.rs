@@ -52,7 +52,9 @@
 //! go to the earliest), and its trial reports the partial sum as a lower bound
 //! ([`SeedTrial::stopped_early`]). A reading stopped this way was searched and its
 //! candidates formed, but its boundary groups (if any) were not walked; it ranks after
-//! the winner, and should the winner fail the full check, it is checked in full then.
+//! the winner, and should the winner fail the full check, it is checked in full then. To
+//! compare readings by their full totals, reverse with each one's seed face given: the
+//! result's [`SeedChoice::detail_energy`] is that reading's total.
 //! [`DooReversal::choices`] reports what was tried and why the winner won.
 //!
 //! # Cost
