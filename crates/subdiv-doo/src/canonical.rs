@@ -20,7 +20,7 @@ use mesh_topo::HalfedgeMesh;
 use glam::DVec3;
 
 use crate::DooError;
-use crate::corner::{CornerMesh, NONE, expand_faces, faces_of_corners, next_of_corners};
+use crate::corner::{CornerMesh, NONE, expand_faces, faces_of_corners, group_by_key, next_of_corners};
 use crate::reverse::{
     CornersByVertex, DooReversal, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial,
     check_coarse_manifold, corners_by_vertex, insertion_sort, insertion_sort_by_key, means_and_details,
@@ -110,8 +110,11 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     // On a closed mesh of the layout the F_V faces are read in one stream; else (or if
     // that finds a mismatch) by one walk around each.
     let streamed = if layout && closed { stream_fv_faces(&arrays, fv_first, quads as usize) } else { None };
-    let (mut labels, mut vertex_corner, fv_sizes, fv_vertices) = match streamed {
-        Some((labels, vertex_corner, sizes)) => (labels, vertex_corner, sizes, None),
+    // The corners of each F_V face: sorted by the stream, or in face order by the walk.
+    let (mut labels, mut vertex_corner, fv_sizes, fv_corners) = match streamed {
+        Some(StreamedFvFaces { labels, first_corners, sizes, by_vertex }) => {
+            (labels, first_corners, sizes, Ok(by_vertex))
+        }
         None => {
             let mut labels = vec![NONE; vertices];
             let mut vertex_corner = Vec::with_capacity(faces - fv_first + 1);
@@ -149,7 +152,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
                 vertex_corner.push(x0);
                 fv_sizes.push(size);
             }
-            (labels, vertex_corner, fv_sizes, Some(fv_vertices))
+            (labels, vertex_corner, fv_sizes, Err(fv_vertices))
         }
     };
     let interior = vertex_corner.len();
@@ -215,10 +218,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     debug_assert_eq!(closed, candidate_edges == vertices, "internal: boundary corners have no twin");
     let by_vertex = if closed {
         // Every vertex is interior: its corners are those of its F_V face, sorted.
-        match fv_vertices {
-            Some(corners) => by_vertex_of_fv_faces(&fv_sizes, corners),
-            None => by_vertex_of_labels(&fv_sizes, &coarse.corner_vertex, coarse.vertex_corner.as_deref()?)?,
-        }
+        fv_corners.unwrap_or_else(|in_face_order| by_vertex_of_fv_faces(&fv_sizes, in_face_order))
     } else {
         corners_by_vertex(&coarse)
     };
@@ -274,17 +274,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
             (SeedChoice::given(0, seed), stats)
         }
         None => {
-            let mut choice = automatic(
-                fine,
-                &maps,
-                &coarse.offsets,
-                &coarse.corner_vertex,
-                detail_energy,
-                scale,
-                &fv,
-                quads,
-                candidates,
-            )?;
+            let mut choice = automatic(fine, &maps, &coarse, detail_energy, scale, &fv, candidates)?;
             let visited = if choice.trials.len() == 1 { ff_count } else { ff_count + interior + 1 };
             // Every valid reading was searched in full; the ones whose sum stopped early
             // are not counted as evaluated.
@@ -686,21 +676,17 @@ fn connected(offsets: &[u32], across: &[u32]) -> bool {
 /// F_V side: with `V + 6 * quads` half-edges and every quad twin on an F_V face, the quad
 /// twins are all the F_V sides, and a corner labelled twice or a count of `2 * quads`
 /// other than `V` is a mismatch. Returns each corner's F_V face (the coarse vertex), each
-/// face's first corner and the face sizes; `None` on any mismatch (the walk then
-/// decides). That each face starts at its smallest corner, which the walk checks, is
-/// left to the caller (see [`by_vertex_of_labels`]).
-fn stream_fv_faces(
-    arrays: &HalfedgeArrays<'_>,
-    fv_first: usize,
-    quads: usize,
-) -> Option<(Vec<u32>, Vec<u32>, Vec<u32>)> {
+/// face's first corner, the face sizes and each vertex's corners in increasing order (a
+/// counting sort of the corners by label); `None` on any mismatch (the walk then
+/// decides), including a face of fewer than 3 sides or one that does not start at its
+/// smallest corner (which the walk checks as it goes).
+fn stream_fv_faces(arrays: &HalfedgeArrays<'_>, fv_first: usize, quads: usize) -> Option<StreamedFvFaces> {
     let HalfedgeArrays { to, face_of, face_halfedge, vertices, faces, .. } = *arrays;
     let fv_count = faces - fv_first;
     if to.len() != vertices + 6 * quads || 2 * quads != vertices {
         return None;
     }
     let mut labels = vec![NONE; vertices];
-    let mut sizes = vec![0u32; fv_count];
     let sides = &to[2 * vertices..];
     let twin_faces = &face_of[2 * vertices..];
     // Quad sides at even offsets, each followed by its twin.
@@ -710,39 +696,25 @@ fn stream_fv_faces(
         if i >= fv_count || std::mem::replace(&mut labels[corner as usize], i as u32) != NONE {
             return None;
         }
-        sizes[i] += 1;
     }
     // As many F_V sides as corners, none labelled twice: every corner is labelled once.
-    if sizes.iter().any(|&m| m < 3) {
+    let (offsets, corners) = group_by_key(&labels, fv_count);
+    let sizes: Vec<u32> = offsets.windows(2).map(|w| w[1] - w[0]).collect();
+    let first_corners: Vec<u32> = face_halfedge[fv_first..].iter().map(|&h| to[(h ^ 1) as usize]).collect();
+    let starts_at_smallest = offsets.iter().zip(&first_corners).all(|(&b, &x)| corners[b as usize] == x);
+    if sizes.iter().any(|&m| m < 3) || !starts_at_smallest {
         return None;
     }
-    let first_corners: Vec<u32> = face_halfedge[fv_first..].iter().map(|&h| to[(h ^ 1) as usize]).collect();
-    Some((labels, first_corners, sizes))
+    let by_vertex = CornersByVertex::from_parts((offsets, corners));
+    Some(StreamedFvFaces { labels, first_corners, sizes, by_vertex })
 }
 
-/// The corners of each coarse vertex in increasing order when every vertex is interior
-/// (vertex `i` has `sizes[i]` corners; `labels[c]`: the vertex of corner `c`), by a
-/// counting sort of the corners in order; `None` unless the smallest corner of each vertex
-/// is `first[i]` (the F_V face starts at it, as in the canonical order).
-fn by_vertex_of_labels(sizes: &[u32], labels: &[u32], first: &[u32]) -> Option<CornersByVertex> {
-    let mut offsets = Vec::with_capacity(sizes.len() + 1);
-    offsets.push(0u32);
-    let mut end = 0;
-    for &m in sizes {
-        end += m;
-        offsets.push(end);
-    }
-    let mut cursor = offsets[..sizes.len()].to_vec();
-    let mut corners = vec![0u32; labels.len()];
-    for (c, &u) in labels.iter().enumerate() {
-        let slot = &mut cursor[u as usize];
-        corners[*slot as usize] = c as u32;
-        *slot += 1;
-    }
-    if offsets.iter().zip(first).any(|(&b, &x)| corners[b as usize] != x) {
-        return None;
-    }
-    Some(CornersByVertex::from_parts((offsets, corners)))
+/// What [`stream_fv_faces`] reads.
+struct StreamedFvFaces {
+    labels: Vec<u32>,
+    first_corners: Vec<u32>,
+    sizes: Vec<u32>,
+    by_vertex: CornersByVertex,
 }
 
 /// The corners of each coarse vertex in increasing order when every vertex is interior:
@@ -780,21 +752,19 @@ struct FvFaces<'a> {
 /// F_E reading needs the full search, or when the dual reading wins (the general path
 /// builds it).
 ///
-/// `coarse_vertex[c]`: the coarse vertex of corner `c` (interior vertex `i` is F_V face
-/// `i`); `scale`: the bounding-box diagonal of all vertices (the scale of the zero test);
+/// `coarse`: the coarse mesh of the first reading (interior vertex `i` is F_V face `i`);
+/// `scale`: the bounding-box diagonal of all vertices (the scale of the zero test);
 /// `dual`: scratch, one entry per fine vertex.
-#[allow(clippy::too_many_arguments)]
 fn automatic(
     fine: &HalfedgeMesh,
     maps: &FaceMaps,
-    ff_offsets: &[u32],
-    coarse_vertex: &[u32],
+    coarse: &CornerMesh,
     energy: f64,
     scale: f64,
     fv: &FvFaces<'_>,
-    quads: u32,
     mut dual: Vec<DVec3>,
 ) -> Option<SeedChoice> {
+    let (ff_offsets, coarse_vertex) = (&coarse.offsets[..], &coarse.corner_vertex[..]);
     let positions = fine.positions();
     let ff_count = ff_offsets.len() - 1;
     let faces = fine.face_count();
@@ -813,7 +783,7 @@ fn automatic(
     }
     // The lowest F_E quad as F_F: the face across its first edge must be a quad.
     let quad = ff_count;
-    debug_assert!(quads > 0);
+    debug_assert!(fv.first > quad, "internal: the automatic choice needs F_E quads");
     let h = fine.raw_face_halfedges()[quad];
     let across = fine.raw_halfedge_faces()[(h ^ 1) as usize] as usize;
     let across_size =
@@ -1043,7 +1013,8 @@ mod tests {
             let arrays = HalfedgeArrays::of(&fine);
             let ff = stream_ff_faces(&fine).expect("the layout of a soup in the canonical order");
             let fv_first = ff.offsets.len() - 1 + ff.quads as usize;
-            let (labels, first, sizes) = stream_fv_faces(&arrays, fv_first, ff.quads as usize).expect("closed");
+            let StreamedFvFaces { labels, first_corners: first, sizes, by_vertex } =
+                stream_fv_faces(&arrays, fv_first, ff.quads as usize).expect("closed");
             let mut walked = Vec::new();
             for (i, &h0) in arrays.face_halfedge[fv_first..].iter().enumerate() {
                 let start = walked.len();
@@ -1060,11 +1031,14 @@ mod tests {
                 assert!(face.iter().all(|&c| labels[c as usize] == i as u32));
             }
             assert_eq!(walked.len(), fine.vertex_count());
-            assert_eq!(by_vertex_of_labels(&sizes, &labels, &first), Some(by_vertex_of_fv_faces(&sizes, walked)));
-            // A face that does not start at its smallest corner is a mismatch.
-            let mut rotated = first.clone();
-            rotated[0] += 1;
-            assert!(by_vertex_of_labels(&sizes, &labels, &rotated).is_none());
+            assert_eq!(by_vertex, by_vertex_of_fv_faces(&sizes, walked));
+            // An F_V face that does not start at its smallest corner is a mismatch (the
+            // layout of the other faces stays).
+            let mut faces: Vec<Vec<u32>> = fine.to_soup().faces().map(<[u32]>::to_vec).collect();
+            faces.last_mut().unwrap().rotate_left(1);
+            let rotated = HalfedgeMesh::from_soup(&PolygonSoup::from_faces(fine.positions().to_vec(), faces)).unwrap();
+            let ff = stream_ff_faces(&rotated).expect("the layout of the F_F faces and quads");
+            assert!(stream_fv_faces(&HalfedgeArrays::of(&rotated), fv_first, ff.quads as usize).is_none());
         }
         // With a boundary the F_V sides are not all quad twins: the walk decides.
         let open = refine(&shapes::grid(4, 3, CellKind::Quads).unwrap(), FaceRule::DooSabin);

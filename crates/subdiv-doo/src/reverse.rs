@@ -880,16 +880,17 @@ impl<'a> Search<'a> {
     }
 
     /// The squared detail norm of one coarse vertex whose candidates have the ranks
-    /// `ranks` (sorted here): summed in rank order, as [`means_and_details`] sums the
-    /// vertex in the result (the same operations in the same order). A rank past the
-    /// candidates (a vertex on no F_F face, which the callers rule out first) counts as
-    /// a zero candidate.
-    fn group_energy(&self, ranks: &mut [u32]) -> f64 {
-        insertion_sort(ranks);
+    /// [`Self::ranks_in_group`] (sorted here): summed in rank order, as
+    /// [`means_and_details`] sums the vertex in the result (the same operations in the
+    /// same order). A rank past the candidates (a vertex on no F_F face, which the callers
+    /// rule out first) counts as a zero candidate.
+    fn group_energy(&mut self) -> f64 {
+        insertion_sort(&mut self.ranks_in_group);
+        let ranks = &self.ranks_in_group;
         let candidate = |r: u32| self.candidate.get(r as usize).copied().unwrap_or(DVec3::ZERO);
         let mean = ranks.iter().map(|&r| candidate(r)).sum::<DVec3>() / ranks.len() as f64;
         let mut energy = 0.0;
-        for &r in ranks.iter() {
+        for &r in ranks {
             energy += (candidate(r) - mean).length_squared();
         }
         energy
@@ -1038,26 +1039,24 @@ impl<'a> Search<'a> {
         // coarse vertex, so that the energy of a whole reading is its detail energy.
         let mut energy = 0.0;
         let mut grouped = 0;
-        let mut ranks = std::mem::take(&mut self.ranks_in_group);
         for f in component_faces.iter() {
             if self.role[f as usize] != UNKNOWN {
                 continue;
             }
             let corners = fine.offsets[f as usize] as usize..fine.offsets[f as usize + 1] as usize;
-            ranks.clear();
+            self.ranks_in_group.clear();
             for &v in &fine.corner_vertex[corners] {
-                ranks.push(self.ff_corner_of_vertex[v as usize]);
+                let rank = self.ff_corner_of_vertex[v as usize];
+                self.ranks_in_group.push(rank);
                 grouped += usize::from(!self.mark_grouped(v));
             }
-            energy += self.group_energy(&mut ranks);
+            energy += self.group_energy();
             if energy >= cutoff {
-                self.ranks_in_group = ranks;
                 return Ok(Energy { energy, size: (hi - lo).length(), stopped_early: true });
             }
         }
         if grouped == ff_corners {
             // No boundary: every candidate is in a group already.
-            self.ranks_in_group = ranks;
             self.stats.interpretations += 1;
             return Ok(Energy { energy, size: (hi - lo).length(), stopped_early: false });
         }
@@ -1090,18 +1089,19 @@ impl<'a> Search<'a> {
                         c = d;
                     }
                 }
-                ranks.clear();
-                ranks.extend(group.iter().map(|&c| self.ff_corner_of_vertex[fine.corner_vertex[c as usize] as usize]));
-                energy += self.group_energy(&mut ranks);
+                self.ranks_in_group.clear();
+                for &c in &group {
+                    let rank = self.ff_corner_of_vertex[fine.corner_vertex[c as usize] as usize];
+                    self.ranks_in_group.push(rank);
+                }
+                energy += self.group_energy();
                 if energy >= cutoff {
                     self.group = group;
-                    self.ranks_in_group = ranks;
                     return Ok(Energy { energy, size: (hi - lo).length(), stopped_early: true });
                 }
             }
         }
         self.group = group;
-        self.ranks_in_group = ranks;
         self.stats.interpretations += 1;
         Ok(Energy { energy, size: (hi - lo).length(), stopped_early: false })
     }

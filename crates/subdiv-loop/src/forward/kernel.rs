@@ -788,6 +788,8 @@ impl Additions<DVec3> for Details<'_> {
 
     #[inline(always)]
     fn isolated_vertex_point(&self, point: &mut DVec3) {
+        // Nothing to add, but adding zero keeps the bits of the formulation with a pass
+        // of corrections after the kernel (a coordinate of −0 becomes +0).
         *point += DVec3::ZERO;
     }
 
