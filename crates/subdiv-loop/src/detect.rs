@@ -283,13 +283,25 @@ pub fn detect(fine: &HalfedgeMesh, options: &DetectOptions) -> Result<LoopConnec
 /// corners alone, without building the fine corner table; anything else goes through
 /// the corner table and the general detection, which also reports every error.
 pub(crate) fn detect_mesh(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
+    detect_mesh_with(fine, seed_vertex, None)
+}
+
+/// [`detect_mesh`], given the mesh's corner table if it is made already.
+pub(crate) fn detect_mesh_with(
+    fine: &HalfedgeMesh,
+    seed_vertex: Option<u32>,
+    table: Option<&CornerTable>,
+) -> Result<Coarsening, LoopError> {
     if let Some(coarsening) =
         detect_canonical_faces(fine.face_count(), fine.vertex_count(), seed_vertex, mesh_face_corners(fine))
         && coarse_mesh_is_valid(&coarsening.coarse)
     {
         return Ok(coarsening);
     }
-    detect_table(&CornerTable::from_mesh(fine)?, seed_vertex)
+    match table {
+        Some(table) => detect_table(table, seed_vertex),
+        None => detect_table(&CornerTable::from_mesh(fine)?, seed_vertex),
+    }
 }
 
 /// The corners of face `f` of a half-edge mesh from its first corner, `None` if it is
@@ -787,6 +799,221 @@ fn detect_general(fine: &CornerTable, seed_vertex: Option<u32>) -> Result<Coarse
         (0..fine.face_count() as u32).filter(|&f| labeler.group_of_face[f as usize] == NONE).collect();
     labeler.group_faces(&ungrouped)?;
     Ok(labeler.assemble())
+}
+
+/// A fine mesh in any order, renumbered into the canonical order of the coarse mesh its
+/// propagation finds (see [`renumber_to_canonical`]).
+pub(crate) struct Renumbering {
+    /// The fine order, exactly as [`detect_general`] numbers the coarse mesh.
+    pub(crate) order: FineOrder,
+    /// The corners of every canonical fine face, in canonical vertex numbers: the fine
+    /// faces themselves, renumbered and rotated by `order`.
+    pub(crate) faces: Vec<[u32; 3]>,
+}
+
+/// The renumbering that the general detection would find, or `None`; the fast path of a
+/// fine mesh in any order, which [`reverse_canonical`] then checks and reverses.
+///
+/// The groups of four faces are found by a search over coarse faces instead of
+/// vertices: from a corner face and its vertex point, the inner face lies across the
+/// edge-point edge, the other two corner faces across the inner face's other edges, and
+/// the corner faces of the neighbouring coarse faces across the corner faces' edges at
+/// their vertex points: a few twin look-ups per coarse face, no circulation. Seeds as in
+/// [`detect_general`] (the caller's seed, then the lowest irregular vertex not reached
+/// yet; isolated vertices are vertex points). Nothing is validated here beyond what the
+/// search needs (a face in two groups, a vertex both vertex point and edge point, a
+/// missing twin, a face left over, say from a component whose valences are all regular:
+/// `None`): the faces, renumbered and rotated by the order found, must be a valid
+/// canonical refinement, which [`reverse_canonical`] checks as it does for any mesh.
+/// When they are, the fine mesh has Loop connectivity with every seed a vertex point, so
+/// its labeling is the one [`detect_general`] propagates from the same seeds (the
+/// labeling from a vertex point is forced), and this order numbers the coarse mesh as
+/// [`Labeler::assemble`] does: vertex points in fine order, coarse faces by their first
+/// fine face, starting at the corner whose corner face comes first, coarse edges (edge
+/// points) in order of first appearance.
+pub(crate) fn renumber_to_canonical(fine: &CornerTable, seed_vertex: Option<u32>) -> Option<Renumbering> {
+    let (nv, faces) = (fine.vertex_count(), fine.face_count());
+    if faces == 0 || !faces.is_multiple_of(4) || seed_vertex.is_some_and(|s| s as usize >= nv) {
+        return None;
+    }
+    let (corner_vertex, twin) = (fine.corner_vertices(), fine.twins());
+    // Valence class and one corner of every vertex, in one pass over the corners.
+    let mut outgoing = vec![0u8; nv];
+    let mut boundary = vec![false; nv];
+    let mut corner_of = vec![NONE; nv];
+    for (c, (&v, &t)) in corner_vertex.iter().zip(twin).enumerate() {
+        let v = v as usize;
+        outgoing[v] = outgoing[v].saturating_add(1);
+        boundary[v] |= t == NONE;
+        corner_of[v] = c as u32;
+    }
+    let mut search = GroupSearch {
+        corner_vertex,
+        twin,
+        label: vec![UNKNOWN; nv],
+        group_of_face: vec![NONE; faces],
+        groups: Vec::with_capacity(faces / 4),
+        stack: Vec::new(),
+    };
+    if let Some(seed) = seed_vertex
+        && corner_of[seed as usize] != NONE
+    {
+        search.run(corner_of[seed as usize])?;
+    }
+    for v in 0..nv {
+        if corner_of[v] == NONE {
+            search.label[v] = EVEN;
+        } else if search.label[v] == UNKNOWN && outgoing[v] != if boundary[v] { 3 } else { 6 } {
+            search.run(corner_of[v])?;
+        }
+    }
+    let GroupSearch { label, group_of_face, groups, .. } = search;
+    if 4 * groups.len() != faces {
+        return None;
+    }
+    drop((outgoing, boundary, corner_of));
+    // Canonical vertex of every fine vertex: the vertex points in fine order, then the
+    // edge points as the coarse corners first name them.
+    let mut canonical_of_fine = vec![NONE; nv];
+    let mut vertex_of_canonical = Vec::with_capacity(nv);
+    for (v, &l) in label.iter().enumerate() {
+        if l == EVEN {
+            canonical_of_fine[v] = vertex_of_canonical.len() as u32;
+            vertex_of_canonical.push(v as u32);
+        }
+    }
+    let mut numbered = vec![false; groups.len()];
+    let mut face_of_canonical = Vec::with_capacity(faces);
+    let mut canonical_faces = Vec::with_capacity(faces);
+    let canonical = |map: &[u32], c: u32| map[corner_vertex[c as usize] as usize];
+    for &g in &group_of_face {
+        if std::mem::replace(&mut numbered[g as usize], true) {
+            continue;
+        }
+        let FaceGroup { corner, inner } = groups[g as usize];
+        // Start at the corner whose corner face comes first.
+        let r = if corner[0] < corner[1] { 0 } else { 1 };
+        let r = if corner[2] < corner[r] { 2 } else { r };
+        let mut m = [0u32; 3];
+        for s in 0..3 {
+            let k = (r + s) % 3;
+            let point = corner_vertex[3 * inner as usize + k];
+            let slot = &mut canonical_of_fine[point as usize];
+            if *slot == NONE {
+                *slot = vertex_of_canonical.len() as u32;
+                vertex_of_canonical.push(point);
+            }
+            m[k] = *slot;
+        }
+        for s in 0..3 {
+            let even = corner[(r + s) % 3];
+            // Canonical corner 0 is the vertex point: actual corner j -> rotation (3 - j) % 3.
+            face_of_canonical.push(3 * (even / 3) + (3 - even % 3) % 3);
+            canonical_faces.push([
+                canonical(&canonical_of_fine, even),
+                canonical(&canonical_of_fine, next(even)),
+                canonical(&canonical_of_fine, prev(even)),
+            ]);
+        }
+        face_of_canonical.push(3 * inner + (3 - r as u32) % 3);
+        canonical_faces.push([m[r], m[(r + 1) % 3], m[(r + 2) % 3]]);
+    }
+    if vertex_of_canonical.len() != nv {
+        return None;
+    }
+    Some(Renumbering { order: FineOrder { vertex_of_canonical, face_of_canonical }, faces: canonical_faces })
+}
+
+impl Renumbering {
+    /// True if the order is the identity (the fine mesh is in the canonical order).
+    pub(crate) fn is_identity(&self) -> bool {
+        let FineOrder { vertex_of_canonical, face_of_canonical } = &self.order;
+        vertex_of_canonical.iter().enumerate().all(|(i, &v)| v == i as u32)
+            && face_of_canonical.iter().enumerate().all(|(k, &code)| code == 3 * k as u32)
+    }
+}
+
+/// The four faces of a coarse face found by [`GroupSearch`]: `corner[k]`, the corner at
+/// the vertex point of the corner face across the inner face's edge `k - 1` (as
+/// [`Group::corner`]), and the inner face.
+#[derive(Clone, Copy)]
+struct FaceGroup {
+    corner: [u32; 3],
+    inner: u32,
+}
+
+/// The search of [`renumber_to_canonical`].
+struct GroupSearch<'a> {
+    corner_vertex: &'a [u32],
+    twin: &'a [u32],
+    label: Vec<u8>,
+    group_of_face: Vec<u32>,
+    groups: Vec<FaceGroup>,
+    /// Corners at the vertex point of corner faces still to visit.
+    stack: Vec<u32>,
+}
+
+impl GroupSearch<'_> {
+    /// Groups the faces reached from the corner face of corner `start`, whose vertex is
+    /// taken for a vertex point; `None` where the pattern breaks.
+    fn run(&mut self, start: u32) -> Option<()> {
+        let (corner_vertex, twin) = (self.corner_vertex, self.twin);
+        self.stack.clear();
+        self.stack.push(start);
+        while let Some(e) = self.stack.pop() {
+            if self.group_of_face[(e / 3) as usize] != NONE {
+                continue;
+            }
+            let across = twin[next(e) as usize];
+            if across == NONE {
+                return None;
+            }
+            let inner = across / 3;
+            // Across the inner face's edge j (m_j -> m_{j+1}) lies the corner face of
+            // vertex point j + 1; its corner there is the one before the twin.
+            let mut corner = [0u32; 3];
+            for j in 0..3 {
+                let t = twin[3 * inner as usize + j];
+                if t == NONE {
+                    return None;
+                }
+                corner[(j + 1) % 3] = prev(t);
+            }
+            let g = self.groups.len() as u32;
+            for f in [inner, corner[0] / 3, corner[1] / 3, corner[2] / 3] {
+                // Also refuses a face met twice in this group.
+                if std::mem::replace(&mut self.group_of_face[f as usize], g) != NONE {
+                    return None;
+                }
+            }
+            for j in 0..3 {
+                let label = &mut self.label[corner_vertex[3 * inner as usize + j] as usize];
+                if *label == EVEN {
+                    return None;
+                }
+                *label = ODD;
+            }
+            for c in corner {
+                let label = &mut self.label[corner_vertex[c as usize] as usize];
+                if *label == ODD {
+                    return None;
+                }
+                *label = EVEN;
+                // The corner faces of the neighbouring coarse faces at this vertex point:
+                // across its two edges.
+                let t = twin[c as usize];
+                if t != NONE {
+                    self.stack.push(next(t));
+                }
+                let t = twin[prev(c) as usize];
+                if t != NONE {
+                    self.stack.push(t);
+                }
+            }
+            self.groups.push(FaceGroup { corner, inner });
+        }
+        Some(())
+    }
 }
 
 /// The coarse triangle of an inner face `(ab, bc, ca)`: vertex points `y = (a, b, c)`,
