@@ -74,6 +74,30 @@ pub(crate) struct CornerTable {
     vertex_corner: OnceLock<Vec<u32>>,
 }
 
+/// What [`CornerTable::mesh_corners`] makes.
+pub(crate) struct MeshCorners {
+    /// Vertex of each corner.
+    pub(crate) corner_vertex: Vec<u32>,
+    /// Corner of the twin half-edge, or [`NONE`] on the boundary.
+    pub(crate) twin: Vec<u32>,
+    /// Corner of every half-edge of the mesh, [`NONE`] for a boundary half-edge.
+    corner_of_halfedge: Vec<u32>,
+}
+
+impl MeshCorners {
+    /// A corner at vertex `v` of `mesh` (the mesh these corners are of), [`NONE`] if it
+    /// is isolated.
+    #[inline]
+    pub(crate) fn corner_at(&self, mesh: &HalfedgeMesh, v: u32) -> u32 {
+        match mesh.vertex(v as usize).and_then(|v| mesh.vertex_halfedge(v)) {
+            None => NONE,
+            // A boundary half-edge has no corner; the twin of the one before it has.
+            Some(h) if mesh.is_boundary_halfedge(h) => self.corner_of_halfedge[mesh.prev(h).twin().index()],
+            Some(h) => self.corner_of_halfedge[h.index()],
+        }
+    }
+}
+
 /// Tables are equal when their connectivity is: the circulation starts follow from it.
 impl PartialEq for CornerTable {
     fn eq(&self, other: &Self) -> bool {
@@ -144,7 +168,7 @@ impl CornerTable {
 
     /// The circulation start of every vertex: its first corner, or its last corner
     /// whose half-edge lies on the boundary.
-    fn vertex_corners(&self) -> &[u32] {
+    pub(crate) fn vertex_corners(&self) -> &[u32] {
         self.vertex_corner.get_or_init(|| {
             let mut vertex_corner = vec![NONE; self.vertex_count];
             for (c, (&v, &t)) in self.corner_vertex.iter().zip(&self.twin).enumerate() {
@@ -155,6 +179,40 @@ impl CornerTable {
             }
             vertex_corner
         })
+    }
+
+    /// The corner vertices and twins of a validated half-edge mesh (what the
+    /// renumbering of a fine mesh reads, without the edges and circulation starts of a
+    /// whole table), and the corner of every face half-edge; `None` if a face is not a
+    /// triangle.
+    pub(crate) fn mesh_corners(mesh: &HalfedgeMesh) -> Option<MeshCorners> {
+        let targets = mesh.raw_halfedge_targets();
+        let faces = mesh.face_count();
+        let mesh_triangles = MeshTriangles::new(mesh);
+        let mut corner_of_halfedge = vec![NONE; mesh.halfedge_count()];
+        let mut face_halfedges = Vec::with_capacity(faces);
+        for f in 0..faces as u32 {
+            let halfedges = mesh_triangles.halfedges(f as usize)?;
+            for (k, h) in halfedges.into_iter().enumerate() {
+                corner_of_halfedge[h as usize] = 3 * f + k as u32;
+            }
+            face_halfedges.push(halfedges);
+        }
+        let mut corner_vertex = vec![0u32; 3 * faces];
+        let mut twin = vec![0u32; 3 * faces];
+        corner_vertex.par_chunks_mut(3 * FACE_CHUNK).zip(twin.par_chunks_mut(3 * FACE_CHUNK)).enumerate().for_each(
+            |(i, (vertices, twins))| {
+                let first = i * FACE_CHUNK;
+                for (f, (vertices, twins)) in vertices.chunks_exact_mut(3).zip(twins.chunks_exact_mut(3)).enumerate() {
+                    let h = face_halfedges[first + f];
+                    for k in 0..3 {
+                        vertices[k] = targets[h[(k + 2) % 3] as usize];
+                        twins[k] = corner_of_halfedge[(h[k] ^ 1) as usize];
+                    }
+                }
+            },
+        );
+        Some(MeshCorners { corner_vertex, twin, corner_of_halfedge })
     }
 
     /// The table of a validated half-edge mesh.

@@ -283,25 +283,13 @@ pub fn detect(fine: &HalfedgeMesh, options: &DetectOptions) -> Result<LoopConnec
 /// corners alone, without building the fine corner table; anything else goes through
 /// the corner table and the general detection, which also reports every error.
 pub(crate) fn detect_mesh(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
-    detect_mesh_with(fine, seed_vertex, None)
-}
-
-/// [`detect_mesh`], given the mesh's corner table if it is made already.
-pub(crate) fn detect_mesh_with(
-    fine: &HalfedgeMesh,
-    seed_vertex: Option<u32>,
-    table: Option<&CornerTable>,
-) -> Result<Coarsening, LoopError> {
     if let Some(coarsening) =
         detect_canonical_faces(fine.face_count(), fine.vertex_count(), seed_vertex, mesh_face_corners(fine))
         && coarse_mesh_is_valid(&coarsening.coarse)
     {
         return Ok(coarsening);
     }
-    match table {
-        Some(table) => detect_table(table, seed_vertex),
-        None => detect_table(&CornerTable::from_mesh(fine)?, seed_vertex),
-    }
+    detect_table(&CornerTable::from_mesh(fine)?, seed_vertex)
 }
 
 /// The corners of face `f` of a half-edge mesh from its first corner, `None` if it is
@@ -831,21 +819,16 @@ pub(crate) struct Renumbering {
 /// [`Labeler::assemble`] does: vertex points in fine order, coarse faces by their first
 /// fine face, starting at the corner whose corner face comes first, coarse edges (edge
 /// points) in order of first appearance.
-pub(crate) fn renumber_to_canonical(fine: &CornerTable, seed_vertex: Option<u32>) -> Option<Renumbering> {
-    let (nv, faces) = (fine.vertex_count(), fine.face_count());
+pub(crate) fn renumber_to_canonical(
+    vertex_count: usize,
+    corner_vertex: &[u32],
+    twin: &[u32],
+    corner_at: impl Fn(u32) -> u32,
+    seed_vertex: Option<u32>,
+) -> Option<Renumbering> {
+    let (nv, faces) = (vertex_count, corner_vertex.len() / 3);
     if faces == 0 || !faces.is_multiple_of(4) || seed_vertex.is_some_and(|s| s as usize >= nv) {
         return None;
-    }
-    let (corner_vertex, twin) = (fine.corner_vertices(), fine.twins());
-    // Valence class and one corner of every vertex, in one pass over the corners.
-    let mut outgoing = vec![0u8; nv];
-    let mut boundary = vec![false; nv];
-    let mut corner_of = vec![NONE; nv];
-    for (c, (&v, &t)) in corner_vertex.iter().zip(twin).enumerate() {
-        let v = v as usize;
-        outgoing[v] = outgoing[v].saturating_add(1);
-        boundary[v] |= t == NONE;
-        corner_of[v] = c as u32;
     }
     let mut search = GroupSearch {
         corner_vertex,
@@ -856,22 +839,27 @@ pub(crate) fn renumber_to_canonical(fine: &CornerTable, seed_vertex: Option<u32>
         stack: Vec::new(),
     };
     if let Some(seed) = seed_vertex
-        && corner_of[seed as usize] != NONE
+        && corner_at(seed) != NONE
     {
-        search.run(corner_of[seed as usize])?;
+        search.run(corner_at(seed))?;
     }
-    for v in 0..nv {
-        if corner_of[v] == NONE {
-            search.label[v] = EVEN;
-        } else if search.label[v] == UNKNOWN && outgoing[v] != if boundary[v] { 3 } else { 6 } {
-            search.run(corner_of[v])?;
+    // Vertices reached are skipped, so the valence is counted (by circulation) only at
+    // the few vertices before each component's first irregular one.
+    for v in 0..nv as u32 {
+        if search.label[v as usize] != UNKNOWN {
+            continue;
+        }
+        let c = corner_at(v);
+        if c == NONE {
+            search.label[v as usize] = EVEN;
+        } else if is_irregular(twin, c) {
+            search.run(c)?;
         }
     }
     let GroupSearch { label, group_of_face, groups, .. } = search;
     if 4 * groups.len() != faces {
         return None;
     }
-    drop((outgoing, boundary, corner_of));
     // Canonical vertex of every fine vertex: the vertex points in fine order, then the
     // edge points as the coarse corners first name them.
     let mut canonical_of_fine = vec![NONE; nv];
@@ -882,38 +870,36 @@ pub(crate) fn renumber_to_canonical(fine: &CornerTable, seed_vertex: Option<u32>
             vertex_of_canonical.push(v as u32);
         }
     }
+    drop(label);
     let mut numbered = vec![false; groups.len()];
     let mut face_of_canonical = Vec::with_capacity(faces);
     let mut canonical_faces = Vec::with_capacity(faces);
-    let canonical = |map: &[u32], c: u32| map[corner_vertex[c as usize] as usize];
     for &g in &group_of_face {
         if std::mem::replace(&mut numbered[g as usize], true) {
             continue;
         }
-        let FaceGroup { corner, inner } = groups[g as usize];
+        let FaceGroup { corner, inner, y, m: points } = groups[g as usize];
         // Start at the corner whose corner face comes first.
         let r = if corner[0] < corner[1] { 0 } else { 1 };
         let r = if corner[2] < corner[r] { 2 } else { r };
         let mut m = [0u32; 3];
         for s in 0..3 {
             let k = (r + s) % 3;
-            let point = corner_vertex[3 * inner as usize + k];
-            let slot = &mut canonical_of_fine[point as usize];
+            let slot = &mut canonical_of_fine[points[k] as usize];
             if *slot == NONE {
                 *slot = vertex_of_canonical.len() as u32;
-                vertex_of_canonical.push(point);
+                vertex_of_canonical.push(points[k]);
             }
             m[k] = *slot;
         }
         for s in 0..3 {
-            let even = corner[(r + s) % 3];
+            let k = (r + s) % 3;
+            let even = corner[k];
             // Canonical corner 0 is the vertex point: actual corner j -> rotation (3 - j) % 3.
             face_of_canonical.push(3 * (even / 3) + (3 - even % 3) % 3);
-            canonical_faces.push([
-                canonical(&canonical_of_fine, even),
-                canonical(&canonical_of_fine, next(even)),
-                canonical(&canonical_of_fine, prev(even)),
-            ]);
+            // The corner face (y_k, m_k, m_{k-1}) (its corners after the vertex point are
+            // those of the inner face's edge across which it was found).
+            canonical_faces.push([canonical_of_fine[y[k] as usize], m[k], m[(k + 2) % 3]]);
         }
         face_of_canonical.push(3 * inner + (3 - r as u32) % 3);
         canonical_faces.push([m[r], m[(r + 1) % 3], m[(r + 2) % 3]]);
@@ -922,6 +908,32 @@ pub(crate) fn renumber_to_canonical(fine: &CornerTable, seed_vertex: Option<u32>
         return None;
     }
     Some(Renumbering { order: FineOrder { vertex_of_canonical, face_of_canonical }, faces: canonical_faces })
+}
+
+/// True if the vertex of corner `start` cannot be an edge point: its number of corners
+/// is not 6 inside or 3 on the boundary (counted around it through the twins).
+fn is_irregular(twin: &[u32], start: u32) -> bool {
+    let mut count = 1u32;
+    // Counter-clockwise: the twin of the half-edge arriving at the vertex.
+    let mut c = start;
+    loop {
+        let t = twin[prev(c) as usize];
+        if t == start {
+            return count != 6;
+        }
+        if t == NONE {
+            break;
+        }
+        count += 1;
+        c = t;
+    }
+    // An open fan: the rest of it, clockwise.
+    let mut c = start;
+    while twin[c as usize] != NONE {
+        c = next(twin[c as usize]);
+        count += 1;
+    }
+    count != 3
 }
 
 impl Renumbering {
@@ -940,6 +952,10 @@ impl Renumbering {
 struct FaceGroup {
     corner: [u32; 3],
     inner: u32,
+    /// The vertex of each `corner` (vertex points).
+    y: [u32; 3],
+    /// The corners of the inner face (edge points; `m[k]` on the coarse edge `y[k] -> y[k + 1]`).
+    m: [u32; 3],
 }
 
 /// The search of [`renumber_to_canonical`].
@@ -986,15 +1002,18 @@ impl GroupSearch<'_> {
                     return None;
                 }
             }
-            for j in 0..3 {
-                let label = &mut self.label[corner_vertex[3 * inner as usize + j] as usize];
+            let i = 3 * inner as usize;
+            let m = [corner_vertex[i], corner_vertex[i + 1], corner_vertex[i + 2]];
+            for point in m {
+                let label = &mut self.label[point as usize];
                 if *label == EVEN {
                     return None;
                 }
                 *label = ODD;
             }
-            for c in corner {
-                let label = &mut self.label[corner_vertex[c as usize] as usize];
+            let y = corner.map(|c| corner_vertex[c as usize]);
+            for (c, v) in corner.into_iter().zip(y) {
+                let label = &mut self.label[v as usize];
                 if *label == ODD {
                     return None;
                 }
@@ -1010,7 +1029,7 @@ impl GroupSearch<'_> {
                     self.stack.push(t);
                 }
             }
-            self.groups.push(FaceGroup { corner, inner });
+            self.groups.push(FaceGroup { corner, inner, y, m });
         }
         Some(())
     }

@@ -55,7 +55,7 @@ use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::detect::{
-    Coarsening, FineOrder, PairedEdge, canonical_groups, coarse_face_is_valid, detect_mesh_with, detect_table,
+    Coarsening, FineOrder, PairedEdge, Renumbering, canonical_groups, coarse_face_is_valid, detect_mesh, detect_table,
     renumber_to_canonical, reverse_canonical_mesh, reverse_canonical_table,
 };
 use crate::forward::buffer::{Output, Slots};
@@ -444,21 +444,24 @@ pub(crate) fn reverse_level(
     // A mesh in any other order: renumbered into the canonical order of the coarse mesh
     // that detection finds, and reversed by the canonical path, which also checks it.
     // Anything else (errors included) goes through the general detection.
-    let built = match fine {
-        FineLevel::Mesh(mesh) => CornerTable::from_mesh(mesh).ok(),
-        FineLevel::Table(_) => None,
+    let renumbering = match fine {
+        FineLevel::Mesh(mesh) => CornerTable::mesh_corners(mesh).and_then(|corners| {
+            let corner_at = |v| corners.corner_at(mesh, v);
+            renumber_to_canonical(mesh.vertex_count(), &corners.corner_vertex, &corners.twin, corner_at, seed_vertex)
+        }),
+        FineLevel::Table(table) => {
+            let starts = table.vertex_corners();
+            let corner_at = |v: u32| starts[v as usize];
+            renumber_to_canonical(table.vertex_count(), table.corner_vertices(), table.twins(), corner_at, seed_vertex)
+        }
     };
-    let table = match fine {
-        FineLevel::Mesh(_) => built.as_ref(),
-        FineLevel::Table(table) => Some(table),
-    };
-    if let Some(table) = table
-        && let Some(level) = reverse_renumbered(table, positions, seed_vertex, rules)
+    if let Some(renumbering) = renumbering
+        && let Some(level) = reverse_renumbered(renumbering, positions, rules)
     {
         return Ok(level);
     }
     let coarsening = match fine {
-        FineLevel::Mesh(mesh) => detect_mesh_with(mesh, seed_vertex, table)?,
+        FineLevel::Mesh(mesh) => detect_mesh(mesh, seed_vertex)?,
         FineLevel::Table(table) => detect_table(table, seed_vertex)?,
     };
     let (coarse_positions, details) = reverse_positions(&coarsening, positions, rules);
@@ -472,19 +475,12 @@ pub(crate) fn reverse_level(
 /// [`reverse_positions`] (the edge points are summed in the same coarse edge order, the
 /// details by the same formula). `None` when the renumbering is not found or the
 /// renumbered mesh is not a valid canonical refinement.
-fn reverse_renumbered(
-    fine: &CornerTable,
-    positions: &[DVec3],
-    seed_vertex: Option<u32>,
-    rules: &LoopOptions,
-) -> Option<LevelParts> {
-    let renumbering = renumber_to_canonical(fine, seed_vertex)?;
+fn reverse_renumbered(renumbering: Renumbering, positions: &[DVec3], rules: &LoopOptions) -> Option<LevelParts> {
     let vertex_of_canonical = &renumbering.order.vertex_of_canonical;
     let canonical_positions: Vec<DVec3> = vertex_of_canonical.iter().map(|&v| positions[v as usize]).collect();
     let faces = &renumbering.faces;
     // The seed (if any) is a vertex point of the renumbering already.
-    let level =
-        reverse_canonical(faces.len(), fine.vertex_count(), None, |f| Some(faces[f]), &canonical_positions, rules)?;
+    let level = reverse_canonical(faces.len(), positions.len(), None, |f| Some(faces[f]), &canonical_positions, rules)?;
     let order = (!renumbering.is_identity()).then_some(renumbering.order);
     Some(LevelParts { coarse: level.coarse, order, positions: level.positions, details: level.details })
 }
