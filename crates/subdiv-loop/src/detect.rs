@@ -1018,15 +1018,12 @@ impl GroupSearch<'_> {
                     return None;
                 }
                 *label = EVEN;
-                // The corner faces of the neighbouring coarse faces at this vertex point:
-                // across its two edges.
+                // The neighbouring coarse face across coarse edge k (y_k -> y_{k+1}): its
+                // corner face at y_k lies across this corner face's edge y_k -> m_k (the
+                // other half of the coarse edge leads to the same coarse face).
                 let t = twin[c as usize];
-                if t != NONE {
+                if t != NONE && self.group_of_face[(t / 3) as usize] == NONE {
                     self.stack.push(next(t));
-                }
-                let t = twin[prev(c) as usize];
-                if t != NONE {
-                    self.stack.push(t);
                 }
             }
             self.groups.push(FaceGroup { corner, inner, y, m });
