@@ -794,9 +794,9 @@ fn detect_general(fine: &CornerTable, seed_vertex: Option<u32>) -> Result<Coarse
 pub(crate) struct Renumbering {
     /// The fine order, exactly as [`detect_general`] numbers the coarse mesh.
     pub(crate) order: FineOrder,
-    /// The corners of every canonical fine face, in canonical vertex numbers: the fine
-    /// faces themselves, renumbered and rotated by `order`.
-    pub(crate) faces: Vec<[u32; 3]>,
+    /// The coarse corners of the canonical fine faces (the fine faces renumbered and
+    /// rotated by `order`), as [`canonical_groups`] reads them.
+    pub(crate) groups: CanonicalGroups,
 }
 
 /// The renumbering that the general detection would find, or `None`; the fast path of a
@@ -871,9 +871,12 @@ pub(crate) fn renumber_to_canonical(
         }
     }
     drop(label);
+    // The smallest edge point.
+    let first_odd = vertex_of_canonical.len() as u32;
     let mut numbered = vec![false; groups.len()];
     let mut face_of_canonical = Vec::with_capacity(faces);
-    let mut canonical_faces = Vec::with_capacity(faces);
+    let mut coarse_vertex = Vec::with_capacity(3 * groups.len());
+    let mut edge_point = Vec::with_capacity(3 * groups.len());
     for &g in &group_of_face {
         if std::mem::replace(&mut numbered[g as usize], true) {
             continue;
@@ -892,22 +895,24 @@ pub(crate) fn renumber_to_canonical(
             }
             m[k] = *slot;
         }
+        // Coarse corner s: the corner face (y_k, m_k, m_{k-1}) (its corners after the
+        // vertex point are those of the inner face's edge across which it was found),
+        // then the inner face (m_r, m_{r+1}, m_{r+2}).
         for s in 0..3 {
             let k = (r + s) % 3;
             let even = corner[k];
             // Canonical corner 0 is the vertex point: actual corner j -> rotation (3 - j) % 3.
             face_of_canonical.push(3 * (even / 3) + (3 - even % 3) % 3);
-            // The corner face (y_k, m_k, m_{k-1}) (its corners after the vertex point are
-            // those of the inner face's edge across which it was found).
-            canonical_faces.push([canonical_of_fine[y[k] as usize], m[k], m[(k + 2) % 3]]);
+            coarse_vertex.push(canonical_of_fine[y[k] as usize]);
+            edge_point.push(m[k]);
         }
         face_of_canonical.push(3 * inner + (3 - r as u32) % 3);
-        canonical_faces.push([m[r], m[(r + 1) % 3], m[(r + 2) % 3]]);
     }
     if vertex_of_canonical.len() != nv {
         return None;
     }
-    Some(Renumbering { order: FineOrder { vertex_of_canonical, face_of_canonical }, faces: canonical_faces })
+    let groups = CanonicalGroups { coarse_vertex, edge_point, first_odd };
+    Some(Renumbering { order: FineOrder { vertex_of_canonical, face_of_canonical }, groups })
 }
 
 /// True if the vertex of corner `start` cannot be an edge point: its number of corners

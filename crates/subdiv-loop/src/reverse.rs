@@ -55,8 +55,8 @@ use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::detect::{
-    Coarsening, FineOrder, PairedEdge, Renumbering, canonical_groups, coarse_face_is_valid, detect_mesh, detect_table,
-    renumber_to_canonical, reverse_canonical_mesh, reverse_canonical_table,
+    CanonicalGroups, Coarsening, FineOrder, PairedEdge, Renumbering, canonical_groups, coarse_face_is_valid,
+    detect_mesh, detect_table, renumber_to_canonical, reverse_canonical_mesh, reverse_canonical_table,
 };
 use crate::forward::buffer::{Output, Slots};
 use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
@@ -478,10 +478,11 @@ pub(crate) fn reverse_level(
 fn reverse_renumbered(renumbering: Renumbering, positions: &[DVec3], rules: &LoopOptions) -> Option<LevelParts> {
     let vertex_of_canonical = &renumbering.order.vertex_of_canonical;
     let canonical_positions: Vec<DVec3> = vertex_of_canonical.iter().map(|&v| positions[v as usize]).collect();
-    let faces = &renumbering.faces;
-    // The seed (if any) is a vertex point of the renumbering already.
-    let level = reverse_canonical(faces.len(), positions.len(), None, |f| Some(faces[f]), &canonical_positions, rules)?;
-    let order = (!renumbering.is_identity()).then_some(renumbering.order);
+    // The groups are made in the canonical pattern (coarse vertices below edge points,
+    // the seed, if any, a vertex point); the rest is checked as for any canonical mesh.
+    let identity = renumbering.is_identity();
+    let level = reverse_canonical_groups(renumbering.groups, positions.len(), &canonical_positions, rules)?;
+    let order = (!identity).then_some(renumbering.order);
     Some(LevelParts { coarse: level.coarse, order, positions: level.positions, details: level.details })
 }
 
@@ -520,7 +521,17 @@ pub(crate) fn reverse_canonical(
     fine: &[DVec3],
     rules: &LoopOptions,
 ) -> Option<CanonicalLevel> {
-    let groups = canonical_groups(faces, seed_vertex, face)?;
+    reverse_canonical_groups(canonical_groups(faces, seed_vertex, face)?, vertex_count, fine, rules)
+}
+
+/// [`reverse_canonical`] from the coarse corners of the fine faces (the groups of four
+/// faces read already).
+fn reverse_canonical_groups(
+    groups: CanonicalGroups,
+    vertex_count: usize,
+    fine: &[DVec3],
+    rules: &LoopOptions,
+) -> Option<CanonicalLevel> {
     let first_odd = groups.first_odd;
     let nv = first_odd as usize;
     let edge_position = |e: u32| fine[(first_odd + e) as usize];
