@@ -1158,6 +1158,84 @@ mod tests {
         assert!(short.reconstruct(2).is_ok());
     }
 
+    /// The renumbering path next to the general detection on one mesh: when the
+    /// renumbering is found and reverses, the general path must give the very same level
+    /// (coarse mesh, positions, details and order, bit for bit).
+    fn renumbered_agrees_with_general(fine: &HalfedgeMesh, seed_vertex: Option<u32>, rules: &LoopOptions) -> bool {
+        let corners = CornerTable::mesh_corners(fine).expect("triangles");
+        let corner_at = |v| corners.corner_at(fine, v);
+        let renumbering =
+            renumber_to_canonical(fine.vertex_count(), &corners.corner_vertex, &corners.twin, corner_at, seed_vertex);
+        let Some(fast) = renumbering.and_then(|r| reverse_renumbered(r, fine.positions(), rules)) else {
+            return false;
+        };
+        let coarsening = detect_table(&CornerTable::from_mesh(fine).unwrap(), seed_vertex)
+            .expect("the general detection accepts what the renumbering accepts");
+        let (positions, details) = reverse_positions(&coarsening, fine.positions(), rules);
+        assert_eq!(fast.coarse, coarsening.coarse);
+        assert_eq!(fast.order, coarsening.fine_order());
+        let bits = |v: &[DVec3]| v.iter().flat_map(|p| p.to_array().map(f64::to_bits)).collect::<Vec<_>>();
+        assert_eq!(bits(&fast.positions), bits(&positions));
+        assert_eq!(bits(&fast.details), bits(&details));
+        true
+    }
+
+    #[test]
+    fn renumbering_path_agrees_with_the_general_detection() {
+        let rules = LoopOptions::default();
+        for (name, soup) in test_shapes() {
+            let fine = perturb(&loop_step(&mesh(&soup), &rules), 0.05, 3);
+            for seed in [1, 2, 3] {
+                let scrambled = mesh(&scramble(&fine, seed));
+                // Regular tori are left to the general detection (a search over seeds).
+                let found = renumbered_agrees_with_general(&scrambled, None, &rules);
+                assert!(found || name.starts_with("torus"), "{name}");
+                assert!(renumbered_agrees_with_general(&scrambled, Some(scrambled_vertex_point(&scrambled)), &rules));
+            }
+        }
+    }
+
+    /// A vertex point of a scrambled refinement (from the general detection).
+    fn scrambled_vertex_point(fine: &HalfedgeMesh) -> u32 {
+        let coarsening = detect_table(&CornerTable::from_mesh(fine).unwrap(), None).unwrap();
+        *coarsening.vertex_point.last().unwrap()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(96))]
+
+        /// The renumbering path is sound: on refined, renumbered meshes with edges
+        /// flipped (most no longer Loop meshes), whatever it accepts the general detection
+        /// accepts with the same result, bit for bit.
+        #[test]
+        fn renumbering_path_is_sound(
+            soup in mesh_topo::testing::arb_triangle_mesh(),
+            flips in 0usize..3,
+            seed in any::<u64>(),
+        ) {
+            let rules = LoopOptions::default();
+            let mut fine = scramble(&perturb(&loop_step(&mesh(&soup), &rules), 0.05, seed), seed);
+            let mut rng = crate::reference::Rng::new(seed);
+            for _ in 0..flips {
+                let m = mesh(&fine);
+                let e = m.edge(rng.below(m.edge_count())).unwrap();
+                if !m.is_boundary_edge(e) {
+                    let [a, b] = m.edge_vertices(e);
+                    let flipped = crate::reference::flip_edge(&fine, a.raw(), b.raw());
+                    if HalfedgeMesh::from_soup(&flipped).is_ok() {
+                        fine = flipped;
+                    }
+                }
+            }
+            let fine = mesh(&fine);
+            let accepted = renumbered_agrees_with_general(&fine, None, &rules);
+            if flips == 0 {
+                // Unless every valence is regular (then the general detection searches).
+                prop_assert!(accepted || detect_table(&CornerTable::from_mesh(&fine).unwrap(), None).is_ok());
+            }
+        }
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(48))]
 
