@@ -412,9 +412,10 @@ pub(crate) struct LevelParts {
     pub(crate) details: Vec<DVec3>,
 }
 
-/// One level reversed, by the fused path when the fine mesh is canonical, else by
-/// detection and [`reverse_positions`]. A user's mesh with a
-/// non-finite position is an error before any connectivity error, on either path.
+/// One level reversed, by the fused path when the fine mesh is canonical, else through
+/// its canonical renumbering ([`reverse_renumbered`]) when that is found and valid, else
+/// by detection and [`reverse_positions`] (which also names every error). A user's mesh
+/// with a non-finite position is an error before any connectivity error, on every path.
 pub(crate) fn reverse_level(
     fine: FineLevel<'_>,
     positions: &[DVec3],
