@@ -25,15 +25,29 @@
 //! indices, plus one offset per face, which the `LoopMesh` does not have: a small extra
 //! pass that comes with the return type, counted against `reconstruct`).
 //!
+//! # Meshes in another order
+//! The refined bunny is written by the forward subdivision, so it is in the canonical
+//! order and `decompose` takes the fast path of such meshes. A mesh written by another
+//! tool is numbered otherwise: `decompose_renumbered` times `decompose` of the same fine
+//! mesh with its vertices and faces renumbered at random and its faces rotated
+//! (`mesh_topo::testing::scramble`, seed 7), which takes the general path (detection by
+//! a search over coarse faces, the level renumbered into the canonical order and
+//! reversed by the canonical path, at every level, since each coarse mesh keeps the
+//! fine numbering's order). Its counterpart `forward_renumbered` is Loop subdivision of
+//! the bunny renumbered the same way to the same level (scattered reads on both sides).
+//!
 //! Ratios are only meaningful within one run (the machine is shared): group `levelL`
-//! times the four operations of size `L` back to back; compare `levelL/decompose` with
-//! `levelL/forward_mesh`, `levelL/reconstruct` with `levelL/forward_soup` and
-//! `levelL/reconstruct_prepared` with `levelL/forward_mesh`.
+//! times the operations of size `L` back to back; compare `levelL/decompose` with
+//! `levelL/forward_mesh`, `levelL/decompose_renumbered` with
+//! `levelL/forward_renumbered`, `levelL/reconstruct` with `levelL/forward_soup` and
+//! `levelL/reconstruct_prepared` with `levelL/forward_mesh`. The figures in the README
+//! are for one thread (`RAYON_NUM_THREADS=1`).
 
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
+use mesh_topo::testing::scramble;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use subdiv_loop::forward::{LoopOptions, subdivide, subdivide_soup};
 use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, decompose};
@@ -104,6 +118,15 @@ fn benches(c: &mut Criterion) {
         let prepared = pyramid.prepare().expect("valid pyramid");
         group.bench_function("reconstruct_prepared", |b| {
             b.iter(|| black_box(&prepared).reconstruct(level).expect("valid pyramid"))
+        });
+        // The same fine mesh in another order (general path), and its forward counterpart.
+        let renumbered = HalfedgeMesh::from_soup(&scramble(fine.to_soup(), 7, 0.0)).expect("valid");
+        group.bench_function("decompose_renumbered", |b| {
+            b.iter(|| decompose(black_box(&renumbered), &options).expect("Loop mesh"))
+        });
+        let base_renumbered = HalfedgeMesh::from_soup(&scramble(base.clone(), 7, 0.0)).expect("valid");
+        group.bench_function("forward_renumbered", |b| {
+            b.iter(|| subdivide(black_box(&base_renumbered), level as u32, &rules).expect("valid"))
         });
         group.finish();
     }

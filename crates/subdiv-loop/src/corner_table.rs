@@ -37,6 +37,25 @@ pub(crate) fn prev(c: u32) -> u32 {
     if c.is_multiple_of(3) { c + 2 } else { c - 1 }
 }
 
+/// Faces per parallel work item of the linear searches over faces.
+const FACE_CHUNK: usize = 4096;
+
+/// The first face that shares two of its edges with one other face (then it shares all
+/// three: a closed "pillow"), from the twins. Chunks of faces searched in parallel, each
+/// by a plain loop (a search item by item through the pool costs far more than the test).
+fn first_pillow_face(twin: &[u32]) -> Option<usize> {
+    let pillow = |t: &[u32]| {
+        let other = |k: usize| if t[k] == NONE { NONE - k as u32 } else { t[k] / 3 };
+        other(0) == other(1) || other(1) == other(2) || other(2) == other(0)
+    };
+    let search = |(i, chunk): (usize, &[u32])| chunk.chunks_exact(3).position(pillow).map(|f| i * FACE_CHUNK + f);
+    if twin.len() <= 3 * FACE_CHUNK {
+        search((0, twin))
+    } else {
+        twin.par_chunks(3 * FACE_CHUNK).enumerate().map(search).find_first(Option::is_some).flatten()
+    }
+}
+
 /// Triangle-mesh connectivity as flat `u32` arrays (see the module docs).
 #[derive(Debug, Clone)]
 pub(crate) struct CornerTable {
@@ -53,6 +72,30 @@ pub(crate) struct CornerTable {
     /// corner whose half-edge lies on the boundary; [`NONE`] for an isolated vertex.
     /// Made on first use (only circulations need it), from the other arrays.
     vertex_corner: OnceLock<Vec<u32>>,
+}
+
+/// What [`CornerTable::mesh_corners`] makes.
+pub(crate) struct MeshCorners {
+    /// Vertex of each corner.
+    pub(crate) corner_vertex: Vec<u32>,
+    /// Corner of the twin half-edge, or [`NONE`] on the boundary.
+    pub(crate) twin: Vec<u32>,
+    /// Corner of every half-edge of the mesh, [`NONE`] for a boundary half-edge.
+    corner_of_halfedge: Vec<u32>,
+}
+
+impl MeshCorners {
+    /// A corner at vertex `v` of `mesh` (the mesh these corners are of), [`NONE`] if it
+    /// is isolated.
+    #[inline]
+    pub(crate) fn corner_at(&self, mesh: &HalfedgeMesh, v: u32) -> u32 {
+        match mesh.vertex(v as usize).and_then(|v| mesh.vertex_halfedge(v)) {
+            None => NONE,
+            // A boundary half-edge has no corner; the twin of the one before it has.
+            Some(h) if mesh.is_boundary_halfedge(h) => self.corner_of_halfedge[mesh.prev(h).twin().index()],
+            Some(h) => self.corner_of_halfedge[h.index()],
+        }
+    }
 }
 
 /// Tables are equal when their connectivity is: the circulation starts follow from it.
@@ -125,7 +168,7 @@ impl CornerTable {
 
     /// The circulation start of every vertex: its first corner, or its last corner
     /// whose half-edge lies on the boundary.
-    fn vertex_corners(&self) -> &[u32] {
+    pub(crate) fn vertex_corners(&self) -> &[u32] {
         self.vertex_corner.get_or_init(|| {
             let mut vertex_corner = vec![NONE; self.vertex_count];
             for (c, (&v, &t)) in self.corner_vertex.iter().zip(&self.twin).enumerate() {
@@ -138,6 +181,40 @@ impl CornerTable {
         })
     }
 
+    /// The corner vertices and twins of a validated half-edge mesh (what the
+    /// renumbering of a fine mesh reads, without the edges and circulation starts of a
+    /// whole table), and the corner of every face half-edge; `None` if a face is not a
+    /// triangle.
+    pub(crate) fn mesh_corners(mesh: &HalfedgeMesh) -> Option<MeshCorners> {
+        let targets = mesh.raw_halfedge_targets();
+        let faces = mesh.face_count();
+        let mesh_triangles = MeshTriangles::new(mesh);
+        let mut corner_of_halfedge = vec![NONE; mesh.halfedge_count()];
+        let mut face_halfedges = Vec::with_capacity(faces);
+        for f in 0..faces as u32 {
+            let halfedges = mesh_triangles.halfedges(f as usize)?;
+            for (k, h) in halfedges.into_iter().enumerate() {
+                corner_of_halfedge[h as usize] = 3 * f + k as u32;
+            }
+            face_halfedges.push(halfedges);
+        }
+        let mut corner_vertex = vec![0u32; 3 * faces];
+        let mut twin = vec![0u32; 3 * faces];
+        corner_vertex.par_chunks_mut(3 * FACE_CHUNK).zip(twin.par_chunks_mut(3 * FACE_CHUNK)).enumerate().for_each(
+            |(i, (vertices, twins))| {
+                let first = i * FACE_CHUNK;
+                for (f, (vertices, twins)) in vertices.chunks_exact_mut(3).zip(twins.chunks_exact_mut(3)).enumerate() {
+                    let h = face_halfedges[first + f];
+                    for k in 0..3 {
+                        vertices[k] = targets[h[(k + 2) % 3] as usize];
+                        twins[k] = corner_of_halfedge[(h[k] ^ 1) as usize];
+                    }
+                }
+            },
+        );
+        Some(MeshCorners { corner_vertex, twin, corner_of_halfedge })
+    }
+
     /// The table of a validated half-edge mesh.
     ///
     /// # Errors
@@ -147,23 +224,23 @@ impl CornerTable {
         let targets = mesh.raw_halfedge_targets();
         let faces = mesh.face_count();
         let mesh_triangles = MeshTriangles::new(mesh);
-        if let Some(f) =
-            (0..faces as u32).into_par_iter().find_first(|&f| mesh_triangles.halfedges(f as usize).is_none())
-        {
-            let face = mesh.face(f as usize).expect("internal: face in range");
-            return Err(LoopError::NotTriangle { face: f as usize, corners: mesh.face_degree(face) });
+        // The corner of every face half-edge: one pass over the faces, in face order, so
+        // the writes follow the half-edge numbering (edges are numbered in face order).
+        // The same pass finds the first face that is not a triangle (a search of its own,
+        // item by item through the pool, cost as much as the whole table).
+        let mut corner_of_halfedge = vec![NONE; mesh.halfedge_count()];
+        for f in 0..faces as u32 {
+            let Some(halfedges) = mesh_triangles.halfedges(f as usize) else {
+                let face = mesh.face(f as usize).expect("internal: face in range");
+                return Err(LoopError::NotTriangle { face: f as usize, corners: mesh.face_degree(face) });
+            };
+            for (k, h) in halfedges.into_iter().enumerate() {
+                corner_of_halfedge[h as usize] = 3 * f + k as u32;
+            }
         }
         let face_halfedges = |f: u32| {
             mesh_triangles.halfedges(f as usize).unwrap_or_else(|| unreachable!("internal: every face is a triangle"))
         };
-        // The corner of every face half-edge: one pass over the faces, in face order, so
-        // the writes follow the half-edge numbering (edges are numbered in face order).
-        let mut corner_of_halfedge = vec![NONE; mesh.halfedge_count()];
-        for f in 0..faces as u32 {
-            for (k, h) in face_halfedges(f).into_iter().enumerate() {
-                corner_of_halfedge[h as usize] = 3 * f + k as u32;
-            }
-        }
         // Everything per face by gathers only, so faces are independent (parallel).
         let mut corner_vertex = vec![0u32; 3 * faces];
         let mut twin = vec![0u32; 3 * faces];
@@ -173,6 +250,7 @@ impl CornerTable {
             .zip(twin.par_chunks_mut(3))
             .zip(corner_edge.par_chunks_mut(3))
             .enumerate()
+            .with_min_len(FACE_CHUNK)
             .for_each(|(f, ((vertices, twins), edges))| {
                 let h = face_halfedges(f as u32);
                 for k in 0..3 {
@@ -184,18 +262,17 @@ impl CornerTable {
                 }
             });
         let corner_of = |h: u32| corner_of_halfedge[h as usize];
-        if let Some(face) = twin.par_chunks(3).position_first(|t| {
-            let other = |k: usize| if t[k] == NONE { NONE - k as u32 } else { t[k] / 3 };
-            other(0) == other(1) || other(1) == other(2) || other(2) == other(0)
-        }) {
+        if let Some(face) = first_pillow_face(&twin) {
             // Two triangles sharing two edges share all three (a closed "pillow"):
             // Loop refinement would glue their children non-manifoldly.
             return Err(LoopError::InteriorValenceTwo { vertex: corner_vertex[3 * face], face });
         }
         // The mesh numbers edges the same way (half-edges 2e, 2e + 1; 2e has a face).
-        let edge_corner = (0..mesh.edge_count() as u32).into_par_iter().map(|e| corner_of(2 * e)).collect();
+        let edge_corner =
+            (0..mesh.edge_count() as u32).into_par_iter().with_min_len(FACE_CHUNK).map(|e| corner_of(2 * e)).collect();
         let vertex_corner: Vec<u32> = (0..mesh.vertex_count())
             .into_par_iter()
+            .with_min_len(FACE_CHUNK)
             .map(|v| match mesh.vertex_halfedge(mesh.vertex(v).expect("internal: vertex in range")) {
                 None => NONE,
                 // A boundary vertex starts at the face half-edge along the boundary: the

@@ -789,6 +789,254 @@ fn detect_general(fine: &CornerTable, seed_vertex: Option<u32>) -> Result<Coarse
     Ok(labeler.assemble())
 }
 
+/// A fine mesh in any order, renumbered into the canonical order of the coarse mesh its
+/// propagation finds (see [`renumber_to_canonical`]).
+pub(crate) struct Renumbering {
+    /// The fine order, exactly as [`detect_general`] numbers the coarse mesh.
+    pub(crate) order: FineOrder,
+    /// The coarse corners of the canonical fine faces (the fine faces renumbered and
+    /// rotated by `order`), as [`canonical_groups`] reads them.
+    pub(crate) groups: CanonicalGroups,
+}
+
+/// The renumbering that the general detection would find, or `None`; the fast path of a
+/// fine mesh in any order, which [`reverse_canonical`] then checks and reverses.
+///
+/// The groups of four faces are found by a search over coarse faces instead of
+/// vertices: from a corner face and its vertex point, the inner face lies across the
+/// edge-point edge, the other two corner faces across the inner face's other edges, and
+/// the corner faces of the neighbouring coarse faces across the corner faces' edges at
+/// their vertex points: a few twin look-ups per coarse face, no circulation. Seeds as in
+/// [`detect_general`] (the caller's seed, then the lowest irregular vertex not reached
+/// yet; isolated vertices are vertex points). Nothing is validated here beyond what the
+/// search needs (a face in two groups, a vertex both vertex point and edge point, a
+/// missing twin, a face left over, say from a component whose valences are all regular:
+/// `None`): the faces, renumbered and rotated by the order found, must be a valid
+/// canonical refinement, which [`reverse_canonical`] checks as it does for any mesh.
+/// When they are, the fine mesh has Loop connectivity with every seed a vertex point, so
+/// its labeling is the one [`detect_general`] propagates from the same seeds (the
+/// labeling from a vertex point is forced), and this order numbers the coarse mesh as
+/// [`Labeler::assemble`] does: vertex points in fine order, coarse faces by their first
+/// fine face, starting at the corner whose corner face comes first, coarse edges (edge
+/// points) in order of first appearance.
+pub(crate) fn renumber_to_canonical(
+    vertex_count: usize,
+    corner_vertex: &[u32],
+    twin: &[u32],
+    corner_at: impl Fn(u32) -> u32,
+    seed_vertex: Option<u32>,
+) -> Option<Renumbering> {
+    let (nv, faces) = (vertex_count, corner_vertex.len() / 3);
+    if faces == 0 || !faces.is_multiple_of(4) || seed_vertex.is_some_and(|s| s as usize >= nv) {
+        return None;
+    }
+    let mut search = GroupSearch {
+        corner_vertex,
+        twin,
+        label: vec![UNKNOWN; nv],
+        group_of_face: vec![NONE; faces],
+        groups: Vec::with_capacity(faces / 4),
+        stack: Vec::new(),
+    };
+    if let Some(seed) = seed_vertex
+        && corner_at(seed) != NONE
+    {
+        search.run(corner_at(seed))?;
+    }
+    // Vertices reached are skipped, so the valence is counted (by circulation) only at
+    // the few vertices before each component's first irregular one.
+    for v in 0..nv as u32 {
+        if search.label[v as usize] != UNKNOWN {
+            continue;
+        }
+        let c = corner_at(v);
+        if c == NONE {
+            search.label[v as usize] = EVEN;
+        } else if is_irregular(twin, c) {
+            search.run(c)?;
+        }
+    }
+    let GroupSearch { label, group_of_face, groups, .. } = search;
+    if 4 * groups.len() != faces {
+        return None;
+    }
+    // Canonical vertex of every fine vertex: the vertex points in fine order, then the
+    // edge points as the coarse corners first name them.
+    let mut canonical_of_fine = vec![NONE; nv];
+    let mut vertex_of_canonical = Vec::with_capacity(nv);
+    for (v, &l) in label.iter().enumerate() {
+        if l == EVEN {
+            canonical_of_fine[v] = vertex_of_canonical.len() as u32;
+            vertex_of_canonical.push(v as u32);
+        }
+    }
+    drop(label);
+    // The smallest edge point.
+    let first_odd = vertex_of_canonical.len() as u32;
+    let mut numbered = vec![false; groups.len()];
+    let mut face_of_canonical = Vec::with_capacity(faces);
+    let mut coarse_vertex = Vec::with_capacity(3 * groups.len());
+    let mut edge_point = Vec::with_capacity(3 * groups.len());
+    for &g in &group_of_face {
+        if std::mem::replace(&mut numbered[g as usize], true) {
+            continue;
+        }
+        let FaceGroup { corner, inner, y, m: points } = groups[g as usize];
+        // Start at the corner whose corner face comes first.
+        let r = if corner[0] < corner[1] { 0 } else { 1 };
+        let r = if corner[2] < corner[r] { 2 } else { r };
+        let mut m = [0u32; 3];
+        for s in 0..3 {
+            let k = (r + s) % 3;
+            let slot = &mut canonical_of_fine[points[k] as usize];
+            if *slot == NONE {
+                *slot = vertex_of_canonical.len() as u32;
+                vertex_of_canonical.push(points[k]);
+            }
+            m[k] = *slot;
+        }
+        // Coarse corner s: the corner face (y_k, m_k, m_{k-1}) (its corners after the
+        // vertex point are those of the inner face's edge across which it was found),
+        // then the inner face (m_r, m_{r+1}, m_{r+2}).
+        for s in 0..3 {
+            let k = (r + s) % 3;
+            let even = corner[k];
+            // Canonical corner 0 is the vertex point: actual corner j -> rotation (3 - j) % 3.
+            face_of_canonical.push(3 * (even / 3) + (3 - even % 3) % 3);
+            coarse_vertex.push(canonical_of_fine[y[k] as usize]);
+            edge_point.push(m[k]);
+        }
+        face_of_canonical.push(3 * inner + (3 - r as u32) % 3);
+    }
+    if vertex_of_canonical.len() != nv {
+        return None;
+    }
+    let groups = CanonicalGroups { coarse_vertex, edge_point, first_odd };
+    Some(Renumbering { order: FineOrder { vertex_of_canonical, face_of_canonical }, groups })
+}
+
+/// True if the vertex of corner `start` cannot be an edge point: its number of corners
+/// is not 6 inside or 3 on the boundary (counted around it through the twins).
+fn is_irregular(twin: &[u32], start: u32) -> bool {
+    let mut count = 1u32;
+    // Counter-clockwise: the twin of the half-edge arriving at the vertex.
+    let mut c = start;
+    loop {
+        let t = twin[prev(c) as usize];
+        if t == start {
+            return count != 6;
+        }
+        if t == NONE {
+            break;
+        }
+        count += 1;
+        c = t;
+    }
+    // An open fan: the rest of it, clockwise.
+    let mut c = start;
+    while twin[c as usize] != NONE {
+        c = next(twin[c as usize]);
+        count += 1;
+    }
+    count != 3
+}
+
+impl Renumbering {
+    /// True if the order is the identity (the fine mesh is in the canonical order).
+    pub(crate) fn is_identity(&self) -> bool {
+        let FineOrder { vertex_of_canonical, face_of_canonical } = &self.order;
+        vertex_of_canonical.iter().enumerate().all(|(i, &v)| v == i as u32)
+            && face_of_canonical.iter().enumerate().all(|(k, &code)| code == 3 * k as u32)
+    }
+}
+
+/// The four faces of a coarse face found by [`GroupSearch`]: `corner[k]`, the corner at
+/// the vertex point of the corner face across the inner face's edge `k - 1` (as
+/// [`Group::corner`]), and the inner face.
+#[derive(Clone, Copy)]
+struct FaceGroup {
+    corner: [u32; 3],
+    inner: u32,
+    /// The vertex of each `corner` (vertex points).
+    y: [u32; 3],
+    /// The corners of the inner face (edge points; `m[k]` on the coarse edge `y[k] -> y[k + 1]`).
+    m: [u32; 3],
+}
+
+/// The search of [`renumber_to_canonical`].
+struct GroupSearch<'a> {
+    corner_vertex: &'a [u32],
+    twin: &'a [u32],
+    label: Vec<u8>,
+    group_of_face: Vec<u32>,
+    groups: Vec<FaceGroup>,
+    /// Corners at the vertex point of corner faces still to visit.
+    stack: Vec<u32>,
+}
+
+impl GroupSearch<'_> {
+    /// Groups the faces reached from the corner face of corner `start`, whose vertex is
+    /// taken for a vertex point; `None` where the pattern breaks.
+    fn run(&mut self, start: u32) -> Option<()> {
+        let (corner_vertex, twin) = (self.corner_vertex, self.twin);
+        self.stack.clear();
+        self.stack.push(start);
+        while let Some(e) = self.stack.pop() {
+            if self.group_of_face[(e / 3) as usize] != NONE {
+                continue;
+            }
+            let across = twin[next(e) as usize];
+            if across == NONE {
+                return None;
+            }
+            let inner = across / 3;
+            // Across the inner face's edge j (m_j -> m_{j+1}) lies the corner face of
+            // vertex point j + 1; its corner there is the one before the twin.
+            let mut corner = [0u32; 3];
+            for j in 0..3 {
+                let t = twin[3 * inner as usize + j];
+                if t == NONE {
+                    return None;
+                }
+                corner[(j + 1) % 3] = prev(t);
+            }
+            let g = self.groups.len() as u32;
+            for f in [inner, corner[0] / 3, corner[1] / 3, corner[2] / 3] {
+                // Also refuses a face met twice in this group.
+                if std::mem::replace(&mut self.group_of_face[f as usize], g) != NONE {
+                    return None;
+                }
+            }
+            let i = 3 * inner as usize;
+            let m = [corner_vertex[i], corner_vertex[i + 1], corner_vertex[i + 2]];
+            for point in m {
+                let label = &mut self.label[point as usize];
+                if *label == EVEN {
+                    return None;
+                }
+                *label = ODD;
+            }
+            let y = corner.map(|c| corner_vertex[c as usize]);
+            for (c, v) in corner.into_iter().zip(y) {
+                let label = &mut self.label[v as usize];
+                if *label == ODD {
+                    return None;
+                }
+                *label = EVEN;
+                // The neighbouring coarse face across coarse edge k (y_k -> y_{k+1}): its
+                // corner face at y_k lies across this corner face's edge y_k -> m_k (the
+                // other half of the coarse edge leads to the same coarse face).
+                let t = twin[c as usize];
+                if t != NONE && self.group_of_face[(t / 3) as usize] == NONE {
+                    self.stack.push(next(t));
+                }
+            }
+            self.groups.push(FaceGroup { corner, inner, y, m });
+        }
+        Some(())
+    }
+}
+
 /// The coarse triangle of an inner face `(ab, bc, ca)`: vertex points `y = (a, b, c)`,
 /// the edge point `m[k]` of each coarse half-edge `y[k] -> y[k+1]`, and `corner[k]`, the
 /// fine corner at `y[k]` in its corner face (whose half-edge is `y[k] -> m[k]`).

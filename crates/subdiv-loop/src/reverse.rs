@@ -55,8 +55,8 @@ use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 use crate::LoopError;
 use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
 use crate::detect::{
-    Coarsening, FineOrder, PairedEdge, canonical_groups, coarse_face_is_valid, detect_mesh, detect_table,
-    reverse_canonical_mesh, reverse_canonical_table,
+    CanonicalGroups, Coarsening, FineOrder, PairedEdge, Renumbering, canonical_groups, coarse_face_is_valid,
+    detect_mesh, detect_table, renumber_to_canonical, reverse_canonical_mesh, reverse_canonical_table,
 };
 use crate::forward::buffer::{Output, Slots};
 use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
@@ -412,9 +412,10 @@ pub(crate) struct LevelParts {
     pub(crate) details: Vec<DVec3>,
 }
 
-/// One level reversed, by the fused path when the fine mesh is canonical, else by
-/// detection and [`reverse_positions`]. A user's mesh with a
-/// non-finite position is an error before any connectivity error, on either path.
+/// One level reversed, by the fused path when the fine mesh is canonical, else through
+/// its canonical renumbering ([`reverse_renumbered`]) when that is found and valid, else
+/// by detection and [`reverse_positions`] (which also names every error). A user's mesh
+/// with a non-finite position is an error before any connectivity error, on every path.
 pub(crate) fn reverse_level(
     fine: FineLevel<'_>,
     positions: &[DVec3],
@@ -441,6 +442,25 @@ pub(crate) fn reverse_level(
         });
     }
     check_input()?;
+    // A mesh in any other order: renumbered into the canonical order of the coarse mesh
+    // that detection finds, and reversed by the canonical path, which also checks it.
+    // Anything else (errors included) goes through the general detection.
+    let renumbering = match fine {
+        FineLevel::Mesh(mesh) => CornerTable::mesh_corners(mesh).and_then(|corners| {
+            let corner_at = |v| corners.corner_at(mesh, v);
+            renumber_to_canonical(mesh.vertex_count(), &corners.corner_vertex, &corners.twin, corner_at, seed_vertex)
+        }),
+        FineLevel::Table(table) => {
+            let starts = table.vertex_corners();
+            let corner_at = |v: u32| starts[v as usize];
+            renumber_to_canonical(table.vertex_count(), table.corner_vertices(), table.twins(), corner_at, seed_vertex)
+        }
+    };
+    if let Some(renumbering) = renumbering
+        && let Some(level) = reverse_renumbered(renumbering, positions, rules)
+    {
+        return Ok(level);
+    }
     let coarsening = match fine {
         FineLevel::Mesh(mesh) => detect_mesh(mesh, seed_vertex)?,
         FineLevel::Table(table) => detect_table(table, seed_vertex)?,
@@ -448,6 +468,23 @@ pub(crate) fn reverse_level(
     let (coarse_positions, details) = reverse_positions(&coarsening, positions, rules);
     let order = coarsening.fine_order();
     Ok(LevelParts { coarse: coarsening.coarse, order, positions: coarse_positions, details })
+}
+
+/// A fine mesh in any order reversed through its canonical renumbering
+/// ([`renumber_to_canonical`]) and [`reverse_canonical`]: the same coarse mesh,
+/// positions, details and order, bit for bit, as the general detection followed by
+/// [`reverse_positions`] (the edge points are summed in the same coarse edge order, the
+/// details by the same formula). `None` when the renumbering is not found or the
+/// renumbered mesh is not a valid canonical refinement.
+fn reverse_renumbered(renumbering: Renumbering, positions: &[DVec3], rules: &LoopOptions) -> Option<LevelParts> {
+    let vertex_of_canonical = &renumbering.order.vertex_of_canonical;
+    let canonical_positions: Vec<DVec3> = vertex_of_canonical.iter().map(|&v| positions[v as usize]).collect();
+    // The groups are made in the canonical pattern (coarse vertices below edge points,
+    // the seed, if any, a vertex point); the rest is checked as for any canonical mesh.
+    let identity = renumbering.is_identity();
+    let level = reverse_canonical_groups(renumbering.groups, positions.len(), &canonical_positions, rules)?;
+    let order = (!identity).then_some(renumbering.order);
+    Some(LevelParts { coarse: level.coarse, order, positions: level.positions, details: level.details })
 }
 
 /// A level reversed by [`reverse_canonical`].
@@ -485,7 +522,17 @@ pub(crate) fn reverse_canonical(
     fine: &[DVec3],
     rules: &LoopOptions,
 ) -> Option<CanonicalLevel> {
-    let groups = canonical_groups(faces, seed_vertex, face)?;
+    reverse_canonical_groups(canonical_groups(faces, seed_vertex, face)?, vertex_count, fine, rules)
+}
+
+/// [`reverse_canonical`] from the coarse corners of the fine faces (the groups of four
+/// faces read already).
+fn reverse_canonical_groups(
+    groups: CanonicalGroups,
+    vertex_count: usize,
+    fine: &[DVec3],
+    rules: &LoopOptions,
+) -> Option<CanonicalLevel> {
     let first_odd = groups.first_odd;
     let nv = first_odd as usize;
     let edge_position = |e: u32| fine[(first_odd + e) as usize];
@@ -1110,6 +1157,84 @@ mod tests {
         short.levels[2].details.pop();
         assert!(matches!(short.reconstruct(3), Err(LoopError::InvalidDetails { level: 3, .. })));
         assert!(short.reconstruct(2).is_ok());
+    }
+
+    /// The renumbering path next to the general detection on one mesh: when the
+    /// renumbering is found and reverses, the general path must give the very same level
+    /// (coarse mesh, positions, details and order, bit for bit).
+    fn renumbered_agrees_with_general(fine: &HalfedgeMesh, seed_vertex: Option<u32>, rules: &LoopOptions) -> bool {
+        let corners = CornerTable::mesh_corners(fine).expect("triangles");
+        let corner_at = |v| corners.corner_at(fine, v);
+        let renumbering =
+            renumber_to_canonical(fine.vertex_count(), &corners.corner_vertex, &corners.twin, corner_at, seed_vertex);
+        let Some(fast) = renumbering.and_then(|r| reverse_renumbered(r, fine.positions(), rules)) else {
+            return false;
+        };
+        let coarsening = detect_table(&CornerTable::from_mesh(fine).unwrap(), seed_vertex)
+            .expect("the general detection accepts what the renumbering accepts");
+        let (positions, details) = reverse_positions(&coarsening, fine.positions(), rules);
+        assert_eq!(fast.coarse, coarsening.coarse);
+        assert_eq!(fast.order, coarsening.fine_order());
+        let bits = |v: &[DVec3]| v.iter().flat_map(|p| p.to_array().map(f64::to_bits)).collect::<Vec<_>>();
+        assert_eq!(bits(&fast.positions), bits(&positions));
+        assert_eq!(bits(&fast.details), bits(&details));
+        true
+    }
+
+    #[test]
+    fn renumbering_path_agrees_with_the_general_detection() {
+        let rules = LoopOptions::default();
+        for (name, soup) in test_shapes() {
+            let fine = perturb(&loop_step(&mesh(&soup), &rules), 0.05, 3);
+            for seed in [1, 2, 3] {
+                let scrambled = mesh(&scramble(&fine, seed));
+                // Regular tori are left to the general detection (a search over seeds).
+                let found = renumbered_agrees_with_general(&scrambled, None, &rules);
+                assert!(found || name.starts_with("torus"), "{name}");
+                assert!(renumbered_agrees_with_general(&scrambled, Some(scrambled_vertex_point(&scrambled)), &rules));
+            }
+        }
+    }
+
+    /// A vertex point of a scrambled refinement (from the general detection).
+    fn scrambled_vertex_point(fine: &HalfedgeMesh) -> u32 {
+        let coarsening = detect_table(&CornerTable::from_mesh(fine).unwrap(), None).unwrap();
+        *coarsening.vertex_point.last().unwrap()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(96))]
+
+        /// The renumbering path is sound: on refined, renumbered meshes with edges
+        /// flipped (most no longer Loop meshes), whatever it accepts the general detection
+        /// accepts with the same result, bit for bit.
+        #[test]
+        fn renumbering_path_is_sound(
+            soup in mesh_topo::testing::arb_triangle_mesh(),
+            flips in 0usize..3,
+            seed in any::<u64>(),
+        ) {
+            let rules = LoopOptions::default();
+            let mut fine = scramble(&perturb(&loop_step(&mesh(&soup), &rules), 0.05, seed), seed);
+            let mut rng = crate::reference::Rng::new(seed);
+            for _ in 0..flips {
+                let m = mesh(&fine);
+                let e = m.edge(rng.below(m.edge_count())).unwrap();
+                if !m.is_boundary_edge(e) {
+                    let [a, b] = m.edge_vertices(e);
+                    let flipped = crate::reference::flip_edge(&fine, a.raw(), b.raw());
+                    if HalfedgeMesh::from_soup(&flipped).is_ok() {
+                        fine = flipped;
+                    }
+                }
+            }
+            let fine = mesh(&fine);
+            let accepted = renumbered_agrees_with_general(&fine, None, &rules);
+            if flips == 0 {
+                // Unless every valence is regular (then the general detection searches).
+                prop_assert!(accepted || detect_table(&CornerTable::from_mesh(&fine).unwrap(), None).is_ok());
+            }
+        }
     }
 
     proptest! {
