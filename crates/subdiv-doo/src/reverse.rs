@@ -104,6 +104,7 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use serde::{Deserialize, Serialize};
 
 use crate::DooError;
+use crate::canonical::distinct;
 use crate::corner::{
     CornerMesh, NONE, VertexCorners, doo_topology, expand_faces, face_points_in_place, faces_of_corners, group_by_key,
     next_of_corners, prev_of_corners,
@@ -599,9 +600,17 @@ impl<'a> Session<'a> {
                 Kept::default()
             };
             let ready = !kept.candidates.is_empty();
-            let buffer = if ready { kept.candidates } else { std::mem::take(&mut search.candidate) };
+            let mut buffer = if ready { kept.candidates } else { std::mem::take(&mut search.candidate) };
             let known = kept.corner_of_vertex;
-            match search.finish(self.rule, &self.component_of_face, component_count, (buffer, ready), known) {
+            // A closed mesh of one component in fewer passes; anything else (or any
+            // mismatch) through the full build, which names the face at fault.
+            let closed =
+                if component_count == 1 { search.finish_closed(self.rule, &mut buffer, ready, &known) } else { None };
+            let result = match closed {
+                Some(result) => Ok(result),
+                None => search.finish(self.rule, &self.component_of_face, component_count, (buffer, ready), known),
+            };
+            match result {
                 Ok((mut reversal, energies)) => {
                     for (k, choice) in choices.iter_mut().enumerate() {
                         let (seed, _) = self.readings[k][pick[k]];
@@ -777,7 +786,7 @@ impl<'a> Search<'a> {
     }
 
     /// [`Self::across`], also giving the quad crossed.
-    #[inline]
+    #[inline(always)]
     fn across_quad(&self, f: usize, fc: u32) -> Result<Option<(u32, u32)>, DooError> {
         let fine = self.fine;
         let ft = fine.corner_twin[fc as usize];
@@ -1298,6 +1307,201 @@ impl<'a> Search<'a> {
         let best_candidates = std::mem::take(&mut found[rank[0]].kept);
         let choice = SeedChoice { component: k, seed_face: seed, given: false, trials, detail_energy: energy, reason };
         Ok((choice, ranked, best_ff_faces, best_candidates))
+    }
+
+    /// [`Self::finish`] for a mesh of one component whose reading covers every vertex once
+    /// (`canonical_of_vertex`: the coarse corner of each fine vertex) and whose coarse mesh
+    /// is closed, in fewer passes: the faces that are neither F_F faces nor F_E quads are
+    /// taken in face order as the F_V faces, each checked to be the counter-clockwise orbit
+    /// of one coarse vertex, which numbers the coarse vertices as the input numbers their
+    /// F_V faces (as [`find_vertex_faces`] and [`coarse_vertex_order`] do), gives each
+    /// vertex's corners and the F_V matching; the two checks of the coarse manifold ride
+    /// on that pass and on the means. `None` at the first mismatch of any kind: then
+    /// [`Self::finish`] runs and names the face at fault. When it gives a result, it is
+    /// the one of [`Self::finish`] (same coarse mesh, details, order and energies).
+    ///
+    /// `buffer`: the candidates by coarse corner if `ready`, else scratch for them.
+    fn finish_closed(
+        &self,
+        rule: FaceRule,
+        buffer: &mut Vec<DVec3>,
+        ready: bool,
+        canonical_of_vertex: &[u32],
+    ) -> Option<(DooReversal, Vec<f64>)> {
+        let fine = self.fine;
+        let faces = fine.face_count();
+        if canonical_of_vertex.len() != fine.vertex_count || fine.corner_twin.contains(&NONE) {
+            return None;
+        }
+        // Coarse faces: the F_F faces in increasing order; fine vertex of each coarse corner.
+        let mut coarse_offsets = Vec::with_capacity(faces / 3 + 2);
+        coarse_offsets.push(0u32);
+        let mut ff_faces = Vec::with_capacity(faces / 3 + 1);
+        let mut vertex_of = Vec::with_capacity(fine.vertex_count);
+        let mut coarse_face_of = vec![NONE; faces];
+        let mut matched = vec![false; faces];
+        for f in 0..faces {
+            if self.role[f] != FF {
+                continue;
+            }
+            coarse_face_of[f] = ff_faces.len() as u32;
+            matched[f] = true;
+            ff_faces.push(f as u32);
+            vertex_of.extend_from_slice(&fine.corner_vertex[fine.offsets[f] as usize..fine.offsets[f + 1] as usize]);
+            coarse_offsets.push(vertex_of.len() as u32);
+        }
+        let coarse_corners = vertex_of.len();
+        if coarse_corners != fine.vertex_count {
+            return None;
+        }
+        // Coarse twins through the F_E quads (none on the boundary: closed).
+        let mut twins = vec![NONE; coarse_corners];
+        let mut quad_face = vec![NONE; coarse_corners];
+        for (k, &f) in ff_faces.iter().enumerate() {
+            let first = coarse_offsets[k] as usize;
+            for (c, fc) in (first..).zip(fine.offsets[f as usize]..fine.offsets[f as usize + 1]) {
+                let (g, gt) = self.across_quad(f as usize, fc).ok()??;
+                let h = self.corner_face[gt as usize] as usize;
+                twins[c] = match coarse_face_of[h] {
+                    NONE => canonical_of_vertex[fine.corner_vertex[gt as usize] as usize],
+                    k => coarse_offsets[k as usize] + (gt - fine.offsets[h]),
+                };
+                quad_face[c] = g;
+            }
+        }
+        drop(coarse_face_of);
+        for c in 0..coarse_corners {
+            let t = twins[c] as usize;
+            if t >= coarse_corners || twins[t] != c as u32 || quad_face[t] != quad_face[c] {
+                return None;
+            }
+        }
+        let coarse_next = next_of_corners(&coarse_offsets);
+
+        // The F_E quads, in order of their smaller coarse corner (as [`match_fine_faces`]).
+        let mut face_order = Vec::with_capacity(faces);
+        let mut rotations = Vec::with_capacity(faces);
+        face_order.extend_from_slice(&ff_faces);
+        rotations.resize(ff_faces.len(), 0);
+        for c in 0..coarse_corners {
+            let t = twins[c] as usize;
+            if c > t {
+                continue;
+            }
+            let cycle =
+                [vertex_of[c], vertex_of[coarse_next[t] as usize], vertex_of[t], vertex_of[coarse_next[c] as usize]];
+            let g = quad_face[c] as usize;
+            let (b, e) = (fine.offsets[g] as usize, fine.offsets[g + 1] as usize);
+            if e - b != 4 || std::mem::replace(&mut matched[g], true) {
+                return None;
+            }
+            let face = &fine.corner_vertex[b..e];
+            let r = cycle.iter().position(|&x| x == face[0])?;
+            if (0..4).any(|i| face[i] != cycle[(i + r) & 3]) {
+                return None;
+            }
+            face_order.push(g as u32);
+            rotations.push(r as u32);
+        }
+
+        // The other faces, in face order, are the F_V faces: each the counter-clockwise
+        // orbit (`c -> next(twin(c))` backwards) of one coarse vertex, numbered in that
+        // order, every coarse corner on exactly one.
+        let clockwise = |c: u32| coarse_next[twins[c as usize] as usize];
+        let mut labels = vec![NONE; coarse_corners];
+        let mut vertex_corner = Vec::with_capacity(faces - face_order.len());
+        let mut by_vertex_offsets = Vec::with_capacity(faces - face_order.len() + 1);
+        by_vertex_offsets.push(0u32);
+        let mut by_vertex_corners: Vec<u32> = Vec::with_capacity(coarse_corners);
+        for (g, _) in matched.iter().enumerate().filter(|(_, matched)| !**matched) {
+            let (b, e) = (fine.offsets[g] as usize, fine.offsets[g + 1] as usize);
+            let m = e - b;
+            let label = vertex_corner.len() as u32;
+            let start = by_vertex_corners.len();
+            if m < 3 || start + m > coarse_corners {
+                return None;
+            }
+            // No corner is labelled twice: two faces that are orbits through one corner
+            // would be the same orbit, the same directed edges, which a mesh has once.
+            for &x in &fine.corner_vertex[b..e] {
+                let c = canonical_of_vertex[x as usize];
+                labels[c as usize] = label;
+                by_vertex_corners.push(c);
+            }
+            let corners = &mut by_vertex_corners[start..];
+            let mut previous = corners[m - 1];
+            let (mut smallest, mut at) = (corners[0], 0);
+            for (j, &c) in corners.iter().enumerate() {
+                if clockwise(c) != previous {
+                    return None;
+                }
+                previous = c;
+                if c < smallest {
+                    (smallest, at) = (c, j);
+                }
+            }
+            insertion_sort(corners);
+            vertex_corner.push(smallest);
+            by_vertex_offsets.push(by_vertex_corners.len() as u32);
+            face_order.push(g as u32);
+            rotations.push(((m - at) % m) as u32);
+        }
+        if by_vertex_corners.len() != coarse_corners {
+            return None;
+        }
+        let coarse_vertex_count = vertex_corner.len();
+        let coarse = CornerMesh {
+            offsets: coarse_offsets,
+            corner_vertex: labels,
+            corner_twin: twins,
+            corner_next: coarse_next,
+            vertex_count: coarse_vertex_count,
+            vertex_corner: Some(vertex_corner),
+        };
+        // The coarse manifold ([`check_coarse_manifold`]): no face visits a vertex twice;
+        // no two edges join the same two vertices (the outgoing half-edges of a vertex are
+        // its corners, the mesh being closed), checked beside the means.
+        let mut stamp = Vec::new();
+        for (k, w) in coarse.offsets.windows(2).enumerate() {
+            if !distinct(&coarse.corner_vertex[w[0] as usize..w[1] as usize], &mut stamp, coarse_vertex_count, k as u32)
+            {
+                return None;
+            }
+        }
+        let by_vertex = CornersByVertex::from_parts((by_vertex_offsets, by_vertex_corners));
+        let expanded;
+        let candidates = if ready && buffer.len() == coarse_corners {
+            &buffer[..]
+        } else {
+            let scratch = std::mem::take(buffer);
+            expanded = expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize], scratch);
+            &expanded[..]
+        };
+        stamp.fill(NONE);
+        let mut manifold = true;
+        let mut ends = Vec::new();
+        let (coarse_positions, details, vertex_energy) =
+            means_and_details_with(&by_vertex, candidates, |u, corners| {
+                ends.clear();
+                ends.extend(corners.iter().map(|&c| coarse.corner_vertex[coarse.corner_next[c as usize] as usize]));
+                manifold &= distinct(&ends, &mut stamp, coarse_vertex_count, u as u32);
+            });
+        if !manifold {
+            return None;
+        }
+        let identity_vertices = vertex_of.iter().enumerate().all(|(c, &x)| x == c as u32);
+        let identity_faces = face_order.iter().enumerate().all(|(k, &g)| g == k as u32);
+        let no_rotation = rotations.iter().all(|&r| r == 0);
+        let order = FineOrder {
+            vertices: if identity_vertices { Vec::new() } else { vertex_of },
+            faces: if identity_faces { Vec::new() } else { face_order },
+            rotations: if no_rotation { Vec::new() } else { rotations },
+        };
+        let mut stats = self.stats;
+        stats.candidate_edges = coarse_corners;
+        let energies = vec![vertex_energy.iter().sum()];
+        let reversal = DooReversal { rule, coarse, coarse_positions, details, order, choices: Vec::new(), stats };
+        Some((reversal, energies))
     }
 
     /// Builds the coarse mesh, details and fine order from the roles of all components;
