@@ -448,7 +448,8 @@ impl<'a> Session<'a> {
         match options.seeds[..] {
             [] => {
                 if let Some(first) = search.first_reading_covers_all(faces) {
-                    let (choice, ranked, best, candidates) = search.choose(0, faces, fine.vertex_count, Some(first))?;
+                    let (choice, ranked, best, candidates) =
+                        search.choose(0, faces, fine.vertex_count, Some(first), options.rule)?;
                     let best = (best, candidates);
                     return Ok(Self::one_component(search, options.rule, NONE, ranked, best, choice, false));
                 }
@@ -510,7 +511,8 @@ impl<'a> Session<'a> {
                         &faces_by_component[component_offsets[k] as usize..component_offsets[k + 1] as usize],
                     )
                 };
-                let (choice, ranked, best, candidates) = search.choose(k, faces, vertices_by_component[k], None)?;
+                let (choice, ranked, best, candidates) =
+                    search.choose(k, faces, vertices_by_component[k], None, options.rule)?;
                 readings.push(ranked);
                 choices.push(choice);
                 best_ff_faces.push(best);
@@ -574,41 +576,57 @@ impl<'a> Session<'a> {
         let mut choices = self.choices.clone();
         let search = &mut self.search;
         loop {
-            if std::mem::take(&mut self.preclassified) {
-                // The roles of the given seed are set already.
+            // The best reading of a closed one-component mesh, built by the ranking.
+            let prebuilt = match search.prebuilt.take() {
+                Some((seed, closed)) if component_count == 1 && pick[0] == 0 && self.readings[0][0].0 == seed => {
+                    Some(closed)
+                }
+                _ => None,
+            };
+            let result = if let Some(Closed { mut reversal, energies, .. }) = prebuilt {
+                // The counters as the build would copy them now.
+                reversal.stats = ReverseStats { candidate_edges: reversal.stats.candidate_edges, ..search.stats };
+                Ok((reversal, energies))
             } else {
-                search.role.fill(UNKNOWN);
-                search.queue.clear();
-                for ((ranked, &p), best) in self.readings.iter().zip(&pick).zip(&self.best_ff_faces) {
-                    if p == 0 && !best.is_empty() {
-                        // The best automatic reading, as the ranking found it (only the F_F
-                        // roles matter from here on).
-                        for &f in best {
-                            search.role[f as usize] = FF;
+                if std::mem::take(&mut self.preclassified) {
+                    // The roles of the given seed are set already.
+                } else {
+                    search.role.fill(UNKNOWN);
+                    search.queue.clear();
+                    for ((ranked, &p), best) in self.readings.iter().zip(&pick).zip(&self.best_ff_faces) {
+                        if p == 0 && !best.is_empty() {
+                            // The best automatic reading, as the ranking found it (only the F_F
+                            // roles matter from here on).
+                            for &f in best {
+                                search.role[f as usize] = FF;
+                            }
+                        } else {
+                            search.classify(ranked[p].0)?;
                         }
-                    } else {
-                        search.classify(ranked[p].0)?;
                     }
                 }
-            }
-            // The candidates of the result: those of the ranking for the best reading of a
-            // one-component mesh, else written into the energy scratch (no reading is
-            // evaluated after the ranking).
-            let kept = if component_count == 1 && pick[0] == 0 {
-                std::mem::take(&mut self.best_candidates[0])
-            } else {
-                Kept::default()
-            };
-            let ready = !kept.candidates.is_empty();
-            let mut buffer = if ready { kept.candidates } else { std::mem::take(&mut search.candidate) };
-            let known = kept.corner_of_vertex;
-            // A closed mesh of one component in fewer passes; anything else (or any
-            // mismatch) through the full build, which names the face at fault.
-            let closed =
-                if component_count == 1 { search.finish_closed(self.rule, &mut buffer, ready, &known) } else { None };
-            let result = match closed {
-                Some(result) => Ok(result),
-                None => search.finish(self.rule, &self.component_of_face, component_count, (buffer, ready), known),
+                // The candidates of the result: those of the ranking for the best reading of a
+                // one-component mesh, else written into the energy scratch (no reading is
+                // evaluated after the ranking).
+                let kept = if component_count == 1 && pick[0] == 0 {
+                    std::mem::take(&mut self.best_candidates[0])
+                } else {
+                    Kept::default()
+                };
+                let ready = !kept.candidates.is_empty();
+                let mut buffer = if ready { kept.candidates } else { std::mem::take(&mut search.candidate) };
+                let known = kept.corner_of_vertex;
+                // A closed mesh of one component in fewer passes; anything else (or any
+                // mismatch) through the full build, which names the face at fault.
+                let closed = if component_count == 1 {
+                    search.finish_closed(self.rule, &mut buffer, ready, &known)
+                } else {
+                    None
+                };
+                match closed {
+                    Some(Closed { reversal, energies, .. }) => Ok((reversal, energies)),
+                    None => search.finish(self.rule, &self.component_of_face, component_count, (buffer, ready), known),
+                }
             };
             match result {
                 Ok((mut reversal, energies)) => {
@@ -686,6 +704,14 @@ struct Kept {
     corner_of_vertex: Vec<u32>,
 }
 
+/// What [`Search::finish_closed`] builds: the reversal, its energy, and the F_V face of
+/// each coarse vertex.
+struct Closed {
+    reversal: DooReversal,
+    energies: Vec<f64>,
+    fv_faces: Vec<u32>,
+}
+
 /// Readings of one component: (seed face, detail energy), best first.
 type Ranked = Vec<(usize, f64)>;
 
@@ -718,6 +744,9 @@ struct Search<'a> {
     /// Scratch of [`Self::energy`]: the ranks of the candidates of one group.
     ranks_in_group: Vec<u32>,
     stats: ReverseStats,
+    /// The first reading of a closed one-component mesh, built by [`Self::choose`] to
+    /// evaluate its dual reading (with its seed face), for the build to use.
+    prebuilt: Option<(usize, Closed)>,
 }
 
 impl<'a> Search<'a> {
@@ -737,6 +766,7 @@ impl<'a> Search<'a> {
             group: Vec::new(),
             ranks_in_group: Vec::new(),
             stats: ReverseStats::default(),
+            prebuilt: None,
         }
     }
 
@@ -1200,6 +1230,7 @@ impl<'a> Search<'a> {
         faces: FaceSet<'_>,
         vertices: usize,
         mut first: Option<Energy>,
+        rule: FaceRule,
     ) -> Result<(SeedChoice, Ranked, Vec<u32>, Kept), DooError> {
         let lowest = faces.first() as usize;
         // A first trial made already is the whole queue.
@@ -1246,7 +1277,16 @@ impl<'a> Search<'a> {
                         other_classes.push((f as usize, "F_E"));
                     }
                     let ff_faces = self.queue[queue_start..].to_vec();
-                    found.push(Found { seed, energy, stopped_early: false, ff_faces, kept: self.keep_reading(whole) });
+                    let mut kept = self.keep_reading(whole);
+                    if whole && fv.is_some() {
+                        // A closed mesh: built now, while the roles of the search are set
+                        // ([`Self::finish_closed`] reads its F_E quads), also so that its
+                        // dual reading is read from the structure ([`Self::dual_energy`]).
+                        self.prebuilt = self
+                            .finish_closed(rule, &mut kept.candidates, true, &kept.corner_of_vertex)
+                            .map(|closed| (seed, closed));
+                    }
+                    found.push(Found { seed, energy, stopped_early: false, ff_faces, kept });
                     self.reset(faces, queue_start);
                     break;
                 }
@@ -1265,6 +1305,24 @@ impl<'a> Search<'a> {
             // The smallest total so far: a reading whose sum reaches it cannot win.
             let mut cutoff = first.energy;
             for (seed, class) in other_classes {
+                if let Some((_, closed)) = self.prebuilt.as_ref().filter(|_| class == "F_V") {
+                    let canonical_of_vertex = &found[0].kept.corner_of_vertex;
+                    if let Some(energy) = self.dual_energy(closed, canonical_of_vertex, cutoff) {
+                        // Stopped early: the search it stands for visits every F_V face and
+                        // looks across each of their edges (one per fine vertex).
+                        self.stats.visited_faces += closed.fv_faces.len();
+                        self.stats.edges_crossed += self.fine.vertex_count;
+                        trials.push(SeedTrial::valid(seed, class, energy, true));
+                        found.push(Found {
+                            seed,
+                            energy,
+                            stopped_early: true,
+                            ff_faces: Vec::new(),
+                            kept: Kept::default(),
+                        });
+                        continue;
+                    }
+                }
                 let result = self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices, cutoff));
                 match result {
                     Ok(Energy { energy, stopped_early, .. }) => {
@@ -1311,8 +1369,10 @@ impl<'a> Search<'a> {
 
     /// [`Self::finish`] for a mesh of one component whose reading covers every vertex once
     /// (`canonical_of_vertex`: the coarse corner of each fine vertex) and whose coarse mesh
-    /// is closed, in fewer passes: the faces that are neither F_F faces nor F_E quads are
-    /// taken in face order as the F_V faces, each checked to be the counter-clockwise orbit
+    /// is closed, in fewer passes, with the roles of the search set (F_F faces and F_E
+    /// quads): the coarse twins and the quad matching come from one pass over the quads in
+    /// face order (no walk across them), the faces that are neither F_F faces nor F_E
+    /// quads are taken in face order as the F_V faces, each checked to be the counter-clockwise orbit
     /// of one coarse vertex, which numbers the coarse vertices as the input numbers their
     /// F_V faces (as [`find_vertex_faces`] and [`coarse_vertex_order`] do), gives each
     /// vertex's corners and the F_V matching; the two checks of the coarse manifold ride
@@ -1327,7 +1387,7 @@ impl<'a> Search<'a> {
         buffer: &mut Vec<DVec3>,
         ready: bool,
         canonical_of_vertex: &[u32],
-    ) -> Option<(DooReversal, Vec<f64>)> {
+    ) -> Option<Closed> {
         let fine = self.fine;
         let faces = fine.face_count();
         if canonical_of_vertex.len() != fine.vertex_count || fine.corner_twin.contains(&NONE) {
@@ -1338,71 +1398,64 @@ impl<'a> Search<'a> {
         coarse_offsets.push(0u32);
         let mut ff_faces = Vec::with_capacity(faces / 3 + 1);
         let mut vertex_of = Vec::with_capacity(fine.vertex_count);
-        let mut coarse_face_of = vec![NONE; faces];
-        let mut matched = vec![false; faces];
         for f in 0..faces {
             if self.role[f] != FF {
                 continue;
             }
-            coarse_face_of[f] = ff_faces.len() as u32;
-            matched[f] = true;
             ff_faces.push(f as u32);
             vertex_of.extend_from_slice(&fine.corner_vertex[fine.offsets[f] as usize..fine.offsets[f + 1] as usize]);
             coarse_offsets.push(vertex_of.len() as u32);
         }
         let coarse_corners = vertex_of.len();
-        if coarse_corners != fine.vertex_count {
+        if coarse_corners != fine.vertex_count || faces >= 1 << 30 {
             return None;
         }
-        // Coarse twins through the F_E quads (none on the boundary: closed).
+        let coarse_next = next_of_corners(&coarse_offsets);
+        // Coarse twins from the F_E quads of the search, in face order: each must be
+        // `(c, next(t), t, next(c))` (rotated) in coarse corners, `c < t`, and every coarse
+        // corner on one. Then the quad holds the twin of the fine half-edge of F_F corner
+        // `c` (`next(c) -> c`) and, opposite it, the one of `t`: what the search and the
+        // full build find across from `c`. Each quad is kept at `c` with its rotation (the
+        // quads are listed in order of their smaller corner, as [`match_fine_faces`] does).
         let mut twins = vec![NONE; coarse_corners];
-        let mut quad_face = vec![NONE; coarse_corners];
-        for (k, &f) in ff_faces.iter().enumerate() {
-            let first = coarse_offsets[k] as usize;
-            for (c, fc) in (first..).zip(fine.offsets[f as usize]..fine.offsets[f as usize + 1]) {
-                let (g, gt) = self.across_quad(f as usize, fc).ok()??;
-                let h = self.corner_face[gt as usize] as usize;
-                twins[c] = match coarse_face_of[h] {
-                    NONE => canonical_of_vertex[fine.corner_vertex[gt as usize] as usize],
-                    k => coarse_offsets[k as usize] + (gt - fine.offsets[h]),
-                };
-                quad_face[c] = g;
-            }
-        }
-        drop(coarse_face_of);
-        for c in 0..coarse_corners {
-            let t = twins[c] as usize;
-            if t >= coarse_corners || twins[t] != c as u32 || quad_face[t] != quad_face[c] {
+        let mut quad_at = vec![NONE; coarse_corners];
+        let mut quads = 0;
+        for (q, _) in self.role.iter().enumerate().filter(|(_, role)| **role == FE) {
+            let (b, e) = (fine.offsets[q] as usize, fine.offsets[q + 1] as usize);
+            if e - b != 4 {
                 return None;
             }
+            let y = &fine.corner_vertex[b..e];
+            let a = [0, 1, 2, 3].map(|i| canonical_of_vertex[y[i] as usize]);
+            let n = a.map(|c| coarse_next[c as usize]);
+            let fits = |s: usize| n[s] == a[(s + 3) & 3] && n[(s + 2) & 3] == a[(s + 1) & 3];
+            let s = match (fits(0), fits(1)) {
+                (true, false) => 0,
+                (false, true) => 1,
+                _ => return None,
+            };
+            let s = if a[s] < a[s + 2] { s } else { s + 2 };
+            let (c, t) = (a[s] as usize, a[(s + 2) & 3] as usize);
+            if twins[c] != NONE || twins[t] != NONE || c == t {
+                return None;
+            }
+            twins[c] = t as u32;
+            twins[t] = c as u32;
+            quad_at[c] = (q as u32) << 2 | ((4 - s) & 3) as u32;
+            quads += 1;
         }
-        let coarse_next = next_of_corners(&coarse_offsets);
-
-        // The F_E quads, in order of their smaller coarse corner (as [`match_fine_faces`]).
+        if 2 * quads != coarse_corners {
+            return None;
+        }
         let mut face_order = Vec::with_capacity(faces);
         let mut rotations = Vec::with_capacity(faces);
         face_order.extend_from_slice(&ff_faces);
         rotations.resize(ff_faces.len(), 0);
-        for c in 0..coarse_corners {
-            let t = twins[c] as usize;
-            if c > t {
-                continue;
-            }
-            let cycle =
-                [vertex_of[c], vertex_of[coarse_next[t] as usize], vertex_of[t], vertex_of[coarse_next[c] as usize]];
-            let g = quad_face[c] as usize;
-            let (b, e) = (fine.offsets[g] as usize, fine.offsets[g + 1] as usize);
-            if e - b != 4 || std::mem::replace(&mut matched[g], true) {
-                return None;
-            }
-            let face = &fine.corner_vertex[b..e];
-            let r = cycle.iter().position(|&x| x == face[0])?;
-            if (0..4).any(|i| face[i] != cycle[(i + r) & 3]) {
-                return None;
-            }
-            face_order.push(g as u32);
-            rotations.push(r as u32);
+        for &packed in quad_at.iter().filter(|&&packed| packed != NONE) {
+            face_order.push(packed >> 2);
+            rotations.push(packed & 3);
         }
+        drop(quad_at);
 
         // The other faces, in face order, are the F_V faces: each the counter-clockwise
         // orbit (`c -> next(twin(c))` backwards) of one coarse vertex, numbered in that
@@ -1413,7 +1466,8 @@ impl<'a> Search<'a> {
         let mut by_vertex_offsets = Vec::with_capacity(faces - face_order.len() + 1);
         by_vertex_offsets.push(0u32);
         let mut by_vertex_corners: Vec<u32> = Vec::with_capacity(coarse_corners);
-        for (g, _) in matched.iter().enumerate().filter(|(_, matched)| !**matched) {
+        let mut fv_faces = Vec::with_capacity(faces - face_order.len());
+        for (g, _) in self.role.iter().enumerate().filter(|(_, role)| **role == UNKNOWN) {
             let (b, e) = (fine.offsets[g] as usize, fine.offsets[g + 1] as usize);
             let m = e - b;
             let label = vertex_corner.len() as u32;
@@ -1445,6 +1499,7 @@ impl<'a> Search<'a> {
             by_vertex_offsets.push(by_vertex_corners.len() as u32);
             face_order.push(g as u32);
             rotations.push(((m - at) % m) as u32);
+            fv_faces.push(g as u32);
         }
         if by_vertex_corners.len() != coarse_corners {
             return None;
@@ -1501,7 +1556,56 @@ impl<'a> Search<'a> {
         stats.candidate_edges = coarse_corners;
         let energies = vec![vertex_energy.iter().sum()];
         let reversal = DooReversal { rule, coarse, coarse_positions, details, order, choices: Vec::new(), stats };
-        Some((reversal, energies))
+        Some(Closed { reversal, energies, fv_faces })
+    }
+
+    /// The detail energy of the dual reading of a closed reading built by
+    /// [`Self::finish_closed`] (`closed`; `canonical_of_vertex`: the coarse corner of each
+    /// fine vertex), as [`Self::energy`] sums it after the search from the lowest F_V face:
+    /// that search finds the F_V faces as its F_F faces (the structure is checked), its
+    /// candidates are the F_V faces expanded, its groups the F_F faces in face order, each
+    /// summed in the order of its corners' F_V faces. Each F_V face is expanded when a
+    /// group first needs it, and the sum stops as soon as it reaches `cutoff`: the partial
+    /// sum then, `None` if it never does (the dual reading is better: the caller searches
+    /// it in full).
+    fn dual_energy(&self, closed: &Closed, canonical_of_vertex: &[u32], cutoff: f64) -> Option<f64> {
+        let fine = self.fine;
+        let coarse = &closed.reversal.coarse;
+        let mut dual = vec![DVec3::ZERO; coarse.corner_count()];
+        let mut expanded = vec![false; coarse.vertex_count];
+        let (mut points, mut out) = (Vec::new(), Vec::new());
+        let mut group = Vec::new();
+        let mut energy = 0.0;
+        for w in coarse.offsets.windows(2) {
+            let (b, e) = (w[0] as usize, w[1] as usize);
+            for &u in &coarse.corner_vertex[b..e] {
+                if std::mem::replace(&mut expanded[u as usize], true) {
+                    continue;
+                }
+                let g = closed.fv_faces[u as usize] as usize;
+                let face = &fine.corner_vertex[fine.offsets[g] as usize..fine.offsets[g + 1] as usize];
+                points.clear();
+                points.extend(face.iter().map(|&x| self.positions[x as usize]));
+                out.resize(face.len(), DVec3::ZERO);
+                self.maps.inverse(&points, &mut out);
+                for (&x, &p) in face.iter().zip(&out) {
+                    dual[canonical_of_vertex[x as usize] as usize] = p;
+                }
+            }
+            group.clear();
+            group.extend(b as u32..e as u32);
+            insertion_sort_by_key(&mut group, |c| coarse.corner_vertex[c as usize]);
+            let mean = group.iter().map(|&c| dual[c as usize]).sum::<DVec3>() / group.len() as f64;
+            let mut group_energy = 0.0;
+            for &c in &group {
+                group_energy += (dual[c as usize] - mean).length_squared();
+            }
+            energy += group_energy;
+            if energy >= cutoff {
+                return Some(energy);
+            }
+        }
+        None
     }
 
     /// Builds the coarse mesh, details and fine order from the roles of all components;
