@@ -1306,8 +1306,10 @@ impl<'a> Search<'a> {
             let mut cutoff = first.energy;
             for (seed, class) in other_classes {
                 if let Some((_, closed)) = self.prebuilt.as_ref().filter(|_| class == "F_V") {
-                    let canonical_of_vertex = &found[0].kept.corner_of_vertex;
-                    if let Some(energy) = self.dual_energy(closed, canonical_of_vertex, cutoff) {
+                    // The first reading's candidates are in the built result: their memory
+                    // serves as scratch.
+                    let Kept { candidates, corner_of_vertex } = &mut found[0].kept;
+                    if let Some(energy) = self.dual_energy(closed, corner_of_vertex, candidates, cutoff) {
                         // Stopped early: the search it stands for visits every F_V face and
                         // looks across each of their edges (one per fine vertex).
                         self.stats.visited_faces += closed.fv_faces.len();
@@ -1567,11 +1569,17 @@ impl<'a> Search<'a> {
     /// summed in the order of its corners' F_V faces. Each F_V face is expanded when a
     /// group first needs it, and the sum stops as soon as it reaches `cutoff`: the partial
     /// sum then, `None` if it never does (the dual reading is better: the caller searches
-    /// it in full).
-    fn dual_energy(&self, closed: &Closed, canonical_of_vertex: &[u32], cutoff: f64) -> Option<f64> {
+    /// it in full). `dual`: scratch for the candidates, by coarse corner.
+    fn dual_energy(
+        &self,
+        closed: &Closed,
+        canonical_of_vertex: &[u32],
+        dual: &mut Vec<DVec3>,
+        cutoff: f64,
+    ) -> Option<f64> {
         let fine = self.fine;
         let coarse = &closed.reversal.coarse;
-        let mut dual = vec![DVec3::ZERO; coarse.corner_count()];
+        dual.resize(coarse.corner_count(), DVec3::ZERO);
         let mut expanded = vec![false; coarse.vertex_count];
         let (mut points, mut out) = (Vec::new(), Vec::new());
         let mut group = Vec::new();
