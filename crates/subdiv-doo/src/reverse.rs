@@ -2321,6 +2321,88 @@ mod tests {
         a.iter().zip(b).map(|(p, q)| (*p - *q).length()).fold(0.0, f64::max)
     }
 
+    /// Closed refinements (jittered, so that no reading is exact), renumbered and with
+    /// rotated faces, and with shuffled faces.
+    fn closed_scrambled() -> Vec<HalfedgeMesh> {
+        let shapes = [
+            shapes::cube(),
+            shapes::icosahedron(),
+            shapes::torus(6, 5, CellKind::Mixed).unwrap(),
+            shapes::torus(5, 4, CellKind::Quads).unwrap(),
+        ];
+        let mut meshes = Vec::new();
+        for (i, coarse) in shapes.iter().enumerate() {
+            let mut fine = subdivide_soup(coarse, &DooOptions::default()).unwrap().into_soup();
+            for (k, p) in fine.positions.iter_mut().enumerate() {
+                *p += 0.01 * DVec3::new((k % 7) as f64, (k % 3) as f64, (k % 5) as f64);
+            }
+            let scrambled = mesh_topo::testing::scramble(fine.clone(), 3 + i as u64, 0.0);
+            let mut faces: Vec<Vec<u32>> = scrambled.faces().map(<[u32]>::to_vec).collect();
+            faces.reverse();
+            let shuffled = PolygonSoup::from_faces(scrambled.positions.clone(), faces);
+            for soup in [scrambled, shuffled] {
+                meshes.push(HalfedgeMesh::from_soup(&soup).unwrap());
+            }
+        }
+        meshes
+    }
+
+    #[test]
+    fn the_closed_build_is_the_full_build() {
+        let mut checked = 0;
+        for mesh in closed_scrambled() {
+            let corners = CornerMesh::from_halfedge(&mesh);
+            let rule = FaceRule::DooSabin;
+            let seeded = ReverseOptions::with_seed(rule, 0);
+            let session = match Session::new(&corners, mesh.positions(), &seeded) {
+                Ok(session) if session.preclassified => session,
+                // Face 0 is not an F_F face of a reading of the whole mesh.
+                _ => continue,
+            };
+            let known = session.best_candidates[0].corner_of_vertex.clone();
+            let fast = session.search.finish_closed(rule, &mut Vec::new(), false, &known).expect("a closed reading");
+            let (full, energies) = session.search.finish(rule, &[], 1, (Vec::new(), false), known).unwrap();
+            assert_eq!(fast.reversal, full);
+            assert_eq!(fast.energies, energies);
+            assert!(max_distance(&full.reconstruct().positions, mesh.positions()) < 1e-12);
+            checked += 1;
+        }
+        assert!(checked >= 4, "{checked}");
+    }
+
+    #[test]
+    fn the_dual_reading_summed_from_the_build_is_the_searched_one() {
+        let mut checked = 0;
+        for mesh in closed_scrambled() {
+            let corners = CornerMesh::from_halfedge(&mesh);
+            let reversal = reverse(&mesh, &ReverseOptions::default()).unwrap();
+            let trials = &reversal.choices()[0].trials;
+            let Some(dual) = trials.iter().find(|t| t.class == "F_V") else { continue };
+            if !dual.stopped_early {
+                continue;
+            }
+            // The same reading searched and summed with the same cutoff.
+            let cutoff = *trials[0].outcome.as_ref().unwrap();
+            let mut search = Search::new(&corners, mesh.positions(), FaceMaps::new(FaceRule::DooSabin));
+            search.classify(dual.seed_face).unwrap();
+            let faces = FaceSet::All(mesh.face_count() as u32);
+            let energy = search.energy(0, faces, mesh.vertex_count(), cutoff).unwrap();
+            assert!(energy.stopped_early);
+            assert_eq!(energy.energy.to_bits(), dual.outcome.as_ref().unwrap().to_bits());
+            // The counters count the search it stands for: each trial searched afresh.
+            let (mut visited, mut crossed) = (0, 0);
+            for trial in trials {
+                let mut search = Search::new(&corners, mesh.positions(), FaceMaps::new(FaceRule::DooSabin));
+                let _ = search.classify(trial.seed_face);
+                visited += search.stats.visited_faces;
+                crossed += search.stats.edges_crossed;
+            }
+            assert_eq!((reversal.stats().visited_faces, reversal.stats().edges_crossed), (visited, crossed));
+            checked += 1;
+        }
+        assert!(checked > 0);
+    }
+
     #[test]
     fn an_empty_mesh_is_an_error() {
         let empty = HalfedgeMesh::from_soup(&PolygonSoup::default()).unwrap();
