@@ -385,6 +385,10 @@ struct Energy {
     size: f64,
     /// Whether the sum stopped when it reached the cutoff.
     stopped_early: bool,
+    /// Whether the sum was left to the caller (`energy` is NaN then): the reading is
+    /// valid as far as the candidates go, its groups are not summed yet (see
+    /// [`Search::complete_energy`]).
+    deferred: bool,
 }
 
 /// The cutoff of a sum that must not stop (no comparison with NaN holds).
@@ -967,6 +971,7 @@ impl<'a> Search<'a> {
         component_faces: FaceSet<'_>,
         component_vertices: usize,
         cutoff: f64,
+        defer: bool,
     ) -> Result<Energy, DooError> {
         let fine = self.fine;
         if self.ff_corner_of_vertex.len() != fine.vertex_count {
@@ -978,7 +983,7 @@ impl<'a> Search<'a> {
         if self.candidate.len() != fine.vertex_count {
             self.candidate = vec![DVec3::ZERO; fine.vertex_count];
         }
-        let result = self.energy_inner(queue_start, component_faces, component_vertices, cutoff);
+        let result = self.energy_inner(queue_start, component_faces, component_vertices, cutoff, defer);
         if result.is_ok() && matches!(component_faces, FaceSet::All(_)) {
             // A valid reading of the whole mesh: the rank of each vertex's F_F corner is
             // its coarse corner in the result, kept for it (see [`Self::choose`]).
@@ -1009,6 +1014,7 @@ impl<'a> Search<'a> {
         component_faces: FaceSet<'_>,
         component_vertices: usize,
         cutoff: f64,
+        defer: bool,
     ) -> Result<Energy, DooError> {
         let fine = self.fine;
         let positions = self.positions;
@@ -1073,6 +1079,48 @@ impl<'a> Search<'a> {
                 }
             }
         }
+        let size = (hi - lo).length();
+        if defer {
+            return Ok(Energy { energy: f64::NAN, size, stopped_early: false, deferred: true });
+        }
+        self.group_sum(queue_start, component_faces, ff_corners, cutoff, size)
+    }
+
+    /// Completes a deferred [`Self::energy`] of the whole mesh, whose ranks and
+    /// candidates were kept (`kept`, given back with them on success): its sum over the
+    /// groups, without a cutoff.
+    fn complete_energy(
+        &mut self,
+        kept: &mut Kept,
+        queue_start: usize,
+        faces: FaceSet<'_>,
+        size: f64,
+    ) -> Result<f64, DooError> {
+        self.ff_corner_of_vertex = std::mem::take(&mut kept.corner_of_vertex);
+        self.candidate = std::mem::take(&mut kept.candidates);
+        let result = self.group_sum(queue_start, faces, self.fine.vertex_count, NO_CUTOFF, size);
+        if result.is_ok() {
+            kept.corner_of_vertex = std::mem::take(&mut self.ff_corner_of_vertex);
+            kept.candidates = std::mem::take(&mut self.candidate);
+        } else {
+            self.ff_corner_of_vertex.fill(NONE);
+        }
+        self.grouped.fill(false);
+        result.map(|reading| reading.energy)
+    }
+
+    /// The sum of [`Self::energy`] over the groups of the current reading, whose
+    /// candidates are formed (`ff_corners` of them, every vertex on one F_F face; `size`:
+    /// the component's size).
+    fn group_sum(
+        &mut self,
+        queue_start: usize,
+        component_faces: FaceSet<'_>,
+        ff_corners: usize,
+        cutoff: f64,
+        size: f64,
+    ) -> Result<Energy, DooError> {
+        let fine = self.fine;
         // Groups of interior coarse vertices: the corners of the other faces. Each group is
         // summed in the order of its coarse corners (the ranks), as the result sums its
         // coarse vertex, so that the energy of a whole reading is its detail energy.
@@ -1091,13 +1139,13 @@ impl<'a> Search<'a> {
             }
             energy += self.group_energy();
             if energy >= cutoff {
-                return Ok(Energy { energy, size: (hi - lo).length(), stopped_early: true });
+                return Ok(Energy { energy, size, stopped_early: true, deferred: false });
             }
         }
         if grouped == ff_corners {
             // No boundary: every candidate is in a group already.
             self.stats.interpretations += 1;
-            return Ok(Energy { energy, size: (hi - lo).length(), stopped_early: false });
+            return Ok(Energy { energy, size, stopped_early: false, deferred: false });
         }
         // Groups of boundary coarse vertices: walk both ways around the coarse vertex
         // (clockwise: across the quad, then the next corner; counter-clockwise: the
@@ -1136,13 +1184,13 @@ impl<'a> Search<'a> {
                 energy += self.group_energy();
                 if energy >= cutoff {
                     self.group = group;
-                    return Ok(Energy { energy, size: (hi - lo).length(), stopped_early: true });
+                    return Ok(Energy { energy, size, stopped_early: true, deferred: false });
                 }
             }
         }
         self.group = group;
         self.stats.interpretations += 1;
-        Ok(Energy { energy, size: (hi - lo).length(), stopped_early: false })
+        Ok(Energy { energy, size, stopped_early: false, deferred: false })
     }
 
     /// The first vertex on two F_F faces met in search order (some vertex is), as an error.
@@ -1172,7 +1220,7 @@ impl<'a> Search<'a> {
     /// a first trial; otherwise restores the state as it was.
     fn first_reading_covers_all(&mut self, faces: FaceSet<'_>) -> Option<Energy> {
         let saved = self.stats;
-        let result = self.classify(0).and_then(|()| self.energy(0, faces, self.fine.vertex_count, NO_CUTOFF));
+        let result = self.classify(0).and_then(|()| self.energy(0, faces, self.fine.vertex_count, NO_CUTOFF, true));
         match result {
             Ok(reading) => Some(reading),
             Err(_) => {
@@ -1261,21 +1309,14 @@ impl<'a> Search<'a> {
         for (seed, class) in candidates {
             let result = match first.take() {
                 Some(reading) => Ok(reading),
-                None => self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices, NO_CUTOFF)),
+                None => self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices, NO_CUTOFF, whole)),
             };
             match result {
-                Ok(Energy { energy, size, .. }) => {
+                Ok(Energy { energy, size, deferred, .. }) => {
                     scale = size;
-                    trials.push(SeedTrial::valid(seed, "F_F", energy, false));
                     // The other classes of this reading.
                     let fv = faces.iter().find(|&f| self.role[f as usize] == UNKNOWN);
                     let fe = faces.iter().find(|&f| self.role[f as usize] == FE);
-                    if let Some(f) = fv {
-                        other_classes.push((f as usize, "F_V"));
-                    }
-                    if let Some(f) = fe {
-                        other_classes.push((f as usize, "F_E"));
-                    }
                     let ff_faces = self.queue[queue_start..].to_vec();
                     let mut kept = self.keep_reading(whole);
                     if whole && fv.is_some() {
@@ -1285,6 +1326,31 @@ impl<'a> Search<'a> {
                         self.prebuilt = self
                             .finish_closed(rule, &mut kept.candidates, true, &kept.corner_of_vertex)
                             .map(|closed| (seed, closed));
+                    }
+                    // The sum over the groups, if left to here: the built result's detail
+                    // energy (the same sums in the same order), else summed now.
+                    let energy = match (deferred, &self.prebuilt) {
+                        (false, _) => energy,
+                        (true, Some((_, closed))) => {
+                            self.stats.interpretations += 1;
+                            closed.energies[0]
+                        }
+                        (true, None) => match self.complete_energy(&mut kept, queue_start, faces, size) {
+                            Ok(energy) => energy,
+                            Err(error) => {
+                                trials.push(SeedTrial::invalid(seed, class, &error));
+                                first_error.get_or_insert(error);
+                                self.reset(faces, queue_start);
+                                continue;
+                            }
+                        },
+                    };
+                    trials.push(SeedTrial::valid(seed, "F_F", energy, false));
+                    if let Some(f) = fv {
+                        other_classes.push((f as usize, "F_V"));
+                    }
+                    if let Some(f) = fe {
+                        other_classes.push((f as usize, "F_E"));
                     }
                     found.push(Found { seed, energy, stopped_early: false, ff_faces, kept });
                     self.reset(faces, queue_start);
@@ -1325,7 +1391,8 @@ impl<'a> Search<'a> {
                         continue;
                     }
                 }
-                let result = self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices, cutoff));
+                let result =
+                    self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices, cutoff, false));
                 match result {
                     Ok(Energy { energy, stopped_early, .. }) => {
                         trials.push(SeedTrial::valid(seed, class, energy, stopped_early));
@@ -2386,7 +2453,7 @@ mod tests {
             let mut search = Search::new(&corners, mesh.positions(), FaceMaps::new(FaceRule::DooSabin));
             search.classify(dual.seed_face).unwrap();
             let faces = FaceSet::All(mesh.face_count() as u32);
-            let energy = search.energy(0, faces, mesh.vertex_count(), cutoff).unwrap();
+            let energy = search.energy(0, faces, mesh.vertex_count(), cutoff, false).unwrap();
             assert!(energy.stopped_early);
             assert_eq!(energy.energy.to_bits(), dual.outcome.as_ref().unwrap().to_bits());
             // The counters count the search it stands for: each trial searched afresh.
