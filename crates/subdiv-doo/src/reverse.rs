@@ -1462,15 +1462,18 @@ impl<'a> Search<'a> {
         if canonical_of_vertex.len() != fine.vertex_count || fine.corner_twin.contains(&NONE) {
             return None;
         }
-        // Coarse faces: the F_F faces in increasing order; fine vertex of each coarse corner.
+        // Coarse faces: the F_F faces in increasing order; fine vertex of each coarse corner,
+        // and the coarse corner of each F_F face's first corner.
         let mut coarse_offsets = Vec::with_capacity(faces / 3 + 2);
         coarse_offsets.push(0u32);
         let mut ff_faces = Vec::with_capacity(faces / 3 + 1);
         let mut vertex_of = Vec::with_capacity(fine.vertex_count);
-        for f in 0..faces {
+        let mut start_of = vec![NONE; faces];
+        for (f, start) in start_of.iter_mut().enumerate() {
             if self.role[f] != FF {
                 continue;
             }
+            *start = vertex_of.len() as u32;
             ff_faces.push(f as u32);
             vertex_of.extend_from_slice(&fine.corner_vertex[fine.offsets[f] as usize..fine.offsets[f + 1] as usize]);
             coarse_offsets.push(vertex_of.len() as u32);
@@ -1480,14 +1483,27 @@ impl<'a> Search<'a> {
             return None;
         }
         let coarse_next = next_of_corners(&coarse_offsets);
-        // Coarse twins from the F_E quads of the search, in face order: each must be
-        // `(c, next(t), t, next(c))` (rotated) in coarse corners, `c < t`, and every coarse
-        // corner on one. Then the quad holds the twin of the fine half-edge of F_F corner
-        // `c` (`next(c) -> c`) and, opposite it, the one of `t`: what the search and the
-        // full build find across from `c`. Each quad is kept at `c` with its rotation (the
-        // quads are listed in order of their smaller corner, as [`match_fine_faces`] does).
+        // The coarse corner of fine corner `x` if it is on an F_F face, else NONE.
+        let ff_corner = |x: u32| {
+            let h = self.corner_face[x as usize] as usize;
+            match start_of[h] {
+                NONE => NONE,
+                start => start + (x - fine.offsets[h]),
+            }
+        };
+        // Coarse twins from the F_E quads of the search, in face order, read through the
+        // fine twins (no lookup by vertex): quad `(c, next(t), t, next(c))` (rotated by its
+        // start `s`) has the twins of F_F corners `c` and `t` at `s + 3` and `s + 1` (the
+        // half-edges `next(c) -> c` and `next(t) -> t`), none at `s` and `s + 2`; `c < t`;
+        // its corners must be those fine vertices, and every coarse corner on one quad.
+        // Then the quad holds the twin of the fine half-edge of F_F corner `c` and,
+        // opposite it, the one of `t`: what the search and the full build find across
+        // from `c`. Each quad is kept at `c` with its rotation (the quads are listed in
+        // order of their smaller corner, as [`match_fine_faces`] does), and its `c` and
+        // `s` by face for the F_V faces.
         let mut twins = vec![NONE; coarse_corners];
         let mut quad_at = vec![NONE; coarse_corners];
+        let mut quad_corner = vec![NONE; faces];
         let mut quads = 0;
         for (q, _) in self.role.iter().enumerate().filter(|(_, role)| **role == FE) {
             let (b, e) = (fine.offsets[q] as usize, fine.offsets[q + 1] as usize);
@@ -1495,24 +1511,26 @@ impl<'a> Search<'a> {
                 return None;
             }
             let y = &fine.corner_vertex[b..e];
-            let a = [0, 1, 2, 3].map(|i| canonical_of_vertex[y[i] as usize]);
-            let n = a.map(|c| coarse_next[c as usize]);
-            let fits = |s: usize| n[s] == a[(s + 3) & 3] && n[(s + 2) & 3] == a[(s + 1) & 3];
-            let s = match (fits(0), fits(1)) {
-                (true, false) => 0,
-                (false, true) => 1,
+            let cc = [0, 1, 2, 3].map(|i| ff_corner(fine.corner_twin[b + i]));
+            let s = match cc.map(|c| c != NONE) {
+                [false, true, false, true] => 0,
+                [true, false, true, false] => 1,
                 _ => return None,
             };
-            let s = if a[s] < a[s + 2] { s } else { s + 2 };
-            let (c, t) = (a[s] as usize, a[(s + 2) & 3] as usize);
-            if twins[c] != NONE || twins[t] != NONE || c == t {
+            let s = if cc[(s + 3) & 3] < cc[s + 1] { s } else { s + 2 };
+            let (c, t) = (cc[(s + 3) & 3] as usize, cc[(s + 1) & 3] as usize);
+            let cycle =
+                [vertex_of[c], vertex_of[coarse_next[t] as usize], vertex_of[t], vertex_of[coarse_next[c] as usize]];
+            if (0..4).any(|k| y[(s + k) & 3] != cycle[k]) || twins[c] != NONE || twins[t] != NONE || c == t {
                 return None;
             }
             twins[c] = t as u32;
             twins[t] = c as u32;
             quad_at[c] = (q as u32) << 2 | ((4 - s) & 3) as u32;
+            quad_corner[q] = (c as u32) << 2 | s as u32;
             quads += 1;
         }
+        drop(start_of);
         if 2 * quads != coarse_corners {
             return None;
         }
@@ -1528,8 +1546,11 @@ impl<'a> Search<'a> {
 
         // The other faces, in face order, are the F_V faces: each the counter-clockwise
         // orbit (`c -> next(twin(c))` backwards) of one coarse vertex, numbered in that
-        // order, every coarse corner on exactly one.
-        let clockwise = |c: u32| coarse_next[twins[c as usize] as usize];
+        // order, every coarse corner on exactly one. The corner of such a face at
+        // `next(t)` (`t` the twin of `c`) is the twin of quad corner `s` (`c`) of the quad
+        // of `c` (or of `s + 2`, the roles of `c` and `t` swapped), and the face's next
+        // corner is at `c`: each corner's coarse corner comes through the fine twins, and
+        // each one must be the previous corner's counter-clockwise one.
         let mut labels = vec![NONE; coarse_corners];
         let mut vertex_corner = Vec::with_capacity(faces - face_order.len());
         let mut by_vertex_offsets = Vec::with_capacity(faces - face_order.len() + 1);
@@ -1544,21 +1565,41 @@ impl<'a> Search<'a> {
             if m < 3 || start + m > coarse_corners {
                 return None;
             }
-            // No corner is labelled twice: two faces that are orbits through one corner
-            // would be the same orbit, the same directed edges, which a mesh has once.
-            for &x in &fine.corner_vertex[b..e] {
-                let c = canonical_of_vertex[x as usize];
-                labels[c as usize] = label;
-                by_vertex_corners.push(c);
-            }
-            let corners = &mut by_vertex_corners[start..];
-            let mut previous = corners[m - 1];
-            let (mut smallest, mut at) = (corners[0], 0);
-            for (j, &c) in corners.iter().enumerate() {
-                if clockwise(c) != previous {
+            // Corner `j` gives its own coarse corner and the one of corner `j + 1`.
+            let mut expected = NONE;
+            let mut first = NONE;
+            for (&x, &ft) in fine.corner_vertex[b..e].iter().zip(&fine.corner_twin[b..e]) {
+                let q = self.corner_face[ft as usize] as usize;
+                let packed = quad_corner[q];
+                if self.role[q] != FE || packed == NONE {
                     return None;
                 }
-                previous = c;
+                let (c, s) = (packed >> 2, packed & 3);
+                let t = twins[c as usize];
+                let (own, next) = match (ft - fine.offsets[q]).wrapping_sub(s) & 3 {
+                    0 => (coarse_next[t as usize], c),
+                    2 => (coarse_next[c as usize], t),
+                    _ => return None,
+                };
+                if vertex_of[own as usize] != x || (expected != NONE && own != expected) {
+                    return None;
+                }
+                if first == NONE {
+                    first = own;
+                }
+                expected = next;
+                // No corner is labelled twice: two faces that are orbits through one
+                // corner would be the same orbit, the same directed edges, which a mesh
+                // has once.
+                labels[own as usize] = label;
+                by_vertex_corners.push(own);
+            }
+            if expected != first {
+                return None;
+            }
+            let corners = &mut by_vertex_corners[start..];
+            let (mut smallest, mut at) = (corners[0], 0);
+            for (j, &c) in corners.iter().enumerate() {
                 if c < smallest {
                     (smallest, at) = (c, j);
                 }
