@@ -77,6 +77,22 @@
 //! sooner the losing readings' sums pass the winner's (on a closed mesh in the canonical
 //! order, the losing dual reading is expanded only as far as its sum goes).
 //!
+//! A reading of a closed mesh of one component, in any order, is built in fewer passes,
+//! all reading in face order: the coarse twins and the F_E matching come from one pass
+//! over the quads of the search (the twins of a quad's corners name its two F_F
+//! corners), and the remaining faces, in face order, are the F_V faces, each checked to
+//! be the orbit of one coarse vertex (its corners' coarse corners through the fine
+//! twins), which numbers the coarse vertices and gives their corners; the manifold
+//! checks ride on that pass and on the means. In automatic mode the first reading of
+//! such a mesh is built right after its search, its detail energy is the built result's
+//! (its groups are not summed twice), and its dual reading is not searched: the built
+//! structure says what that search finds (the F_V faces as F_F faces, its groups the
+//! F_F faces), so its sum runs over the F_F faces in face order, each F_V face expanded
+//! when a group first needs it, until it reaches the first reading's total, as on a
+//! canonical mesh. The counters count the searches this stands for. Any mismatch of
+//! these passes, or a dual reading that would win, goes to the full build and the full
+//! search, which name the face at fault: results, errors and counters are the same.
+//!
 //! A mesh in the *canonical order* (as written by [`crate::subdivide`] or rebuilt by a
 //! pyramid: identity [`FineOrder`]) of one connected coarse mesh is reversed without the
 //! corner arrays, the search and the face matching: its numbering says which faces are
