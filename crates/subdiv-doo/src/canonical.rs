@@ -599,7 +599,7 @@ const SHORT: usize = 8;
 /// [`NONE`]: short lists pairwise, longer ones by marking each value's slot of `stamp`
 /// (made on first use, `slots` long) with `mark`, which must differ between calls.
 #[inline(always)]
-fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark: u32) -> bool {
+pub(crate) fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark: u32) -> bool {
     if values.len() <= SHORT {
         // Plain loops: they are inlined where iterator adaptors were not.
         for i in 0..values.len() {

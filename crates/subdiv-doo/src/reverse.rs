@@ -77,6 +77,22 @@
 //! sooner the losing readings' sums pass the winner's (on a closed mesh in the canonical
 //! order, the losing dual reading is expanded only as far as its sum goes).
 //!
+//! A reading of a closed mesh of one component, in any order, is built in fewer passes,
+//! all reading in face order: the coarse twins and the F_E matching come from one pass
+//! over the quads of the search (the twins of a quad's corners name its two F_F
+//! corners), and the remaining faces, in face order, are the F_V faces, each checked to
+//! be the orbit of one coarse vertex (its corners' coarse corners through the fine
+//! twins), which numbers the coarse vertices and gives their corners; the manifold
+//! checks ride on that pass and on the means. In automatic mode the first reading of
+//! such a mesh is built right after its search, its detail energy is the built result's
+//! (its groups are not summed twice), and its dual reading is not searched: the built
+//! structure says what that search finds (the F_V faces as F_F faces, its groups the
+//! F_F faces), so its sum runs over the F_F faces in face order, each F_V face expanded
+//! when a group first needs it, until it reaches the first reading's total, as on a
+//! canonical mesh. The counters count the searches this stands for. Any mismatch of
+//! these passes, or a dual reading that would win, goes to the full build and the full
+//! search, which name the face at fault: results, errors and counters are the same.
+//!
 //! A mesh in the *canonical order* (as written by [`crate::subdivide`] or rebuilt by a
 //! pyramid: identity [`FineOrder`]) of one connected coarse mesh is reversed without the
 //! corner arrays, the search and the face matching: its numbering says which faces are
@@ -104,6 +120,7 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use serde::{Deserialize, Serialize};
 
 use crate::DooError;
+use crate::canonical::distinct;
 use crate::corner::{
     CornerMesh, NONE, VertexCorners, doo_topology, expand_faces, face_points_in_place, faces_of_corners, group_by_key,
     next_of_corners, prev_of_corners,
@@ -384,6 +401,10 @@ struct Energy {
     size: f64,
     /// Whether the sum stopped when it reached the cutoff.
     stopped_early: bool,
+    /// Whether the sum was left to the caller (`energy` is NaN then): the reading is
+    /// valid as far as the candidates go, its groups are not summed yet (see
+    /// [`Search::complete_energy`]).
+    deferred: bool,
 }
 
 /// The cutoff of a sum that must not stop (no comparison with NaN holds).
@@ -447,7 +468,8 @@ impl<'a> Session<'a> {
         match options.seeds[..] {
             [] => {
                 if let Some(first) = search.first_reading_covers_all(faces) {
-                    let (choice, ranked, best, candidates) = search.choose(0, faces, fine.vertex_count, Some(first))?;
+                    let (choice, ranked, best, candidates) =
+                        search.choose(0, faces, fine.vertex_count, Some(first), options.rule)?;
                     let best = (best, candidates);
                     return Ok(Self::one_component(search, options.rule, NONE, ranked, best, choice, false));
                 }
@@ -509,7 +531,8 @@ impl<'a> Session<'a> {
                         &faces_by_component[component_offsets[k] as usize..component_offsets[k + 1] as usize],
                     )
                 };
-                let (choice, ranked, best, candidates) = search.choose(k, faces, vertices_by_component[k], None)?;
+                let (choice, ranked, best, candidates) =
+                    search.choose(k, faces, vertices_by_component[k], None, options.rule)?;
                 readings.push(ranked);
                 choices.push(choice);
                 best_ff_faces.push(best);
@@ -573,35 +596,59 @@ impl<'a> Session<'a> {
         let mut choices = self.choices.clone();
         let search = &mut self.search;
         loop {
-            if std::mem::take(&mut self.preclassified) {
-                // The roles of the given seed are set already.
+            // The best reading of a closed one-component mesh, built by the ranking.
+            let prebuilt = match search.prebuilt.take() {
+                Some((seed, closed)) if component_count == 1 && pick[0] == 0 && self.readings[0][0].0 == seed => {
+                    Some(closed)
+                }
+                _ => None,
+            };
+            let result = if let Some(Closed { mut reversal, energies, .. }) = prebuilt {
+                // The counters as the build would copy them now.
+                reversal.stats = ReverseStats { candidate_edges: reversal.stats.candidate_edges, ..search.stats };
+                Ok((reversal, energies))
             } else {
-                search.role.fill(UNKNOWN);
-                search.queue.clear();
-                for ((ranked, &p), best) in self.readings.iter().zip(&pick).zip(&self.best_ff_faces) {
-                    if p == 0 && !best.is_empty() {
-                        // The best automatic reading, as the ranking found it (only the F_F
-                        // roles matter from here on).
-                        for &f in best {
-                            search.role[f as usize] = FF;
+                if std::mem::take(&mut self.preclassified) {
+                    // The roles of the given seed are set already.
+                } else {
+                    search.role.fill(UNKNOWN);
+                    search.queue.clear();
+                    for ((ranked, &p), best) in self.readings.iter().zip(&pick).zip(&self.best_ff_faces) {
+                        if p == 0 && !best.is_empty() {
+                            // The best automatic reading, as the ranking found it (only the F_F
+                            // roles matter from here on).
+                            for &f in best {
+                                search.role[f as usize] = FF;
+                            }
+                        } else {
+                            search.classify(ranked[p].0)?;
                         }
-                    } else {
-                        search.classify(ranked[p].0)?;
                     }
                 }
-            }
-            // The candidates of the result: those of the ranking for the best reading of a
-            // one-component mesh, else written into the energy scratch (no reading is
-            // evaluated after the ranking).
-            let kept = if component_count == 1 && pick[0] == 0 {
-                std::mem::take(&mut self.best_candidates[0])
-            } else {
-                Kept::default()
+                // The candidates of the result: those of the ranking for the best reading of a
+                // one-component mesh, else written into the energy scratch (no reading is
+                // evaluated after the ranking).
+                let kept = if component_count == 1 && pick[0] == 0 {
+                    std::mem::take(&mut self.best_candidates[0])
+                } else {
+                    Kept::default()
+                };
+                let ready = !kept.candidates.is_empty();
+                let mut buffer = if ready { kept.candidates } else { std::mem::take(&mut search.candidate) };
+                let known = kept.corner_of_vertex;
+                // A closed mesh of one component in fewer passes; anything else (or any
+                // mismatch) through the full build, which names the face at fault.
+                let closed = if component_count == 1 {
+                    search.finish_closed(self.rule, &mut buffer, ready, &known)
+                } else {
+                    None
+                };
+                match closed {
+                    Some(Closed { reversal, energies, .. }) => Ok((reversal, energies)),
+                    None => search.finish(self.rule, &self.component_of_face, component_count, (buffer, ready), known),
+                }
             };
-            let ready = !kept.candidates.is_empty();
-            let buffer = if ready { kept.candidates } else { std::mem::take(&mut search.candidate) };
-            let known = kept.corner_of_vertex;
-            match search.finish(self.rule, &self.component_of_face, component_count, (buffer, ready), known) {
+            match result {
                 Ok((mut reversal, energies)) => {
                     for (k, choice) in choices.iter_mut().enumerate() {
                         let (seed, _) = self.readings[k][pick[k]];
@@ -677,6 +724,14 @@ struct Kept {
     corner_of_vertex: Vec<u32>,
 }
 
+/// What [`Search::finish_closed`] builds: the reversal, its energy, and the F_V face of
+/// each coarse vertex.
+struct Closed {
+    reversal: DooReversal,
+    energies: Vec<f64>,
+    fv_faces: Vec<u32>,
+}
+
 /// Readings of one component: (seed face, detail energy), best first.
 type Ranked = Vec<(usize, f64)>;
 
@@ -709,6 +764,9 @@ struct Search<'a> {
     /// Scratch of [`Self::energy`]: the ranks of the candidates of one group.
     ranks_in_group: Vec<u32>,
     stats: ReverseStats,
+    /// The first reading of a closed one-component mesh, built by [`Self::choose`] to
+    /// evaluate its dual reading (with its seed face), for the build to use.
+    prebuilt: Option<(usize, Closed)>,
 }
 
 impl<'a> Search<'a> {
@@ -728,6 +786,7 @@ impl<'a> Search<'a> {
             group: Vec::new(),
             ranks_in_group: Vec::new(),
             stats: ReverseStats::default(),
+            prebuilt: None,
         }
     }
 
@@ -777,7 +836,7 @@ impl<'a> Search<'a> {
     }
 
     /// [`Self::across`], also giving the quad crossed.
-    #[inline]
+    #[inline(always)]
     fn across_quad(&self, f: usize, fc: u32) -> Result<Option<(u32, u32)>, DooError> {
         let fine = self.fine;
         let ft = fine.corner_twin[fc as usize];
@@ -928,6 +987,7 @@ impl<'a> Search<'a> {
         component_faces: FaceSet<'_>,
         component_vertices: usize,
         cutoff: f64,
+        defer: bool,
     ) -> Result<Energy, DooError> {
         let fine = self.fine;
         if self.ff_corner_of_vertex.len() != fine.vertex_count {
@@ -939,7 +999,7 @@ impl<'a> Search<'a> {
         if self.candidate.len() != fine.vertex_count {
             self.candidate = vec![DVec3::ZERO; fine.vertex_count];
         }
-        let result = self.energy_inner(queue_start, component_faces, component_vertices, cutoff);
+        let result = self.energy_inner(queue_start, component_faces, component_vertices, cutoff, defer);
         if result.is_ok() && matches!(component_faces, FaceSet::All(_)) {
             // A valid reading of the whole mesh: the rank of each vertex's F_F corner is
             // its coarse corner in the result, kept for it (see [`Self::choose`]).
@@ -970,6 +1030,7 @@ impl<'a> Search<'a> {
         component_faces: FaceSet<'_>,
         component_vertices: usize,
         cutoff: f64,
+        defer: bool,
     ) -> Result<Energy, DooError> {
         let fine = self.fine;
         let positions = self.positions;
@@ -1034,6 +1095,48 @@ impl<'a> Search<'a> {
                 }
             }
         }
+        let size = (hi - lo).length();
+        if defer {
+            return Ok(Energy { energy: f64::NAN, size, stopped_early: false, deferred: true });
+        }
+        self.group_sum(queue_start, component_faces, ff_corners, cutoff, size)
+    }
+
+    /// Completes a deferred [`Self::energy`] of the whole mesh, whose ranks and
+    /// candidates were kept (`kept`, given back with them on success): its sum over the
+    /// groups, without a cutoff.
+    fn complete_energy(
+        &mut self,
+        kept: &mut Kept,
+        queue_start: usize,
+        faces: FaceSet<'_>,
+        size: f64,
+    ) -> Result<f64, DooError> {
+        self.ff_corner_of_vertex = std::mem::take(&mut kept.corner_of_vertex);
+        self.candidate = std::mem::take(&mut kept.candidates);
+        let result = self.group_sum(queue_start, faces, self.fine.vertex_count, NO_CUTOFF, size);
+        if result.is_ok() {
+            kept.corner_of_vertex = std::mem::take(&mut self.ff_corner_of_vertex);
+            kept.candidates = std::mem::take(&mut self.candidate);
+        } else {
+            self.ff_corner_of_vertex.fill(NONE);
+        }
+        self.grouped.fill(false);
+        result.map(|reading| reading.energy)
+    }
+
+    /// The sum of [`Self::energy`] over the groups of the current reading, whose
+    /// candidates are formed (`ff_corners` of them, every vertex on one F_F face; `size`:
+    /// the component's size).
+    fn group_sum(
+        &mut self,
+        queue_start: usize,
+        component_faces: FaceSet<'_>,
+        ff_corners: usize,
+        cutoff: f64,
+        size: f64,
+    ) -> Result<Energy, DooError> {
+        let fine = self.fine;
         // Groups of interior coarse vertices: the corners of the other faces. Each group is
         // summed in the order of its coarse corners (the ranks), as the result sums its
         // coarse vertex, so that the energy of a whole reading is its detail energy.
@@ -1052,13 +1155,13 @@ impl<'a> Search<'a> {
             }
             energy += self.group_energy();
             if energy >= cutoff {
-                return Ok(Energy { energy, size: (hi - lo).length(), stopped_early: true });
+                return Ok(Energy { energy, size, stopped_early: true, deferred: false });
             }
         }
         if grouped == ff_corners {
             // No boundary: every candidate is in a group already.
             self.stats.interpretations += 1;
-            return Ok(Energy { energy, size: (hi - lo).length(), stopped_early: false });
+            return Ok(Energy { energy, size, stopped_early: false, deferred: false });
         }
         // Groups of boundary coarse vertices: walk both ways around the coarse vertex
         // (clockwise: across the quad, then the next corner; counter-clockwise: the
@@ -1097,13 +1200,13 @@ impl<'a> Search<'a> {
                 energy += self.group_energy();
                 if energy >= cutoff {
                     self.group = group;
-                    return Ok(Energy { energy, size: (hi - lo).length(), stopped_early: true });
+                    return Ok(Energy { energy, size, stopped_early: true, deferred: false });
                 }
             }
         }
         self.group = group;
         self.stats.interpretations += 1;
-        Ok(Energy { energy, size: (hi - lo).length(), stopped_early: false })
+        Ok(Energy { energy, size, stopped_early: false, deferred: false })
     }
 
     /// The first vertex on two F_F faces met in search order (some vertex is), as an error.
@@ -1133,7 +1236,7 @@ impl<'a> Search<'a> {
     /// a first trial; otherwise restores the state as it was.
     fn first_reading_covers_all(&mut self, faces: FaceSet<'_>) -> Option<Energy> {
         let saved = self.stats;
-        let result = self.classify(0).and_then(|()| self.energy(0, faces, self.fine.vertex_count, NO_CUTOFF));
+        let result = self.classify(0).and_then(|()| self.energy(0, faces, self.fine.vertex_count, NO_CUTOFF, true));
         match result {
             Ok(reading) => Some(reading),
             Err(_) => {
@@ -1191,6 +1294,7 @@ impl<'a> Search<'a> {
         faces: FaceSet<'_>,
         vertices: usize,
         mut first: Option<Energy>,
+        rule: FaceRule,
     ) -> Result<(SeedChoice, Ranked, Vec<u32>, Kept), DooError> {
         let lowest = faces.first() as usize;
         // A first trial made already is the whole queue.
@@ -1221,23 +1325,50 @@ impl<'a> Search<'a> {
         for (seed, class) in candidates {
             let result = match first.take() {
                 Some(reading) => Ok(reading),
-                None => self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices, NO_CUTOFF)),
+                None => self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices, NO_CUTOFF, whole)),
             };
             match result {
-                Ok(Energy { energy, size, .. }) => {
+                Ok(Energy { energy, size, deferred, .. }) => {
                     scale = size;
-                    trials.push(SeedTrial::valid(seed, "F_F", energy, false));
                     // The other classes of this reading.
                     let fv = faces.iter().find(|&f| self.role[f as usize] == UNKNOWN);
                     let fe = faces.iter().find(|&f| self.role[f as usize] == FE);
+                    let ff_faces = self.queue[queue_start..].to_vec();
+                    let mut kept = self.keep_reading(whole);
+                    if whole && fv.is_some() {
+                        // A closed mesh: built now, while the roles of the search are set
+                        // ([`Self::finish_closed`] reads its F_E quads), also so that its
+                        // dual reading is read from the structure ([`Self::dual_energy`]).
+                        self.prebuilt = self
+                            .finish_closed(rule, &mut kept.candidates, true, &kept.corner_of_vertex)
+                            .map(|closed| (seed, closed));
+                    }
+                    // The sum over the groups, if left to here: the built result's detail
+                    // energy (the same sums in the same order), else summed now.
+                    let energy = match (deferred, &self.prebuilt) {
+                        (false, _) => energy,
+                        (true, Some((_, closed))) => {
+                            self.stats.interpretations += 1;
+                            closed.energies[0]
+                        }
+                        (true, None) => match self.complete_energy(&mut kept, queue_start, faces, size) {
+                            Ok(energy) => energy,
+                            Err(error) => {
+                                trials.push(SeedTrial::invalid(seed, class, &error));
+                                first_error.get_or_insert(error);
+                                self.reset(faces, queue_start);
+                                continue;
+                            }
+                        },
+                    };
+                    trials.push(SeedTrial::valid(seed, "F_F", energy, false));
                     if let Some(f) = fv {
                         other_classes.push((f as usize, "F_V"));
                     }
                     if let Some(f) = fe {
                         other_classes.push((f as usize, "F_E"));
                     }
-                    let ff_faces = self.queue[queue_start..].to_vec();
-                    found.push(Found { seed, energy, stopped_early: false, ff_faces, kept: self.keep_reading(whole) });
+                    found.push(Found { seed, energy, stopped_early: false, ff_faces, kept });
                     self.reset(faces, queue_start);
                     break;
                 }
@@ -1256,7 +1387,28 @@ impl<'a> Search<'a> {
             // The smallest total so far: a reading whose sum reaches it cannot win.
             let mut cutoff = first.energy;
             for (seed, class) in other_classes {
-                let result = self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices, cutoff));
+                if let Some((_, closed)) = self.prebuilt.as_ref().filter(|_| class == "F_V") {
+                    // The first reading's candidates are in the built result: their memory
+                    // serves as scratch.
+                    let Kept { candidates, corner_of_vertex } = &mut found[0].kept;
+                    if let Some(energy) = self.dual_energy(closed, corner_of_vertex, candidates, cutoff) {
+                        // Stopped early: the search it stands for visits every F_V face and
+                        // looks across each of their edges (one per fine vertex).
+                        self.stats.visited_faces += closed.fv_faces.len();
+                        self.stats.edges_crossed += self.fine.vertex_count;
+                        trials.push(SeedTrial::valid(seed, class, energy, true));
+                        found.push(Found {
+                            seed,
+                            energy,
+                            stopped_early: true,
+                            ff_faces: Vec::new(),
+                            kept: Kept::default(),
+                        });
+                        continue;
+                    }
+                }
+                let result =
+                    self.classify(seed).and_then(|()| self.energy(queue_start, faces, vertices, cutoff, false));
                 match result {
                     Ok(Energy { energy, stopped_early, .. }) => {
                         trials.push(SeedTrial::valid(seed, class, energy, stopped_early));
@@ -1298,6 +1450,294 @@ impl<'a> Search<'a> {
         let best_candidates = std::mem::take(&mut found[rank[0]].kept);
         let choice = SeedChoice { component: k, seed_face: seed, given: false, trials, detail_energy: energy, reason };
         Ok((choice, ranked, best_ff_faces, best_candidates))
+    }
+
+    /// [`Self::finish`] for a mesh of one component whose reading covers every vertex once
+    /// (`canonical_of_vertex`: the coarse corner of each fine vertex) and whose coarse mesh
+    /// is closed, in fewer passes, with the roles of the search set (F_F faces and F_E
+    /// quads): the coarse twins and the quad matching come from one pass over the quads in
+    /// face order (no walk across them), the faces that are neither F_F faces nor F_E
+    /// quads are taken in face order as the F_V faces, each checked to be the counter-clockwise orbit
+    /// of one coarse vertex, which numbers the coarse vertices as the input numbers their
+    /// F_V faces (as [`find_vertex_faces`] and [`coarse_vertex_order`] do), gives each
+    /// vertex's corners and the F_V matching; the two checks of the coarse manifold ride
+    /// on that pass and on the means. `None` at the first mismatch of any kind: then
+    /// [`Self::finish`] runs and names the face at fault. When it gives a result, it is
+    /// the one of [`Self::finish`] (same coarse mesh, details, order and energies).
+    ///
+    /// `buffer`: the candidates by coarse corner if `ready`, else scratch for them.
+    fn finish_closed(
+        &self,
+        rule: FaceRule,
+        buffer: &mut Vec<DVec3>,
+        ready: bool,
+        canonical_of_vertex: &[u32],
+    ) -> Option<Closed> {
+        let fine = self.fine;
+        let faces = fine.face_count();
+        if canonical_of_vertex.len() != fine.vertex_count || fine.corner_twin.contains(&NONE) {
+            return None;
+        }
+        // Coarse faces: the F_F faces in increasing order; fine vertex of each coarse corner,
+        // and the coarse corner of each F_F face's first corner.
+        let mut coarse_offsets = Vec::with_capacity(faces / 3 + 2);
+        coarse_offsets.push(0u32);
+        let mut ff_faces = Vec::with_capacity(faces / 3 + 1);
+        let mut vertex_of = Vec::with_capacity(fine.vertex_count);
+        let mut start_of = vec![NONE; faces];
+        for (f, start) in start_of.iter_mut().enumerate() {
+            if self.role[f] != FF {
+                continue;
+            }
+            *start = vertex_of.len() as u32;
+            ff_faces.push(f as u32);
+            vertex_of.extend_from_slice(&fine.corner_vertex[fine.offsets[f] as usize..fine.offsets[f + 1] as usize]);
+            coarse_offsets.push(vertex_of.len() as u32);
+        }
+        let coarse_corners = vertex_of.len();
+        if coarse_corners != fine.vertex_count || faces >= 1 << 30 {
+            return None;
+        }
+        let coarse_next = next_of_corners(&coarse_offsets);
+        // The coarse corner of fine corner `x` if it is on an F_F face, else NONE.
+        let ff_corner = |x: u32| {
+            let h = self.corner_face[x as usize] as usize;
+            match start_of[h] {
+                NONE => NONE,
+                start => start + (x - fine.offsets[h]),
+            }
+        };
+        // Coarse twins from the F_E quads of the search, in face order, read through the
+        // fine twins (no lookup by vertex): quad `(c, next(t), t, next(c))` (rotated by its
+        // start `s`) has the twins of F_F corners `c` and `t` at `s + 3` and `s + 1` (the
+        // half-edges `next(c) -> c` and `next(t) -> t`), none at `s` and `s + 2`; `c < t`;
+        // its corners must be those fine vertices, and every coarse corner on one quad.
+        // Then the quad holds the twin of the fine half-edge of F_F corner `c` and,
+        // opposite it, the one of `t`: what the search and the full build find across
+        // from `c`. Each quad is kept at `c` with its rotation (the quads are listed in
+        // order of their smaller corner, as [`match_fine_faces`] does), and its `c` and
+        // `s` by face for the F_V faces.
+        let mut twins = vec![NONE; coarse_corners];
+        let mut quad_at = vec![NONE; coarse_corners];
+        let mut quad_corner = vec![NONE; faces];
+        let mut quads = 0;
+        for (q, _) in self.role.iter().enumerate().filter(|(_, role)| **role == FE) {
+            let (b, e) = (fine.offsets[q] as usize, fine.offsets[q + 1] as usize);
+            if e - b != 4 {
+                return None;
+            }
+            let y = &fine.corner_vertex[b..e];
+            let cc = [0, 1, 2, 3].map(|i| ff_corner(fine.corner_twin[b + i]));
+            let s = match cc.map(|c| c != NONE) {
+                [false, true, false, true] => 0,
+                [true, false, true, false] => 1,
+                _ => return None,
+            };
+            let s = if cc[(s + 3) & 3] < cc[s + 1] { s } else { s + 2 };
+            let (c, t) = (cc[(s + 3) & 3] as usize, cc[(s + 1) & 3] as usize);
+            let cycle =
+                [vertex_of[c], vertex_of[coarse_next[t] as usize], vertex_of[t], vertex_of[coarse_next[c] as usize]];
+            if (0..4).any(|k| y[(s + k) & 3] != cycle[k]) || twins[c] != NONE || twins[t] != NONE || c == t {
+                return None;
+            }
+            twins[c] = t as u32;
+            twins[t] = c as u32;
+            quad_at[c] = (q as u32) << 2 | ((4 - s) & 3) as u32;
+            quad_corner[q] = (c as u32) << 2 | s as u32;
+            quads += 1;
+        }
+        drop(start_of);
+        if 2 * quads != coarse_corners {
+            return None;
+        }
+        let mut face_order = Vec::with_capacity(faces);
+        let mut rotations = Vec::with_capacity(faces);
+        face_order.extend_from_slice(&ff_faces);
+        rotations.resize(ff_faces.len(), 0);
+        for &packed in quad_at.iter().filter(|&&packed| packed != NONE) {
+            face_order.push(packed >> 2);
+            rotations.push(packed & 3);
+        }
+        drop(quad_at);
+
+        // The other faces, in face order, are the F_V faces: each the counter-clockwise
+        // orbit (`c -> next(twin(c))` backwards) of one coarse vertex, numbered in that
+        // order, every coarse corner on exactly one. The corner of such a face at
+        // `next(t)` (`t` the twin of `c`) is the twin of quad corner `s` (`c`) of the quad
+        // of `c` (or of `s + 2`, the roles of `c` and `t` swapped), and the face's next
+        // corner is at `c`: each corner's coarse corner comes through the fine twins, and
+        // each one must be the previous corner's counter-clockwise one.
+        let mut labels = vec![NONE; coarse_corners];
+        let mut vertex_corner = Vec::with_capacity(faces - face_order.len());
+        let mut by_vertex_offsets = Vec::with_capacity(faces - face_order.len() + 1);
+        by_vertex_offsets.push(0u32);
+        let mut by_vertex_corners: Vec<u32> = Vec::with_capacity(coarse_corners);
+        let mut fv_faces = Vec::with_capacity(faces - face_order.len());
+        for (g, _) in self.role.iter().enumerate().filter(|(_, role)| **role == UNKNOWN) {
+            let (b, e) = (fine.offsets[g] as usize, fine.offsets[g + 1] as usize);
+            let m = e - b;
+            let label = vertex_corner.len() as u32;
+            let start = by_vertex_corners.len();
+            if m < 3 || start + m > coarse_corners {
+                return None;
+            }
+            // Corner `j` gives its own coarse corner and the one of corner `j + 1`.
+            let mut expected = NONE;
+            let mut first = NONE;
+            for (&x, &ft) in fine.corner_vertex[b..e].iter().zip(&fine.corner_twin[b..e]) {
+                let q = self.corner_face[ft as usize] as usize;
+                let packed = quad_corner[q];
+                if self.role[q] != FE || packed == NONE {
+                    return None;
+                }
+                let (c, s) = (packed >> 2, packed & 3);
+                let t = twins[c as usize];
+                let (own, next) = match (ft - fine.offsets[q]).wrapping_sub(s) & 3 {
+                    0 => (coarse_next[t as usize], c),
+                    2 => (coarse_next[c as usize], t),
+                    _ => return None,
+                };
+                if vertex_of[own as usize] != x || (expected != NONE && own != expected) {
+                    return None;
+                }
+                if first == NONE {
+                    first = own;
+                }
+                expected = next;
+                // No corner is labelled twice: two faces that are orbits through one
+                // corner would be the same orbit, the same directed edges, which a mesh
+                // has once.
+                labels[own as usize] = label;
+                by_vertex_corners.push(own);
+            }
+            if expected != first {
+                return None;
+            }
+            let corners = &mut by_vertex_corners[start..];
+            let (mut smallest, mut at) = (corners[0], 0);
+            for (j, &c) in corners.iter().enumerate() {
+                if c < smallest {
+                    (smallest, at) = (c, j);
+                }
+            }
+            insertion_sort(corners);
+            vertex_corner.push(smallest);
+            by_vertex_offsets.push(by_vertex_corners.len() as u32);
+            face_order.push(g as u32);
+            rotations.push(((m - at) % m) as u32);
+            fv_faces.push(g as u32);
+        }
+        if by_vertex_corners.len() != coarse_corners {
+            return None;
+        }
+        let coarse_vertex_count = vertex_corner.len();
+        let coarse = CornerMesh {
+            offsets: coarse_offsets,
+            corner_vertex: labels,
+            corner_twin: twins,
+            corner_next: coarse_next,
+            vertex_count: coarse_vertex_count,
+            vertex_corner: Some(vertex_corner),
+        };
+        // The coarse manifold ([`check_coarse_manifold`]): no face visits a vertex twice;
+        // no two edges join the same two vertices (the outgoing half-edges of a vertex are
+        // its corners, the mesh being closed), checked beside the means.
+        let mut stamp = Vec::new();
+        for (k, w) in coarse.offsets.windows(2).enumerate() {
+            if !distinct(&coarse.corner_vertex[w[0] as usize..w[1] as usize], &mut stamp, coarse_vertex_count, k as u32)
+            {
+                return None;
+            }
+        }
+        let by_vertex = CornersByVertex::from_parts((by_vertex_offsets, by_vertex_corners));
+        let expanded;
+        let candidates = if ready && buffer.len() == coarse_corners {
+            &buffer[..]
+        } else {
+            let scratch = std::mem::take(buffer);
+            expanded = expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize], scratch);
+            &expanded[..]
+        };
+        stamp.fill(NONE);
+        let mut manifold = true;
+        let mut ends = Vec::new();
+        let (coarse_positions, details, vertex_energy) =
+            means_and_details_with(&by_vertex, candidates, |u, corners| {
+                ends.clear();
+                ends.extend(corners.iter().map(|&c| coarse.corner_vertex[coarse.corner_next[c as usize] as usize]));
+                manifold &= distinct(&ends, &mut stamp, coarse_vertex_count, u as u32);
+            });
+        if !manifold {
+            return None;
+        }
+        let identity_vertices = vertex_of.iter().enumerate().all(|(c, &x)| x == c as u32);
+        let identity_faces = face_order.iter().enumerate().all(|(k, &g)| g == k as u32);
+        let no_rotation = rotations.iter().all(|&r| r == 0);
+        let order = FineOrder {
+            vertices: if identity_vertices { Vec::new() } else { vertex_of },
+            faces: if identity_faces { Vec::new() } else { face_order },
+            rotations: if no_rotation { Vec::new() } else { rotations },
+        };
+        let mut stats = self.stats;
+        stats.candidate_edges = coarse_corners;
+        let energies = vec![vertex_energy.iter().sum()];
+        let reversal = DooReversal { rule, coarse, coarse_positions, details, order, choices: Vec::new(), stats };
+        Some(Closed { reversal, energies, fv_faces })
+    }
+
+    /// The detail energy of the dual reading of a closed reading built by
+    /// [`Self::finish_closed`] (`closed`; `canonical_of_vertex`: the coarse corner of each
+    /// fine vertex), as [`Self::energy`] sums it after the search from the lowest F_V face:
+    /// that search finds the F_V faces as its F_F faces (the structure is checked), its
+    /// candidates are the F_V faces expanded, its groups the F_F faces in face order, each
+    /// summed in the order of its corners' F_V faces. Each F_V face is expanded when a
+    /// group first needs it, and the sum stops as soon as it reaches `cutoff`: the partial
+    /// sum then, `None` if it never does (the dual reading is better: the caller searches
+    /// it in full). `dual`: scratch for the candidates, by coarse corner.
+    fn dual_energy(
+        &self,
+        closed: &Closed,
+        canonical_of_vertex: &[u32],
+        dual: &mut Vec<DVec3>,
+        cutoff: f64,
+    ) -> Option<f64> {
+        let fine = self.fine;
+        let coarse = &closed.reversal.coarse;
+        dual.resize(coarse.corner_count(), DVec3::ZERO);
+        let mut expanded = vec![false; coarse.vertex_count];
+        let (mut points, mut out) = (Vec::new(), Vec::new());
+        let mut group = Vec::new();
+        let mut energy = 0.0;
+        for w in coarse.offsets.windows(2) {
+            let (b, e) = (w[0] as usize, w[1] as usize);
+            for &u in &coarse.corner_vertex[b..e] {
+                if std::mem::replace(&mut expanded[u as usize], true) {
+                    continue;
+                }
+                let g = closed.fv_faces[u as usize] as usize;
+                let face = &fine.corner_vertex[fine.offsets[g] as usize..fine.offsets[g + 1] as usize];
+                points.clear();
+                points.extend(face.iter().map(|&x| self.positions[x as usize]));
+                out.resize(face.len(), DVec3::ZERO);
+                self.maps.inverse(&points, &mut out);
+                for (&x, &p) in face.iter().zip(&out) {
+                    dual[canonical_of_vertex[x as usize] as usize] = p;
+                }
+            }
+            group.clear();
+            group.extend(b as u32..e as u32);
+            insertion_sort_by_key(&mut group, |c| coarse.corner_vertex[c as usize]);
+            let mean = group.iter().map(|&c| dual[c as usize]).sum::<DVec3>() / group.len() as f64;
+            let mut group_energy = 0.0;
+            for &c in &group {
+                group_energy += (dual[c as usize] - mean).length_squared();
+            }
+            energy += group_energy;
+            if energy >= cutoff {
+                return Some(energy);
+            }
+        }
+        None
     }
 
     /// Builds the coarse mesh, details and fine order from the roles of all components;
@@ -2003,6 +2443,88 @@ mod tests {
 
     fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
         a.iter().zip(b).map(|(p, q)| (*p - *q).length()).fold(0.0, f64::max)
+    }
+
+    /// Closed refinements (jittered, so that no reading is exact), renumbered and with
+    /// rotated faces, and with shuffled faces.
+    fn closed_scrambled() -> Vec<HalfedgeMesh> {
+        let shapes = [
+            shapes::cube(),
+            shapes::icosahedron(),
+            shapes::torus(6, 5, CellKind::Mixed).unwrap(),
+            shapes::torus(5, 4, CellKind::Quads).unwrap(),
+        ];
+        let mut meshes = Vec::new();
+        for (i, coarse) in shapes.iter().enumerate() {
+            let mut fine = subdivide_soup(coarse, &DooOptions::default()).unwrap().into_soup();
+            for (k, p) in fine.positions.iter_mut().enumerate() {
+                *p += 0.01 * DVec3::new((k % 7) as f64, (k % 3) as f64, (k % 5) as f64);
+            }
+            let scrambled = mesh_topo::testing::scramble(fine.clone(), 3 + i as u64, 0.0);
+            let mut faces: Vec<Vec<u32>> = scrambled.faces().map(<[u32]>::to_vec).collect();
+            faces.reverse();
+            let shuffled = PolygonSoup::from_faces(scrambled.positions.clone(), faces);
+            for soup in [scrambled, shuffled] {
+                meshes.push(HalfedgeMesh::from_soup(&soup).unwrap());
+            }
+        }
+        meshes
+    }
+
+    #[test]
+    fn the_closed_build_is_the_full_build() {
+        let mut checked = 0;
+        for mesh in closed_scrambled() {
+            let corners = CornerMesh::from_halfedge(&mesh);
+            let rule = FaceRule::DooSabin;
+            let seeded = ReverseOptions::with_seed(rule, 0);
+            let session = match Session::new(&corners, mesh.positions(), &seeded) {
+                Ok(session) if session.preclassified => session,
+                // Face 0 is not an F_F face of a reading of the whole mesh.
+                _ => continue,
+            };
+            let known = session.best_candidates[0].corner_of_vertex.clone();
+            let fast = session.search.finish_closed(rule, &mut Vec::new(), false, &known).expect("a closed reading");
+            let (full, energies) = session.search.finish(rule, &[], 1, (Vec::new(), false), known).unwrap();
+            assert_eq!(fast.reversal, full);
+            assert_eq!(fast.energies, energies);
+            assert!(max_distance(&full.reconstruct().positions, mesh.positions()) < 1e-12);
+            checked += 1;
+        }
+        assert!(checked >= 4, "{checked}");
+    }
+
+    #[test]
+    fn the_dual_reading_summed_from_the_build_is_the_searched_one() {
+        let mut checked = 0;
+        for mesh in closed_scrambled() {
+            let corners = CornerMesh::from_halfedge(&mesh);
+            let reversal = reverse(&mesh, &ReverseOptions::default()).unwrap();
+            let trials = &reversal.choices()[0].trials;
+            let Some(dual) = trials.iter().find(|t| t.class == "F_V") else { continue };
+            if !dual.stopped_early {
+                continue;
+            }
+            // The same reading searched and summed with the same cutoff.
+            let cutoff = *trials[0].outcome.as_ref().unwrap();
+            let mut search = Search::new(&corners, mesh.positions(), FaceMaps::new(FaceRule::DooSabin));
+            search.classify(dual.seed_face).unwrap();
+            let faces = FaceSet::All(mesh.face_count() as u32);
+            let energy = search.energy(0, faces, mesh.vertex_count(), cutoff, false).unwrap();
+            assert!(energy.stopped_early);
+            assert_eq!(energy.energy.to_bits(), dual.outcome.as_ref().unwrap().to_bits());
+            // The counters count the search it stands for: each trial searched afresh.
+            let (mut visited, mut crossed) = (0, 0);
+            for trial in trials {
+                let mut search = Search::new(&corners, mesh.positions(), FaceMaps::new(FaceRule::DooSabin));
+                let _ = search.classify(trial.seed_face);
+                visited += search.stats.visited_faces;
+                crossed += search.stats.edges_crossed;
+            }
+            assert_eq!((reversal.stats().visited_faces, reversal.stats().edges_crossed), (visited, crossed));
+            checked += 1;
+        }
+        assert!(checked > 0);
     }
 
     #[test]
