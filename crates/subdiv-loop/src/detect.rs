@@ -856,10 +856,31 @@ pub(crate) fn renumber_to_canonical(
             search.run(c)?;
         }
     }
-    let GroupSearch { label, group_of_face, groups, .. } = search;
+    let GroupSearch { label, groups, .. } = search;
     if 4 * groups.len() != faces {
         return None;
     }
+    // Every face is in one group: the groups in order of their first face are the coarse
+    // faces in order. A counting sort by first face / 4 (at most four groups a bucket,
+    // put in order as they are numbered) reads the groups in order once and writes them
+    // once, instead of reading each group back at random from the faces in order.
+    let mut start = vec![0u32; groups.len() + 1];
+    for group in &groups {
+        start[(group.first_face() / 4) as usize + 1] += 1;
+    }
+    for b in 1..start.len() {
+        start[b] += start[b - 1];
+    }
+    let mut sorted = vec![FaceGroup::default(); groups.len()];
+    {
+        let mut end = start.clone();
+        for group in &groups {
+            let slot = &mut end[(group.first_face() / 4) as usize];
+            sorted[*slot as usize] = *group;
+            *slot += 1;
+        }
+    }
+    drop(groups);
     // Canonical vertex of every fine vertex: the vertex points in fine order, then the
     // edge points as the coarse corners first name them.
     let mut canonical_of_fine = vec![NONE; nv];
@@ -873,40 +894,41 @@ pub(crate) fn renumber_to_canonical(
     drop(label);
     // The smallest edge point.
     let first_odd = vertex_of_canonical.len() as u32;
-    let mut numbered = vec![false; groups.len()];
     let mut face_of_canonical = Vec::with_capacity(faces);
-    let mut coarse_vertex = Vec::with_capacity(3 * groups.len());
-    let mut edge_point = Vec::with_capacity(3 * groups.len());
-    for &g in &group_of_face {
-        if std::mem::replace(&mut numbered[g as usize], true) {
-            continue;
+    let mut coarse_vertex = Vec::with_capacity(3 * sorted.len());
+    let mut edge_point = Vec::with_capacity(3 * sorted.len());
+    for bucket in start.windows(2) {
+        let bucket = &mut sorted[bucket[0] as usize..bucket[1] as usize];
+        if bucket.len() > 1 {
+            bucket.sort_unstable_by_key(FaceGroup::first_face);
         }
-        let FaceGroup { corner, inner, y, m: points } = groups[g as usize];
-        // Start at the corner whose corner face comes first.
-        let r = if corner[0] < corner[1] { 0 } else { 1 };
-        let r = if corner[2] < corner[r] { 2 } else { r };
-        let mut m = [0u32; 3];
-        for s in 0..3 {
-            let k = (r + s) % 3;
-            let slot = &mut canonical_of_fine[points[k] as usize];
-            if *slot == NONE {
-                *slot = vertex_of_canonical.len() as u32;
-                vertex_of_canonical.push(points[k]);
+        for &FaceGroup { corner, inner, y, m: points } in &*bucket {
+            // Start at the corner whose corner face comes first.
+            let r = if corner[0] < corner[1] { 0 } else { 1 };
+            let r = if corner[2] < corner[r] { 2 } else { r };
+            let mut m = [0u32; 3];
+            for s in 0..3 {
+                let k = (r + s) % 3;
+                let slot = &mut canonical_of_fine[points[k] as usize];
+                if *slot == NONE {
+                    *slot = vertex_of_canonical.len() as u32;
+                    vertex_of_canonical.push(points[k]);
+                }
+                m[k] = *slot;
             }
-            m[k] = *slot;
+            // Coarse corner s: the corner face (y_k, m_k, m_{k-1}) (its corners after the
+            // vertex point are those of the inner face's edge across which it was found),
+            // then the inner face (m_r, m_{r+1}, m_{r+2}).
+            for s in 0..3 {
+                let k = (r + s) % 3;
+                let even = corner[k];
+                // Canonical corner 0 is the vertex point: actual corner j -> rotation (3 - j) % 3.
+                face_of_canonical.push(3 * (even / 3) + (3 - even % 3) % 3);
+                coarse_vertex.push(canonical_of_fine[y[k] as usize]);
+                edge_point.push(m[k]);
+            }
+            face_of_canonical.push(3 * inner + (3 - r as u32) % 3);
         }
-        // Coarse corner s: the corner face (y_k, m_k, m_{k-1}) (its corners after the
-        // vertex point are those of the inner face's edge across which it was found),
-        // then the inner face (m_r, m_{r+1}, m_{r+2}).
-        for s in 0..3 {
-            let k = (r + s) % 3;
-            let even = corner[k];
-            // Canonical corner 0 is the vertex point: actual corner j -> rotation (3 - j) % 3.
-            face_of_canonical.push(3 * (even / 3) + (3 - even % 3) % 3);
-            coarse_vertex.push(canonical_of_fine[y[k] as usize]);
-            edge_point.push(m[k]);
-        }
-        face_of_canonical.push(3 * inner + (3 - r as u32) % 3);
     }
     if vertex_of_canonical.len() != nv {
         return None;
@@ -953,7 +975,7 @@ impl Renumbering {
 /// The four faces of a coarse face found by [`GroupSearch`]: `corner[k]`, the corner at
 /// the vertex point of the corner face across the inner face's edge `k - 1` (as
 /// [`Group::corner`]), and the inner face.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Default)]
 struct FaceGroup {
     corner: [u32; 3],
     inner: u32,
@@ -961,6 +983,13 @@ struct FaceGroup {
     y: [u32; 3],
     /// The corners of the inner face (edge points; `m[k]` on the coarse edge `y[k] -> y[k + 1]`).
     m: [u32; 3],
+}
+
+impl FaceGroup {
+    /// The lowest of its four faces.
+    fn first_face(&self) -> u32 {
+        self.corner.iter().fold(self.inner, |f, &c| f.min(c / 3))
+    }
 }
 
 /// The search of [`renumber_to_canonical`].
