@@ -23,7 +23,7 @@ use crate::DooError;
 use crate::corner::{CornerMesh, NONE, expand_faces, faces_of_corners, group_by_key, next_of_corners};
 use crate::reverse::{
     CornersByVertex, DooReversal, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial,
-    check_coarse_manifold, corners_by_vertex, insertion_sort, insertion_sort_by_key, means_and_details,
+    check_coarse_manifold, corners_by_vertex, dual_group_energy, insertion_sort, means_and_details,
     means_and_details_with, ranking_reason,
 };
 use crate::rule::FaceMaps;
@@ -836,15 +836,7 @@ fn automatic(
         }
         // Summed in the order of the dual reading's coarse corners, which number the F_V
         // faces' corners in face order: by F_V face, as no face has two corners on one.
-        group_corners.clear();
-        group_corners.extend(b as u32..e as u32);
-        insertion_sort_by_key(&mut group_corners, |c| coarse_vertex[c as usize]);
-        let mean = group_corners.iter().map(|&c| dual[c as usize]).sum::<DVec3>() / group_corners.len() as f64;
-        let mut group_energy = 0.0;
-        for &c in &group_corners {
-            group_energy += (dual[c as usize] - mean).length_squared();
-        }
-        dual_energy += group_energy;
+        dual_energy += dual_group_energy(&mut group_corners, b as u32..e as u32, coarse_vertex, &dual);
         if dual_energy >= energy {
             stopped = true;
             break;

@@ -1724,15 +1724,7 @@ impl<'a> Search<'a> {
                     dual[canonical_of_vertex[x as usize] as usize] = p;
                 }
             }
-            group.clear();
-            group.extend(b as u32..e as u32);
-            insertion_sort_by_key(&mut group, |c| coarse.corner_vertex[c as usize]);
-            let mean = group.iter().map(|&c| dual[c as usize]).sum::<DVec3>() / group.len() as f64;
-            let mut group_energy = 0.0;
-            for &c in &group {
-                group_energy += (dual[c as usize] - mean).length_squared();
-            }
-            energy += group_energy;
+            energy += dual_group_energy(&mut group, b as u32..e as u32, &coarse.corner_vertex, dual);
             if energy >= cutoff {
                 return Some(energy);
             }
@@ -2419,6 +2411,27 @@ pub(crate) fn insertion_sort_by_key(values: &mut [u32], key: impl Fn(u32) -> u32
         }
         values[j] = x;
     }
+}
+
+/// The detail energy of one group of the dual reading: the squared distances of its
+/// candidates (`dual`, by coarse corner) from their mean, the group being the coarse
+/// corners `corners` summed in the order of their coarse vertices (`corner_vertex`), as
+/// the dual reading's result would sum them. `group` is scratch.
+pub(crate) fn dual_group_energy(
+    group: &mut Vec<u32>,
+    corners: std::ops::Range<u32>,
+    corner_vertex: &[u32],
+    dual: &[DVec3],
+) -> f64 {
+    group.clear();
+    group.extend(corners);
+    insertion_sort_by_key(group, |c| corner_vertex[c as usize]);
+    let mean = group.iter().map(|&c| dual[c as usize]).sum::<DVec3>() / group.len() as f64;
+    let mut energy = 0.0;
+    for &c in group.iter() {
+        energy += (dual[c as usize] - mean).length_squared();
+    }
+    energy
 }
 
 #[cfg(test)]
