@@ -31,9 +31,11 @@ const DRIVERS: &[Driver] = &[
     Driver { library: "OpenMesh", program: "openmesh_subdiv", schemes: &[("loop", "loop")] },
 ];
 
-/// One of our measurements: mean time and output faces.
+/// One of our measurements: mean time, the time of the fastest sample (if criterion
+/// wrote its samples) and output faces.
 pub struct Measurement {
     pub mean_ns: f64,
+    pub best_ns: Option<f64>,
     pub elements: Option<f64>,
 }
 
@@ -70,11 +72,18 @@ impl PeerRuns {
     }
 }
 
-/// Our time for one (mesh, scheme, level), per thread count.
+/// Our time for one (mesh, scheme, level) per thread count: the fastest sample (the
+/// mean when there are no samples) and the mean, in seconds.
 #[derive(Default)]
 struct Ours {
     faces: Option<f64>,
-    seconds_by_threads: BTreeMap<usize, f64>,
+    seconds_by_threads: BTreeMap<usize, OurTimes>,
+}
+
+#[derive(Clone, Copy)]
+struct OurTimes {
+    best: f64,
+    mean: f64,
 }
 
 /// Markdown section comparing the `subdivide-<mesh>/<scheme>-<n>t/<level>` rows with the
@@ -85,7 +94,9 @@ pub fn comparison(rows: &BTreeMap<String, Measurement>, mesh_file: impl Fn(&str)
         let Some((mesh, scheme, threads, level)) = parse_id(id) else { continue };
         let entry = ours.entry((mesh, scheme, level)).or_default();
         entry.faces = measurement.elements.or(entry.faces);
-        entry.seconds_by_threads.insert(threads, measurement.mean_ns * 1e-9);
+        let mean = measurement.mean_ns * 1e-9;
+        let best = measurement.best_ns.map_or(mean, |ns| ns * 1e-9);
+        entry.seconds_by_threads.insert(threads, OurTimes { best, mean });
     }
     if ours.is_empty() {
         return String::from("No `subdivide-*` benchmarks were run: nothing to compare with peers.\n");
@@ -95,10 +106,12 @@ pub fn comparison(rows: &BTreeMap<String, Measurement>, mesh_file: impl Fn(&str)
         DRIVERS.iter().filter_map(|d| find_program(d.program, peers_dir.as_deref()).map(|p| (d, p))).collect();
     let mut text = String::from(
         "## Subdivision against peer libraries (same run)\n\n\
-         Times of the subdivision call alone, best of up to 3 runs for the peers, criterion mean for \
-         ours; `ratio` = fastest peer time / our time (above 1: we are faster). `loop-reuse` rows \
-         (repeated subdivision into the previous result's memory) are compared with the same peer \
-         runs as `loop`.\n\n",
+         Times of the subdivision call alone: best of up to 3 runs for the peers; for ours the \
+         fastest criterion sample (a sample averages several calls) and, in parentheses, the \
+         criterion mean. `ratio` = fastest peer time / our time (above 1: we are faster), best \
+         against best and, in parentheses, against our mean. `loop-reuse` rows (repeated \
+         subdivision into the previous result's memory) are compared with the same peer runs as \
+         `loop`.\n\n",
     );
     let missing: Vec<&str> =
         DRIVERS.iter().filter(|d| !found.iter().any(|(f, _)| f.program == d.program)).map(|d| d.library).collect();
@@ -133,13 +146,15 @@ pub fn comparison(rows: &BTreeMap<String, Measurement>, mesh_file: impl Fn(&str)
             }
         }
         let fastest = peer_times.iter().map(|&(_, t)| t).fold(f64::INFINITY, f64::min);
-        let ratio = |ours: Option<f64>| match ours {
-            Some(t) if fastest.is_finite() => format!("{:.2}", fastest / t),
+        let ratio = |ours: Option<OurTimes>| match ours {
+            Some(t) if fastest.is_finite() => format!("{:.2} ({:.2})", fastest / t.best, fastest / t.mean),
             _ => "–".into(),
         };
-        let rate = |seconds: Option<f64>| match (seconds, measured.faces) {
-            (Some(t), Some(f)) => format!("{} ({:.1} Mf/s)", format_seconds(t), f / t / 1e6),
-            (Some(t), None) => format_seconds(t),
+        let rate = |times: Option<OurTimes>| match (times, measured.faces) {
+            (Some(t), Some(f)) => {
+                format!("{} ({}), {:.1} Mf/s", format_seconds(t.best), format_seconds(t.mean), f / t.best / 1e6)
+            }
+            (Some(t), None) => format!("{} ({})", format_seconds(t.best), format_seconds(t.mean)),
             _ => "–".into(),
         };
         let peers = if peer_times.is_empty() {
@@ -190,7 +205,11 @@ fn run_driver(program: &Path, scheme: &str, input: &Path, level: u32) -> Result<
 }
 
 fn format_seconds(t: f64) -> String {
-    if t < 1.0 { format!("{:.1} ms", t * 1e3) } else { format!("{t:.2} s") }
+    match t {
+        t if t < 0.01 => format!("{:.3} ms", t * 1e3),
+        t if t < 1.0 => format!("{:.1} ms", t * 1e3),
+        t => format!("{t:.2} s"),
+    }
 }
 
 #[cfg(test)]
