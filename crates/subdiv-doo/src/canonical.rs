@@ -20,14 +20,13 @@ use mesh_topo::HalfedgeMesh;
 use glam::DVec3;
 
 use crate::DooError;
-use crate::corner::{CornerMesh, NONE, expand_faces, faces_of_corners, group_by_key, next_of_corners};
+use crate::corner::{CornerMesh, NONE, faces_of_corners, group_by_key, next_of_corners};
 use crate::reverse::{
     CornersByVertex, DooReversal, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial,
     check_coarse_manifold, corners_by_vertex, dual_group_energy, insertion_sort, means_and_details,
-    means_and_details_with, ranking_reason,
+    means_and_details_in, ranking_reason,
 };
 use crate::rule::FaceMaps;
-use rayon::prelude::*;
 
 /// The reversal of `fine` with the one given seed of `options` (or none, see
 /// [`automatic`]), if every position is finite and `fine` is a valid
@@ -61,7 +60,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     };
     options.rule.validate().ok()?;
     let arrays = HalfedgeArrays::of(fine);
-    let HalfedgeArrays { to, next, face_halfedge, vertices, faces, .. } = arrays;
+    let HalfedgeArrays { vertices, faces, .. } = arrays;
     if vertices == 0 || vertices >= NONE as usize || faces >= NONE as usize {
         return None;
     }
@@ -100,16 +99,177 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         "internal: canonical twins are an involution"
     );
 
+    let closed = !on_boundary;
+    // The coarse vertices (from the connectivity) and the candidates (from the positions)
+    // do not depend on each other: on several threads they are found side by side.
+    let maps = FaceMaps::new(options.rule);
+    let positions = fine.positions();
+    let find_vertices = || {
+        let ff = FfParts { offsets: &offsets, next: &coarse_next, twins: &twins, layout, closed };
+        coarse_vertices(&arrays, &ff, fv_first, quads as usize, automatic_choice)
+    };
+    let expand = || expand_in_order(&offsets, &maps, positions, automatic_choice);
+    let (found, (candidates, scale)) = if rayon::current_num_threads() > 1 && vertices >= PARALLEL_VERTICES {
+        let (found, expanded) = rayon::join(find_vertices, expand);
+        (found?, expanded)
+    } else {
+        let found = find_vertices()?;
+        (found, expand())
+    };
+    let CoarseVertices { labels, vertex_corner, fv_sizes, by_vertex: closed_by_vertex, mut stamp, interior } = found;
+    let coarse_vertex_count = vertex_corner.len();
+    let candidate_edges = twins.iter().filter(|&&t| t != NONE).count();
+    let coarse = CornerMesh {
+        offsets,
+        corner_vertex: labels,
+        corner_twin: twins,
+        corner_next: coarse_next,
+        vertex_count: coarse_vertex_count,
+        vertex_corner: Some(vertex_corner),
+    };
+    debug_assert_eq!(closed, candidate_edges == vertices, "internal: boundary corners have no twin");
+    let by_vertex = match closed_by_vertex {
+        Some(by_vertex) => by_vertex,
+        None => corners_by_vertex(&coarse),
+    };
+    if !closed {
+        let ff_faces: Vec<u32> = (0..ff).collect();
+        check_coarse_manifold(&coarse, &ff_faces, &by_vertex).ok()?;
+    }
+
+    let fv = FvFaces { first: fv_first, sizes_of: &fv_sizes };
+    // On a closed mesh the second check of the coarse manifold (no two edges join the
+    // same two vertices) is made in the same pass, on the corners of each vertex: the
+    // outgoing coarse half-edges of a vertex are its corners.
+    let (coarse_positions, details, vertex_energy) = if closed {
+        let vertex_count = coarse.vertex_count;
+        // The vertices `range`, with the check; `stamp` is scratch of [`distinct`].
+        let means_checked = |range: std::ops::Range<usize>, stamp: &mut Vec<u32>| {
+            let mut manifold = true;
+            // The far ends of each vertex's outgoing coarse half-edges.
+            let mut short_ends = [NONE; SHORT];
+            let mut long_ends = Vec::new();
+            let reserve = vertex_count - range.start;
+            let parts = means_and_details_in(&by_vertex, &candidates, range, reserve, |u, corners| {
+                let ends = if corners.len() <= SHORT {
+                    &mut short_ends[..corners.len()]
+                } else {
+                    long_ends.resize(corners.len(), NONE);
+                    &mut long_ends[..]
+                };
+                for (end, &c) in ends.iter_mut().zip(corners) {
+                    *end = coarse.corner_vertex[coarse.corner_next[c as usize] as usize];
+                }
+                manifold &= distinct(ends, stamp, interior, u as u32);
+            });
+            manifold.then_some(parts)
+        };
+        stamp.fill(NONE);
+        if rayon::current_num_threads() > 1 && vertices >= PARALLEL_VERTICES {
+            // Two halves side by side (each vertex's values do not depend on the others),
+            // the second appended to the first (whose room covers both).
+            let half = vertex_count / 2;
+            let (first, second) = rayon::join(
+                || means_checked(0..half, &mut stamp),
+                || means_checked(half..vertex_count, &mut Vec::new()),
+            );
+            let ((mut means, mut details, mut energies), (more_means, more_details, more_energies)) = (first?, second?);
+            means.extend_from_slice(&more_means);
+            details.extend_from_slice(&more_details);
+            energies.extend_from_slice(&more_energies);
+            (means, details, energies)
+        } else {
+            means_checked(0..vertex_count, &mut stamp)?
+        }
+    } else {
+        means_and_details(&by_vertex, &candidates)
+    };
+    // Every fine position is in some coarse vertex's mean: a position that is not
+    // finite makes a mean that is not (the general path reports it).
+    if !coarse_positions.iter().all(|p| p.is_finite()) {
+        return None;
+    }
+    // The detail energy of the lowest face read as F_F (for the automatic choice): the
+    // general path sums its groups (the F_V faces, in face order: the coarse vertices) as
+    // the result sums its vertices.
+    let detail_energy = vertex_energy.iter().sum();
+    let (mut choice, stats) = match seed {
+        Some(seed) => {
+            let stats =
+                ReverseStats { visited_faces: ff_count, edges_crossed: vertices, candidate_edges, interpretations: 0 };
+            (SeedChoice::given(0, seed), stats)
+        }
+        None => {
+            let mut choice = automatic(fine, &maps, &coarse, detail_energy, scale, &fv, candidates)?;
+            let visited = if choice.trials.len() == 1 { ff_count } else { ff_count + interior + 1 };
+            // Every valid reading was searched in full; the ones whose sum stopped early
+            // are not counted as evaluated.
+            let valid = choice.trials.iter().filter(|t| t.outcome.is_ok()).count();
+            let interpretations = choice.trials.iter().filter(|t| t.outcome.is_ok() && !t.stopped_early).count();
+            let edges_crossed = valid * vertices + choice.trials.len() - valid;
+            choice.component = 0;
+            (choice, ReverseStats { visited_faces: visited, edges_crossed, candidate_edges, interpretations })
+        }
+    };
+    choice.detail_energy = detail_energy;
+    Some(DooReversal {
+        rule: options.rule,
+        coarse,
+        coarse_positions,
+        details,
+        order: FineOrder::default(),
+        choices: vec![choice],
+        stats,
+    })
+}
+
+/// The F_F side of the first reading, as [`coarse_vertices`] reads it.
+struct FfParts<'a> {
+    offsets: &'a [u32],
+    next: &'a [u32],
+    twins: &'a [u32],
+    layout: bool,
+    closed: bool,
+}
+
+/// What [`coarse_vertices`] finds.
+struct CoarseVertices {
+    /// The coarse vertex of each corner.
+    labels: Vec<u32>,
+    /// A corner of each coarse vertex.
+    vertex_corner: Vec<u32>,
+    /// The sizes of the F_V faces.
+    fv_sizes: Vec<u32>,
+    /// On a closed mesh, the corners of each coarse vertex in increasing order.
+    by_vertex: Option<CornersByVertex>,
+    /// Scratch of [`distinct`] (empty, or one slot per interior vertex).
+    stamp: Vec<u32>,
+    /// The number of interior coarse vertices (those with an F_V face).
+    interior: usize,
+}
+
+/// The coarse vertices of the first reading of [`reverse_canonical`]: the interior ones
+/// from the F_V faces (vertex `i` is F_V face `i`), then the boundary vertices in order
+/// of their first corner, with the first check of the coarse manifold on a closed mesh
+/// (no face visits a vertex twice); `None` at the first mismatch.
+fn coarse_vertices(
+    arrays: &HalfedgeArrays<'_>,
+    ff: &FfParts<'_>,
+    fv_first: usize,
+    quads: usize,
+    automatic_choice: bool,
+) -> Option<CoarseVertices> {
+    let HalfedgeArrays { to, next, face_halfedge, vertices, faces, .. } = *arrays;
+    let FfParts { offsets, next: coarse_next, twins, layout, closed } = *ff;
     // Interior coarse vertices from the F_V faces (vertex `i` is F_V face `i`), then the
     // boundary vertices in order of their first corner.
     let clockwise = |x: u32| match twins[x as usize] {
         NONE => NONE,
         t => coarse_next[t as usize],
     };
-    let closed = !on_boundary;
     // On a closed mesh of the layout the F_V faces are read in one stream; else (or if
     // that finds a mismatch) by one walk around each.
-    let streamed = if layout && closed { stream_fv_faces(&arrays, fv_first, quads as usize) } else { None };
+    let streamed = if layout && closed { stream_fv_faces(arrays, fv_first, quads) } else { None };
     // The corners of each F_V face: sorted by the stream, or in face order by the walk.
     let (mut labels, mut vertex_corner, fv_sizes, fv_corners) = match streamed {
         Some(StreamedFvFaces { labels, first_corners, sizes, by_vertex }) => {
@@ -205,96 +365,11 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         }
     }
 
-    let coarse_vertex_count = vertex_corner.len();
-    let candidate_edges = twins.iter().filter(|&&t| t != NONE).count();
-    let coarse = CornerMesh {
-        offsets,
-        corner_vertex: labels,
-        corner_twin: twins,
-        corner_next: coarse_next,
-        vertex_count: coarse_vertex_count,
-        vertex_corner: Some(vertex_corner),
-    };
-    debug_assert_eq!(closed, candidate_edges == vertices, "internal: boundary corners have no twin");
-    let by_vertex = if closed {
+    let by_vertex = closed.then(|| {
         // Every vertex is interior: its corners are those of its F_V face, sorted.
         fv_corners.unwrap_or_else(|in_face_order| by_vertex_of_fv_faces(&fv_sizes, in_face_order))
-    } else {
-        corners_by_vertex(&coarse)
-    };
-    if !closed {
-        let ff_faces: Vec<u32> = (0..ff).collect();
-        check_coarse_manifold(&coarse, &ff_faces, &by_vertex).ok()?;
-    }
-
-    let maps = FaceMaps::new(options.rule);
-    let positions = fine.positions();
-    let (candidates, scale) = expand_in_order(&coarse.offsets, &maps, positions, automatic_choice);
-    let fv = FvFaces { first: fv_first, sizes_of: &fv_sizes };
-    // On a closed mesh the second check of the coarse manifold (no two edges join the
-    // same two vertices) is made in the same pass, on the corners of each vertex: the
-    // outgoing coarse half-edges of a vertex are its corners.
-    let mut manifold = true;
-    let (coarse_positions, details, vertex_energy) = if closed {
-        stamp.fill(NONE);
-        // The far ends of each vertex's outgoing coarse half-edges.
-        let mut short_ends = [NONE; SHORT];
-        let mut long_ends = Vec::new();
-        means_and_details_with(&by_vertex, &candidates, |u, corners| {
-            let ends = if corners.len() <= SHORT {
-                &mut short_ends[..corners.len()]
-            } else {
-                long_ends.resize(corners.len(), NONE);
-                &mut long_ends[..]
-            };
-            for (end, &c) in ends.iter_mut().zip(corners) {
-                *end = coarse.corner_vertex[coarse.corner_next[c as usize] as usize];
-            }
-            manifold &= distinct(ends, &mut stamp, interior, u as u32);
-        })
-    } else {
-        means_and_details(&by_vertex, &candidates)
-    };
-    if !manifold {
-        return None;
-    }
-    // Every fine position is in some coarse vertex's mean: a position that is not
-    // finite makes a mean that is not (the general path reports it).
-    if !coarse_positions.iter().all(|p| p.is_finite()) {
-        return None;
-    }
-    // The detail energy of the lowest face read as F_F (for the automatic choice): the
-    // general path sums its groups (the F_V faces, in face order: the coarse vertices) as
-    // the result sums its vertices.
-    let detail_energy = vertex_energy.iter().sum();
-    let (mut choice, stats) = match seed {
-        Some(seed) => {
-            let stats =
-                ReverseStats { visited_faces: ff_count, edges_crossed: vertices, candidate_edges, interpretations: 0 };
-            (SeedChoice::given(0, seed), stats)
-        }
-        None => {
-            let mut choice = automatic(fine, &maps, &coarse, detail_energy, scale, &fv, candidates)?;
-            let visited = if choice.trials.len() == 1 { ff_count } else { ff_count + interior + 1 };
-            // Every valid reading was searched in full; the ones whose sum stopped early
-            // are not counted as evaluated.
-            let valid = choice.trials.iter().filter(|t| t.outcome.is_ok()).count();
-            let interpretations = choice.trials.iter().filter(|t| t.outcome.is_ok() && !t.stopped_early).count();
-            let edges_crossed = valid * vertices + choice.trials.len() - valid;
-            choice.component = 0;
-            (choice, ReverseStats { visited_faces: visited, edges_crossed, candidate_edges, interpretations })
-        }
-    };
-    choice.detail_energy = detail_energy;
-    Some(DooReversal {
-        rule: options.rule,
-        coarse,
-        coarse_positions,
-        details,
-        order: FineOrder::default(),
-        choices: vec![choice],
-        stats,
-    })
+    });
+    Some(CoarseVertices { labels, vertex_corner, fv_sizes, by_vertex, stamp, interior })
 }
 
 /// The flat arrays of a half-edge mesh that the canonical passes read, and its sizes.
@@ -592,6 +667,10 @@ fn across_of_twins(offsets: &[u32], twins: &[u32]) -> Vec<u32> {
     twins.iter().map(|&t| if t == NONE { NONE } else { face_of_corner[t as usize] }).collect()
 }
 
+/// Meshes of at least this many fine vertices are read on two threads when the pool has
+/// them (below it, the tasks cost more than they save).
+const PARALLEL_VERTICES: usize = 1 << 14;
+
 /// Lists up to this long are checked for repeats by comparing their entries pairwise.
 const SHORT: usize = 8;
 
@@ -623,17 +702,13 @@ pub(crate) fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark:
 
 /// The candidates of the coarse faces (`offsets`) whose corners are the fine vertices in
 /// order (corner `c` at `positions[c]`): each face expanded straight from its slice of
-/// the positions into fresh memory, in face order. With several threads, the pieces of
-/// [`expand_faces`] run side by side instead (the same values).
+/// the positions into fresh memory, in face order (on several threads it runs beside
+/// [`coarse_vertices`]).
 ///
 /// With `diagonal`, also the length of the bounding-box diagonal of all positions (the
 /// scale of the automatic choice's zero test), on one thread from the slices while they
 /// are in cache; else zero.
 fn expand_in_order(offsets: &[u32], maps: &FaceMaps, positions: &[DVec3], diagonal: bool) -> (Vec<DVec3>, f64) {
-    if rayon::current_num_threads() > 1 {
-        let candidates = expand_faces(offsets, maps, |c| positions[c], Vec::new());
-        return (candidates, if diagonal { diagonal_of(positions) } else { 0.0 });
-    }
     let mut out = Vec::with_capacity(offsets.last().map_or(0, |&n| n as usize));
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for w in offsets.windows(2) {
@@ -855,23 +930,6 @@ fn automatic(
     trials.push(SeedTrial::invalid(quad, "F_E", &error));
     let reason = ranking_reason(energy, &[(fv_seed, dual_energy, true)]);
     Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason })
-}
-
-/// The length of the bounding-box diagonal of `points` (split among the threads on large
-/// meshes: min and max do not depend on the order).
-fn diagonal_of(points: &[DVec3]) -> f64 {
-    let bounds = |(lo, hi): (DVec3, DVec3), p: &DVec3| (lo.min(*p), hi.max(*p));
-    let empty = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    let (lo, hi) = if rayon::current_num_threads() > 1 && points.len() >= 1 << 16 {
-        points
-            .par_iter()
-            .with_min_len(1 << 14)
-            .fold(|| empty, bounds)
-            .reduce(|| empty, |(a, b), (c, d)| (a.min(c), b.max(d)))
-    } else {
-        points.iter().fold(empty, bounds)
-    };
-    (hi - lo).length()
 }
 
 #[cfg(test)]
