@@ -27,6 +27,7 @@ use crate::reverse::{
     means_and_details_in, ranking_reason,
 };
 use crate::rule::FaceMaps;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The reversal of `fine` with the one given seed of `options` (or none, see
 /// [`automatic`]), if every position is finite and `fine` is a valid
@@ -868,54 +869,19 @@ fn automatic(
     }
     // The dual reading: its candidates are the F_V faces expanded (every vertex is on
     // one F_V face), its groups the F_F faces.
-    let HalfedgeArrays { to, next, face_halfedge, .. } = HalfedgeArrays::of(fine);
     debug_assert_eq!(dual.len(), positions.len());
-    let mut expanded = vec![false; fv.sizes_of.len()];
-    // Faces of up to [`SHORT`] sides are gathered on the stack (no growing push in the
-    // gathering loop, whose bounds then stay in registers).
-    let (mut short_points, mut short_expanded) = ([DVec3::ZERO; SHORT], [DVec3::ZERO; SHORT]);
-    let (mut long_points, mut long_expanded) = (Vec::new(), Vec::new());
-    let (mut short_face, mut long_face) = ([NONE; SHORT], Vec::new());
-    let mut group_corners = Vec::new();
+    let reading = DualReading { arrays: HalfedgeArrays::of(fine), maps, positions, ff_offsets, coarse_vertex, fv };
     let mut dual_energy = 0.0;
     let mut stopped = false;
-    for w in ff_offsets.windows(2) {
-        let (b, e) = (w[0] as usize, w[1] as usize);
-        for &u in &coarse_vertex[b..e] {
-            if std::mem::replace(&mut expanded[u as usize], true) {
-                continue;
-            }
-            // The face's corners in its own order (the walk of [`reverse_canonical`]).
-            let m = fv.sizes_of[u as usize] as usize;
-            let (points, out, face) = if m <= SHORT {
-                (&mut short_points[..m], &mut short_expanded[..m], &mut short_face[..m])
-            } else {
-                long_points.resize(m, DVec3::ZERO);
-                long_expanded.resize(m, DVec3::ZERO);
-                long_face.resize(m, NONE);
-                (&mut long_points[..], &mut long_expanded[..], &mut long_face[..])
-            };
-            let first = face_halfedge[fv.first + u as usize];
-            let mut h = first;
-            for (slot, corner) in points.iter_mut().zip(face.iter_mut()) {
-                let v = to[(h ^ 1) as usize];
-                *corner = v;
-                *slot = positions[v as usize];
-                h = next[h as usize];
-            }
-            debug_assert_eq!(h, first, "internal: an F_V face has its counted size");
-            maps.inverse(points, out);
-            for (&v, &p) in face.iter().zip(out.iter()) {
-                dual[v as usize] = p;
-            }
-        }
-        // Summed in the order of the dual reading's coarse corners, which number the F_V
-        // faces' corners in face order: by F_V face, as no face has two corners on one.
-        dual_energy += dual_group_energy(&mut group_corners, b as u32..e as u32, coarse_vertex, &dual);
-        if dual_energy >= energy {
-            stopped = true;
-            break;
-        }
+    if rayon::current_num_threads() > 1 && positions.len() >= PARALLEL_VERTICES {
+        drop(dual);
+        (dual_energy, stopped) = reading.sum_in_pairs(energy);
+    } else {
+        reading.groups(0..ff_count, &mut dual, |group_energy| {
+            dual_energy += group_energy;
+            stopped = dual_energy >= energy;
+            !stopped
+        });
     }
     if !stopped {
         // The dual reading is better.
@@ -930,6 +896,149 @@ fn automatic(
     trials.push(SeedTrial::invalid(quad, "F_E", &error));
     let reason = ranking_reason(energy, &[(fv_seed, dual_energy, true)]);
     Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason })
+}
+
+/// The F_F faces of the dual reading at or above which [`DualReading::sum_in_pairs`]
+/// splits its sum (each piece expands again the F_V faces it shares with the previous
+/// one: pieces of many rows of faces keep that small).
+const DUAL_PIECE: usize = 1 << 12;
+
+/// The dual reading of a closed canonical mesh (the lowest F_V face as F_F): its
+/// candidates are the F_V faces expanded, its groups the F_F faces (see [`automatic`]).
+struct DualReading<'a> {
+    arrays: HalfedgeArrays<'a>,
+    maps: &'a FaceMaps,
+    positions: &'a [DVec3],
+    /// The F_F faces' corner ranges.
+    ff_offsets: &'a [u32],
+    /// The first reading's coarse vertex of each corner (its F_V face).
+    coarse_vertex: &'a [u32],
+    fv: &'a FvFaces<'a>,
+}
+
+impl DualReading<'_> {
+    /// The detail energies of the groups `faces` (F_F faces), in face order, each handed
+    /// to `take` until it returns `false`. Each F_V face is expanded when a group first
+    /// needs it; `dual` holds the candidates of the corners of `faces` (from the first
+    /// one on).
+    fn groups(&self, faces: std::ops::Range<usize>, dual: &mut [DVec3], mut take: impl FnMut(f64) -> bool) {
+        let Self { ref arrays, maps, positions, ff_offsets, coarse_vertex, fv } = *self;
+        let HalfedgeArrays { to, next, face_halfedge, .. } = *arrays;
+        let base = ff_offsets[faces.start] as usize;
+        debug_assert_eq!(dual.len(), ff_offsets[faces.end] as usize - base);
+        let mut filled = vec![false; dual.len()];
+        // Faces of up to [`SHORT`] sides are gathered on the stack (no growing push in the
+        // gathering loop, whose bounds then stay in registers).
+        let (mut short_points, mut short_expanded) = ([DVec3::ZERO; SHORT], [DVec3::ZERO; SHORT]);
+        let (mut long_points, mut long_expanded) = (Vec::new(), Vec::new());
+        let (mut short_face, mut long_face) = ([NONE; SHORT], Vec::new());
+        let mut group_corners = Vec::new();
+        for w in ff_offsets[faces.start..=faces.end].windows(2) {
+            let (b, e) = (w[0] as usize, w[1] as usize);
+            for c in b..e {
+                if filled[c - base] {
+                    continue;
+                }
+                let u = coarse_vertex[c];
+                // The face's corners in its own order (the walk of [`reverse_canonical`]).
+                let m = fv.sizes_of[u as usize] as usize;
+                let (points, out, face) = if m <= SHORT {
+                    (&mut short_points[..m], &mut short_expanded[..m], &mut short_face[..m])
+                } else {
+                    long_points.resize(m, DVec3::ZERO);
+                    long_expanded.resize(m, DVec3::ZERO);
+                    long_face.resize(m, NONE);
+                    (&mut long_points[..], &mut long_expanded[..], &mut long_face[..])
+                };
+                let first = face_halfedge[fv.first + u as usize];
+                let mut h = first;
+                for (slot, corner) in points.iter_mut().zip(face.iter_mut()) {
+                    let v = to[(h ^ 1) as usize];
+                    *corner = v;
+                    *slot = positions[v as usize];
+                    h = next[h as usize];
+                }
+                debug_assert_eq!(h, first, "internal: an F_V face has its counted size");
+                maps.inverse(points, out);
+                for (&v, &p) in face.iter().zip(out.iter()) {
+                    // Only the corners of `faces` are kept (the others, of an F_V face
+                    // shared with the faces before or after, are found again there).
+                    let i = (v as usize).wrapping_sub(base);
+                    if i < dual.len() {
+                        dual[i] = p;
+                        filled[i] = true;
+                    }
+                }
+            }
+            // Summed in the order of the dual reading's coarse corners, which number the F_V
+            // faces' corners in face order: by F_V face, as no face has two corners on one.
+            let group_energy =
+                dual_group_energy(&mut group_corners, b as u32..e as u32, coarse_vertex, dual, base as u32);
+            if !take(group_energy) {
+                break;
+            }
+        }
+    }
+
+    /// The dual reading's sum on two threads, until it reaches `energy`: the groups in
+    /// pieces of [`DUAL_PIECE`] faces or more, two at a time, the first summed on from the
+    /// total so far and stopped where it reaches `energy`, the second's energies kept (and
+    /// given up as soon as the first stops) to be added after it. The same values are added
+    /// in the same order and the sum stops at the same group as on one thread. Returns the
+    /// sum and whether it reached `energy`.
+    fn sum_in_pairs(&self, energy: f64) -> (f64, bool) {
+        let faces = self.ff_offsets.len() - 1;
+        let piece = (faces / 16).max(DUAL_PIECE);
+        let corners =
+            |range: &std::ops::Range<usize>| (self.ff_offsets[range.end] - self.ff_offsets[range.start]) as usize;
+        let halt = AtomicBool::new(false);
+        let mut total = 0.0;
+        let mut start = 0;
+        while start < faces {
+            let first = start..(start + piece).min(faces);
+            let second = first.end..(first.end + piece).min(faces);
+            start = second.end;
+            let ((sum, reached), later) = rayon::join(
+                || {
+                    let mut dual = vec![DVec3::ZERO; corners(&first)];
+                    let (mut sum, mut reached) = (total, false);
+                    self.groups(first.clone(), &mut dual, |group_energy| {
+                        sum += group_energy;
+                        reached = sum >= energy;
+                        if reached {
+                            halt.store(true, Ordering::Relaxed);
+                        }
+                        !reached
+                    });
+                    (sum, reached)
+                },
+                || {
+                    let mut energies = Vec::with_capacity(second.len());
+                    if !second.is_empty() {
+                        let mut dual = vec![DVec3::ZERO; corners(&second)];
+                        self.groups(second.clone(), &mut dual, |group_energy| {
+                            energies.push(group_energy);
+                            !halt.load(Ordering::Relaxed)
+                        });
+                    }
+                    energies
+                },
+            );
+            total = sum;
+            if reached {
+                return (total, true);
+            }
+            // The first piece did not stop, so the second was not given up.
+            debug_assert_eq!(later.len(), second.len(), "internal: the second piece is complete");
+            for group_energy in later {
+                total += group_energy;
+                if total >= energy {
+                    return (total, true);
+                }
+            }
+        }
+        (total, false)
+    }
 }
 
 #[cfg(test)]
@@ -1013,6 +1122,53 @@ mod tests {
         assert!(choice.reason.contains(&format!("at least {partial:.6e}")), "{}", choice.reason);
         // Only the winner counts as evaluated in full; both readings were searched.
         assert_eq!(fast.stats().interpretations, 1);
+    }
+
+    #[test]
+    fn the_dual_sum_in_pairs_stops_where_the_sum_in_order_stops() {
+        // Pieces of at least `DUAL_PIECE` faces: a torus of several pieces.
+        let soup = shapes::torus(96, 48, CellKind::Triangles).unwrap();
+        let fine = refine(&soup, FaceRule::DooSabin);
+        let ff = stream_ff_faces(&fine).expect("the layout of a canonical mesh");
+        let (offsets, quads) = (ff.offsets.clone(), ff.quads as usize);
+        let faces = offsets.len() - 1;
+        assert!(faces > 2 * DUAL_PIECE, "{faces}");
+        let arrays = HalfedgeArrays::of(&fine);
+        let fv_first = faces + quads;
+        let streamed = stream_fv_faces(&arrays, fv_first, quads).expect("closed");
+        let fv = FvFaces { first: fv_first, sizes_of: &streamed.sizes };
+        let maps = FaceMaps::new(FaceRule::DooSabin);
+        let reading = DualReading {
+            arrays: HalfedgeArrays::of(&fine),
+            maps: &maps,
+            positions: fine.positions(),
+            ff_offsets: &offsets,
+            coarse_vertex: &streamed.labels,
+            fv: &fv,
+        };
+        // Every group's energy in order, on one thread.
+        let mut all = Vec::new();
+        reading.groups(0..faces, &mut vec![DVec3::ZERO; fine.vertex_count()], |e| {
+            all.push(e);
+            true
+        });
+        assert_eq!(all.len(), faces);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        // Thresholds reached in the first piece, in the second piece of the first pair, in
+        // a later pair, at the last group, and never.
+        for stop in [10, DUAL_PIECE + 7, 2 * DUAL_PIECE + 100, faces - 1] {
+            let energy = all[..=stop].iter().sum::<f64>();
+            // The first group at which the sum in order reaches `energy`.
+            let mut sum = 0.0;
+            let at = all.iter().position(|&e| {
+                sum += e;
+                sum >= energy
+            });
+            let expected = all[..=at.unwrap()].iter().sum::<f64>();
+            assert_eq!(pool.install(|| reading.sum_in_pairs(energy)), (expected, true), "{stop}");
+        }
+        let total = all.iter().sum::<f64>();
+        assert_eq!(pool.install(|| reading.sum_in_pairs(f64::INFINITY)), (total, false));
     }
 
     #[test]

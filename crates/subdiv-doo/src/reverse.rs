@@ -1724,7 +1724,7 @@ impl<'a> Search<'a> {
                     dual[canonical_of_vertex[x as usize] as usize] = p;
                 }
             }
-            energy += dual_group_energy(&mut group, b as u32..e as u32, &coarse.corner_vertex, dual);
+            energy += dual_group_energy(&mut group, b as u32..e as u32, &coarse.corner_vertex, dual, 0);
             if energy >= cutoff {
                 return Some(energy);
             }
@@ -2433,22 +2433,24 @@ pub(crate) fn insertion_sort_by_key(values: &mut [u32], key: impl Fn(u32) -> u32
 }
 
 /// The detail energy of one group of the dual reading: the squared distances of its
-/// candidates (`dual`, by coarse corner) from their mean, the group being the coarse
-/// corners `corners` summed in the order of their coarse vertices (`corner_vertex`), as
-/// the dual reading's result would sum them. `group` is scratch.
+/// candidates (`dual`, by coarse corner, from corner `base` on) from their mean, the group
+/// being the coarse corners `corners` summed in the order of their coarse vertices
+/// (`corner_vertex`), as the dual reading's result would sum them. `group` is scratch.
 pub(crate) fn dual_group_energy(
     group: &mut Vec<u32>,
     corners: std::ops::Range<u32>,
     corner_vertex: &[u32],
     dual: &[DVec3],
+    base: u32,
 ) -> f64 {
     group.clear();
     group.extend(corners);
     insertion_sort_by_key(group, |c| corner_vertex[c as usize]);
-    let mean = group.iter().map(|&c| dual[c as usize]).sum::<DVec3>() / group.len() as f64;
+    let value = |c: u32| dual[(c - base) as usize];
+    let mean = group.iter().map(|&c| value(c)).sum::<DVec3>() / group.len() as f64;
     let mut energy = 0.0;
     for &c in group.iter() {
-        energy += (dual[c as usize] - mean).length_squared();
+        energy += (value(c) - mean).length_squared();
     }
     energy
 }
