@@ -926,7 +926,7 @@ impl DualReading<'_> {
         let HalfedgeArrays { to, next, face_halfedge, .. } = *arrays;
         let base = ff_offsets[faces.start] as usize;
         debug_assert_eq!(dual.len(), ff_offsets[faces.end] as usize - base);
-        let mut filled = vec![false; dual.len()];
+        let mut expanded = vec![false; fv.sizes_of.len()];
         // Faces of up to [`SHORT`] sides are gathered on the stack (no growing push in the
         // gathering loop, whose bounds then stay in registers).
         let (mut short_points, mut short_expanded) = ([DVec3::ZERO; SHORT], [DVec3::ZERO; SHORT]);
@@ -935,11 +935,10 @@ impl DualReading<'_> {
         let mut group_corners = Vec::new();
         for w in ff_offsets[faces.start..=faces.end].windows(2) {
             let (b, e) = (w[0] as usize, w[1] as usize);
-            for c in b..e {
-                if filled[c - base] {
+            for &u in &coarse_vertex[b..e] {
+                if std::mem::replace(&mut expanded[u as usize], true) {
                     continue;
                 }
-                let u = coarse_vertex[c];
                 // The face's corners in its own order (the walk of [`reverse_canonical`]).
                 let m = fv.sizes_of[u as usize] as usize;
                 let (points, out, face) = if m <= SHORT {
@@ -966,7 +965,6 @@ impl DualReading<'_> {
                     let i = (v as usize).wrapping_sub(base);
                     if i < dual.len() {
                         dual[i] = p;
-                        filled[i] = true;
                     }
                 }
             }
