@@ -1123,6 +1123,26 @@ mod tests {
     }
 
     #[test]
+    fn two_threads_give_the_one_thread_result() {
+        // Above `PARALLEL_VERTICES`: the coarse vertices beside the expansion, the means in
+        // two halves, and (automatic mode) the dual sum in pieces.
+        let closed = refine(&shapes::torus(96, 48, CellKind::Triangles).unwrap(), FaceRule::DooSabin);
+        let open = refine(&shapes::grid(100, 60, CellKind::Quads).unwrap(), FaceRule::DooSabin);
+        assert!(closed.vertex_count() >= PARALLEL_VERTICES && open.vertex_count() >= PARALLEL_VERTICES);
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for (fine, options) in [
+            (&closed, ReverseOptions::auto(FaceRule::DooSabin)),
+            (&closed, ReverseOptions::with_seed(FaceRule::DooSabin, 5)),
+            (&open, ReverseOptions::with_seed(FaceRule::DooSabin, 0)),
+        ] {
+            let parallel = two.install(|| reverse_canonical(fine, &options)).expect("canonical order");
+            assert_eq!(parallel, one.install(|| reverse_canonical(fine, &options)).unwrap());
+            assert_eq!(parallel, general(fine, &options));
+        }
+    }
+
+    #[test]
     fn the_dual_sum_in_pairs_stops_where_the_sum_in_order_stops() {
         // Pieces of at least `DUAL_PIECE` faces: a torus of several pieces.
         let soup = shapes::torus(96, 48, CellKind::Triangles).unwrap();
