@@ -117,7 +117,15 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         let found = find_vertices()?;
         (found, expand())
     };
-    let CoarseVertices { labels, vertex_corner, fv_sizes, by_vertex: closed_by_vertex, mut stamp, interior } = found;
+    let CoarseVertices {
+        labels,
+        vertex_corner,
+        fv_sizes,
+        by_vertex: closed_by_vertex,
+        ends: quad_ends,
+        mut stamp,
+        interior,
+    } = found;
     let coarse_vertex_count = vertex_corner.len();
     let candidate_edges = twins.iter().filter(|&&t| t != NONE).count();
     let coarse = CornerMesh {
@@ -158,8 +166,18 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
                     long_ends.resize(corners.len(), NONE);
                     &mut long_ends[..]
                 };
-                for (end, &c) in ends.iter_mut().zip(corners) {
-                    *end = coarse.corner_vertex[coarse.corner_next[c as usize] as usize];
+                // Read from the quads by the F_V stream (one load per corner), or found.
+                match &quad_ends {
+                    Some(quad_ends) => {
+                        for (end, &c) in ends.iter_mut().zip(corners) {
+                            *end = quad_ends[c as usize];
+                        }
+                    }
+                    None => {
+                        for (end, &c) in ends.iter_mut().zip(corners) {
+                            *end = coarse.corner_vertex[coarse.corner_next[c as usize] as usize];
+                        }
+                    }
                 }
                 manifold &= distinct(ends, stamp, interior, u as u32);
             });
@@ -243,6 +261,8 @@ struct CoarseVertices {
     fv_sizes: Vec<u32>,
     /// On a closed mesh, the corners of each coarse vertex in increasing order.
     by_vertex: Option<CornersByVertex>,
+    /// From the F_V stream: the coarse vertex at the far end of each corner's coarse edge.
+    ends: Option<Vec<u32>>,
     /// Scratch of [`distinct`] (empty, or one slot per interior vertex).
     stamp: Vec<u32>,
     /// The number of interior coarse vertices (those with an F_V face).
@@ -272,8 +292,10 @@ fn coarse_vertices(
     // that finds a mismatch) by one walk around each.
     let streamed = if layout && closed { stream_fv_faces(arrays, fv_first, quads) } else { None };
     // The corners of each F_V face: sorted by the stream, or in face order by the walk.
+    let mut ends = None;
     let (mut labels, mut vertex_corner, fv_sizes, fv_corners) = match streamed {
-        Some(StreamedFvFaces { labels, first_corners, sizes, by_vertex }) => {
+        Some(StreamedFvFaces { labels, first_corners, sizes, by_vertex, ends: quad_ends }) => {
+            ends = Some(quad_ends);
             (labels, first_corners, sizes, Ok(by_vertex))
         }
         None => {
@@ -370,7 +392,7 @@ fn coarse_vertices(
         // Every vertex is interior: its corners are those of its F_V face, sorted.
         fv_corners.unwrap_or_else(|in_face_order| by_vertex_of_fv_faces(&fv_sizes, in_face_order))
     });
-    Some(CoarseVertices { labels, vertex_corner, fv_sizes, by_vertex, stamp, interior })
+    Some(CoarseVertices { labels, vertex_corner, fv_sizes, by_vertex, ends, stamp, interior })
 }
 
 /// The flat arrays of a half-edge mesh that the canonical passes read, and its sizes.
@@ -763,15 +785,25 @@ fn stream_fv_faces(arrays: &HalfedgeArrays<'_>, fv_first: usize, quads: usize) -
         return None;
     }
     let mut labels = vec![NONE; vertices];
-    let sides = &to[2 * vertices..];
-    let twin_faces = &face_of[2 * vertices..];
-    // Quad sides at even offsets, each followed by its twin.
-    for (&corner, &face) in sides.iter().zip(twin_faces.iter().skip(1)).step_by(2) {
-        // The twin's face (NONE on the boundary wraps to a large index).
-        let i = (face as usize).wrapping_sub(fv_first);
-        if i >= fv_count || std::mem::replace(&mut labels[corner as usize], i as u32) != NONE {
+    let mut ends = vec![NONE; vertices];
+    // Quad `j` of the layout, `(c, next(t), t, next(c))`: its sides `c -> next(t)` and
+    // `t -> next(c)`, each followed by its twin (which ends at `c`, resp. `t`).
+    let quad_sides = to[2 * vertices..].chunks_exact(4).zip(face_of[2 * vertices..].chunks_exact(4));
+    for (sides, twin_faces) in quad_sides {
+        // The twins' faces (NONE on the boundary wraps to a large index): the F_V faces of
+        // `c` and `next(t)`, and of `t` and `next(c)`.
+        let i = (twin_faces[1] as usize).wrapping_sub(fv_first);
+        let k = (twin_faces[3] as usize).wrapping_sub(fv_first);
+        if i >= fv_count || std::mem::replace(&mut labels[sides[0] as usize], i as u32) != NONE {
             return None;
         }
+        if k >= fv_count || std::mem::replace(&mut labels[sides[2] as usize], k as u32) != NONE {
+            return None;
+        }
+        // The far end of the coarse edge from `c` is the vertex of `next(c)`, and from `t`
+        // that of `next(t)`.
+        ends[sides[1] as usize] = k as u32;
+        ends[sides[3] as usize] = i as u32;
     }
     // As many F_V sides as corners, none labelled twice: every corner is labelled once.
     let (offsets, corners) = group_by_key(&labels, fv_count);
@@ -782,7 +814,7 @@ fn stream_fv_faces(arrays: &HalfedgeArrays<'_>, fv_first: usize, quads: usize) -
         return None;
     }
     let by_vertex = CornersByVertex::from_parts((offsets, corners));
-    Some(StreamedFvFaces { labels, first_corners, sizes, by_vertex })
+    Some(StreamedFvFaces { labels, first_corners, sizes, by_vertex, ends })
 }
 
 /// What [`stream_fv_faces`] reads.
@@ -791,6 +823,9 @@ struct StreamedFvFaces {
     first_corners: Vec<u32>,
     sizes: Vec<u32>,
     by_vertex: CornersByVertex,
+    /// The coarse vertex at the far end of each corner's coarse edge (the vertex of its
+    /// next corner), from the quads ([`NONE`] for a corner on no quad).
+    ends: Vec<u32>,
 }
 
 /// The corners of each coarse vertex in increasing order when every vertex is interior:
@@ -1237,8 +1272,10 @@ mod tests {
             let arrays = HalfedgeArrays::of(&fine);
             let ff = stream_ff_faces(&fine).expect("the layout of a soup in the canonical order");
             let fv_first = ff.offsets.len() - 1 + ff.quads as usize;
-            let StreamedFvFaces { labels, first_corners: first, sizes, by_vertex } =
+            let StreamedFvFaces { labels, first_corners: first, sizes, by_vertex, ends } =
                 stream_fv_faces(&arrays, fv_first, ff.quads as usize).expect("closed");
+            // The far end of each corner's coarse edge: the vertex of its next corner.
+            assert!(ends.iter().zip(&ff.next).all(|(&end, &next)| end == labels[next as usize]));
             let mut walked = Vec::new();
             for (i, &h0) in arrays.face_halfedge[fv_first..].iter().enumerate() {
                 let start = walked.len();
