@@ -20,14 +20,14 @@ use mesh_topo::HalfedgeMesh;
 use glam::DVec3;
 
 use crate::DooError;
-use crate::corner::{CornerMesh, NONE, expand_faces, faces_of_corners, group_by_key, next_of_corners};
+use crate::corner::{CornerMesh, NONE, faces_of_corners, group_by_key, next_of_corners};
 use crate::reverse::{
     CornersByVertex, DooReversal, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial,
     check_coarse_manifold, corners_by_vertex, dual_group_energy, insertion_sort, means_and_details,
-    means_and_details_with, ranking_reason,
+    means_and_details_in, ranking_reason,
 };
 use crate::rule::FaceMaps;
-use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The reversal of `fine` with the one given seed of `options` (or none, see
 /// [`automatic`]), if every position is finite and `fine` is a valid
@@ -61,7 +61,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     };
     options.rule.validate().ok()?;
     let arrays = HalfedgeArrays::of(fine);
-    let HalfedgeArrays { to, next, face_halfedge, vertices, faces, .. } = arrays;
+    let HalfedgeArrays { vertices, faces, .. } = arrays;
     if vertices == 0 || vertices >= NONE as usize || faces >= NONE as usize {
         return None;
     }
@@ -100,19 +100,202 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         "internal: canonical twins are an involution"
     );
 
+    let closed = !on_boundary;
+    // The coarse vertices (from the connectivity) and the candidates (from the positions)
+    // do not depend on each other: on several threads they are found side by side.
+    let maps = FaceMaps::new(options.rule);
+    let positions = fine.positions();
+    let find_vertices = || {
+        let ff = FfParts { offsets: &offsets, next: &coarse_next, twins: &twins, layout, closed };
+        coarse_vertices(&arrays, &ff, fv_first, quads as usize, automatic_choice)
+    };
+    let expand = || expand_in_order(&offsets, &maps, positions, automatic_choice);
+    let (found, (candidates, scale)) = if rayon::current_num_threads() > 1 && vertices >= PARALLEL_VERTICES {
+        let (found, expanded) = rayon::join(find_vertices, expand);
+        (found?, expanded)
+    } else {
+        let found = find_vertices()?;
+        (found, expand())
+    };
+    let CoarseVertices {
+        labels,
+        vertex_corner,
+        fv_sizes,
+        by_vertex: closed_by_vertex,
+        ends: quad_ends,
+        mut stamp,
+        interior,
+    } = found;
+    let coarse_vertex_count = vertex_corner.len();
+    let candidate_edges = twins.iter().filter(|&&t| t != NONE).count();
+    let coarse = CornerMesh {
+        offsets,
+        corner_vertex: labels,
+        corner_twin: twins,
+        corner_next: coarse_next,
+        vertex_count: coarse_vertex_count,
+        vertex_corner: Some(vertex_corner),
+    };
+    debug_assert_eq!(closed, candidate_edges == vertices, "internal: boundary corners have no twin");
+    let by_vertex = match closed_by_vertex {
+        Some(by_vertex) => by_vertex,
+        None => corners_by_vertex(&coarse),
+    };
+    if !closed {
+        let ff_faces: Vec<u32> = (0..ff).collect();
+        check_coarse_manifold(&coarse, &ff_faces, &by_vertex).ok()?;
+    }
+
+    let fv = FvFaces { first: fv_first, sizes_of: &fv_sizes };
+    // On a closed mesh the second check of the coarse manifold (no two edges join the
+    // same two vertices) is made in the same pass, on the corners of each vertex: the
+    // outgoing coarse half-edges of a vertex are its corners.
+    let (coarse_positions, details, vertex_energy) = if closed {
+        let vertex_count = coarse.vertex_count;
+        // The vertices `range`, with the check; `stamp` is scratch of [`distinct`].
+        let means_checked = |range: std::ops::Range<usize>, stamp: &mut Vec<u32>| {
+            let mut manifold = true;
+            // The far ends of each vertex's outgoing coarse half-edges.
+            let mut short_ends = [NONE; SHORT];
+            let mut long_ends = Vec::new();
+            let reserve = vertex_count - range.start;
+            let parts = means_and_details_in(&by_vertex, &candidates, range, reserve, |u, corners| {
+                let ends = if corners.len() <= SHORT {
+                    &mut short_ends[..corners.len()]
+                } else {
+                    long_ends.resize(corners.len(), NONE);
+                    &mut long_ends[..]
+                };
+                // Read from the quads by the F_V stream (one load per corner), or found.
+                match &quad_ends {
+                    Some(quad_ends) => {
+                        for (end, &c) in ends.iter_mut().zip(corners) {
+                            *end = quad_ends[c as usize];
+                        }
+                    }
+                    None => {
+                        for (end, &c) in ends.iter_mut().zip(corners) {
+                            *end = coarse.corner_vertex[coarse.corner_next[c as usize] as usize];
+                        }
+                    }
+                }
+                manifold &= distinct(ends, stamp, interior, u as u32);
+            });
+            manifold.then_some(parts)
+        };
+        stamp.fill(NONE);
+        if rayon::current_num_threads() > 1 && vertices >= PARALLEL_VERTICES {
+            // Two halves side by side (each vertex's values do not depend on the others),
+            // the second appended to the first (whose room covers both).
+            let half = vertex_count / 2;
+            let (first, second) = rayon::join(
+                || means_checked(0..half, &mut stamp),
+                || means_checked(half..vertex_count, &mut Vec::new()),
+            );
+            let ((mut means, mut details, mut energies), (more_means, more_details, more_energies)) = (first?, second?);
+            means.extend_from_slice(&more_means);
+            details.extend_from_slice(&more_details);
+            energies.extend_from_slice(&more_energies);
+            (means, details, energies)
+        } else {
+            means_checked(0..vertex_count, &mut stamp)?
+        }
+    } else {
+        means_and_details(&by_vertex, &candidates)
+    };
+    // Every fine position is in some coarse vertex's mean: a position that is not
+    // finite makes a mean that is not (the general path reports it).
+    if !coarse_positions.iter().all(|p| p.is_finite()) {
+        return None;
+    }
+    // The detail energy of the lowest face read as F_F (for the automatic choice): the
+    // general path sums its groups (the F_V faces, in face order: the coarse vertices) as
+    // the result sums its vertices.
+    let detail_energy = vertex_energy.iter().sum();
+    let (mut choice, stats) = match seed {
+        Some(seed) => {
+            let stats =
+                ReverseStats { visited_faces: ff_count, edges_crossed: vertices, candidate_edges, interpretations: 0 };
+            (SeedChoice::given(0, seed), stats)
+        }
+        None => {
+            let mut choice = automatic(fine, &maps, &coarse, detail_energy, scale, &fv, candidates)?;
+            let visited = if choice.trials.len() == 1 { ff_count } else { ff_count + interior + 1 };
+            // Every valid reading was searched in full; the ones whose sum stopped early
+            // are not counted as evaluated.
+            let valid = choice.trials.iter().filter(|t| t.outcome.is_ok()).count();
+            let interpretations = choice.trials.iter().filter(|t| t.outcome.is_ok() && !t.stopped_early).count();
+            let edges_crossed = valid * vertices + choice.trials.len() - valid;
+            choice.component = 0;
+            (choice, ReverseStats { visited_faces: visited, edges_crossed, candidate_edges, interpretations })
+        }
+    };
+    choice.detail_energy = detail_energy;
+    Some(DooReversal {
+        rule: options.rule,
+        coarse,
+        coarse_positions,
+        details,
+        order: FineOrder::default(),
+        choices: vec![choice],
+        stats,
+    })
+}
+
+/// The F_F side of the first reading, as [`coarse_vertices`] reads it.
+struct FfParts<'a> {
+    offsets: &'a [u32],
+    next: &'a [u32],
+    twins: &'a [u32],
+    layout: bool,
+    closed: bool,
+}
+
+/// What [`coarse_vertices`] finds.
+struct CoarseVertices {
+    /// The coarse vertex of each corner.
+    labels: Vec<u32>,
+    /// A corner of each coarse vertex.
+    vertex_corner: Vec<u32>,
+    /// The sizes of the F_V faces.
+    fv_sizes: Vec<u32>,
+    /// On a closed mesh, the corners of each coarse vertex in increasing order.
+    by_vertex: Option<CornersByVertex>,
+    /// From the F_V stream: the coarse vertex at the far end of each corner's coarse edge.
+    ends: Option<Vec<u32>>,
+    /// Scratch of [`distinct`] (empty, or one slot per interior vertex).
+    stamp: Vec<u32>,
+    /// The number of interior coarse vertices (those with an F_V face).
+    interior: usize,
+}
+
+/// The coarse vertices of the first reading of [`reverse_canonical`]: the interior ones
+/// from the F_V faces (vertex `i` is F_V face `i`), then the boundary vertices in order
+/// of their first corner, with the first check of the coarse manifold on a closed mesh
+/// (no face visits a vertex twice); `None` at the first mismatch.
+fn coarse_vertices(
+    arrays: &HalfedgeArrays<'_>,
+    ff: &FfParts<'_>,
+    fv_first: usize,
+    quads: usize,
+    automatic_choice: bool,
+) -> Option<CoarseVertices> {
+    let HalfedgeArrays { to, next, face_halfedge, vertices, faces, .. } = *arrays;
+    let FfParts { offsets, next: coarse_next, twins, layout, closed } = *ff;
     // Interior coarse vertices from the F_V faces (vertex `i` is F_V face `i`), then the
     // boundary vertices in order of their first corner.
     let clockwise = |x: u32| match twins[x as usize] {
         NONE => NONE,
         t => coarse_next[t as usize],
     };
-    let closed = !on_boundary;
     // On a closed mesh of the layout the F_V faces are read in one stream; else (or if
     // that finds a mismatch) by one walk around each.
-    let streamed = if layout && closed { stream_fv_faces(&arrays, fv_first, quads as usize) } else { None };
+    let streamed = if layout && closed { stream_fv_faces(arrays, fv_first, quads) } else { None };
     // The corners of each F_V face: sorted by the stream, or in face order by the walk.
+    let mut ends = None;
     let (mut labels, mut vertex_corner, fv_sizes, fv_corners) = match streamed {
-        Some(StreamedFvFaces { labels, first_corners, sizes, by_vertex }) => {
+        Some(StreamedFvFaces { labels, first_corners, sizes, by_vertex, ends: quad_ends }) => {
+            ends = Some(quad_ends);
             (labels, first_corners, sizes, Ok(by_vertex))
         }
         None => {
@@ -205,96 +388,11 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         }
     }
 
-    let coarse_vertex_count = vertex_corner.len();
-    let candidate_edges = twins.iter().filter(|&&t| t != NONE).count();
-    let coarse = CornerMesh {
-        offsets,
-        corner_vertex: labels,
-        corner_twin: twins,
-        corner_next: coarse_next,
-        vertex_count: coarse_vertex_count,
-        vertex_corner: Some(vertex_corner),
-    };
-    debug_assert_eq!(closed, candidate_edges == vertices, "internal: boundary corners have no twin");
-    let by_vertex = if closed {
+    let by_vertex = closed.then(|| {
         // Every vertex is interior: its corners are those of its F_V face, sorted.
         fv_corners.unwrap_or_else(|in_face_order| by_vertex_of_fv_faces(&fv_sizes, in_face_order))
-    } else {
-        corners_by_vertex(&coarse)
-    };
-    if !closed {
-        let ff_faces: Vec<u32> = (0..ff).collect();
-        check_coarse_manifold(&coarse, &ff_faces, &by_vertex).ok()?;
-    }
-
-    let maps = FaceMaps::new(options.rule);
-    let positions = fine.positions();
-    let (candidates, scale) = expand_in_order(&coarse.offsets, &maps, positions, automatic_choice);
-    let fv = FvFaces { first: fv_first, sizes_of: &fv_sizes };
-    // On a closed mesh the second check of the coarse manifold (no two edges join the
-    // same two vertices) is made in the same pass, on the corners of each vertex: the
-    // outgoing coarse half-edges of a vertex are its corners.
-    let mut manifold = true;
-    let (coarse_positions, details, vertex_energy) = if closed {
-        stamp.fill(NONE);
-        // The far ends of each vertex's outgoing coarse half-edges.
-        let mut short_ends = [NONE; SHORT];
-        let mut long_ends = Vec::new();
-        means_and_details_with(&by_vertex, &candidates, |u, corners| {
-            let ends = if corners.len() <= SHORT {
-                &mut short_ends[..corners.len()]
-            } else {
-                long_ends.resize(corners.len(), NONE);
-                &mut long_ends[..]
-            };
-            for (end, &c) in ends.iter_mut().zip(corners) {
-                *end = coarse.corner_vertex[coarse.corner_next[c as usize] as usize];
-            }
-            manifold &= distinct(ends, &mut stamp, interior, u as u32);
-        })
-    } else {
-        means_and_details(&by_vertex, &candidates)
-    };
-    if !manifold {
-        return None;
-    }
-    // Every fine position is in some coarse vertex's mean: a position that is not
-    // finite makes a mean that is not (the general path reports it).
-    if !coarse_positions.iter().all(|p| p.is_finite()) {
-        return None;
-    }
-    // The detail energy of the lowest face read as F_F (for the automatic choice): the
-    // general path sums its groups (the F_V faces, in face order: the coarse vertices) as
-    // the result sums its vertices.
-    let detail_energy = vertex_energy.iter().sum();
-    let (mut choice, stats) = match seed {
-        Some(seed) => {
-            let stats =
-                ReverseStats { visited_faces: ff_count, edges_crossed: vertices, candidate_edges, interpretations: 0 };
-            (SeedChoice::given(0, seed), stats)
-        }
-        None => {
-            let mut choice = automatic(fine, &maps, &coarse, detail_energy, scale, &fv, candidates)?;
-            let visited = if choice.trials.len() == 1 { ff_count } else { ff_count + interior + 1 };
-            // Every valid reading was searched in full; the ones whose sum stopped early
-            // are not counted as evaluated.
-            let valid = choice.trials.iter().filter(|t| t.outcome.is_ok()).count();
-            let interpretations = choice.trials.iter().filter(|t| t.outcome.is_ok() && !t.stopped_early).count();
-            let edges_crossed = valid * vertices + choice.trials.len() - valid;
-            choice.component = 0;
-            (choice, ReverseStats { visited_faces: visited, edges_crossed, candidate_edges, interpretations })
-        }
-    };
-    choice.detail_energy = detail_energy;
-    Some(DooReversal {
-        rule: options.rule,
-        coarse,
-        coarse_positions,
-        details,
-        order: FineOrder::default(),
-        choices: vec![choice],
-        stats,
-    })
+    });
+    Some(CoarseVertices { labels, vertex_corner, fv_sizes, by_vertex, ends, stamp, interior })
 }
 
 /// The flat arrays of a half-edge mesh that the canonical passes read, and its sizes.
@@ -592,6 +690,10 @@ fn across_of_twins(offsets: &[u32], twins: &[u32]) -> Vec<u32> {
     twins.iter().map(|&t| if t == NONE { NONE } else { face_of_corner[t as usize] }).collect()
 }
 
+/// Meshes of at least this many fine vertices are read on two threads when the pool has
+/// them (below it, the tasks cost more than they save).
+const PARALLEL_VERTICES: usize = 1 << 14;
+
 /// Lists up to this long are checked for repeats by comparing their entries pairwise.
 const SHORT: usize = 8;
 
@@ -623,17 +725,13 @@ pub(crate) fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark:
 
 /// The candidates of the coarse faces (`offsets`) whose corners are the fine vertices in
 /// order (corner `c` at `positions[c]`): each face expanded straight from its slice of
-/// the positions into fresh memory, in face order. With several threads, the pieces of
-/// [`expand_faces`] run side by side instead (the same values).
+/// the positions into fresh memory, in face order (on several threads it runs beside
+/// [`coarse_vertices`]).
 ///
 /// With `diagonal`, also the length of the bounding-box diagonal of all positions (the
 /// scale of the automatic choice's zero test), on one thread from the slices while they
 /// are in cache; else zero.
 fn expand_in_order(offsets: &[u32], maps: &FaceMaps, positions: &[DVec3], diagonal: bool) -> (Vec<DVec3>, f64) {
-    if rayon::current_num_threads() > 1 {
-        let candidates = expand_faces(offsets, maps, |c| positions[c], Vec::new());
-        return (candidates, if diagonal { diagonal_of(positions) } else { 0.0 });
-    }
     let mut out = Vec::with_capacity(offsets.last().map_or(0, |&n| n as usize));
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for w in offsets.windows(2) {
@@ -687,15 +785,25 @@ fn stream_fv_faces(arrays: &HalfedgeArrays<'_>, fv_first: usize, quads: usize) -
         return None;
     }
     let mut labels = vec![NONE; vertices];
-    let sides = &to[2 * vertices..];
-    let twin_faces = &face_of[2 * vertices..];
-    // Quad sides at even offsets, each followed by its twin.
-    for (&corner, &face) in sides.iter().zip(twin_faces.iter().skip(1)).step_by(2) {
-        // The twin's face (NONE on the boundary wraps to a large index).
-        let i = (face as usize).wrapping_sub(fv_first);
-        if i >= fv_count || std::mem::replace(&mut labels[corner as usize], i as u32) != NONE {
+    let mut ends = vec![NONE; vertices];
+    // Quad `j` of the layout, `(c, next(t), t, next(c))`: its sides `c -> next(t)` and
+    // `t -> next(c)`, each followed by its twin (which ends at `c`, resp. `t`).
+    let quad_sides = to[2 * vertices..].chunks_exact(4).zip(face_of[2 * vertices..].chunks_exact(4));
+    for (sides, twin_faces) in quad_sides {
+        // The twins' faces (NONE on the boundary wraps to a large index): the F_V faces of
+        // `c` and `next(t)`, and of `t` and `next(c)`.
+        let i = (twin_faces[1] as usize).wrapping_sub(fv_first);
+        let k = (twin_faces[3] as usize).wrapping_sub(fv_first);
+        if i >= fv_count || std::mem::replace(&mut labels[sides[0] as usize], i as u32) != NONE {
             return None;
         }
+        if k >= fv_count || std::mem::replace(&mut labels[sides[2] as usize], k as u32) != NONE {
+            return None;
+        }
+        // The far end of the coarse edge from `c` is the vertex of `next(c)`, and from `t`
+        // that of `next(t)`.
+        ends[sides[1] as usize] = k as u32;
+        ends[sides[3] as usize] = i as u32;
     }
     // As many F_V sides as corners, none labelled twice: every corner is labelled once.
     let (offsets, corners) = group_by_key(&labels, fv_count);
@@ -706,7 +814,7 @@ fn stream_fv_faces(arrays: &HalfedgeArrays<'_>, fv_first: usize, quads: usize) -
         return None;
     }
     let by_vertex = CornersByVertex::from_parts((offsets, corners));
-    Some(StreamedFvFaces { labels, first_corners, sizes, by_vertex })
+    Some(StreamedFvFaces { labels, first_corners, sizes, by_vertex, ends })
 }
 
 /// What [`stream_fv_faces`] reads.
@@ -715,6 +823,9 @@ struct StreamedFvFaces {
     first_corners: Vec<u32>,
     sizes: Vec<u32>,
     by_vertex: CornersByVertex,
+    /// The coarse vertex at the far end of each corner's coarse edge (the vertex of its
+    /// next corner), from the quads ([`NONE`] for a corner on no quad).
+    ends: Vec<u32>,
 }
 
 /// The corners of each coarse vertex in increasing order when every vertex is interior:
@@ -793,54 +904,19 @@ fn automatic(
     }
     // The dual reading: its candidates are the F_V faces expanded (every vertex is on
     // one F_V face), its groups the F_F faces.
-    let HalfedgeArrays { to, next, face_halfedge, .. } = HalfedgeArrays::of(fine);
     debug_assert_eq!(dual.len(), positions.len());
-    let mut expanded = vec![false; fv.sizes_of.len()];
-    // Faces of up to [`SHORT`] sides are gathered on the stack (no growing push in the
-    // gathering loop, whose bounds then stay in registers).
-    let (mut short_points, mut short_expanded) = ([DVec3::ZERO; SHORT], [DVec3::ZERO; SHORT]);
-    let (mut long_points, mut long_expanded) = (Vec::new(), Vec::new());
-    let (mut short_face, mut long_face) = ([NONE; SHORT], Vec::new());
-    let mut group_corners = Vec::new();
+    let reading = DualReading { arrays: HalfedgeArrays::of(fine), maps, positions, ff_offsets, coarse_vertex, fv };
     let mut dual_energy = 0.0;
     let mut stopped = false;
-    for w in ff_offsets.windows(2) {
-        let (b, e) = (w[0] as usize, w[1] as usize);
-        for &u in &coarse_vertex[b..e] {
-            if std::mem::replace(&mut expanded[u as usize], true) {
-                continue;
-            }
-            // The face's corners in its own order (the walk of [`reverse_canonical`]).
-            let m = fv.sizes_of[u as usize] as usize;
-            let (points, out, face) = if m <= SHORT {
-                (&mut short_points[..m], &mut short_expanded[..m], &mut short_face[..m])
-            } else {
-                long_points.resize(m, DVec3::ZERO);
-                long_expanded.resize(m, DVec3::ZERO);
-                long_face.resize(m, NONE);
-                (&mut long_points[..], &mut long_expanded[..], &mut long_face[..])
-            };
-            let first = face_halfedge[fv.first + u as usize];
-            let mut h = first;
-            for (slot, corner) in points.iter_mut().zip(face.iter_mut()) {
-                let v = to[(h ^ 1) as usize];
-                *corner = v;
-                *slot = positions[v as usize];
-                h = next[h as usize];
-            }
-            debug_assert_eq!(h, first, "internal: an F_V face has its counted size");
-            maps.inverse(points, out);
-            for (&v, &p) in face.iter().zip(out.iter()) {
-                dual[v as usize] = p;
-            }
-        }
-        // Summed in the order of the dual reading's coarse corners, which number the F_V
-        // faces' corners in face order: by F_V face, as no face has two corners on one.
-        dual_energy += dual_group_energy(&mut group_corners, b as u32..e as u32, coarse_vertex, &dual);
-        if dual_energy >= energy {
-            stopped = true;
-            break;
-        }
+    if rayon::current_num_threads() > 1 && positions.len() >= PARALLEL_VERTICES {
+        drop(dual);
+        (dual_energy, stopped) = reading.sum_in_pairs(energy);
+    } else {
+        reading.groups(0..ff_count, &mut dual, |group_energy| {
+            dual_energy += group_energy;
+            stopped = dual_energy >= energy;
+            !stopped
+        });
     }
     if !stopped {
         // The dual reading is better.
@@ -857,21 +933,145 @@ fn automatic(
     Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason })
 }
 
-/// The length of the bounding-box diagonal of `points` (split among the threads on large
-/// meshes: min and max do not depend on the order).
-fn diagonal_of(points: &[DVec3]) -> f64 {
-    let bounds = |(lo, hi): (DVec3, DVec3), p: &DVec3| (lo.min(*p), hi.max(*p));
-    let empty = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    let (lo, hi) = if rayon::current_num_threads() > 1 && points.len() >= 1 << 16 {
-        points
-            .par_iter()
-            .with_min_len(1 << 14)
-            .fold(|| empty, bounds)
-            .reduce(|| empty, |(a, b), (c, d)| (a.min(c), b.max(d)))
-    } else {
-        points.iter().fold(empty, bounds)
-    };
-    (hi - lo).length()
+/// The F_F faces of the dual reading at or above which [`DualReading::sum_in_pairs`]
+/// splits its sum (each piece expands again the F_V faces it shares with the previous
+/// one: pieces of many rows of faces keep that small).
+const DUAL_PIECE: usize = 1 << 12;
+
+/// The dual reading of a closed canonical mesh (the lowest F_V face as F_F): its
+/// candidates are the F_V faces expanded, its groups the F_F faces (see [`automatic`]).
+struct DualReading<'a> {
+    arrays: HalfedgeArrays<'a>,
+    maps: &'a FaceMaps,
+    positions: &'a [DVec3],
+    /// The F_F faces' corner ranges.
+    ff_offsets: &'a [u32],
+    /// The first reading's coarse vertex of each corner (its F_V face).
+    coarse_vertex: &'a [u32],
+    fv: &'a FvFaces<'a>,
+}
+
+impl DualReading<'_> {
+    /// The detail energies of the groups `faces` (F_F faces), in face order, each handed
+    /// to `take` until it returns `false`. Each F_V face is expanded when a group first
+    /// needs it; `dual` holds the candidates of the corners of `faces` (from the first
+    /// one on).
+    fn groups(&self, faces: std::ops::Range<usize>, dual: &mut [DVec3], mut take: impl FnMut(f64) -> bool) {
+        let Self { ref arrays, maps, positions, ff_offsets, coarse_vertex, fv } = *self;
+        let HalfedgeArrays { to, next, face_halfedge, .. } = *arrays;
+        let base = ff_offsets[faces.start] as usize;
+        debug_assert_eq!(dual.len(), ff_offsets[faces.end] as usize - base);
+        let mut expanded = vec![false; fv.sizes_of.len()];
+        // Faces of up to [`SHORT`] sides are gathered on the stack (no growing push in the
+        // gathering loop, whose bounds then stay in registers).
+        let (mut short_points, mut short_expanded) = ([DVec3::ZERO; SHORT], [DVec3::ZERO; SHORT]);
+        let (mut long_points, mut long_expanded) = (Vec::new(), Vec::new());
+        let (mut short_face, mut long_face) = ([NONE; SHORT], Vec::new());
+        let mut group_corners = Vec::new();
+        for w in ff_offsets[faces.start..=faces.end].windows(2) {
+            let (b, e) = (w[0] as usize, w[1] as usize);
+            for &u in &coarse_vertex[b..e] {
+                if std::mem::replace(&mut expanded[u as usize], true) {
+                    continue;
+                }
+                // The face's corners in its own order (the walk of [`reverse_canonical`]).
+                let m = fv.sizes_of[u as usize] as usize;
+                let (points, out, face) = if m <= SHORT {
+                    (&mut short_points[..m], &mut short_expanded[..m], &mut short_face[..m])
+                } else {
+                    long_points.resize(m, DVec3::ZERO);
+                    long_expanded.resize(m, DVec3::ZERO);
+                    long_face.resize(m, NONE);
+                    (&mut long_points[..], &mut long_expanded[..], &mut long_face[..])
+                };
+                let first = face_halfedge[fv.first + u as usize];
+                let mut h = first;
+                for (slot, corner) in points.iter_mut().zip(face.iter_mut()) {
+                    let v = to[(h ^ 1) as usize];
+                    *corner = v;
+                    *slot = positions[v as usize];
+                    h = next[h as usize];
+                }
+                debug_assert_eq!(h, first, "internal: an F_V face has its counted size");
+                maps.inverse(points, out);
+                for (&v, &p) in face.iter().zip(out.iter()) {
+                    // Only the corners of `faces` are kept (the others, of an F_V face
+                    // shared with the faces before or after, are found again there).
+                    let i = (v as usize).wrapping_sub(base);
+                    if i < dual.len() {
+                        dual[i] = p;
+                    }
+                }
+            }
+            // Summed in the order of the dual reading's coarse corners, which number the F_V
+            // faces' corners in face order: by F_V face, as no face has two corners on one.
+            let group_energy =
+                dual_group_energy(&mut group_corners, b as u32..e as u32, coarse_vertex, dual, base as u32);
+            if !take(group_energy) {
+                break;
+            }
+        }
+    }
+
+    /// The dual reading's sum on two threads, until it reaches `energy`: the groups in
+    /// pieces of [`DUAL_PIECE`] faces or more, two at a time, the first summed on from the
+    /// total so far and stopped where it reaches `energy`, the second's energies kept (and
+    /// given up as soon as the first stops) to be added after it. The same values are added
+    /// in the same order and the sum stops at the same group as on one thread. Returns the
+    /// sum and whether it reached `energy`.
+    fn sum_in_pairs(&self, energy: f64) -> (f64, bool) {
+        let faces = self.ff_offsets.len() - 1;
+        let piece = (faces / 16).max(DUAL_PIECE);
+        let corners =
+            |range: &std::ops::Range<usize>| (self.ff_offsets[range.end] - self.ff_offsets[range.start]) as usize;
+        let halt = AtomicBool::new(false);
+        let mut total = 0.0;
+        let mut start = 0;
+        while start < faces {
+            let first = start..(start + piece).min(faces);
+            let second = first.end..(first.end + piece).min(faces);
+            start = second.end;
+            let ((sum, reached), later) = rayon::join(
+                || {
+                    let mut dual = vec![DVec3::ZERO; corners(&first)];
+                    let (mut sum, mut reached) = (total, false);
+                    self.groups(first.clone(), &mut dual, |group_energy| {
+                        sum += group_energy;
+                        reached = sum >= energy;
+                        if reached {
+                            halt.store(true, Ordering::Relaxed);
+                        }
+                        !reached
+                    });
+                    (sum, reached)
+                },
+                || {
+                    let mut energies = Vec::with_capacity(second.len());
+                    if !second.is_empty() {
+                        let mut dual = vec![DVec3::ZERO; corners(&second)];
+                        self.groups(second.clone(), &mut dual, |group_energy| {
+                            energies.push(group_energy);
+                            !halt.load(Ordering::Relaxed)
+                        });
+                    }
+                    energies
+                },
+            );
+            total = sum;
+            if reached {
+                return (total, true);
+            }
+            // The first piece did not stop, so the second was not given up.
+            debug_assert_eq!(later.len(), second.len(), "internal: the second piece is complete");
+            for group_energy in later {
+                total += group_energy;
+                if total >= energy {
+                    return (total, true);
+                }
+            }
+        }
+        (total, false)
+    }
 }
 
 #[cfg(test)]
@@ -958,6 +1158,73 @@ mod tests {
     }
 
     #[test]
+    fn two_threads_give_the_one_thread_result() {
+        // Above `PARALLEL_VERTICES`: the coarse vertices beside the expansion, the means in
+        // two halves, and (automatic mode) the dual sum in pieces.
+        let closed = refine(&shapes::torus(96, 48, CellKind::Triangles).unwrap(), FaceRule::DooSabin);
+        let open = refine(&shapes::grid(100, 60, CellKind::Quads).unwrap(), FaceRule::DooSabin);
+        assert!(closed.vertex_count() >= PARALLEL_VERTICES && open.vertex_count() >= PARALLEL_VERTICES);
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for (fine, options) in [
+            (&closed, ReverseOptions::auto(FaceRule::DooSabin)),
+            (&closed, ReverseOptions::with_seed(FaceRule::DooSabin, 5)),
+            (&open, ReverseOptions::with_seed(FaceRule::DooSabin, 0)),
+        ] {
+            let parallel = two.install(|| reverse_canonical(fine, &options)).expect("canonical order");
+            assert_eq!(parallel, one.install(|| reverse_canonical(fine, &options)).unwrap());
+            assert_eq!(parallel, general(fine, &options));
+        }
+    }
+
+    #[test]
+    fn the_dual_sum_in_pairs_stops_where_the_sum_in_order_stops() {
+        // Pieces of at least `DUAL_PIECE` faces: a torus of several pieces.
+        let soup = shapes::torus(96, 48, CellKind::Triangles).unwrap();
+        let fine = refine(&soup, FaceRule::DooSabin);
+        let ff = stream_ff_faces(&fine).expect("the layout of a canonical mesh");
+        let (offsets, quads) = (ff.offsets.clone(), ff.quads as usize);
+        let faces = offsets.len() - 1;
+        assert!(faces > 2 * DUAL_PIECE, "{faces}");
+        let arrays = HalfedgeArrays::of(&fine);
+        let fv_first = faces + quads;
+        let streamed = stream_fv_faces(&arrays, fv_first, quads).expect("closed");
+        let fv = FvFaces { first: fv_first, sizes_of: &streamed.sizes };
+        let maps = FaceMaps::new(FaceRule::DooSabin);
+        let reading = DualReading {
+            arrays: HalfedgeArrays::of(&fine),
+            maps: &maps,
+            positions: fine.positions(),
+            ff_offsets: &offsets,
+            coarse_vertex: &streamed.labels,
+            fv: &fv,
+        };
+        // Every group's energy in order, on one thread.
+        let mut all = Vec::new();
+        reading.groups(0..faces, &mut vec![DVec3::ZERO; fine.vertex_count()], |e| {
+            all.push(e);
+            true
+        });
+        assert_eq!(all.len(), faces);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        // Thresholds reached in the first piece, in the second piece of the first pair, in
+        // a later pair, at the last group, and never.
+        for stop in [10, DUAL_PIECE + 7, 2 * DUAL_PIECE + 100, faces - 1] {
+            let energy = all[..=stop].iter().sum::<f64>();
+            // The first group at which the sum in order reaches `energy`.
+            let mut sum = 0.0;
+            let at = all.iter().position(|&e| {
+                sum += e;
+                sum >= energy
+            });
+            let expected = all[..=at.unwrap()].iter().sum::<f64>();
+            assert_eq!(pool.install(|| reading.sum_in_pairs(energy)), (expected, true), "{stop}");
+        }
+        let total = all.iter().sum::<f64>();
+        assert_eq!(pool.install(|| reading.sum_in_pairs(f64::INFINITY)), (total, false));
+    }
+
+    #[test]
     fn the_layout_pass_reads_what_the_walk_finds() {
         let soups = [
             shapes::cube(),
@@ -1005,8 +1272,10 @@ mod tests {
             let arrays = HalfedgeArrays::of(&fine);
             let ff = stream_ff_faces(&fine).expect("the layout of a soup in the canonical order");
             let fv_first = ff.offsets.len() - 1 + ff.quads as usize;
-            let StreamedFvFaces { labels, first_corners: first, sizes, by_vertex } =
+            let StreamedFvFaces { labels, first_corners: first, sizes, by_vertex, ends } =
                 stream_fv_faces(&arrays, fv_first, ff.quads as usize).expect("closed");
+            // The far end of each corner's coarse edge: the vertex of its next corner.
+            assert!(ends.iter().zip(&ff.next).all(|(&end, &next)| end == labels[next as usize]));
             let mut walked = Vec::new();
             for (i, &h0) in arrays.face_halfedge[fv_first..].iter().enumerate() {
                 let start = walked.len();

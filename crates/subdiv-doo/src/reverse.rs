@@ -1724,7 +1724,7 @@ impl<'a> Search<'a> {
                     dual[canonical_of_vertex[x as usize] as usize] = p;
                 }
             }
-            energy += dual_group_energy(&mut group, b as u32..e as u32, &coarse.corner_vertex, dual);
+            energy += dual_group_energy(&mut group, b as u32..e as u32, &coarse.corner_vertex, dual, 0);
             if energy >= cutoff {
                 return Some(energy);
             }
@@ -1976,13 +1976,32 @@ pub(crate) fn means_and_details(
 pub(crate) fn means_and_details_with(
     by_vertex: &CornersByVertex,
     candidates: &[DVec3],
-    mut before: impl FnMut(usize, &[u32]),
+    before: impl FnMut(usize, &[u32]),
 ) -> (Vec<DVec3>, Vec<DVec3>, Vec<f64>) {
     let vertices = by_vertex.offsets.len() - 1;
-    let mut means = Vec::with_capacity(vertices);
-    let mut details = Vec::with_capacity(by_vertex.corners.len() - vertices);
-    let mut energies = Vec::with_capacity(vertices);
-    for (v, corners) in by_vertex.iter().enumerate() {
+    means_and_details_in(by_vertex, candidates, 0..vertices, vertices, before)
+}
+
+/// [`means_and_details_with`] for the vertices `range` only (their means, details and
+/// energies, in order), with room for those of `reserve` vertices from `range.start` on
+/// (so that the values of the vertices after `range` can be appended without moving
+/// these).
+pub(crate) fn means_and_details_in(
+    by_vertex: &CornersByVertex,
+    candidates: &[DVec3],
+    range: std::ops::Range<usize>,
+    reserve: usize,
+    mut before: impl FnMut(usize, &[u32]),
+) -> (Vec<DVec3>, Vec<DVec3>, Vec<f64>) {
+    let reserve = reserve.max(range.len());
+    let (first, end) = (range.start, range.start + reserve);
+    let detail_room = details_offset(by_vertex, end) - details_offset(by_vertex, first);
+    let mut means = Vec::with_capacity(reserve);
+    let mut details = Vec::with_capacity(detail_room);
+    let mut energies = Vec::with_capacity(reserve);
+    let offsets = &by_vertex.offsets[range.start..=range.end];
+    for (v, w) in (range.start..).zip(offsets.windows(2)) {
+        let corners = &by_vertex.corners[w[0] as usize..w[1] as usize];
         before(v, corners);
         let mean = corners.iter().map(|&c| candidates[c as usize]).sum::<DVec3>() / corners.len() as f64;
         means.push(mean);
@@ -2414,22 +2433,24 @@ pub(crate) fn insertion_sort_by_key(values: &mut [u32], key: impl Fn(u32) -> u32
 }
 
 /// The detail energy of one group of the dual reading: the squared distances of its
-/// candidates (`dual`, by coarse corner) from their mean, the group being the coarse
-/// corners `corners` summed in the order of their coarse vertices (`corner_vertex`), as
-/// the dual reading's result would sum them. `group` is scratch.
+/// candidates (`dual`, by coarse corner, from corner `base` on) from their mean, the group
+/// being the coarse corners `corners` summed in the order of their coarse vertices
+/// (`corner_vertex`), as the dual reading's result would sum them. `group` is scratch.
 pub(crate) fn dual_group_energy(
     group: &mut Vec<u32>,
     corners: std::ops::Range<u32>,
     corner_vertex: &[u32],
     dual: &[DVec3],
+    base: u32,
 ) -> f64 {
     group.clear();
     group.extend(corners);
     insertion_sort_by_key(group, |c| corner_vertex[c as usize]);
-    let mean = group.iter().map(|&c| dual[c as usize]).sum::<DVec3>() / group.len() as f64;
+    let value = |c: u32| dual[(c - base) as usize];
+    let mean = group.iter().map(|&c| value(c)).sum::<DVec3>() / group.len() as f64;
     let mut energy = 0.0;
     for &c in group.iter() {
-        energy += (dual[c as usize] - mean).length_squared();
+        energy += (value(c) - mean).length_squared();
     }
     energy
 }
