@@ -54,9 +54,9 @@ use glam::DVec3;
 use mesh_topo::HalfedgeMesh;
 
 use crate::LoopError;
-use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
+use crate::corner_table::{Corner, CornerTable, NONE, VertexStar, next, prev};
 use crate::forward::LoopOptions;
-use crate::forward::buffer::{Output, Slots};
+use crate::forward::buffer::{Output, Slots, prefetch};
 use crate::forward::kernel;
 use crate::forward::topology::MeshTriangles;
 use crate::reverse::{CanonicalLevel, reverse_canonical};
@@ -821,22 +821,20 @@ pub(crate) struct Renumbering {
 /// points) in order of first appearance.
 pub(crate) fn renumber_to_canonical(
     vertex_count: usize,
-    corner_vertex: &[u32],
-    twin: &[u32],
+    corners: &[Corner],
     corner_at: impl Fn(u32) -> u32,
     seed_vertex: Option<u32>,
 ) -> Option<Renumbering> {
-    let (nv, faces) = (vertex_count, corner_vertex.len() / 3);
+    let (nv, faces) = (vertex_count, corners.len() / 3);
     if faces == 0 || !faces.is_multiple_of(4) || seed_vertex.is_some_and(|s| s as usize >= nv) {
         return None;
     }
     let mut search = GroupSearch {
-        corner_vertex,
-        twin,
+        corners,
         label: vec![UNKNOWN; nv],
-        group_of_face: vec![NONE; faces],
+        grouped: vec![false; faces],
         groups: Vec::with_capacity(faces / 4),
-        stack: Vec::new(),
+        queue: std::collections::VecDeque::new(),
     };
     if let Some(seed) = seed_vertex
         && corner_at(seed) != NONE
@@ -852,7 +850,7 @@ pub(crate) fn renumber_to_canonical(
         let c = corner_at(v);
         if c == NONE {
             search.label[v as usize] = EVEN;
-        } else if is_irregular(twin, c) {
+        } else if is_irregular(corners, c) {
             search.run(c)?;
         }
     }
@@ -881,23 +879,41 @@ pub(crate) fn renumber_to_canonical(
         }
     }
     drop(groups);
-    // Canonical vertex of every fine vertex: the vertex points in fine order, then the
-    // edge points as the coarse corners first name them.
-    let mut canonical_of_fine = vec![NONE; nv];
+    // Canonical vertex of every fine vertex: the vertex points in fine order (their
+    // rank among the vertex points, read from a bit set small enough to stay in cache),
+    // then the edge points as the coarse corners first name them.
     let mut vertex_of_canonical = Vec::with_capacity(nv);
-    for (v, &l) in label.iter().enumerate() {
-        if l == EVEN {
-            canonical_of_fine[v] = vertex_of_canonical.len() as u32;
-            vertex_of_canonical.push(v as u32);
+    let mut even_bits = Vec::with_capacity(nv.div_ceil(64));
+    for (w, labels) in label.chunks(64).enumerate() {
+        let before = vertex_of_canonical.len() as u32;
+        let mut bits = 0u64;
+        for (i, &l) in labels.iter().enumerate() {
+            if l == EVEN {
+                bits |= 1 << i;
+                vertex_of_canonical.push((64 * w + i) as u32);
+            }
         }
+        even_bits.push(EvenWord { bits, before });
     }
     drop(label);
+    let coarse_of_even = |v: u32| {
+        let EvenWord { bits, before } = even_bits[(v / 64) as usize];
+        before + (bits & ((1u64 << (v % 64)) - 1)).count_ones()
+    };
+    // Edge points only (vertex points are ranked above).
+    let mut canonical_of_fine = vec![NONE; nv];
     // The smallest edge point.
     let first_odd = vertex_of_canonical.len() as u32;
     let mut face_of_canonical = Vec::with_capacity(faces);
     let mut coarse_vertex = Vec::with_capacity(3 * sorted.len());
     let mut edge_point = Vec::with_capacity(3 * sorted.len());
     for bucket in start.windows(2) {
+        // The edge points of the groups a few places ahead (read at random): prefetched.
+        if let Some(ahead) = sorted.get(bucket[1] as usize + NUMBERING_AHEAD) {
+            for &point in &ahead.m {
+                prefetch(&canonical_of_fine, point as usize);
+            }
+        }
         let bucket = &mut sorted[bucket[0] as usize..bucket[1] as usize];
         if bucket.len() > 1 {
             bucket.sort_unstable_by_key(FaceGroup::first_face);
@@ -924,7 +940,7 @@ pub(crate) fn renumber_to_canonical(
                 let even = corner[k];
                 // Canonical corner 0 is the vertex point: actual corner j -> rotation (3 - j) % 3.
                 face_of_canonical.push(3 * (even / 3) + (3 - even % 3) % 3);
-                coarse_vertex.push(canonical_of_fine[y[k] as usize]);
+                coarse_vertex.push(coarse_of_even(y[k]));
                 edge_point.push(m[k]);
             }
             face_of_canonical.push(3 * inner + (3 - r as u32) % 3);
@@ -937,14 +953,26 @@ pub(crate) fn renumber_to_canonical(
     Some(Renumbering { order: FineOrder { vertex_of_canonical, face_of_canonical }, groups })
 }
 
+/// Groups ahead whose edge points the numbering of [`renumber_to_canonical`] prefetches.
+const NUMBERING_AHEAD: usize = 12;
+
+/// 64 vertices of a bit set of the vertex points, with the number of vertex points
+/// below them: the rank of a vertex point in two loads from one small array.
+#[derive(Clone, Copy)]
+struct EvenWord {
+    bits: u64,
+    before: u32,
+}
+
 /// True if the vertex of corner `start` cannot be an edge point: its number of corners
 /// is not 6 inside or 3 on the boundary (counted around it through the twins).
-fn is_irregular(twin: &[u32], start: u32) -> bool {
+fn is_irregular(corners: &[Corner], start: u32) -> bool {
+    let twin = |c: u32| corners[c as usize].twin;
     let mut count = 1u32;
     // Counter-clockwise: the twin of the half-edge arriving at the vertex.
     let mut c = start;
     loop {
-        let t = twin[prev(c) as usize];
+        let t = twin(prev(c));
         if t == start {
             return count != 6;
         }
@@ -956,8 +984,8 @@ fn is_irregular(twin: &[u32], start: u32) -> bool {
     }
     // An open fan: the rest of it, clockwise.
     let mut c = start;
-    while twin[c as usize] != NONE {
-        c = next(twin[c as usize]);
+    while twin(c) != NONE {
+        c = next(twin(c));
         count += 1;
     }
     count != 3
@@ -993,28 +1021,74 @@ impl FaceGroup {
 }
 
 /// The search of [`renumber_to_canonical`].
+///
+/// Breadth-first, with a software pipeline: the fine mesh of another tool is in no
+/// useful order, so nearly every face the search reads is a cache miss, and a
+/// depth-first search (the next face is the one just found) waits for them one after
+/// the other. From a queue, the coarse faces to visit next are known well ahead: the
+/// lines of a queued corner's face are prefetched when it is queued, those of its inner
+/// face [`FAR`](Self::FAR) places before its turn, those of its other two corner faces
+/// [`NEAR`](Self::NEAR) places before, so that the misses overlap. The order of the
+/// visit changes nothing in the result: the groups are put in the order of their first
+/// face afterwards, and a component is searched to its end before the next seed.
 struct GroupSearch<'a> {
-    corner_vertex: &'a [u32],
-    twin: &'a [u32],
+    corners: &'a [Corner],
     label: Vec<u8>,
-    group_of_face: Vec<u32>,
+    /// True once a face is in a group (one byte a face: the flags stay in cache).
+    grouped: Vec<bool>,
     groups: Vec<FaceGroup>,
     /// Corners at the vertex point of corner faces still to visit.
-    stack: Vec<u32>,
+    queue: std::collections::VecDeque<u32>,
 }
 
 impl GroupSearch<'_> {
+    /// Queue places ahead at which the inner face of a queued corner is prefetched.
+    const FAR: usize = 24;
+    /// Queue places ahead at which the other corner faces are prefetched.
+    const NEAR: usize = 10;
+
+    /// Prefetches the corners and twins of the face of corner `c`.
+    #[inline(always)]
+    fn prefetch_face(&self, c: u32) {
+        let first = 3 * (c / 3) as usize;
+        prefetch(self.corners, first);
+        prefetch(self.corners, first + 2);
+    }
+
+    /// The inner face across the edge-point edge of the corner face of corner `e`.
+    #[inline(always)]
+    fn across(&self, e: u32) -> u32 {
+        self.corners[next(e) as usize].twin
+    }
+
     /// Groups the faces reached from the corner face of corner `start`, whose vertex is
     /// taken for a vertex point; `None` where the pattern breaks.
     fn run(&mut self, start: u32) -> Option<()> {
-        let (corner_vertex, twin) = (self.corner_vertex, self.twin);
-        self.stack.clear();
-        self.stack.push(start);
-        while let Some(e) = self.stack.pop() {
-            if self.group_of_face[(e / 3) as usize] != NONE {
+        let corners = self.corners;
+        self.queue.clear();
+        self.queue.push_back(start);
+        while let Some(e) = self.queue.pop_front() {
+            if let Some(&ahead) = self.queue.get(Self::FAR)
+                && let across = self.across(ahead)
+                && across != NONE
+            {
+                self.prefetch_face(across);
+            }
+            if let Some(&ahead) = self.queue.get(Self::NEAR)
+                && let across = self.across(ahead)
+                && across != NONE
+            {
+                let i = 3 * (across / 3) as usize;
+                for &Corner { twin: t, .. } in &corners[i..i + 3] {
+                    if t != NONE {
+                        self.prefetch_face(t);
+                    }
+                }
+            }
+            if self.grouped[(e / 3) as usize] {
                 continue;
             }
-            let across = twin[next(e) as usize];
+            let across = self.across(e);
             if across == NONE {
                 return None;
             }
@@ -1023,21 +1097,20 @@ impl GroupSearch<'_> {
             // vertex point j + 1; its corner there is the one before the twin.
             let mut corner = [0u32; 3];
             for j in 0..3 {
-                let t = twin[3 * inner as usize + j];
+                let t = corners[3 * inner as usize + j].twin;
                 if t == NONE {
                     return None;
                 }
                 corner[(j + 1) % 3] = prev(t);
             }
-            let g = self.groups.len() as u32;
             for f in [inner, corner[0] / 3, corner[1] / 3, corner[2] / 3] {
                 // Also refuses a face met twice in this group.
-                if std::mem::replace(&mut self.group_of_face[f as usize], g) != NONE {
+                if std::mem::replace(&mut self.grouped[f as usize], true) {
                     return None;
                 }
             }
             let i = 3 * inner as usize;
-            let m = [corner_vertex[i], corner_vertex[i + 1], corner_vertex[i + 2]];
+            let m = [corners[i].vertex, corners[i + 1].vertex, corners[i + 2].vertex];
             for point in m {
                 let label = &mut self.label[point as usize];
                 if *label == EVEN {
@@ -1045,7 +1118,7 @@ impl GroupSearch<'_> {
                 }
                 *label = ODD;
             }
-            let y = corner.map(|c| corner_vertex[c as usize]);
+            let y = corner.map(|c| corners[c as usize].vertex);
             for (c, v) in corner.into_iter().zip(y) {
                 let label = &mut self.label[v as usize];
                 if *label == ODD {
@@ -1055,9 +1128,10 @@ impl GroupSearch<'_> {
                 // The neighbouring coarse face across coarse edge k (y_k -> y_{k+1}): its
                 // corner face at y_k lies across this corner face's edge y_k -> m_k (the
                 // other half of the coarse edge leads to the same coarse face).
-                let t = twin[c as usize];
-                if t != NONE && self.group_of_face[(t / 3) as usize] == NONE {
-                    self.stack.push(next(t));
+                let t = corners[c as usize].twin;
+                if t != NONE && !self.grouped[(t / 3) as usize] {
+                    self.prefetch_face(t);
+                    self.queue.push_back(next(t));
                 }
             }
             self.groups.push(FaceGroup { corner, inner, y, m });

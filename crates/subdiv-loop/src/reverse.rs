@@ -448,12 +448,12 @@ pub(crate) fn reverse_level(
     let renumbering = match fine {
         FineLevel::Mesh(mesh) => CornerTable::mesh_corners(mesh).and_then(|corners| {
             let corner_at = |v| corners.corner_at(mesh, v);
-            renumber_to_canonical(mesh.vertex_count(), &corners.corner_vertex, &corners.twin, corner_at, seed_vertex)
+            renumber_to_canonical(mesh.vertex_count(), &corners.corners, corner_at, seed_vertex)
         }),
         FineLevel::Table(table) => {
             let starts = table.vertex_corners();
             let corner_at = |v: u32| starts[v as usize];
-            renumber_to_canonical(table.vertex_count(), table.corner_vertices(), table.twins(), corner_at, seed_vertex)
+            renumber_to_canonical(table.vertex_count(), &table.corners(), corner_at, seed_vertex)
         }
     };
     if let Some(renumbering) = renumbering
@@ -1165,8 +1165,7 @@ mod tests {
     fn renumbered_agrees_with_general(fine: &HalfedgeMesh, seed_vertex: Option<u32>, rules: &LoopOptions) -> bool {
         let corners = CornerTable::mesh_corners(fine).expect("triangles");
         let corner_at = |v| corners.corner_at(fine, v);
-        let renumbering =
-            renumber_to_canonical(fine.vertex_count(), &corners.corner_vertex, &corners.twin, corner_at, seed_vertex);
+        let renumbering = renumber_to_canonical(fine.vertex_count(), &corners.corners, corner_at, seed_vertex);
         let Some(fast) = renumbering.and_then(|r| reverse_renumbered(r, fine.positions(), rules)) else {
             return false;
         };
