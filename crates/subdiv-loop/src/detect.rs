@@ -516,7 +516,7 @@ fn detect_canonical_faces(
     face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
 ) -> Option<Coarsening> {
     let groups = canonical_groups(faces, seed_vertex, face)?;
-    let (coarse, _, ()) = groups.into_table(vertex_count, (), |_, _, _| ())?;
+    let (coarse, _, ()) = groups.into_table(vertex_count, (), |_, _, _| (), |_, _| ())?;
     Some(Coarsening::canonical(coarse))
 }
 
@@ -606,11 +606,16 @@ impl CanonicalGroups {
     /// face of its second half-edge; [`NONE`] on the boundary), in [`PairedEdge`]: the
     /// pairing reads that face anyway, and the edge rule needs the vertex, which edge
     /// by edge is a chain of dependent loads through the twin.
+    ///
+    /// `ahead(state, v)` is called for the vertex of the corner [`PAIRING_AHEAD`] places
+    /// ahead of the one `on_edge` reads: a hint (say a prefetch of what `on_edge` will
+    /// read for that vertex), whose misses then overlap the work in between.
     pub(crate) fn into_table<S: Send>(
         self,
         vertex_count: usize,
         mut state: S,
         on_edge: impl Fn(&mut S, [u32; 2], u32) + Sync,
+        ahead: impl Fn(&S, u32) + Sync,
     ) -> Option<(CornerTable, Vec<PairedEdge>, S)> {
         let Self { coarse_vertex, edge_point: mut corner_edge, first_odd } = self;
         let corners = coarse_vertex.len();
@@ -620,6 +625,9 @@ impl CanonicalGroups {
             let side = || {
                 let mut new_edge = first_odd;
                 for (c, &m) in corner_edge.iter().enumerate() {
+                    if let Some(&v) = coarse_vertex.get(c + PAIRING_AHEAD) {
+                        ahead(&state, v);
+                    }
                     if m == new_edge {
                         new_edge += 1;
                         on_edge(&mut state, ends(c), m);
@@ -627,7 +635,10 @@ impl CanonicalGroups {
                 }
                 state
             };
-            let pair = || pair_twins(&coarse_vertex, &corner_edge[..], first_odd, edge_count, |_, _| ());
+            let pair = || {
+                let (no_edge, no_hint) = (|_: &mut (), _, _| (), |_: &(), _| ());
+                pair_twins(&coarse_vertex, &corner_edge[..], first_odd, edge_count, &mut (), no_edge, no_hint)
+            };
             let (paired, state) = rayon::join(pair, side);
             let (twin, edge_corner, edges) = paired?;
             corner_edge.par_iter_mut().with_min_len(3 * GROUP_CHUNK).for_each(|e| *e -= first_odd);
@@ -635,9 +646,8 @@ impl CanonicalGroups {
         } else {
             // The edge points become the edges as the pairing reads them (no pass of
             // their own).
-            let pair_and_sum = |ends, m| on_edge(&mut state, ends, m);
             let (twin, edge_corner, edges) =
-                pair_twins(&coarse_vertex, &mut corner_edge[..], first_odd, edge_count, pair_and_sum)?;
+                pair_twins(&coarse_vertex, &mut corner_edge[..], first_odd, edge_count, &mut state, on_edge, ahead)?;
             (twin, edge_corner, edges, state)
         };
         let table = CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner);
@@ -664,12 +674,21 @@ pub(crate) struct PairedEdge {
 trait CornerEdgePoints {
     /// The edge of corner `c`: its edge point minus `first_odd`.
     fn edge(&mut self, c: usize, first_odd: u32) -> u32;
+
+    /// The edge point of corner `c`, not read by [`edge`](Self::edge) yet (`None` past
+    /// the end).
+    fn edge_point_ahead(&self, c: usize) -> Option<u32>;
 }
 
 impl CornerEdgePoints for &[u32] {
     #[inline(always)]
     fn edge(&mut self, c: usize, first_odd: u32) -> u32 {
         self[c] - first_odd
+    }
+
+    #[inline(always)]
+    fn edge_point_ahead(&self, c: usize) -> Option<u32> {
+        self.get(c).copied()
     }
 }
 
@@ -681,31 +700,49 @@ impl CornerEdgePoints for &mut [u32] {
         self[c] = e;
         e
     }
+
+    #[inline(always)]
+    fn edge_point_ahead(&self, c: usize) -> Option<u32> {
+        self.get(c).copied()
+    }
 }
+
+/// Corners ahead at which the pairing of [`CanonicalGroups::into_table`] prefetches
+/// what it will read there (the edge's record, and whatever `ahead` asks).
+pub(crate) const PAIRING_AHEAD: usize = 16;
 
 /// The twin pairing of [`CanonicalGroups::into_table`]: the twins, the first corner
 /// of every edge and what [`PairedEdge`] keeps, or `None` if the edge points are not
 /// numbered in order of first appearance, or an edge has more than two half-edges or
-/// two in the same direction. `new_edge(ends, edge_point)` is called when a corner
-/// starts an edge.
-fn pair_twins(
+/// two in the same direction. `new_edge(state, ends, edge_point)` is called when a
+/// corner starts an edge, `ahead(state, v)` for the vertex of the corner
+/// [`PAIRING_AHEAD`] places ahead.
+fn pair_twins<S>(
     coarse_vertex: &[u32],
     mut corner_edge: impl CornerEdgePoints,
     first_odd: u32,
     edge_count: usize,
-    mut new_edge: impl FnMut([u32; 2], u32),
+    state: &mut S,
+    new_edge: impl Fn(&mut S, [u32; 2], u32),
+    ahead: impl Fn(&S, u32),
 ) -> Option<(Vec<u32>, Vec<u32>, Vec<PairedEdge>)> {
     let corners = coarse_vertex.len();
     let mut twin = vec![NONE; corners];
     let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
     let mut edges: Vec<PairedEdge> = Vec::with_capacity(edge_count);
     for c in 0..corners as u32 {
+        let later = c as usize + PAIRING_AHEAD;
+        if let Some(m) = corner_edge.edge_point_ahead(later) {
+            // The record of an edge seen before (its second half-edge), at random.
+            prefetch(&edges, m.wrapping_sub(first_odd) as usize);
+            ahead(state, coarse_vertex[later]);
+        }
         let e = corner_edge.edge(c as usize, first_odd);
         let ends = [coarse_vertex[c as usize], coarse_vertex[next(c) as usize]];
         if e as usize == edges.len() {
             edge_corner.push(c);
             edges.push(PairedEdge { ends, opposite: NONE, first: c });
-            new_edge(ends, first_odd + e);
+            new_edge(state, ends, first_odd + e);
             continue;
         }
         let edge = edges.get_mut(e as usize)?;
@@ -1028,7 +1065,9 @@ impl FaceGroup {
 /// the other. From a queue, the coarse faces to visit next are known well ahead: the
 /// lines of a queued corner's face are prefetched when it is queued, those of its inner
 /// face [`FAR`](Self::FAR) places before its turn, those of its other two corner faces
-/// [`NEAR`](Self::NEAR) places before, so that the misses overlap. The order of the
+/// and the labels of its edge points [`NEAR`](Self::NEAR) places before, the labels of
+/// its vertex points and the flags of the faces across [`CLOSE`](Self::CLOSE) places
+/// before, so that the misses overlap. The order of the
 /// visit changes nothing in the result: the groups are put in the order of their first
 /// face afterwards, and a component is searched to its end before the next seed.
 struct GroupSearch<'a> {
@@ -1044,8 +1083,12 @@ struct GroupSearch<'a> {
 impl GroupSearch<'_> {
     /// Queue places ahead at which the inner face of a queued corner is prefetched.
     const FAR: usize = 24;
-    /// Queue places ahead at which the other corner faces are prefetched.
-    const NEAR: usize = 10;
+    /// Queue places ahead at which the other corner faces and the labels of the edge
+    /// points are prefetched.
+    const NEAR: usize = 12;
+    /// Queue places ahead at which the labels of the vertex points and the flags of the
+    /// faces across are prefetched.
+    const CLOSE: usize = 4;
 
     /// Prefetches the corners and twins of the face of corner `c`.
     #[inline(always)]
@@ -1079,9 +1122,24 @@ impl GroupSearch<'_> {
                 && across != NONE
             {
                 let i = 3 * (across / 3) as usize;
-                for &Corner { twin: t, .. } in &corners[i..i + 3] {
+                for &Corner { vertex: m, twin: t } in &corners[i..i + 3] {
+                    prefetch(&self.label, m as usize);
                     if t != NONE {
                         self.prefetch_face(t);
+                    }
+                }
+            }
+            if let Some(&ahead) = self.queue.get(Self::CLOSE)
+                && let across = self.across(ahead)
+                && across != NONE
+            {
+                let i = 3 * (across / 3) as usize;
+                for &Corner { twin: t, .. } in &corners[i..i + 3] {
+                    if t != NONE
+                        && let Some(&Corner { vertex: y, twin }) = corners.get(prev(t) as usize)
+                    {
+                        prefetch(&self.label, y as usize);
+                        prefetch(&self.grouped, (twin / 3) as usize);
                     }
                 }
             }
@@ -1130,7 +1188,7 @@ impl GroupSearch<'_> {
                 // other half of the coarse edge leads to the same coarse face).
                 let t = corners[c as usize].twin;
                 if t != NONE && !self.grouped[(t / 3) as usize] {
-                    self.prefetch_face(t);
+                    self.prefetch_face(next(t));
                     self.queue.push_back(next(t));
                 }
             }
