@@ -896,70 +896,51 @@ pub(crate) fn renumber_to_canonical(
         return None;
     }
     // Every face is in one group: the groups in order of their first face are the coarse
-    // faces in order. A counting sort by first face / 4 (at most four groups a bucket,
-    // put in order as they are numbered) reads the groups in order once and writes them
-    // once, instead of reading each group back at random from the faces in order.
-    let mut start = vec![0u32; groups.len() + 1];
+    // faces in order. The first faces, marked in a bit set that stays in cache, rank the
+    // groups: each group is read in order once and written once to its place.
+    let mut first_faces = RankedBits::new(faces);
     for group in &groups {
-        start[(group.first_face() / 4) as usize + 1] += 1;
+        first_faces.insert(group.first_face());
     }
-    for b in 1..start.len() {
-        start[b] += start[b - 1];
-    }
+    first_faces.count();
     let mut sorted = vec![FaceGroup::default(); groups.len()];
-    {
-        let mut end = start.clone();
-        for group in &groups {
-            let slot = &mut end[(group.first_face() / 4) as usize];
-            sorted[*slot as usize] = *group;
-            *slot += 1;
-        }
+    for group in &groups {
+        sorted[first_faces.rank(group.first_face()) as usize] = *group;
     }
     drop(groups);
     // Canonical vertex of every fine vertex: the vertex points in fine order (their
     // rank among the vertex points, read from a bit set small enough to stay in cache),
     // then the edge points as the coarse corners first name them.
     let mut vertex_of_canonical = Vec::with_capacity(nv);
-    let mut even_bits = Vec::with_capacity(nv.div_ceil(64));
-    for (w, labels) in label.chunks(64).enumerate() {
-        let before = vertex_of_canonical.len() as u32;
-        let mut bits = 0u64;
-        for (i, &l) in labels.iter().enumerate() {
-            if l == EVEN {
-                bits |= 1 << i;
-                vertex_of_canonical.push((64 * w + i) as u32);
-            }
+    let mut vertex_points = RankedBits::new(nv);
+    for (v, &l) in label.iter().enumerate() {
+        if l == EVEN {
+            vertex_points.insert(v as u32);
+            vertex_of_canonical.push(v as u32);
         }
-        even_bits.push(EvenWord { bits, before });
     }
+    vertex_points.count();
     drop(label);
-    let coarse_of_even = |v: u32| {
-        let EvenWord { bits, before } = even_bits[(v / 64) as usize];
-        before + (bits & ((1u64 << (v % 64)) - 1)).count_ones()
-    };
-    // Edge points only (vertex points are ranked above).
-    let mut canonical_of_fine = vec![NONE; nv];
     // The smallest edge point.
     let first_odd = vertex_of_canonical.len() as u32;
-    let mut face_of_canonical = Vec::with_capacity(faces);
-    let mut coarse_vertex = Vec::with_capacity(3 * sorted.len());
-    let mut edge_point = Vec::with_capacity(3 * sorted.len());
-    for bucket in start.windows(2) {
-        // The edge points of the groups a few places ahead (read at random): prefetched.
-        if let Some(ahead) = sorted.get(bucket[1] as usize + NUMBERING_AHEAD) {
-            for &point in &ahead.m {
-                prefetch(&canonical_of_fine, point as usize);
+    // Start at the corner whose corner face comes first.
+    let first_corner = |corner: [u32; 3]| {
+        let r = if corner[0] < corner[1] { 0 } else { 1 };
+        if corner[2] < corner[r] { 2 } else { r }
+    };
+    // The edge points in order of first appearance: the only sequential part (beside
+    // the rest on another thread, when the pool has one).
+    let number_edges = || {
+        let mut canonical_of_fine = vec![NONE; nv];
+        let mut edge_point = Vec::with_capacity(3 * sorted.len());
+        for (g, &FaceGroup { corner, m: points, .. }) in sorted.iter().enumerate() {
+            // The edge points of the groups a few places ahead (read at random).
+            if let Some(ahead) = sorted.get(g + NUMBERING_AHEAD) {
+                for &point in &ahead.m {
+                    prefetch(&canonical_of_fine, point as usize);
+                }
             }
-        }
-        let bucket = &mut sorted[bucket[0] as usize..bucket[1] as usize];
-        if bucket.len() > 1 {
-            bucket.sort_unstable_by_key(FaceGroup::first_face);
-        }
-        for &FaceGroup { corner, inner, y, m: points } in &*bucket {
-            // Start at the corner whose corner face comes first.
-            let r = if corner[0] < corner[1] { 0 } else { 1 };
-            let r = if corner[2] < corner[r] { 2 } else { r };
-            let mut m = [0u32; 3];
+            let r = first_corner(corner);
             for s in 0..3 {
                 let k = (r + s) % 3;
                 let slot = &mut canonical_of_fine[points[k] as usize];
@@ -967,22 +948,45 @@ pub(crate) fn renumber_to_canonical(
                     *slot = vertex_of_canonical.len() as u32;
                     vertex_of_canonical.push(points[k]);
                 }
-                m[k] = *slot;
+                edge_point.push(*slot);
             }
-            // Coarse corner s: the corner face (y_k, m_k, m_{k-1}) (its corners after the
-            // vertex point are those of the inner face's edge across which it was found),
-            // then the inner face (m_r, m_{r+1}, m_{r+2}).
-            for s in 0..3 {
-                let k = (r + s) % 3;
-                let even = corner[k];
-                // Canonical corner 0 is the vertex point: actual corner j -> rotation (3 - j) % 3.
-                face_of_canonical.push(3 * (even / 3) + (3 - even % 3) % 3);
-                coarse_vertex.push(coarse_of_even(y[k]));
-                edge_point.push(m[k]);
-            }
-            face_of_canonical.push(3 * inner + (3 - r as u32) % 3);
         }
-    }
+        edge_point
+    };
+    // Coarse corner s: the corner face (y_k, m_k, m_{k-1}) (its corners after the vertex
+    // point are those of the inner face's edge across which it was found), then the
+    // inner face (m_r, m_{r+1}, m_{r+2}). Group by group, in parallel.
+    let corners_and_faces = || {
+        let mut coarse_vertex = Output::<u32>::new(3 * sorted.len());
+        let mut face_of_canonical = Output::<u32>::new(faces);
+        {
+            let (mut vertices, mut codes) = (coarse_vertex.slots(), face_of_canonical.slots());
+            let pieces: Vec<_> = sorted
+                .chunks(GROUP_CHUNK)
+                .map(|chunk| (chunk, vertices.take_front(3 * chunk.len()), codes.take_front(4 * chunk.len())))
+                .collect();
+            let run = |(chunk, mut vertices, mut codes): (&[FaceGroup], Slots<'_, u32>, Slots<'_, u32>)| {
+                for &FaceGroup { corner, inner, y, .. } in chunk {
+                    let r = first_corner(corner);
+                    for s in 0..3 {
+                        let k = (r + s) % 3;
+                        let even = corner[k];
+                        // Canonical corner 0 is the vertex point: actual corner j -> rotation (3 - j) % 3.
+                        codes.push(3 * (even / 3) + (3 - even % 3) % 3);
+                        vertices.push(vertex_points.rank(y[k]));
+                    }
+                    codes.push(3 * inner + (3 - r as u32) % 3);
+                }
+            };
+            if pieces.len() > 1 {
+                pieces.into_par_iter().for_each(run);
+            } else {
+                pieces.into_iter().for_each(run);
+            }
+        }
+        (coarse_vertex.into_vec(), face_of_canonical.into_vec())
+    };
+    let (edge_point, (coarse_vertex, face_of_canonical)) = rayon::join(number_edges, corners_and_faces);
     if vertex_of_canonical.len() != nv {
         return None;
     }
@@ -993,12 +997,45 @@ pub(crate) fn renumber_to_canonical(
 /// Groups ahead whose edge points the numbering of [`renumber_to_canonical`] prefetches.
 const NUMBERING_AHEAD: usize = 12;
 
-/// 64 vertices of a bit set of the vertex points, with the number of vertex points
-/// below them: the rank of a vertex point in two loads from one small array.
-#[derive(Clone, Copy)]
-struct EvenWord {
+/// 64 elements of a [`RankedBits`], with the number of members below them.
+#[derive(Clone, Copy, Default)]
+struct RankWord {
     bits: u64,
     before: u32,
+}
+
+/// A bit set of `0..len` that ranks its members (the number of members below) in two
+/// loads from one small array: 1/4 byte an element, where a table of ranks at random
+/// would take 4 and miss the caches.
+struct RankedBits {
+    words: Vec<RankWord>,
+}
+
+impl RankedBits {
+    fn new(len: usize) -> Self {
+        Self { words: vec![RankWord::default(); len.div_ceil(64)] }
+    }
+
+    #[inline(always)]
+    fn insert(&mut self, i: u32) {
+        self.words[(i / 64) as usize].bits |= 1 << (i % 64);
+    }
+
+    /// Counts the members below every word (after the last insertion).
+    fn count(&mut self) {
+        let mut before = 0;
+        for word in &mut self.words {
+            word.before = before;
+            before += word.bits.count_ones();
+        }
+    }
+
+    /// The number of members below `i` (valid after [`count`](Self::count)).
+    #[inline(always)]
+    fn rank(&self, i: u32) -> u32 {
+        let RankWord { bits, before } = self.words[(i / 64) as usize];
+        before + (bits & ((1u64 << (i % 64)) - 1)).count_ones()
+    }
 }
 
 /// True if the vertex of corner `start` cannot be an edge point: its number of corners
