@@ -56,7 +56,7 @@ use mesh_topo::HalfedgeMesh;
 use crate::LoopError;
 use crate::corner_table::{Corner, CornerTable, NONE, VertexStar, next, prev};
 use crate::forward::LoopOptions;
-use crate::forward::buffer::{Output, Slots, prefetch};
+use crate::forward::buffer::{Output, Slots, prefetch, worth_prefetching};
 use crate::forward::kernel;
 use crate::forward::topology::MeshTriangles;
 use crate::reverse::{CanonicalLevel, reverse_canonical};
@@ -624,8 +624,9 @@ impl CanonicalGroups {
         let (twin, edge_corner, edges, state) = if kernel::runs_in_parallel(corners / 3) {
             let side = || {
                 let mut new_edge = first_odd;
+                let prefetching = worth_prefetching(corners * size_of::<PairedEdge>());
                 for (c, &m) in corner_edge.iter().enumerate() {
-                    if let Some(&v) = coarse_vertex.get(c + PAIRING_AHEAD) {
+                    if prefetching && let Some(&v) = coarse_vertex.get(c + PAIRING_AHEAD) {
                         ahead(&state, v);
                     }
                     if m == new_edge {
@@ -727,12 +728,13 @@ fn pair_twins<S>(
     ahead: impl Fn(&S, u32),
 ) -> Option<(Vec<u32>, Vec<u32>, Vec<PairedEdge>)> {
     let corners = coarse_vertex.len();
+    let prefetching = worth_prefetching(corners * size_of::<PairedEdge>());
     let mut twin = vec![NONE; corners];
     let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
     let mut edges: Vec<PairedEdge> = Vec::with_capacity(edge_count);
     for c in 0..corners as u32 {
         let later = c as usize + PAIRING_AHEAD;
-        if let Some(m) = corner_edge.edge_point_ahead(later) {
+        if prefetching && let Some(m) = corner_edge.edge_point_ahead(later) {
             // The record of an edge seen before (its second half-edge), at random.
             prefetch(&edges, m.wrapping_sub(first_odd) as usize);
             ahead(state, coarse_vertex[later]);
@@ -876,7 +878,7 @@ pub(crate) fn renumber_to_canonical(
     if let Some(seed) = seed_vertex
         && corner_at(seed) != NONE
     {
-        search.run(corner_at(seed))?;
+        search.search(corner_at(seed))?;
     }
     // Vertices reached are skipped, so the valence is counted (by circulation) only at
     // the few vertices before each component's first irregular one.
@@ -888,7 +890,7 @@ pub(crate) fn renumber_to_canonical(
         if c == NONE {
             search.label[v as usize] = EVEN;
         } else if is_irregular(corners, c) {
-            search.run(c)?;
+            search.search(c)?;
         }
     }
     let GroupSearch { label, groups, .. } = search;
@@ -932,10 +934,11 @@ pub(crate) fn renumber_to_canonical(
     // the rest on another thread, when the pool has one).
     let number_edges = || {
         let mut canonical_of_fine = vec![NONE; nv];
+        let prefetching = worth_prefetching(size_of_val(&canonical_of_fine[..]));
         let mut edge_point = Vec::with_capacity(3 * sorted.len());
         for (g, &FaceGroup { corner, m: points, .. }) in sorted.iter().enumerate() {
             // The edge points of the groups a few places ahead (read at random).
-            if let Some(ahead) = sorted.get(g + NUMBERING_AHEAD) {
+            if prefetching && let Some(ahead) = sorted.get(g + NUMBERING_AHEAD) {
                 for &point in &ahead.m {
                     prefetch(&canonical_of_fine, point as usize);
                 }
@@ -1127,6 +1130,11 @@ impl GroupSearch<'_> {
     /// faces across are prefetched.
     const CLOSE: usize = 4;
 
+    /// [`run`](Self::run), prefetching if the fine mesh is larger than the caches.
+    fn search(&mut self, start: u32) -> Option<()> {
+        if worth_prefetching(size_of_val(self.corners)) { self.run::<true>(start) } else { self.run::<false>(start) }
+    }
+
     /// Prefetches the corners and twins of the face of corner `c`.
     #[inline(always)]
     fn prefetch_face(&self, c: u32) {
@@ -1143,18 +1151,24 @@ impl GroupSearch<'_> {
 
     /// Groups the faces reached from the corner face of corner `start`, whose vertex is
     /// taken for a vertex point; `None` where the pattern breaks.
-    fn run(&mut self, start: u32) -> Option<()> {
+    ///
+    /// Without `PREFETCH` (a fine mesh that fits in the caches) the search is
+    /// depth-first without look-ahead: no miss to hide, and the last face found is the
+    /// one in cache.
+    fn run<const PREFETCH: bool>(&mut self, start: u32) -> Option<()> {
         let corners = self.corners;
         self.queue.clear();
         self.queue.push_back(start);
-        while let Some(e) = self.queue.pop_front() {
-            if let Some(&ahead) = self.queue.get(Self::FAR)
+        while let Some(e) = if PREFETCH { self.queue.pop_front() } else { self.queue.pop_back() } {
+            if PREFETCH
+                && let Some(&ahead) = self.queue.get(Self::FAR)
                 && let across = self.across(ahead)
                 && across != NONE
             {
                 self.prefetch_face(across);
             }
-            if let Some(&ahead) = self.queue.get(Self::NEAR)
+            if PREFETCH
+                && let Some(&ahead) = self.queue.get(Self::NEAR)
                 && let across = self.across(ahead)
                 && across != NONE
             {
@@ -1166,7 +1180,8 @@ impl GroupSearch<'_> {
                     }
                 }
             }
-            if let Some(&ahead) = self.queue.get(Self::CLOSE)
+            if PREFETCH
+                && let Some(&ahead) = self.queue.get(Self::CLOSE)
                 && let across = self.across(ahead)
                 && across != NONE
             {
@@ -1225,7 +1240,9 @@ impl GroupSearch<'_> {
                 // other half of the coarse edge leads to the same coarse face).
                 let t = corners[c as usize].twin;
                 if t != NONE && !self.grouped[(t / 3) as usize] {
-                    self.prefetch_face(next(t));
+                    if PREFETCH {
+                        self.prefetch_face(next(t));
+                    }
                     self.queue.push_back(next(t));
                 }
             }

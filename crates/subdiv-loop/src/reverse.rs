@@ -58,7 +58,7 @@ use crate::detect::{
     CanonicalGroups, Coarsening, FineOrder, PairedEdge, Renumbering, canonical_groups, coarse_face_is_valid,
     detect_mesh, detect_table, renumber_to_canonical, reverse_canonical_mesh, reverse_canonical_table,
 };
-use crate::forward::buffer::{Output, Slots, prefetch};
+use crate::forward::buffer::{Output, Slots, prefetch, worth_prefetching};
 use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
 use crate::forward::topology::{BASE_MASK, MAX_FACES, Topology};
 use crate::forward::{LoopOptions, VertexWeights};
@@ -490,6 +490,7 @@ fn reverse_renumbered(renumbering: Renumbering, positions: &[DVec3], rules: &Loo
 /// values a few places ahead prefetched, by chunks in parallel when large.
 fn gather(values: &[DVec3], indices: &[u32]) -> Vec<DVec3> {
     const AHEAD: usize = 16;
+    let prefetching = worth_prefetching(size_of_val(values));
     let mut output = Output::<DVec3>::new(indices.len());
     {
         let mut slots = output.slots();
@@ -497,7 +498,7 @@ fn gather(values: &[DVec3], indices: &[u32]) -> Vec<DVec3> {
             indices.chunks(PARALLEL_THRESHOLD).map(|chunk| (chunk, slots.take_front(chunk.len()))).collect();
         let run = |(chunk, mut piece): (&[u32], Slots<'_, DVec3>)| {
             for (i, &v) in chunk.iter().enumerate() {
-                if let Some(&later) = chunk.get(i + AHEAD) {
+                if prefetching && let Some(&later) = chunk.get(i + AHEAD) {
                     prefetch(values, later as usize);
                 }
                 piece.push(values[v as usize]);
@@ -565,6 +566,7 @@ fn reverse_canonical_groups(
     // `reverse_positions`), beside the pairing of the twins or inside it, with the
     // doubled-edge check on the way.
     let sum_edge_point = |sums: &mut EdgeSums, ends: [u32; 2], m: u32| sums.add_edge(ends, fine[m as usize]);
+    // (Called only when the pairing prefetches, for large meshes.)
     let ahead = |sums: &EdgeSums, v: u32| prefetch(&sums.records, v as usize);
     let (coarse, edges, mut sums) = groups.into_table(vertex_count, EdgeSums::new(nv), sum_edge_point, ahead)?;
     if !sums.edges_are_simple() {
@@ -702,6 +704,7 @@ fn canonical_details(
 ) -> Option<(Vec<DVec3>, bool)> {
     let (corner_vertex, twin, edge_corner) = (coarse.corner_vertices(), coarse.twins(), coarse.edge_corners());
     let faces = coarse.face_count();
+    let prefetching = worth_prefetching(size_of_val(positions));
     let mut output = Output::<DVec3>::new(coarse.edge_count());
     let finite = {
         let mut slots = output.slots();
@@ -722,12 +725,14 @@ fn canonical_details(
                 // The coarse vertices are in any order when the fine mesh was renumbered:
                 // the positions of the faces and far ends a few places ahead are
                 // prefetched.
-                if let Some(ahead) = corner_vertex.get(3 * (f + DETAILS_AHEAD)..3 * (f + DETAILS_AHEAD) + 3) {
+                if prefetching
+                    && let Some(ahead) = corner_vertex.get(3 * (f + DETAILS_AHEAD)..3 * (f + DETAILS_AHEAD) + 3)
+                {
                     for &v in ahead {
                         prefetch(positions, v as usize);
                     }
                 }
-                if let Some(edge) = edges.get(e0 + piece.written() + 2 * DETAILS_AHEAD) {
+                if prefetching && let Some(edge) = edges.get(e0 + piece.written() + 2 * DETAILS_AHEAD) {
                     prefetch(positions, edge.opposite as usize);
                 }
                 let c0 = 3 * f;

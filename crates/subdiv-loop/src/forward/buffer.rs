@@ -184,6 +184,14 @@ fn advise_huge_pages(start: *const u8, bytes: usize) {
 #[cfg(not(target_os = "linux"))]
 fn advise_huge_pages(_start: *const u8, _bytes: usize) {}
 
+/// True if an array of `bytes` read at random is worth prefetching: larger than a
+/// core's share of the caches. Below that the reads hit the cache anyway, and the
+/// hints and the look-ahead only add work.
+#[inline]
+pub(crate) fn worth_prefetching(bytes: usize) -> bool {
+    bytes >= 1 << 21
+}
+
 /// Asks the processor to bring the cache line of `slice[i]` into its caches (nothing
 /// if `i` is out of range, or on targets without a prefetch instruction). A hint only:
 /// it never changes memory, so results never depend on it. Searches that hop through
