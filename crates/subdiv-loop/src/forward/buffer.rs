@@ -19,6 +19,9 @@
 //! to back the buffer with transparent huge pages (2 MiB on x86-64): one fault per huge
 //! page, fewer TLB misses, and a cheaper release. This only changes how the kernel backs
 //! the pages, never their contents; on other systems it does nothing.
+//!
+//! [`prefetch`] is the other memory hint kept here: a cache prefetch for the passes that
+//! read large arrays at random (the renumbered reversal), which never changes memory.
 
 #![allow(unsafe_code)]
 
