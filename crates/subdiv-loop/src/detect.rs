@@ -54,9 +54,9 @@ use glam::DVec3;
 use mesh_topo::HalfedgeMesh;
 
 use crate::LoopError;
-use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
+use crate::corner_table::{Corner, CornerTable, NONE, VertexStar, next, prev};
 use crate::forward::LoopOptions;
-use crate::forward::buffer::{Output, Slots};
+use crate::forward::buffer::{Output, Slots, prefetch, worth_prefetching};
 use crate::forward::kernel;
 use crate::forward::topology::MeshTriangles;
 use crate::reverse::{CanonicalLevel, reverse_canonical};
@@ -516,7 +516,7 @@ fn detect_canonical_faces(
     face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
 ) -> Option<Coarsening> {
     let groups = canonical_groups(faces, seed_vertex, face)?;
-    let (coarse, _, ()) = groups.into_table(vertex_count, (), |_, _, _| ())?;
+    let (coarse, _, ()) = groups.into_table(vertex_count, (), |_, _, _| (), |_, _| ())?;
     Some(Coarsening::canonical(coarse))
 }
 
@@ -606,11 +606,16 @@ impl CanonicalGroups {
     /// face of its second half-edge; [`NONE`] on the boundary), in [`PairedEdge`]: the
     /// pairing reads that face anyway, and the edge rule needs the vertex, which edge
     /// by edge is a chain of dependent loads through the twin.
+    ///
+    /// `ahead(state, v)` is called for the vertex of the corner [`PAIRING_AHEAD`] places
+    /// ahead of the one `on_edge` reads: a hint (say a prefetch of what `on_edge` will
+    /// read for that vertex), whose misses then overlap the work in between.
     pub(crate) fn into_table<S: Send>(
         self,
         vertex_count: usize,
         mut state: S,
         on_edge: impl Fn(&mut S, [u32; 2], u32) + Sync,
+        ahead: impl Fn(&S, u32) + Sync,
     ) -> Option<(CornerTable, Vec<PairedEdge>, S)> {
         let Self { coarse_vertex, edge_point: mut corner_edge, first_odd } = self;
         let corners = coarse_vertex.len();
@@ -619,7 +624,11 @@ impl CanonicalGroups {
         let (twin, edge_corner, edges, state) = if kernel::runs_in_parallel(corners / 3) {
             let side = || {
                 let mut new_edge = first_odd;
+                let prefetching = worth_prefetching(corners * size_of::<PairedEdge>());
                 for (c, &m) in corner_edge.iter().enumerate() {
+                    if prefetching && let Some(&v) = coarse_vertex.get(c + PAIRING_AHEAD) {
+                        ahead(&state, v);
+                    }
                     if m == new_edge {
                         new_edge += 1;
                         on_edge(&mut state, ends(c), m);
@@ -627,7 +636,10 @@ impl CanonicalGroups {
                 }
                 state
             };
-            let pair = || pair_twins(&coarse_vertex, &corner_edge[..], first_odd, edge_count, |_, _| ());
+            let pair = || {
+                let (no_edge, no_hint) = (|_: &mut (), _, _| (), |_: &(), _| ());
+                pair_twins(&coarse_vertex, &corner_edge[..], first_odd, edge_count, &mut (), no_edge, no_hint)
+            };
             let (paired, state) = rayon::join(pair, side);
             let (twin, edge_corner, edges) = paired?;
             corner_edge.par_iter_mut().with_min_len(3 * GROUP_CHUNK).for_each(|e| *e -= first_odd);
@@ -635,9 +647,8 @@ impl CanonicalGroups {
         } else {
             // The edge points become the edges as the pairing reads them (no pass of
             // their own).
-            let pair_and_sum = |ends, m| on_edge(&mut state, ends, m);
             let (twin, edge_corner, edges) =
-                pair_twins(&coarse_vertex, &mut corner_edge[..], first_odd, edge_count, pair_and_sum)?;
+                pair_twins(&coarse_vertex, &mut corner_edge[..], first_odd, edge_count, &mut state, on_edge, ahead)?;
             (twin, edge_corner, edges, state)
         };
         let table = CornerTable::from_numbered_parts(first_odd as usize, coarse_vertex, twin, corner_edge, edge_corner);
@@ -664,12 +675,21 @@ pub(crate) struct PairedEdge {
 trait CornerEdgePoints {
     /// The edge of corner `c`: its edge point minus `first_odd`.
     fn edge(&mut self, c: usize, first_odd: u32) -> u32;
+
+    /// The edge point of corner `c`, not read by [`edge`](Self::edge) yet (`None` past
+    /// the end).
+    fn edge_point_ahead(&self, c: usize) -> Option<u32>;
 }
 
 impl CornerEdgePoints for &[u32] {
     #[inline(always)]
     fn edge(&mut self, c: usize, first_odd: u32) -> u32 {
         self[c] - first_odd
+    }
+
+    #[inline(always)]
+    fn edge_point_ahead(&self, c: usize) -> Option<u32> {
+        self.get(c).copied()
     }
 }
 
@@ -681,31 +701,50 @@ impl CornerEdgePoints for &mut [u32] {
         self[c] = e;
         e
     }
+
+    #[inline(always)]
+    fn edge_point_ahead(&self, c: usize) -> Option<u32> {
+        self.get(c).copied()
+    }
 }
+
+/// Corners ahead at which the pairing of [`CanonicalGroups::into_table`] prefetches
+/// what it will read there (the edge's record, and whatever `ahead` asks).
+pub(crate) const PAIRING_AHEAD: usize = 16;
 
 /// The twin pairing of [`CanonicalGroups::into_table`]: the twins, the first corner
 /// of every edge and what [`PairedEdge`] keeps, or `None` if the edge points are not
 /// numbered in order of first appearance, or an edge has more than two half-edges or
-/// two in the same direction. `new_edge(ends, edge_point)` is called when a corner
-/// starts an edge.
-fn pair_twins(
+/// two in the same direction. `new_edge(state, ends, edge_point)` is called when a
+/// corner starts an edge, `ahead(state, v)` for the vertex of the corner
+/// [`PAIRING_AHEAD`] places ahead.
+fn pair_twins<S>(
     coarse_vertex: &[u32],
     mut corner_edge: impl CornerEdgePoints,
     first_odd: u32,
     edge_count: usize,
-    mut new_edge: impl FnMut([u32; 2], u32),
+    state: &mut S,
+    new_edge: impl Fn(&mut S, [u32; 2], u32),
+    ahead: impl Fn(&S, u32),
 ) -> Option<(Vec<u32>, Vec<u32>, Vec<PairedEdge>)> {
     let corners = coarse_vertex.len();
+    let prefetching = worth_prefetching(corners * size_of::<PairedEdge>());
     let mut twin = vec![NONE; corners];
     let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
     let mut edges: Vec<PairedEdge> = Vec::with_capacity(edge_count);
     for c in 0..corners as u32 {
+        let later = c as usize + PAIRING_AHEAD;
+        if prefetching && let Some(m) = corner_edge.edge_point_ahead(later) {
+            // The record of an edge seen before (its second half-edge), at random.
+            prefetch(&edges, m.wrapping_sub(first_odd) as usize);
+            ahead(state, coarse_vertex[later]);
+        }
         let e = corner_edge.edge(c as usize, first_odd);
         let ends = [coarse_vertex[c as usize], coarse_vertex[next(c) as usize]];
         if e as usize == edges.len() {
             edge_corner.push(c);
             edges.push(PairedEdge { ends, opposite: NONE, first: c });
-            new_edge(ends, first_odd + e);
+            new_edge(state, ends, first_odd + e);
             continue;
         }
         let edge = edges.get_mut(e as usize)?;
@@ -821,27 +860,25 @@ pub(crate) struct Renumbering {
 /// points) in order of first appearance.
 pub(crate) fn renumber_to_canonical(
     vertex_count: usize,
-    corner_vertex: &[u32],
-    twin: &[u32],
+    corners: &[Corner],
     corner_at: impl Fn(u32) -> u32,
     seed_vertex: Option<u32>,
 ) -> Option<Renumbering> {
-    let (nv, faces) = (vertex_count, corner_vertex.len() / 3);
+    let (nv, faces) = (vertex_count, corners.len() / 3);
     if faces == 0 || !faces.is_multiple_of(4) || seed_vertex.is_some_and(|s| s as usize >= nv) {
         return None;
     }
     let mut search = GroupSearch {
-        corner_vertex,
-        twin,
+        corners,
         label: vec![UNKNOWN; nv],
-        group_of_face: vec![NONE; faces],
+        grouped: vec![false; faces],
         groups: Vec::with_capacity(faces / 4),
-        stack: Vec::new(),
+        queue: std::collections::VecDeque::new(),
     };
     if let Some(seed) = seed_vertex
         && corner_at(seed) != NONE
     {
-        search.run(corner_at(seed))?;
+        search.search(corner_at(seed))?;
     }
     // Vertices reached are skipped, so the valence is counted (by circulation) only at
     // the few vertices before each component's first irregular one.
@@ -852,8 +889,8 @@ pub(crate) fn renumber_to_canonical(
         let c = corner_at(v);
         if c == NONE {
             search.label[v as usize] = EVEN;
-        } else if is_irregular(twin, c) {
-            search.run(c)?;
+        } else if is_irregular(corners, c) {
+            search.search(c)?;
         }
     }
     let GroupSearch { label, groups, .. } = search;
@@ -861,52 +898,52 @@ pub(crate) fn renumber_to_canonical(
         return None;
     }
     // Every face is in one group: the groups in order of their first face are the coarse
-    // faces in order. A counting sort by first face / 4 (at most four groups a bucket,
-    // put in order as they are numbered) reads the groups in order once and writes them
-    // once, instead of reading each group back at random from the faces in order.
-    let mut start = vec![0u32; groups.len() + 1];
+    // faces in order. The first faces, marked in a bit set that stays in cache, rank the
+    // groups: each group is read in order once and written once to its place.
+    let mut first_faces = RankedBits::new(faces);
     for group in &groups {
-        start[(group.first_face() / 4) as usize + 1] += 1;
+        first_faces.insert(group.first_face());
     }
-    for b in 1..start.len() {
-        start[b] += start[b - 1];
-    }
+    first_faces.count();
     let mut sorted = vec![FaceGroup::default(); groups.len()];
-    {
-        let mut end = start.clone();
-        for group in &groups {
-            let slot = &mut end[(group.first_face() / 4) as usize];
-            sorted[*slot as usize] = *group;
-            *slot += 1;
-        }
+    for group in &groups {
+        sorted[first_faces.rank(group.first_face()) as usize] = *group;
     }
     drop(groups);
-    // Canonical vertex of every fine vertex: the vertex points in fine order, then the
-    // edge points as the coarse corners first name them.
-    let mut canonical_of_fine = vec![NONE; nv];
+    // Canonical vertex of every fine vertex: the vertex points in fine order (their
+    // rank among the vertex points, read from a bit set small enough to stay in cache),
+    // then the edge points as the coarse corners first name them.
     let mut vertex_of_canonical = Vec::with_capacity(nv);
+    let mut vertex_points = RankedBits::new(nv);
     for (v, &l) in label.iter().enumerate() {
         if l == EVEN {
-            canonical_of_fine[v] = vertex_of_canonical.len() as u32;
+            vertex_points.insert(v as u32);
             vertex_of_canonical.push(v as u32);
         }
     }
+    vertex_points.count();
     drop(label);
     // The smallest edge point.
     let first_odd = vertex_of_canonical.len() as u32;
-    let mut face_of_canonical = Vec::with_capacity(faces);
-    let mut coarse_vertex = Vec::with_capacity(3 * sorted.len());
-    let mut edge_point = Vec::with_capacity(3 * sorted.len());
-    for bucket in start.windows(2) {
-        let bucket = &mut sorted[bucket[0] as usize..bucket[1] as usize];
-        if bucket.len() > 1 {
-            bucket.sort_unstable_by_key(FaceGroup::first_face);
-        }
-        for &FaceGroup { corner, inner, y, m: points } in &*bucket {
-            // Start at the corner whose corner face comes first.
-            let r = if corner[0] < corner[1] { 0 } else { 1 };
-            let r = if corner[2] < corner[r] { 2 } else { r };
-            let mut m = [0u32; 3];
+    // Start at the corner whose corner face comes first.
+    let first_corner = |corner: [u32; 3]| {
+        let r = if corner[0] < corner[1] { 0 } else { 1 };
+        if corner[2] < corner[r] { 2 } else { r }
+    };
+    // The edge points in order of first appearance: the only sequential part (beside
+    // the rest on another thread, when the pool has one).
+    let number_edges = || {
+        let mut canonical_of_fine = vec![NONE; nv];
+        let prefetching = worth_prefetching(size_of_val(&canonical_of_fine[..]));
+        let mut edge_point = Vec::with_capacity(3 * sorted.len());
+        for (g, &FaceGroup { corner, m: points, .. }) in sorted.iter().enumerate() {
+            // The edge points of the groups a few places ahead (read at random).
+            if prefetching && let Some(ahead) = sorted.get(g + NUMBERING_AHEAD) {
+                for &point in &ahead.m {
+                    prefetch(&canonical_of_fine, point as usize);
+                }
+            }
+            let r = first_corner(corner);
             for s in 0..3 {
                 let k = (r + s) % 3;
                 let slot = &mut canonical_of_fine[points[k] as usize];
@@ -914,22 +951,45 @@ pub(crate) fn renumber_to_canonical(
                     *slot = vertex_of_canonical.len() as u32;
                     vertex_of_canonical.push(points[k]);
                 }
-                m[k] = *slot;
+                edge_point.push(*slot);
             }
-            // Coarse corner s: the corner face (y_k, m_k, m_{k-1}) (its corners after the
-            // vertex point are those of the inner face's edge across which it was found),
-            // then the inner face (m_r, m_{r+1}, m_{r+2}).
-            for s in 0..3 {
-                let k = (r + s) % 3;
-                let even = corner[k];
-                // Canonical corner 0 is the vertex point: actual corner j -> rotation (3 - j) % 3.
-                face_of_canonical.push(3 * (even / 3) + (3 - even % 3) % 3);
-                coarse_vertex.push(canonical_of_fine[y[k] as usize]);
-                edge_point.push(m[k]);
-            }
-            face_of_canonical.push(3 * inner + (3 - r as u32) % 3);
         }
-    }
+        edge_point
+    };
+    // Coarse corner s: the corner face (y_k, m_k, m_{k-1}) (its corners after the vertex
+    // point are those of the inner face's edge across which it was found), then the
+    // inner face (m_r, m_{r+1}, m_{r+2}). Group by group, in parallel.
+    let corners_and_faces = || {
+        let mut coarse_vertex = Output::<u32>::new(3 * sorted.len());
+        let mut face_of_canonical = Output::<u32>::new(faces);
+        {
+            let (mut vertices, mut codes) = (coarse_vertex.slots(), face_of_canonical.slots());
+            let pieces: Vec<_> = sorted
+                .chunks(GROUP_CHUNK)
+                .map(|chunk| (chunk, vertices.take_front(3 * chunk.len()), codes.take_front(4 * chunk.len())))
+                .collect();
+            let run = |(chunk, mut vertices, mut codes): (&[FaceGroup], Slots<'_, u32>, Slots<'_, u32>)| {
+                for &FaceGroup { corner, inner, y, .. } in chunk {
+                    let r = first_corner(corner);
+                    for s in 0..3 {
+                        let k = (r + s) % 3;
+                        let even = corner[k];
+                        // Canonical corner 0 is the vertex point: actual corner j -> rotation (3 - j) % 3.
+                        codes.push(3 * (even / 3) + (3 - even % 3) % 3);
+                        vertices.push(vertex_points.rank(y[k]));
+                    }
+                    codes.push(3 * inner + (3 - r as u32) % 3);
+                }
+            };
+            if pieces.len() > 1 {
+                pieces.into_par_iter().for_each(run);
+            } else {
+                pieces.into_iter().for_each(run);
+            }
+        }
+        (coarse_vertex.into_vec(), face_of_canonical.into_vec())
+    };
+    let (edge_point, (coarse_vertex, face_of_canonical)) = rayon::join(number_edges, corners_and_faces);
     if vertex_of_canonical.len() != nv {
         return None;
     }
@@ -937,14 +997,59 @@ pub(crate) fn renumber_to_canonical(
     Some(Renumbering { order: FineOrder { vertex_of_canonical, face_of_canonical }, groups })
 }
 
+/// Groups ahead whose edge points the numbering of [`renumber_to_canonical`] prefetches.
+const NUMBERING_AHEAD: usize = 12;
+
+/// 64 elements of a [`RankedBits`], with the number of members below them.
+#[derive(Clone, Copy, Default)]
+struct RankWord {
+    bits: u64,
+    before: u32,
+}
+
+/// A bit set of `0..len` that ranks its members (the number of members below) in two
+/// loads from one small array: 1/4 byte an element, where a table of ranks at random
+/// would take 4 and miss the caches.
+struct RankedBits {
+    words: Vec<RankWord>,
+}
+
+impl RankedBits {
+    fn new(len: usize) -> Self {
+        Self { words: vec![RankWord::default(); len.div_ceil(64)] }
+    }
+
+    #[inline(always)]
+    fn insert(&mut self, i: u32) {
+        self.words[(i / 64) as usize].bits |= 1 << (i % 64);
+    }
+
+    /// Counts the members below every word (after the last insertion).
+    fn count(&mut self) {
+        let mut before = 0;
+        for word in &mut self.words {
+            word.before = before;
+            before += word.bits.count_ones();
+        }
+    }
+
+    /// The number of members below `i` (valid after [`count`](Self::count)).
+    #[inline(always)]
+    fn rank(&self, i: u32) -> u32 {
+        let RankWord { bits, before } = self.words[(i / 64) as usize];
+        before + (bits & ((1u64 << (i % 64)) - 1)).count_ones()
+    }
+}
+
 /// True if the vertex of corner `start` cannot be an edge point: its number of corners
 /// is not 6 inside or 3 on the boundary (counted around it through the twins).
-fn is_irregular(twin: &[u32], start: u32) -> bool {
+fn is_irregular(corners: &[Corner], start: u32) -> bool {
+    let twin = |c: u32| corners[c as usize].twin;
     let mut count = 1u32;
     // Counter-clockwise: the twin of the half-edge arriving at the vertex.
     let mut c = start;
     loop {
-        let t = twin[prev(c) as usize];
+        let t = twin(prev(c));
         if t == start {
             return count != 6;
         }
@@ -956,8 +1061,8 @@ fn is_irregular(twin: &[u32], start: u32) -> bool {
     }
     // An open fan: the rest of it, clockwise.
     let mut c = start;
-    while twin[c as usize] != NONE {
-        c = next(twin[c as usize]);
+    while twin(c) != NONE {
+        c = next(twin(c));
         count += 1;
     }
     count != 3
@@ -993,28 +1098,107 @@ impl FaceGroup {
 }
 
 /// The search of [`renumber_to_canonical`].
+///
+/// Breadth-first, with a software pipeline: the fine mesh of another tool is in no
+/// useful order, so nearly every face the search reads is a cache miss, and a
+/// depth-first search (the next face is the one just found) waits for them one after
+/// the other. From a queue, the coarse faces to visit next are known well ahead: the
+/// lines of a queued corner's face are prefetched when it is queued, those of its inner
+/// face [`FAR`](Self::FAR) places before its turn, those of its other two corner faces
+/// and the labels of its edge points [`NEAR`](Self::NEAR) places before, the labels of
+/// its vertex points and the flags of the faces across [`CLOSE`](Self::CLOSE) places
+/// before, so that the misses overlap. The order of the
+/// visit changes nothing in the result: the groups are put in the order of their first
+/// face afterwards, and a component is searched to its end before the next seed.
 struct GroupSearch<'a> {
-    corner_vertex: &'a [u32],
-    twin: &'a [u32],
+    corners: &'a [Corner],
     label: Vec<u8>,
-    group_of_face: Vec<u32>,
+    /// True once a face is in a group (one byte a face: the flags stay in cache).
+    grouped: Vec<bool>,
     groups: Vec<FaceGroup>,
     /// Corners at the vertex point of corner faces still to visit.
-    stack: Vec<u32>,
+    queue: std::collections::VecDeque<u32>,
 }
 
 impl GroupSearch<'_> {
+    /// Queue places ahead at which the inner face of a queued corner is prefetched.
+    const FAR: usize = 24;
+    /// Queue places ahead at which the other corner faces and the labels of the edge
+    /// points are prefetched.
+    const NEAR: usize = 12;
+    /// Queue places ahead at which the labels of the vertex points and the flags of the
+    /// faces across are prefetched.
+    const CLOSE: usize = 4;
+
+    /// [`run`](Self::run), prefetching if the fine mesh is larger than the caches.
+    fn search(&mut self, start: u32) -> Option<()> {
+        if worth_prefetching(size_of_val(self.corners)) { self.run::<true>(start) } else { self.run::<false>(start) }
+    }
+
+    /// Prefetches the corners and twins of the face of corner `c`.
+    #[inline(always)]
+    fn prefetch_face(&self, c: u32) {
+        let first = 3 * (c / 3) as usize;
+        prefetch(self.corners, first);
+        prefetch(self.corners, first + 2);
+    }
+
+    /// The inner face across the edge-point edge of the corner face of corner `e`.
+    #[inline(always)]
+    fn across(&self, e: u32) -> u32 {
+        self.corners[next(e) as usize].twin
+    }
+
     /// Groups the faces reached from the corner face of corner `start`, whose vertex is
     /// taken for a vertex point; `None` where the pattern breaks.
-    fn run(&mut self, start: u32) -> Option<()> {
-        let (corner_vertex, twin) = (self.corner_vertex, self.twin);
-        self.stack.clear();
-        self.stack.push(start);
-        while let Some(e) = self.stack.pop() {
-            if self.group_of_face[(e / 3) as usize] != NONE {
+    ///
+    /// Without `PREFETCH` (a fine mesh that fits in the caches) the search is
+    /// depth-first without look-ahead: no miss to hide, and the last face found is the
+    /// one in cache.
+    fn run<const PREFETCH: bool>(&mut self, start: u32) -> Option<()> {
+        let corners = self.corners;
+        self.queue.clear();
+        self.queue.push_back(start);
+        while let Some(e) = if PREFETCH { self.queue.pop_front() } else { self.queue.pop_back() } {
+            if PREFETCH
+                && let Some(&ahead) = self.queue.get(Self::FAR)
+                && let across = self.across(ahead)
+                && across != NONE
+            {
+                self.prefetch_face(across);
+            }
+            if PREFETCH
+                && let Some(&ahead) = self.queue.get(Self::NEAR)
+                && let across = self.across(ahead)
+                && across != NONE
+            {
+                let i = 3 * (across / 3) as usize;
+                for &Corner { vertex: m, twin: t } in &corners[i..i + 3] {
+                    prefetch(&self.label, m as usize);
+                    if t != NONE {
+                        self.prefetch_face(t);
+                    }
+                }
+            }
+            if PREFETCH
+                && let Some(&ahead) = self.queue.get(Self::CLOSE)
+                && let across = self.across(ahead)
+                && across != NONE
+            {
+                let i = 3 * (across / 3) as usize;
+                for &Corner { twin: t, .. } in &corners[i..i + 3] {
+                    if t != NONE
+                        && let Some(&Corner { vertex: y, twin }) = corners.get(prev(t) as usize)
+                    {
+                        prefetch(&self.label, y as usize);
+                        prefetch(&self.grouped, (twin / 3) as usize);
+                    }
+                }
+            }
+            if self.grouped[(e / 3) as usize] {
                 continue;
             }
-            let across = twin[next(e) as usize];
+            let across = self.across(e);
             if across == NONE {
                 return None;
             }
@@ -1023,21 +1207,20 @@ impl GroupSearch<'_> {
             // vertex point j + 1; its corner there is the one before the twin.
             let mut corner = [0u32; 3];
             for j in 0..3 {
-                let t = twin[3 * inner as usize + j];
+                let t = corners[3 * inner as usize + j].twin;
                 if t == NONE {
                     return None;
                 }
                 corner[(j + 1) % 3] = prev(t);
             }
-            let g = self.groups.len() as u32;
             for f in [inner, corner[0] / 3, corner[1] / 3, corner[2] / 3] {
                 // Also refuses a face met twice in this group.
-                if std::mem::replace(&mut self.group_of_face[f as usize], g) != NONE {
+                if std::mem::replace(&mut self.grouped[f as usize], true) {
                     return None;
                 }
             }
             let i = 3 * inner as usize;
-            let m = [corner_vertex[i], corner_vertex[i + 1], corner_vertex[i + 2]];
+            let m = [corners[i].vertex, corners[i + 1].vertex, corners[i + 2].vertex];
             for point in m {
                 let label = &mut self.label[point as usize];
                 if *label == EVEN {
@@ -1045,7 +1228,7 @@ impl GroupSearch<'_> {
                 }
                 *label = ODD;
             }
-            let y = corner.map(|c| corner_vertex[c as usize]);
+            let y = corner.map(|c| corners[c as usize].vertex);
             for (c, v) in corner.into_iter().zip(y) {
                 let label = &mut self.label[v as usize];
                 if *label == ODD {
@@ -1055,9 +1238,12 @@ impl GroupSearch<'_> {
                 // The neighbouring coarse face across coarse edge k (y_k -> y_{k+1}): its
                 // corner face at y_k lies across this corner face's edge y_k -> m_k (the
                 // other half of the coarse edge leads to the same coarse face).
-                let t = twin[c as usize];
-                if t != NONE && self.group_of_face[(t / 3) as usize] == NONE {
-                    self.stack.push(next(t));
+                let t = corners[c as usize].twin;
+                if t != NONE && !self.grouped[(t / 3) as usize] {
+                    if PREFETCH {
+                        self.prefetch_face(next(t));
+                    }
+                    self.queue.push_back(next(t));
                 }
             }
             self.groups.push(FaceGroup { corner, inner, y, m });

@@ -58,7 +58,7 @@ use crate::detect::{
     CanonicalGroups, Coarsening, FineOrder, PairedEdge, Renumbering, canonical_groups, coarse_face_is_valid,
     detect_mesh, detect_table, renumber_to_canonical, reverse_canonical_mesh, reverse_canonical_table,
 };
-use crate::forward::buffer::{Output, Slots};
+use crate::forward::buffer::{Output, Slots, prefetch, worth_prefetching};
 use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
 use crate::forward::topology::{BASE_MASK, MAX_FACES, Topology};
 use crate::forward::{LoopOptions, VertexWeights};
@@ -448,12 +448,12 @@ pub(crate) fn reverse_level(
     let renumbering = match fine {
         FineLevel::Mesh(mesh) => CornerTable::mesh_corners(mesh).and_then(|corners| {
             let corner_at = |v| corners.corner_at(mesh, v);
-            renumber_to_canonical(mesh.vertex_count(), &corners.corner_vertex, &corners.twin, corner_at, seed_vertex)
+            renumber_to_canonical(mesh.vertex_count(), &corners.corners, corner_at, seed_vertex)
         }),
         FineLevel::Table(table) => {
             let starts = table.vertex_corners();
             let corner_at = |v: u32| starts[v as usize];
-            renumber_to_canonical(table.vertex_count(), table.corner_vertices(), table.twins(), corner_at, seed_vertex)
+            renumber_to_canonical(table.vertex_count(), &table.corners(), corner_at, seed_vertex)
         }
     };
     if let Some(renumbering) = renumbering
@@ -477,14 +477,40 @@ pub(crate) fn reverse_level(
 /// details by the same formula). `None` when the renumbering is not found or the
 /// renumbered mesh is not a valid canonical refinement.
 fn reverse_renumbered(renumbering: Renumbering, positions: &[DVec3], rules: &LoopOptions) -> Option<LevelParts> {
-    let vertex_of_canonical = &renumbering.order.vertex_of_canonical;
-    let canonical_positions: Vec<DVec3> = vertex_of_canonical.iter().map(|&v| positions[v as usize]).collect();
+    let canonical_positions = gather(positions, &renumbering.order.vertex_of_canonical);
     // The groups are made in the canonical pattern (coarse vertices below edge points,
     // the seed, if any, a vertex point); the rest is checked as for any canonical mesh.
     let identity = renumbering.is_identity();
     let level = reverse_canonical_groups(renumbering.groups, positions.len(), &canonical_positions, rules)?;
     let order = (!identity).then_some(renumbering.order);
     Some(LevelParts { coarse: level.coarse, order, positions: level.positions, details: level.details })
+}
+
+/// `values[i]` for every `i` of `indices`, in order: a gather at random, with the
+/// values a few places ahead prefetched, by chunks in parallel when large.
+fn gather(values: &[DVec3], indices: &[u32]) -> Vec<DVec3> {
+    const AHEAD: usize = 16;
+    let prefetching = worth_prefetching(size_of_val(values));
+    let mut output = Output::<DVec3>::new(indices.len());
+    {
+        let mut slots = output.slots();
+        let pieces: Vec<_> =
+            indices.chunks(PARALLEL_THRESHOLD).map(|chunk| (chunk, slots.take_front(chunk.len()))).collect();
+        let run = |(chunk, mut piece): (&[u32], Slots<'_, DVec3>)| {
+            for (i, &v) in chunk.iter().enumerate() {
+                if prefetching && let Some(&later) = chunk.get(i + AHEAD) {
+                    prefetch(values, later as usize);
+                }
+                piece.push(values[v as usize]);
+            }
+        };
+        if pieces.len() > 1 {
+            pieces.into_par_iter().for_each(run);
+        } else {
+            pieces.into_iter().for_each(run);
+        }
+    }
+    output.into_vec()
 }
 
 /// A level reversed by [`reverse_canonical`].
@@ -540,7 +566,9 @@ fn reverse_canonical_groups(
     // `reverse_positions`), beside the pairing of the twins or inside it, with the
     // doubled-edge check on the way.
     let sum_edge_point = |sums: &mut EdgeSums, ends: [u32; 2], m: u32| sums.add_edge(ends, fine[m as usize]);
-    let (coarse, edges, mut sums) = groups.into_table(vertex_count, EdgeSums::new(nv), sum_edge_point)?;
+    // (Called only when the pairing prefetches, for large meshes.)
+    let ahead = |sums: &EdgeSums, v: u32| prefetch(&sums.records, v as usize);
+    let (coarse, edges, mut sums) = groups.into_table(vertex_count, EdgeSums::new(nv), sum_edge_point, ahead)?;
     if !sums.edges_are_simple() {
         return None;
     }
@@ -657,6 +685,9 @@ pub(crate) fn non_finite_bits(p: DVec3) -> u64 {
     bits(p.x) | bits(p.y) | bits(p.z)
 }
 
+/// Faces ahead whose positions [`canonical_details`] prefetches.
+const DETAILS_AHEAD: usize = 8;
+
 /// Coarse faces per parallel work item of [`canonical_details`].
 const DETAIL_CHUNK: usize = 2048;
 
@@ -673,6 +704,7 @@ fn canonical_details(
 ) -> Option<(Vec<DVec3>, bool)> {
     let (corner_vertex, twin, edge_corner) = (coarse.corner_vertices(), coarse.twins(), coarse.edge_corners());
     let faces = coarse.face_count();
+    let prefetching = worth_prefetching(size_of_val(positions));
     let mut output = Output::<DVec3>::new(coarse.edge_count());
     let finite = {
         let mut slots = output.slots();
@@ -690,6 +722,19 @@ fn canonical_details(
             // not finite (`0 * inf` and `0 * NaN` are NaN), in two instructions a detail.
             let mut zeros = DVec3::ZERO;
             for f in range {
+                // The coarse vertices are in any order when the fine mesh was renumbered:
+                // the positions of the faces and far ends a few places ahead are
+                // prefetched.
+                if prefetching
+                    && let Some(ahead) = corner_vertex.get(3 * (f + DETAILS_AHEAD)..3 * (f + DETAILS_AHEAD) + 3)
+                {
+                    for &v in ahead {
+                        prefetch(positions, v as usize);
+                    }
+                }
+                if prefetching && let Some(edge) = edges.get(e0 + piece.written() + 2 * DETAILS_AHEAD) {
+                    prefetch(positions, edge.opposite as usize);
+                }
                 let c0 = 3 * f;
                 let x = [corner_vertex[c0], corner_vertex[c0 + 1], corner_vertex[c0 + 2]];
                 let t = [twin[c0], twin[c0 + 1], twin[c0 + 2]];
@@ -1165,8 +1210,7 @@ mod tests {
     fn renumbered_agrees_with_general(fine: &HalfedgeMesh, seed_vertex: Option<u32>, rules: &LoopOptions) -> bool {
         let corners = CornerTable::mesh_corners(fine).expect("triangles");
         let corner_at = |v| corners.corner_at(fine, v);
-        let renumbering =
-            renumber_to_canonical(fine.vertex_count(), &corners.corner_vertex, &corners.twin, corner_at, seed_vertex);
+        let renumbering = renumber_to_canonical(fine.vertex_count(), &corners.corners, corner_at, seed_vertex);
         let Some(fast) = renumbering.and_then(|r| reverse_renumbered(r, fine.positions(), rules)) else {
             return false;
         };

@@ -6,8 +6,8 @@
 //! out the uninitialised slots as disjoint [`Slots`] pieces that are written front to
 //! back; a piece counts as filled once its last slot is written, and
 //! [`Output::into_vec`] checks that the filled pieces cover the whole array before it
-//! exposes the elements. That check is what makes the single `unsafe` call of the
-//! module ([`Vec::set_len`]) sound whatever the callers do: slots are only reachable
+//! exposes the elements. That check is what makes the `unsafe` call of
+//! [`Vec::set_len`] sound whatever the callers do: slots are only reachable
 //! through [`Slots::push`], each piece is a distinct sub-slice, so "filled lengths add up
 //! to the length" means every slot was written. A piece dropped half-written (a panic
 //! in a task, or a bug) never counts, `into_vec` then panics, and the written values
@@ -19,6 +19,9 @@
 //! to back the buffer with transparent huge pages (2 MiB on x86-64): one fault per huge
 //! page, fewer TLB misses, and a cheaper release. This only changes how the kernel backs
 //! the pages, never their contents; on other systems it does nothing.
+//!
+//! [`prefetch`] is the other memory hint kept here: a cache prefetch for the passes that
+//! read large arrays at random (the renumbered reversal), which never changes memory.
 
 #![allow(unsafe_code)]
 
@@ -183,6 +186,33 @@ fn advise_huge_pages(start: *const u8, bytes: usize) {
 
 #[cfg(not(target_os = "linux"))]
 fn advise_huge_pages(_start: *const u8, _bytes: usize) {}
+
+/// True if an array of `bytes` read at random is worth prefetching: larger than a
+/// core's share of the caches. Below that the reads hit the cache anyway, and the
+/// hints and the look-ahead only add work.
+#[inline]
+pub(crate) fn worth_prefetching(bytes: usize) -> bool {
+    bytes >= 1 << 21
+}
+
+/// Asks the processor to bring the cache line of `slice[i]` into its caches (nothing
+/// if `i` is out of range, or on targets without a prefetch instruction). A hint only:
+/// it never changes memory, so results never depend on it. Searches that hop through
+/// arrays larger than the caches issue it for elements they will read a few steps
+/// later, so that the misses overlap instead of following one another.
+#[inline(always)]
+pub(crate) fn prefetch<T>(slice: &[T], i: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(element) = slice.get(i) {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: `_mm_prefetch` needs SSE, part of every x86-64 target; a prefetch
+        // never faults and never changes memory (here the address is even that of a
+        // live element).
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(std::ptr::from_ref(element).cast()) };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (slice, i);
+}
 
 /// The transparent huge page size (2 MiB on x86-64, read once from sysfs).
 #[cfg(target_os = "linux")]
