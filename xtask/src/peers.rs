@@ -1,11 +1,17 @@
 //! Same-run comparison of the `subdivide-*` benchmarks with peer libraries.
 //!
-//! The peers are small command-line drivers around OpenSubdiv, CGAL and OpenMesh that
-//! follow one protocol: `<driver> <scheme> <in> <out|-> <level> [repeats] [budget_s]`
-//! prints one JSON line whose `t_sub_best_s` is the best time of the subdivision call
-//! alone (reading and writing excluded), like our criterion benchmarks. The drivers are
-//! looked up in `$MULTIRES_PEERS_DIR`, `$MULTIRES_PEERS_DIR/build` and the `PATH`; a
-//! missing driver is skipped with a note, so the command works on a bare machine too.
+//! The peers are small command-line drivers that time the subdivision call alone
+//! (reading and writing excluded), like our criterion benchmarks, in one of two protocols:
+//! - the C++ drivers around OpenSubdiv, CGAL and OpenMesh:
+//!   `<driver> <scheme> <in> <out|-> <level> [repeats] [budget_s]` prints one JSON line
+//!   whose `t_sub_best_s` is the best time;
+//! - `rust-peers`, one program for the Rust crates (opensubdiv-rs, subdiv-kernels, alum):
+//!   `rust-peers <crate> <scheme> <in> <out|-> <level> --repeat N --budget-s S` prints
+//!   `crate scheme levels in_faces out_verts out_faces best_ms median_ms`.
+//!
+//! The drivers are looked up in `$MULTIRES_PEERS_DIR`, `$MULTIRES_PEERS_DIR/build`,
+//! `$MULTIRES_PEERS_DIR/rust-peers/target/release` and the `PATH`; a missing driver is
+//! skipped with a note, so the command works on a bare machine too.
 //!
 //! Variants of one of our schemes are compared with the peers' runs of the scheme itself:
 //! `loop-reuse` (repeated subdivision into the previous result's memory) with `loop`.
@@ -17,18 +23,74 @@ use std::env;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// A peer driver: the library, the program name, and which of our schemes it runs under
-/// which of its own scheme names.
+/// A peer driver: the library, the program name, how it is called, which of our schemes
+/// it runs under which of its own scheme names, and the largest output (faces) it is
+/// asked for.
 struct Driver {
     library: &'static str,
     program: &'static str,
+    protocol: Protocol,
     schemes: &'static [(&'static str, &'static str)],
+    max_output_faces: f64,
 }
 
+/// How a driver is called and how its time is read back (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Protocol {
+    /// `<driver> <scheme> …` printing a JSON line with `t_sub_best_s`.
+    Json,
+    /// `rust-peers <crate> <scheme> …` printing one line of fields, `best_ms` seventh.
+    RustPeers { krate: &'static str },
+}
+
+/// No limit on the output size.
+const UNLIMITED: f64 = f64::INFINITY;
+
 const DRIVERS: &[Driver] = &[
-    Driver { library: "OpenSubdiv", program: "osd_subdiv", schemes: &[("loop", "loop")] },
-    Driver { library: "CGAL", program: "cgal_subdiv", schemes: &[("loop", "loop"), ("doo-sabin", "doosabin")] },
-    Driver { library: "OpenMesh", program: "openmesh_subdiv", schemes: &[("loop", "loop")] },
+    Driver {
+        library: "OpenSubdiv",
+        program: "osd_subdiv",
+        protocol: Protocol::Json,
+        schemes: &[("loop", "loop")],
+        max_output_faces: UNLIMITED,
+    },
+    Driver {
+        library: "CGAL",
+        program: "cgal_subdiv",
+        protocol: Protocol::Json,
+        schemes: &[("loop", "loop"), ("doo-sabin", "doosabin")],
+        max_output_faces: UNLIMITED,
+    },
+    Driver {
+        library: "OpenMesh",
+        program: "openmesh_subdiv",
+        protocol: Protocol::Json,
+        schemes: &[("loop", "loop")],
+        max_output_faces: UNLIMITED,
+    },
+    Driver {
+        library: "opensubdiv-rs",
+        program: "rust-peers",
+        protocol: Protocol::RustPeers { krate: "opensubdiv-rs" },
+        schemes: &[("loop", "loop")],
+        max_output_faces: UNLIMITED,
+    },
+    // Its Doo-Sabin keeps the stencil tables of every level: above 8 GiB for the
+    // 14.5M faces of level 4 of the large bunny, so that run is left out.
+    Driver {
+        library: "subdiv-kernels",
+        program: "rust-peers",
+        protocol: Protocol::RustPeers { krate: "subdiv-kernels" },
+        schemes: &[("loop", "loop"), ("doo-sabin", "doo-sabin")],
+        max_output_faces: 5e6,
+    },
+    Driver {
+        library: "alum",
+        program: "rust-peers",
+        protocol: Protocol::RustPeers { krate: "alum" },
+        schemes: &[("loop", "loop")],
+        max_output_faces: UNLIMITED,
+    },
 ];
 
 /// One of our measurements: mean time, the time of the fastest sample (if criterion
@@ -49,7 +111,7 @@ fn peer_scheme(scheme: &str) -> &str {
     VARIANTS.iter().find(|(variant, _)| *variant == scheme).map_or(scheme, |&(_, base)| base)
 }
 
-/// Peer runs made so far, so that the same (driver, scheme, mesh, level) runs once.
+/// Peer runs made so far, so that the same (library, scheme, mesh, level) runs once.
 #[derive(Default)]
 struct PeerRuns {
     runs: BTreeMap<(String, String, PathBuf, u32), Result<f64, String>>,
@@ -59,14 +121,14 @@ impl PeerRuns {
     /// The result of `run` for this key, running it only the first time.
     fn get_or_run(
         &mut self,
-        program: &str,
+        library: &str,
         scheme: &str,
         input: &Path,
         level: u32,
         run: impl FnOnce() -> Result<f64, String>,
     ) -> Result<f64, String> {
         self.runs
-            .entry((program.to_string(), scheme.to_string(), input.to_path_buf(), level))
+            .entry((library.to_string(), scheme.to_string(), input.to_path_buf(), level))
             .or_insert_with(run)
             .clone()
     }
@@ -118,7 +180,7 @@ pub fn comparison(rows: &BTreeMap<String, Measurement>, mesh_file: impl Fn(&str)
     if !missing.is_empty() {
         text.push_str(&format!(
             "Not found (skipped): {}. Set `MULTIRES_PEERS_DIR` to the folder holding the peer drivers \
-             (`osd_subdiv`, `cgal_subdiv`, `openmesh_subdiv`).\n\n",
+             (`osd_subdiv`, `cgal_subdiv`, `openmesh_subdiv`, `rust-peers`).\n\n",
             missing.join(", ")
         ));
     }
@@ -135,9 +197,13 @@ pub fn comparison(rows: &BTreeMap<String, Measurement>, mesh_file: impl Fn(&str)
                 let Some((_, their_scheme)) = driver.schemes.iter().find(|(our, _)| *our == compared) else {
                     continue;
                 };
-                let result = peer_runs.get_or_run(driver.program, their_scheme, &input, *level, || {
+                if measured.faces.is_some_and(|f| f > driver.max_output_faces) {
+                    eprintln!("    {}: {their_scheme} level {level} skipped (output above its limit)", driver.library);
+                    continue;
+                }
+                let result = peer_runs.get_or_run(driver.library, their_scheme, &input, *level, || {
                     eprintln!("    {} {their_scheme} {} level {level}", driver.library, input.display());
-                    run_driver(program, their_scheme, &input, *level)
+                    run_driver(program, driver.protocol, their_scheme, &input, *level)
                 });
                 match result {
                     Ok(seconds) => peer_times.push((driver.library, seconds)),
@@ -185,23 +251,48 @@ fn parse_id(id: &str) -> Option<(String, String, usize, u32)> {
 }
 
 fn find_program(program: &str, peers_dir: Option<&Path>) -> Option<PathBuf> {
-    let from_dir = peers_dir.into_iter().flat_map(|d| [d.join(program), d.join("build").join(program)]);
+    let from_dir = peers_dir.into_iter().flat_map(|d| {
+        [d.join(program), d.join("build").join(program), d.join("rust-peers/target/release").join(program)]
+    });
     let from_path = env::var_os("PATH").into_iter().flat_map(|p| env::split_paths(&p).collect::<Vec<_>>());
     from_dir.chain(from_path.map(|d| d.join(program))).find(|candidate| candidate.is_file())
 }
 
-fn run_driver(program: &Path, scheme: &str, input: &Path, level: u32) -> Result<f64, String> {
-    let output = Command::new(program)
-        .args([scheme, &input.display().to_string(), "-", &level.to_string(), "3", "20"])
-        .output()
-        .map_err(|e| format!("cannot start {}: {e}", program.display()))?;
+fn run_driver(program: &Path, protocol: Protocol, scheme: &str, input: &Path, level: u32) -> Result<f64, String> {
+    let (input, level) = (input.display().to_string(), level.to_string());
+    let args: Vec<&str> = match protocol {
+        Protocol::Json => vec![scheme, &input, "-", &level, "3", "20"],
+        Protocol::RustPeers { krate } => vec![krate, scheme, &input, "-", &level, "--repeat", "3", "--budget-s", "20"],
+    };
+    let output =
+        Command::new(program).args(&args).output().map_err(|e| format!("cannot start {}: {e}", program.display()))?;
     if !output.status.success() {
         return Err(format!("exit {}: {}", output.status, String::from_utf8_lossy(&output.stderr).trim()));
     }
     let stdout = String::from_utf8_lossy(&output.stdout);
+    match protocol {
+        Protocol::Json => json_best_seconds(&stdout),
+        Protocol::RustPeers { krate } => rust_peers_best_seconds(&stdout, krate),
+    }
+}
+
+/// `t_sub_best_s` of the last JSON line of a C++ driver's output.
+fn json_best_seconds(stdout: &str) -> Result<f64, String> {
     let line = stdout.lines().rev().find(|l| l.trim_start().starts_with('{')).ok_or("no JSON line in the output")?;
     let value: serde_json::Value = serde_json::from_str(line).map_err(|e| format!("bad JSON: {e}"))?;
     value["t_sub_best_s"].as_f64().ok_or_else(|| "no t_sub_best_s in the output".into())
+}
+
+/// `best_ms` (in seconds) of the result line of `rust-peers` for `krate`:
+/// `crate scheme levels in_faces out_verts out_faces best_ms median_ms`.
+fn rust_peers_best_seconds(stdout: &str, krate: &str) -> Result<f64, String> {
+    let fields: Vec<&str> = stdout
+        .lines()
+        .map(|line| line.split_whitespace().collect::<Vec<_>>())
+        .find(|fields| fields.len() == 8 && fields[0] == krate)
+        .ok_or_else(|| format!("no result line for {krate} in the output"))?;
+    let best_ms: f64 = fields[6].parse().map_err(|_| format!("best_ms is not a number: {:?}", fields[6]))?;
+    if best_ms.is_finite() && best_ms > 0.0 { Ok(best_ms * 1e-3) } else { Err(format!("best_ms is {best_ms}")) }
 }
 
 fn format_seconds(t: f64) -> String {
@@ -234,12 +325,34 @@ mod tests {
     }
 
     #[test]
-    fn a_peer_run_is_made_once_per_driver_mesh_and_level() {
+    fn peer_outputs_give_their_best_time_in_seconds() {
+        let json = "warming up\n{\"t_sub_best_s\": 0.25, \"faces\": 4}\n";
+        assert_eq!(json_best_seconds(json), Ok(0.25));
+        assert!(json_best_seconds("no json here").is_err());
+        let rust = "alum loop 2 3674 29394 58784 14.600 14.900\n";
+        assert_eq!(rust_peers_best_seconds(rust, "alum"), Ok(0.0146));
+        assert!(rust_peers_best_seconds(rust, "subdiv-kernels").unwrap_err().contains("no result line"));
+        assert!(rust_peers_best_seconds("alum loop 2 3674 29394 58784 NaN NaN\n", "alum").is_err());
+    }
+
+    #[test]
+    fn the_rust_crates_share_one_program_but_run_apart() {
+        let rust: Vec<&Driver> = DRIVERS.iter().filter(|d| d.program == "rust-peers").collect();
+        assert_eq!(rust.len(), 3);
+        let mut libraries: Vec<&str> = DRIVERS.iter().map(|d| d.library).collect();
+        libraries.sort_unstable();
+        libraries.dedup();
+        assert_eq!(libraries.len(), DRIVERS.len(), "runs are remembered by library name");
+        assert!(rust.iter().all(|d| matches!(d.protocol, Protocol::RustPeers { krate } if krate == d.library)));
+    }
+
+    #[test]
+    fn a_peer_run_is_made_once_per_library_mesh_and_level() {
         let mut runs = PeerRuns::default();
         let mut count = 0;
         let mesh = Path::new("bunny.obj");
         for _ in 0..3 {
-            let time = runs.get_or_run("osd_subdiv", "loop", mesh, 2, || {
+            let time = runs.get_or_run("OpenSubdiv", "loop", mesh, 2, || {
                 count += 1;
                 Ok(0.5)
             });
@@ -247,11 +360,11 @@ mod tests {
         }
         assert_eq!(count, 1);
         // Another level, driver or mesh is another run; failures are remembered too.
-        let failed = runs.get_or_run("osd_subdiv", "loop", mesh, 3, || Err("exit 1".into()));
+        let failed = runs.get_or_run("OpenSubdiv", "loop", mesh, 3, || Err("exit 1".into()));
         assert_eq!(failed, Err("exit 1".to_string()));
-        assert_eq!(runs.get_or_run("osd_subdiv", "loop", mesh, 3, || Ok(1.0)), failed);
-        assert_eq!(runs.get_or_run("cgal_subdiv", "loop", mesh, 2, || Ok(0.25)), Ok(0.25));
-        assert_eq!(runs.get_or_run("osd_subdiv", "loop", Path::new("bunny00.off"), 2, || Ok(2.0)), Ok(2.0));
+        assert_eq!(runs.get_or_run("OpenSubdiv", "loop", mesh, 3, || Ok(1.0)), failed);
+        assert_eq!(runs.get_or_run("CGAL", "loop", mesh, 2, || Ok(0.25)), Ok(0.25));
+        assert_eq!(runs.get_or_run("OpenSubdiv", "loop", Path::new("bunny00.off"), 2, || Ok(2.0)), Ok(2.0));
         assert_eq!(runs.runs.len(), 4);
     }
 }
