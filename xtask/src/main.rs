@@ -196,10 +196,12 @@ fn bench(krate: Option<&str>, passed: &[String]) -> Result<(), String> {
         table.push_str(&format!("| {name} | {} | {best} | {throughput} |\n", format_time(measurement.mean_ns)));
     }
     println!("{table}");
+    // The test meshes, and the ones the benchmarks make (`target/bench-meshes/`).
+    let folders = [workspace_root().join("tests/data"), target_dir().join("bench-meshes")];
     let mesh_file = |mesh: &str| {
-        ["obj", "off", "ply"]
+        folders
             .iter()
-            .map(|ext| workspace_root().join("tests/data").join(format!("{mesh}.{ext}")))
+            .flat_map(|folder| ["obj", "off", "ply"].map(|ext| folder.join(format!("{mesh}.{ext}"))))
             .find(|p| p.is_file())
     };
     let comparison = peers::comparison(&rows, mesh_file);

@@ -316,6 +316,10 @@ mod tests {
     fn benchmark_ids_parse() {
         assert_eq!(parse_id("subdivide-bunny00/doo-sabin-2t/3"), Some(("bunny00".into(), "doo-sabin".into(), 2, 3)));
         assert_eq!(parse_id("subdivide-bunny/loop-warren-1t/4").unwrap().1, "loop-warren");
+        assert_eq!(
+            parse_id("subdivide-bunny00-loop2/doo-sabin-1t/3"),
+            Some(("bunny00-loop2".into(), "doo-sabin".into(), 1, 3))
+        );
         assert_eq!(parse_id("build/bunny"), None);
         assert_eq!(parse_id("subdivide-bunny/loop/4"), None);
     }
