@@ -79,9 +79,9 @@ const DRIVERS: &[Driver] = &[
         schemes: &[("loop", "loop")],
         output_limit: None,
     },
-    // Its Doo-Sabin keeps the stencil tables of every level: above 8 GiB for the
-    // 14.5M faces of level 4 of the large bunny, so that run is left out (its Loop at
-    // 19.3M faces stays under 8 GiB).
+    // Its Doo-Sabin keeps the stencil tables of every level: above 8 GiB at 14.5M output
+    // faces (level 4 of `bunny00`), so its Doo-Sabin runs above 5M faces are left out
+    // (its Loop at 19.3M faces stays under 8 GiB).
     Driver {
         library: "subdiv-kernels",
         program: "rust-peers",
@@ -178,7 +178,8 @@ pub fn comparison(rows: &BTreeMap<String, Measurement>, mesh_file: impl Fn(&str)
          criterion mean. `ratio` = fastest peer time / our time (above 1: we are faster), best \
          against best and, in parentheses, against our mean. `loop-reuse` rows (repeated \
          subdivision into the previous result's memory) are compared with the same peer runs as \
-         `loop`.\n\n",
+         `loop`. Peer runs above a driver's output limit are left out (subdiv-kernels' \
+         Doo-Sabin above 5M faces: more than 8 GiB).\n\n",
     );
     let missing: Vec<&str> =
         DRIVERS.iter().filter(|d| !found.iter().any(|(f, _)| f.program == d.program)).map(|d| d.library).collect();
