@@ -275,7 +275,16 @@ impl LoopConnectivity {
 /// [`LoopError::NotLoopConnectivity`] naming the fine vertex or face where the Loop
 /// structure breaks.
 pub fn detect(fine: &HalfedgeMesh, options: &DetectOptions) -> Result<LoopConnectivity, LoopError> {
-    Ok(LoopConnectivity { coarsening: detect_mesh(fine, options.seed_vertex)? })
+    let seed_vertex = options.seed_vertex;
+    // A mesh in another order (a file of another tool) is renumbered into the canonical
+    // order by a search over coarse faces, as the reversal does; whatever that does not
+    // settle (a component whose valences are all regular, every error) goes through the
+    // general detection.
+    let coarsening = match detect_canonical_mesh(fine, seed_vertex).or_else(|| detect_renumbered(fine, seed_vertex)) {
+        Some(coarsening) => coarsening,
+        None => detect_table(&CornerTable::from_mesh(fine)?, seed_vertex)?,
+    };
+    Ok(LoopConnectivity { coarsening })
 }
 
 /// [`detect_table`] on a validated half-edge mesh. A mesh in the canonical order (the
@@ -283,13 +292,35 @@ pub fn detect(fine: &HalfedgeMesh, options: &DetectOptions) -> Result<LoopConnec
 /// corners alone, without building the fine corner table; anything else goes through
 /// the corner table and the general detection, which also reports every error.
 pub(crate) fn detect_mesh(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
-    if let Some(coarsening) =
-        detect_canonical_faces(fine.face_count(), fine.vertex_count(), seed_vertex, mesh_face_corners(fine))
-        && coarse_mesh_is_valid(&coarsening.coarse)
-    {
-        return Ok(coarsening);
+    match detect_canonical_mesh(fine, seed_vertex) {
+        Some(coarsening) => Ok(coarsening),
+        None => detect_table(&CornerTable::from_mesh(fine)?, seed_vertex),
     }
-    detect_table(&CornerTable::from_mesh(fine)?, seed_vertex)
+}
+
+/// The coarsening of a mesh in the canonical order, from its face corners alone; `None`
+/// for any other mesh.
+fn detect_canonical_mesh(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Option<Coarsening> {
+    detect_canonical_faces(fine.face_count(), fine.vertex_count(), seed_vertex, mesh_face_corners(fine))
+        .filter(|coarsening| coarse_mesh_is_valid(&coarsening.coarse))
+}
+
+/// The coarsening of a mesh in any order through [`renumber_to_canonical`], checked as
+/// the canonical path checks (the coarse twins paired from the renumbered faces, then
+/// [`coarse_mesh_is_valid`]): the very coarsening [`detect_general`] finds. `None` when
+/// the renumbering is not found or does not check out.
+fn detect_renumbered(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Option<Coarsening> {
+    let corners = CornerTable::mesh_corners(fine)?;
+    let corner_at = |v| corners.corner_at(fine, v);
+    let Renumbering { order, groups } =
+        renumber_to_canonical(fine.vertex_count(), &corners.corners, corner_at, seed_vertex)?;
+    let (coarse, _, ()) = groups.into_table(fine.vertex_count(), (), |_, _, _| (), |_, _| ())?;
+    if !coarse_mesh_is_valid(&coarse) {
+        return None;
+    }
+    let FineOrder { vertex_of_canonical: mut vertex_point, face_of_canonical } = order;
+    let edge_point = vertex_point.split_off(coarse.vertex_count());
+    Some(Coarsening::new(coarse, vertex_point, edge_point, face_of_canonical))
 }
 
 /// The corners of face `f` of a half-edge mesh from its first corner, `None` if it is
@@ -1682,6 +1713,81 @@ mod tests {
                 let expected = order.vertex_of_canonical[table.vertex(canonical_corner) as usize];
                 assert_eq!(scrambled.face(face)[j as usize], expected);
             }
+        }
+    }
+
+    /// The general detection alone, on the corner table (the reference).
+    fn detect_in_general(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
+        detect_table(&CornerTable::from_mesh(fine)?, seed_vertex)
+    }
+
+    /// `detect` on meshes in another order takes the renumbering path and finds exactly
+    /// what the general detection finds, with and without a seed; a mesh whose valences
+    /// are all regular (the torus; the open cylinder, valence 4 all along its two
+    /// boundaries) has no irregular vertex to start the search from and is left to the
+    /// general detection, unless a seed is given.
+    #[test]
+    fn detect_renumbers_meshes_in_another_order_as_the_general_detection_would() {
+        let shapes = [
+            ("tetrahedron", shapes::tetrahedron()),
+            ("icosahedron", shapes::icosahedron()),
+            ("grid", shapes::grid(4, 3, CellKind::Triangles).unwrap()),
+            ("torus", shapes::torus(4, 4, CellKind::Triangles).unwrap()),
+            ("bipyramid", bipyramid(9)),
+            ("open fan", open_fan(3)),
+            ("cylinder", cylinder(5, 2)),
+        ];
+        for (name, soup) in shapes {
+            let fine = refined(&soup);
+            for seed in [1, 2, 3] {
+                let scrambled = mesh(&scramble(&fine, seed));
+                let general = detect_in_general(&scrambled, None).unwrap();
+                assert!(!general.is_canonical(), "{name}");
+                let renumbered = detect_renumbered(&scrambled, None);
+                let regular = name == "torus" || name == "cylinder";
+                assert_eq!(renumbered.is_some(), !regular, "{name}");
+                let found = detect(&scrambled, &DetectOptions::default()).unwrap();
+                assert_eq!(found.coarsening, general, "{name}");
+                let vertex_point = general.vertex_point[general.vertex_point.len() / 2];
+                assert!(detect_renumbered(&scrambled, Some(vertex_point)).is_some(), "{name}");
+                let seeded = detect(&scrambled, &DetectOptions { seed_vertex: Some(vertex_point) }).unwrap();
+                assert_eq!(seeded.coarsening, detect_in_general(&scrambled, Some(vertex_point)).unwrap(), "{name}");
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// `detect` (canonical, renumbering and general paths) gives what the general
+        /// detection gives, results and errors alike, on refined meshes renumbered and
+        /// with edges flipped (most of them no longer Loop meshes).
+        #[test]
+        fn detect_agrees_with_the_general_detection(
+            soup in mesh_topo::testing::arb_triangle_mesh(),
+            flips in 0usize..3,
+            renumber in any::<bool>(),
+            seed in any::<u64>(),
+        ) {
+            let mut fine = refined(&soup);
+            if renumber {
+                fine = scramble(&fine, seed);
+            }
+            let mut rng = crate::reference::Rng::new(seed);
+            for _ in 0..flips {
+                let m = mesh(&fine);
+                let e = m.edge(rng.below(m.edge_count())).unwrap();
+                if !m.is_boundary_edge(e) {
+                    let [a, b] = m.edge_vertices(e);
+                    let flipped = flip_edge(&fine, a.raw(), b.raw());
+                    if HalfedgeMesh::from_soup(&flipped).is_ok() {
+                        fine = flipped;
+                    }
+                }
+            }
+            let fine = mesh(&fine);
+            let found = detect(&fine, &DetectOptions::default()).map(|structure| structure.coarsening);
+            prop_assert_eq!(found, detect_in_general(&fine, None));
         }
     }
 
