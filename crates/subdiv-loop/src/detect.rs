@@ -246,8 +246,12 @@ impl LoopConnectivity {
 /// Finds the Loop structure of a triangle mesh: its vertex points, edge points and
 /// coarse faces (see the [module docs](self) for the method and the numbering).
 ///
-/// Linear in the mesh size (at most seven propagation attempts in a component whose
-/// valences are all regular, one otherwise).
+/// Linear in the mesh size. A mesh in the canonical order (as Loop subdivision writes
+/// it) is recognised from its faces alone; a mesh in any other order is renumbered by a
+/// search over coarse faces from its irregular vertices (or the seed); what neither
+/// settles (a component whose valences are all regular, and every error) goes through
+/// the general propagation over vertices (at most seven attempts in a component whose
+/// valences are all regular, one otherwise). All three give the same result.
 ///
 /// ```
 /// use glam::DVec3;
