@@ -1650,7 +1650,8 @@ mod tests {
     use crate::corner_table::CornerTable;
     use crate::forward::LoopOptions;
     use crate::reference::{
-        bipyramid, cylinder, flip_edge, loop_step, open_fan, perturb, random_diagonal_grid, scramble, swap_vertices,
+        bipyramid, cylinder, flip_edge, flip_random_edges, loop_step, open_fan, perturb, random_diagonal_grid,
+        scramble, swap_vertices,
     };
     use glam::DVec3;
     use mesh_topo::PolygonSoup;
@@ -1773,22 +1774,8 @@ mod tests {
             renumber in any::<bool>(),
             seed in any::<u64>(),
         ) {
-            let mut fine = refined(&soup);
-            if renumber {
-                fine = scramble(&fine, seed);
-            }
-            let mut rng = crate::reference::Rng::new(seed);
-            for _ in 0..flips {
-                let m = mesh(&fine);
-                let e = m.edge(rng.below(m.edge_count())).unwrap();
-                if !m.is_boundary_edge(e) {
-                    let [a, b] = m.edge_vertices(e);
-                    let flipped = flip_edge(&fine, a.raw(), b.raw());
-                    if HalfedgeMesh::from_soup(&flipped).is_ok() {
-                        fine = flipped;
-                    }
-                }
-            }
+            let fine = if renumber { scramble(&refined(&soup), seed) } else { refined(&soup) };
+            let fine = flip_random_edges(fine, flips, seed);
             let fine = mesh(&fine);
             let found = detect(&fine, &DetectOptions::default()).map(|structure| structure.coarsening);
             prop_assert_eq!(found, detect_in_general(&fine, None));
@@ -1951,23 +1938,12 @@ mod tests {
             seed in any::<u64>(),
         ) {
             // Refined meshes in canonical order (the fast path) or renumbered.
-            let mut soup = match (refine, seed % 2) {
+            let soup = match (refine, seed % 2) {
                 (true, 0) => scramble(&refined(&soup), seed),
                 (true, _) => refined(&soup),
                 (false, _) => soup,
             };
-            let mut rng = crate::reference::Rng::new(seed);
-            for _ in 0..flips {
-                let m = mesh(&soup);
-                let e = m.edge(rng.below(m.edge_count())).unwrap();
-                if !m.is_boundary_edge(e) {
-                    let [a, b] = m.edge_vertices(e);
-                    let flipped = flip_edge(&soup, a.raw(), b.raw());
-                    if HalfedgeMesh::from_soup(&flipped).is_ok() {
-                        soup = flipped;
-                    }
-                }
-            }
+            let soup = flip_random_edges(soup, flips, seed);
             let soup = perturb(&soup, 0.01, seed);
             if let Ok(structure) = detect_soup(&soup, None) {
                 let coarse = structure.coarsening.coarse.to_soup(vec![DVec3::ZERO; structure.coarse_vertex_count()]);

@@ -201,6 +201,26 @@ pub(crate) fn cylinder(around: u32, along: u32) -> PolygonSoup {
     PolygonSoup::from_faces(positions, faces)
 }
 
+/// `flips` attempts at flipping a random edge of a valid mesh (random from `seed`): an
+/// attempt that picks a boundary edge, or whose flip would not be a valid mesh, changes
+/// nothing. Most refined meshes lose their Loop connectivity this way.
+pub(crate) fn flip_random_edges(soup: PolygonSoup, flips: usize, seed: u64) -> PolygonSoup {
+    let mut soup = soup;
+    let mut rng = Rng::new(seed);
+    for _ in 0..flips {
+        let mesh = HalfedgeMesh::from_soup(&soup).expect("valid mesh");
+        let e = mesh.edge(rng.below(mesh.edge_count())).expect("edge in range");
+        if !mesh.is_boundary_edge(e) {
+            let [a, b] = mesh.edge_vertices(e);
+            let flipped = flip_edge(&soup, a.raw(), b.raw());
+            if HalfedgeMesh::from_soup(&flipped).is_ok() {
+                soup = flipped;
+            }
+        }
+    }
+    soup
+}
+
 /// Replaces the diagonal of the two triangles sharing edge (a, b) by the other one.
 /// Panics if (a, b) is not an interior edge.
 pub(crate) fn flip_edge(soup: &PolygonSoup, a: u32, b: u32) -> PolygonSoup {

@@ -864,7 +864,9 @@ pub(crate) fn refine_level(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::reference::{bipyramid, loop_step, loop_steps, open_fan, perturb, relative_distance, scramble};
+    use crate::reference::{
+        bipyramid, flip_random_edges, loop_step, loop_steps, open_fan, perturb, relative_distance, scramble,
+    };
     use mesh_topo::PolygonSoup;
     use mesh_topo::shapes::{self, CellKind};
     use proptest::prelude::*;
@@ -1259,19 +1261,8 @@ mod tests {
             seed in any::<u64>(),
         ) {
             let rules = LoopOptions::default();
-            let mut fine = scramble(&perturb(&loop_step(&mesh(&soup), &rules), 0.05, seed), seed);
-            let mut rng = crate::reference::Rng::new(seed);
-            for _ in 0..flips {
-                let m = mesh(&fine);
-                let e = m.edge(rng.below(m.edge_count())).unwrap();
-                if !m.is_boundary_edge(e) {
-                    let [a, b] = m.edge_vertices(e);
-                    let flipped = crate::reference::flip_edge(&fine, a.raw(), b.raw());
-                    if HalfedgeMesh::from_soup(&flipped).is_ok() {
-                        fine = flipped;
-                    }
-                }
-            }
+            let fine = scramble(&perturb(&loop_step(&mesh(&soup), &rules), 0.05, seed), seed);
+            let fine = flip_random_edges(fine, flips, seed);
             let fine = mesh(&fine);
             let accepted = renumbered_agrees_with_general(&fine, None, &rules);
             if flips == 0 {
