@@ -98,7 +98,9 @@ impl Default for DecomposeOptions {
 pub struct RateDistortion {
     /// Fraction of details requested.
     pub fraction: f64,
-    /// Number of details kept.
+    /// Number of details kept: `round(fraction × total)`, as
+    /// [`LoopPyramid::compressed`] keeps them (some may be zero vectors; the same count
+    /// as `subdiv_doo`'s rate-distortion rows, so that the facade's tables mean one thing).
     pub kept: usize,
     /// Total number of details.
     pub total: usize,
@@ -177,6 +179,18 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Loop
         None => CornerTable::from_mesh(mesh)?,
     };
     Ok(LoopPyramid { rules: options.rules, base: table.to_soup(positions.into_owned()), levels })
+}
+
+/// The number of details that [`LoopPyramid::compressed`] keeps of `total` for
+/// `fraction` (in `[0, 1]`): `round(fraction × total)`.
+///
+/// ```
+/// use subdiv_loop::pyramid::kept_count;
+/// assert_eq!(kept_count(0.5, 5), 3);
+/// assert_eq!(kept_count(1.0, 5), 5);
+/// ```
+pub fn kept_count(fraction: f64, total: usize) -> usize {
+    ((fraction * total as f64).round() as usize).min(total)
 }
 
 /// Positions given by the user must be finite (a `HalfedgeMesh` may have been edited).
@@ -303,7 +317,7 @@ impl LoopPyramid {
     }
 
     /// A copy keeping only the largest `fraction` of the details (see the
-    /// [module docs](self)); `round(fraction × detail_count())` details are kept.
+    /// [module docs](self)); [`kept_count`]`(fraction, detail_count())` details are kept.
     ///
     /// # Errors
     /// [`LoopError::InvalidParameter`] unless `0 <= fraction <= 1`.
@@ -315,7 +329,7 @@ impl LoopPyramid {
             });
         }
         let total = self.detail_count();
-        let keep = ((fraction * total as f64).round() as usize).min(total);
+        let keep = kept_count(fraction, total);
         let mut out = self.clone();
         if keep == total {
             return Ok(out);
@@ -366,7 +380,6 @@ impl LoopPyramid {
             .iter()
             .map(|&fraction| {
                 let compressed = self.compressed(fraction)?;
-                let kept = compressed.levels.iter().flat_map(|l| &l.details).filter(|d| **d != DVec3::ZERO).count();
                 let approx = compressed.reconstruct_on(&prepared.base, finest)?;
                 let (mut max, mut sum) = (0.0f64, 0.0f64);
                 for (p, q) in approx.positions.iter().zip(&exact.positions) {
@@ -377,7 +390,7 @@ impl LoopPyramid {
                 let n = exact.positions.len().max(1) as f64;
                 Ok(RateDistortion {
                     fraction,
-                    kept,
+                    kept: kept_count(fraction, total),
                     total,
                     max_error: max.sqrt() * scale,
                     rms_error: (sum / n).sqrt() * scale,
@@ -726,6 +739,10 @@ mod tests {
         assert!(smallest_kept >= largest_dropped);
         let rows = pyramid.rate_distortion(&[1.0, 0.5, 0.1, 0.0]).unwrap();
         assert_eq!(rows[0].max_error, 0.0);
+        // The rows count the details that `compressed` keeps, zero vectors included (a
+        // level can hold exact zeros).
+        let counts: Vec<usize> = rows.iter().map(|r| r.kept).collect();
+        assert_eq!(counts, [total, (total as f64 * 0.5).round() as usize, (total as f64 * 0.1).round() as usize, 0]);
         for pair in rows.windows(2) {
             assert!(pair[0].kept >= pair[1].kept);
             assert!(pair[1].rms_error > 0.0 && pair[1].rms_error <= pair[1].max_error);
