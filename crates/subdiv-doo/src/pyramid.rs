@@ -386,7 +386,8 @@ impl DooPyramid {
         }
     }
 
-    /// For each level, which detail vectors the fraction `keep` keeps.
+    /// For each level, which detail vectors the fraction `keep` keeps: the
+    /// [`kept_count`] largest.
     fn kept_details(&self, keep: f64) -> Vec<Vec<bool>> {
         let levels = self.levels.len();
         let mut ranked: Vec<(f64, usize, usize)> = Vec::with_capacity(self.detail_count());
@@ -394,7 +395,7 @@ impl DooPyramid {
             let weight = (2.0f64).powi((levels - 1 - k) as i32);
             ranked.extend(level.details.iter().enumerate().map(|(i, d)| (d.length() * weight, k, i)));
         }
-        let count = ((keep * ranked.len() as f64).round() as usize).min(ranked.len());
+        let count = kept_count(keep, ranked.len());
         ranked.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
         let mut mask: Vec<Vec<bool>> = self.levels.iter().map(|l| vec![false; l.details.len()]).collect();
         for &(_, k, i) in &ranked[..count] {
@@ -470,7 +471,7 @@ impl DooPyramid {
                 let n = exact.positions.len().max(1) as f64;
                 Ok(RateDistortion {
                     fraction,
-                    kept: ((fraction * total as f64).round() as usize).min(total),
+                    kept: kept_count(fraction, total),
                     max_error: max / diagonal,
                     rms_error: (sum / n).sqrt() / diagonal,
                 })
@@ -610,6 +611,13 @@ fn is_permutation(values: &[u32], n: usize) -> bool {
     }
     let mut seen = vec![false; n];
     values.iter().all(|&v| (v as usize) < n && !std::mem::replace(&mut seen[v as usize], true))
+}
+
+/// The number of detail vectors that the fraction `fraction` keeps of `total`:
+/// `round(fraction × total)`, the one rule of the compression and of its
+/// rate-distortion rows.
+fn kept_count(fraction: f64, total: usize) -> usize {
+    ((fraction * total as f64).round() as usize).min(total)
 }
 
 #[cfg(test)]
