@@ -50,7 +50,12 @@ pub fn is_doo_pyramid(bytes: &[u8]) -> bool {
 pub enum Depth {
     /// Exactly this many levels (an error if the mesh does not allow them).
     Levels(u32),
-    /// As many levels as the connectivity allows (at least one).
+    /// As many levels as the connectivity allows (at least one), stopping after a level
+    /// that does not coarsen the mesh: a mesh of faces that share no edge (a lone quad,
+    /// say) is its own Doo-Sabin refinement, every face an F_F face, and reversing it
+    /// again and again would only expand the same faces about their centroids, scaling
+    /// round-off by the expansion factor at each level until the pyramid no longer
+    /// rebuilds the mesh exactly.
     Max,
 }
 
@@ -183,7 +188,20 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
                 }
                 None => ((CornerMesh::from_halfedge(mesh), mesh.positions().to_vec()), 0),
             };
+            // Faces of the mesh that the last step reversed.
+            let mut reversed_faces = mesh.face_count();
             for level in start..MAX_LEVELS {
+                // No F_E and no F_V face: as many coarse faces as fine ones (see `Depth::Max`).
+                if let Some(last) = steps.last()
+                    && last.coarse.face_count() == reversed_faces
+                {
+                    stopped = Some(format!(
+                        "level {level} did not coarsen the mesh: it has no F_E or F_V face (no two faces share an \
+                         edge), so every further level would only expand the same faces"
+                    ));
+                    break;
+                }
+                reversed_faces = current.0.face_count();
                 let step = match greedy_step(&current.0, &current.1, options, level) {
                     Ok(step) => step,
                     Err(error) if level > 0 => {
@@ -631,6 +649,44 @@ mod tests {
         let mut fine = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 2)).unwrap().to_mesh().unwrap();
         fine.positions_mut()[40].z += 0.1;
         decompose(&fine, &DecomposeOptions::levels(FaceRule::DooSabin, 2)).unwrap().pyramid
+    }
+
+    #[test]
+    fn fuzz_regression_max_depth_stops_when_a_level_does_not_coarsen() {
+        // A lone quad, and two quads sharing no edge, are their own Doo-Sabin refinement.
+        // `Depth::Max` went on to 32 levels, each expanding the faces by 1 / (1 - a) = 10
+        // under the centroid rule with a = 0.9: a base of size 7e31 from which the quad
+        // came back with an error of 6e14 times its diagonal.
+        let lone_quad = PolygonSoup::from_faces(
+            vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
+            [[0u32, 1, 2, 3]],
+        );
+        let mut two_quads = lone_quad.clone();
+        two_quads.positions.extend(lone_quad.positions.iter().map(|p| *p + DVec3::new(3.0, 0.5, 0.25)));
+        two_quads.push_face(&[4, 5, 6, 7]);
+        for (soup, rule) in [(lone_quad, FaceRule::Centroid { a: 0.9 }), (two_quads, FaceRule::DooSabin)] {
+            let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+            let decomposition = decompose(&mesh, &DecomposeOptions::max(rule)).unwrap();
+            assert_eq!(decomposition.pyramid.level_count(), 1);
+            assert!(
+                decomposition.stopped.as_deref().unwrap().contains("did not coarsen"),
+                "{:?}",
+                decomposition.stopped
+            );
+            let rebuilt = decomposition.pyramid.reconstruct(1, None).unwrap();
+            assert_eq!(rebuilt.indices, soup.indices);
+            for (p, q) in rebuilt.positions.iter().zip(&soup.positions) {
+                assert!(p.distance(*q) < 1e-12, "{p} against {q}");
+            }
+            // An explicit depth is still honoured: the user asked for it.
+            let deeper = decompose(&mesh, &DecomposeOptions::levels(rule, 3)).unwrap();
+            assert_eq!(deeper.pyramid.level_count(), 3);
+        }
+        // A real refinement still decomposes all the way.
+        let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
+        let fine = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 2)).unwrap().to_mesh().unwrap();
+        let decomposition = decompose(&fine, &DecomposeOptions::max(FaceRule::DooSabin)).unwrap();
+        assert_eq!(decomposition.pyramid.level_count(), 2);
     }
 
     #[test]

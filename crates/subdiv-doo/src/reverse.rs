@@ -41,7 +41,8 @@
 //! all-quad meshes even the F_E quads can play the role of F_F faces. A search needs one
 //! seed per connected component. [`ReverseOptions::seeds`] may name them; for every
 //! component without one, the *automatic* mode tries the classes in turn (the lowest
-//! face of the component, or its first neighbour that works, as an F_F face; then the
+//! face of the component as an F_F face, else the first of its neighbours that works,
+//! else of their neighbours, since an F_F face is at most two faces away; then the
 //! lowest face that this reading calls an F_V face; then the lowest F_E quad) and keeps
 //! the valid interpretation with the **smallest total squared detail norm**
 //! `Σ |d_i|²`, the earliest on ties. An interpretation whose details are all zero to
@@ -1301,17 +1302,26 @@ impl<'a> Search<'a> {
         let queue_start = if first.is_some() { 0 } else { self.queue.len() };
         let mut trials = Vec::new();
 
-        // A first valid reading: the lowest face, else its neighbours in order.
+        // A first valid reading: the lowest face, else its neighbours in order, else
+        // theirs. On a Doo-Sabin mesh an F_F face is never further away: an F_E quad lies
+        // between two F_F faces, and an F_V face (around an inner coarse vertex) is
+        // surrounded by F_E quads. Two rings are needed on an open mesh whose lowest face
+        // is an F_V face: its F_E neighbours may fail as F_F faces, and so does its own
+        // dual reading, whose F_E quads meet the boundary.
         let mut first_error = None;
         let mut candidates: Vec<(usize, &'static str)> = vec![(lowest, "F_F")];
-        let b = self.fine.offsets[lowest] as usize;
-        let e = self.fine.offsets[lowest + 1] as usize;
-        for c in b..e {
-            let t = self.fine.corner_twin[c];
-            if t != NONE {
-                let g = self.corner_face[t as usize] as usize;
-                if !candidates.iter().any(|&(s, _)| s == g) {
-                    candidates.push((g, "neighbour"));
+        for ring in 0..2 {
+            let inner = if ring == 0 { 0..1 } else { 1..candidates.len() };
+            for k in inner {
+                let f = candidates[k].0;
+                for c in self.fine.offsets[f] as usize..self.fine.offsets[f + 1] as usize {
+                    let t = self.fine.corner_twin[c];
+                    if t != NONE {
+                        let g = self.corner_face[t as usize] as usize;
+                        if !candidates.iter().any(|&(s, _)| s == g) {
+                            candidates.push((g, "neighbour"));
+                        }
+                    }
                 }
             }
         }
@@ -2458,7 +2468,7 @@ pub(crate) fn dual_group_energy(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{DooOptions, subdivide_soup};
+    use crate::{DooOptions, FaceKind, subdivide_soup};
     use mesh_topo::shapes::{self, CellKind};
 
     /// The refinement of a cube and a torus side by side (two components), one vertex moved.
@@ -2559,6 +2569,37 @@ mod tests {
             checked += 1;
         }
         assert!(checked > 0);
+    }
+
+    #[test]
+    fn fuzz_regression_an_open_mesh_whose_lowest_face_is_an_f_v_face() {
+        // Found by the `reverse_doo` fuzz target: an open mixed grid after one step, with
+        // an F_V face first. It is no F_F face of a valid reading (its dual reading meets
+        // the boundary), nor were its F_E neighbours, and the automatic mode gave up
+        // there; the F_F faces two faces away were never tried.
+        let mut tried = 0;
+        for (coarse, rule) in [
+            (shapes::grid(4, 2, CellKind::Mixed).unwrap(), FaceRule::Simple),
+            (shapes::grid(3, 3, CellKind::Triangles).unwrap(), FaceRule::DooSabin),
+            (shapes::grid(3, 2, CellKind::Quads).unwrap(), FaceRule::CENTROID_HALF),
+        ] {
+            let fine = subdivide_soup(&coarse, &DooOptions::new(rule, 1)).unwrap();
+            let soup = fine.to_soup();
+            for fv in (0..fine.face_count()).filter(|&f| fine.face_kind(f) == FaceKind::Vertex) {
+                let mut faces: Vec<Vec<u32>> = soup.faces().map(<[u32]>::to_vec).collect();
+                faces.swap(0, fv);
+                let moved = PolygonSoup::from_faces(soup.positions.clone(), faces);
+                let mesh = HalfedgeMesh::from_soup(&moved).unwrap();
+                let reversal = reverse(&mesh, &ReverseOptions::auto(rule)).unwrap();
+                assert_eq!(reversal.coarse().face_count(), coarse.face_count());
+                assert!(reversal.details().iter().all(|d| d.length() < 1e-12));
+                let rebuilt = reversal.reconstruct();
+                assert_eq!((&rebuilt.offsets, &rebuilt.indices), (&moved.offsets, &moved.indices));
+                assert!(max_distance(&rebuilt.positions, &moved.positions) < 1e-12);
+                tried += 1;
+            }
+        }
+        assert!(tried >= 4, "{tried} meshes with an F_V face first");
     }
 
     #[test]
