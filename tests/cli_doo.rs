@@ -153,6 +153,36 @@ fn the_three_rules_agree_on_triangles_and_parallelograms_only() {
 }
 
 #[test]
+fn reverse_and_decompose_take_the_rule_subdivide_took() {
+    // An open mixed grid after one step of the simple rule: reversed with the same rule,
+    // the details are zero; with the original weights (`--scheme doo`) they are not, and
+    // still rebuild the mesh.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(&d.join("grid.obj"), &shapes::grid(4, 2, shapes::CellKind::Mixed).unwrap());
+    ok(&["subdivide", "grid.obj", "fine.obj", "--scheme", "doo-simple"], d);
+    let fine = read(&d.join("fine.obj"));
+    for (scheme, zero) in [("doo-simple", true), ("doo", false), ("doo-sabin", false)] {
+        ok(&["decompose", "fine.obj", "fine.mres", "--scheme", scheme], d);
+        ok(&["reconstruct", "fine.mres", "smooth.obj", "--keep", "0"], d);
+        let error = relative_error(&read(&d.join("smooth.obj")), &fine);
+        assert_eq!(error < 1e-14, zero, "{scheme}: {error}");
+        ok(&["reconstruct", "fine.mres", "rebuilt.obj"], d);
+        assert!(relative_error(&read(&d.join("rebuilt.obj")), &fine) < 1e-12, "{scheme}");
+        std::fs::remove_file(d.join("fine.mres")).unwrap();
+    }
+    // The same mesh with an F_V face first: the automatic mode finds an F_F face two
+    // faces away (its F_V and F_E neighbours give no valid reading of an open mesh).
+    let last = fine.face_count() - 1;
+    assert_eq!(fine.face(last).len(), 4, "an F_V face around an inner vertex of valence 4");
+    let faces: Vec<Vec<u32>> = std::iter::once(last).chain(0..last).map(|f| fine.face(f).to_vec()).collect();
+    write(&d.join("fv_first.obj"), &PolygonSoup::from_faces(fine.positions.clone(), faces));
+    let printed = ok(&["reverse", "fv_first.obj", "coarse.obj", "--scheme", "doo-simple"], d);
+    assert!(printed.contains("-> 15 vertices, 12 faces"), "{printed}");
+    assert!(printed.contains("gives all details zero"), "{printed}");
+}
+
+#[test]
 fn analyze_shows_the_reif_check() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

@@ -74,6 +74,42 @@ fn decompose_then_reconstruct_reproduces_the_input() {
     assert!(error > 0.0 && error < 0.05, "{error}");
 }
 
+/// Largest detail left when every detail is dropped (`--keep 0`), relative to the input:
+/// zero (to rounding) when the scheme reversed is the one that made the mesh.
+fn error_without_details(dir: &Path, mesh: &str, scheme_options: &[&str]) -> f64 {
+    let mut args = vec!["decompose", mesh, "out.mres", "--levels", "2"];
+    args.extend_from_slice(scheme_options);
+    ok(&args, dir);
+    ok(&["reconstruct", "out.mres", "smooth.obj", "--keep", "0"], dir);
+    let error = relative_error(&read(&dir.join("smooth.obj")), &read(&dir.join(mesh)));
+    std::fs::remove_file(dir.join("out.mres")).unwrap();
+    error
+}
+
+#[test]
+fn reverse_and_decompose_take_the_rules_subdivide_took() {
+    // Warren's weights on a closed mesh, and boundary corners kept on an open grid: the
+    // same `--scheme` (and `--keep-corners`) as `subdivide` gives zero details, another
+    // rule details that still rebuild the mesh.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    io::write_soup(d.join("octahedron.obj"), &shapes::octahedron(), &WriteOptions::default()).unwrap();
+    ok(&["subdivide", "octahedron.obj", "warren.obj", "--scheme", "loop-warren", "--levels", "2"], d);
+    assert!(error_without_details(d, "warren.obj", &["--scheme", "loop-warren"]) < 1e-14);
+    assert!(error_without_details(d, "warren.obj", &["--scheme", "loop"]) > 1e-3);
+    let grid = shapes::grid(3, 3, shapes::CellKind::Triangles).unwrap();
+    io::write_soup(d.join("grid.obj"), &grid, &WriteOptions::default()).unwrap();
+    ok(&["subdivide", "grid.obj", "corners.obj", "--scheme", "loop", "--keep-corners", "--levels", "2"], d);
+    assert!(error_without_details(d, "corners.obj", &["--scheme", "loop", "--keep-corners"]) < 1e-14);
+    assert!(error_without_details(d, "corners.obj", &["--scheme", "loop"]) > 1e-3);
+    ok(&["decompose", "corners.obj", "corners.mres", "--scheme", "loop", "--levels", "2"], d);
+    ok(&["reconstruct", "corners.mres", "rebuilt.obj"], d);
+    assert!(relative_error(&read(&d.join("rebuilt.obj")), &read(&d.join("corners.obj"))) < 1e-12);
+    // A Doo-Sabin rule is no Loop rule, and the Loop reversal keeps its own options.
+    let line = fails(&["reverse", "warren.obj", "out.obj", "--scheme", "doo-simple", "--keep-corners"], d, "out.obj");
+    assert!(line.contains("--keep-corners applies to the Loop schemes only"), "{line}");
+}
+
 #[test]
 fn bad_input_gives_one_error_line_and_no_output() {
     let dir = tempfile::tempdir().unwrap();

@@ -1,8 +1,9 @@
 //! Doo-Sabin-family commands: subdivide, reverse, decompose, reconstruct, analyze.
 //!
-//! `reverse` and `decompose` with `--scheme doo` assume the original Doo-Sabin weights
-//! (the rule of `subdivide --scheme doo-sabin`, CGAL's and most peers' choice); the rule
-//! is stored in the `.mres` file, so `reconstruct` needs no option. Every command computes
+//! `reverse` and `decompose` invert the rule their `--scheme` names, as `subdivide`
+//! names them (`doo-sabin`, `doo-simple`, `doo-centroid`); `--scheme doo` is the
+//! original Doo-Sabin weights (CGAL's and most peers' choice). The rule is stored in the
+//! `.mres` file, so `reconstruct` needs no option. Every command computes
 //! its whole result before it writes anything: bad input writes no file.
 
 use std::fmt::Write as _;
@@ -15,12 +16,23 @@ use subdiv_doo::{DooError, DooOptions, FaceRule, SeedChoice, subdivide_soup};
 
 use super::common::{note_dropped, read_mesh, read_soup, write_soup};
 use super::{
-    AnalyzeArgs, AnalyzeScheme, CliError, CliResult, DecomposeArgs, ReconstructArgs, ReverseArgs, SubdivideArgs,
-    SurfaceScheme, input_error,
+    AnalyzeArgs, AnalyzeScheme, CliError, CliResult, DecomposeArgs, ReconstructArgs, ReverseArgs, ReverseScheme,
+    SubdivideArgs, SurfaceScheme, input_error,
 };
 
-/// The per-face rule that `reverse` and `decompose --scheme doo` invert.
-const REVERSE_RULE: FaceRule = FaceRule::DooSabin;
+/// The per-face rule that `reverse` and `decompose` invert: that of `subdivide` with the
+/// same `--scheme` (`doo` is `doo-sabin`).
+fn reverse_rule(scheme: ReverseScheme, keep_corners: bool) -> Result<FaceRule, CliError> {
+    if keep_corners {
+        return Err(CliError::Input("--keep-corners applies to the Loop schemes only".into()));
+    }
+    Ok(match scheme {
+        ReverseScheme::Doo | ReverseScheme::DooSabin => FaceRule::DooSabin,
+        ReverseScheme::DooSimple => FaceRule::Simple,
+        ReverseScheme::DooCentroid => FaceRule::CENTROID_HALF,
+        other => return Err(CliError::Input(format!("{other:?} is not a Doo-Sabin scheme"))),
+    })
+}
 
 /// Fractions of the rate-distortion table printed by `decompose --report`.
 const REPORT_FRACTIONS: [f64; 9] = [1.0, 0.5, 0.25, 0.1, 0.05, 0.02, 0.01, 0.005, 0.0];
@@ -87,9 +99,10 @@ pub fn reverse(args: &ReverseArgs) -> CliResult {
     if args.levels == 0 {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
+    let rule = reverse_rule(args.scheme, args.keep_corners)?;
     let mesh = read_mesh(&args.mesh)?;
     let options = DecomposeOptions {
-        rule: REVERSE_RULE,
+        rule,
         depth: Depth::Levels(args.levels),
         seeds: args.seed_face.map(|f| vec![f as usize]).unwrap_or_default(),
     };
@@ -116,9 +129,10 @@ pub fn decompose(args: &DecomposeArgs) -> CliResult {
     if !args.max && args.levels == 0 {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
+    let rule = reverse_rule(args.scheme, args.keep_corners)?;
     let mesh = read_mesh(&args.mesh)?;
     let depth = if args.max { Depth::Max } else { Depth::Levels(args.levels) };
-    let options = DecomposeOptions { rule: REVERSE_RULE, depth, seeds: Vec::new() };
+    let options = DecomposeOptions { rule, depth, seeds: Vec::new() };
     let decomposition = decompose_mesh(&mesh, &options).map_err(|e| doo_error(&args.mesh, e))?;
     let pyramid = &decomposition.pyramid;
     let report = if args.report {

@@ -4,17 +4,18 @@ use std::path::Path;
 
 use mesh_topo::io::WriteOptions;
 use subdiv_loop::LoopError;
-use subdiv_loop::forward::LoopOptions;
+use subdiv_loop::forward::{LoopOptions, VertexWeights};
 use subdiv_loop::pyramid::{self, DecomposeOptions, Levels, LoopPyramid};
 
 use super::common::{read_mesh, write_soup};
 use super::{
-    AnalyzeArgs, CliError, CliResult, DecomposeArgs, ReconstructArgs, ReverseArgs, SubdivideArgs, input_error,
+    AnalyzeArgs, CliError, CliResult, DecomposeArgs, ReconstructArgs, ReverseArgs, ReverseScheme, SubdivideArgs,
+    input_error,
 };
 
 /// `subdivide --scheme loop | loop-warren | ternary-loop | quaternary-loop`.
 pub fn subdivide(args: &SubdivideArgs) -> CliResult {
-    use subdiv_loop::forward::{self, LoopOptions, VertexWeights};
+    use subdiv_loop::forward;
     use subdiv_loop::mband::{self, TernaryOptions};
 
     use super::SurfaceScheme;
@@ -48,9 +49,11 @@ pub fn subdivide(args: &SubdivideArgs) -> CliResult {
     super::common::write_soup(&args.out, &fine.into_soup(), &mesh_topo::io::WriteOptions::default())
 }
 
-/// Loop's original weights, boundary corners smoothed: the defaults of `subdivide --scheme loop`.
-fn reverse_rules() -> LoopOptions {
-    LoopOptions::default()
+/// The rules that `reverse` and `decompose` invert: those of `subdivide` with the same
+/// `--scheme` and `--keep-corners`.
+fn reverse_rules(scheme: ReverseScheme, keep_corners: bool) -> LoopOptions {
+    let weights = if scheme == ReverseScheme::LoopWarren { VertexWeights::Warren } else { VertexWeights::Loop };
+    LoopOptions { weights, keep_corners }
 }
 
 fn loop_error(path: &Path, error: LoopError) -> CliError {
@@ -74,8 +77,11 @@ pub fn reverse(args: &ReverseArgs) -> CliResult {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
     let mesh = read_mesh(&args.mesh)?;
-    let options =
-        DecomposeOptions { rules: reverse_rules(), levels: Levels::Count(args.levels as usize), seed_vertex: None };
+    let options = DecomposeOptions {
+        rules: reverse_rules(args.scheme, args.keep_corners),
+        levels: Levels::Count(args.levels as usize),
+        seed_vertex: None,
+    };
     let pyramid = pyramid::decompose(&mesh, &options).map_err(|e| loop_error(&args.mesh, e))?;
     write_soup(&args.out, &pyramid.base, &WriteOptions::default())?;
     println!(
@@ -99,7 +105,7 @@ pub fn decompose(args: &DecomposeArgs) -> CliResult {
     }
     let mesh = read_mesh(&args.mesh)?;
     let levels = if args.max { Levels::Max } else { Levels::Count(args.levels as usize) };
-    let options = DecomposeOptions { rules: reverse_rules(), levels, seed_vertex: None };
+    let options = DecomposeOptions { rules: reverse_rules(args.scheme, args.keep_corners), levels, seed_vertex: None };
     let pyramid = pyramid::decompose(&mesh, &options).map_err(|e| loop_error(&args.mesh, e))?;
     let report = if args.report {
         Some(pyramid.rate_distortion(&REPORT_FRACTIONS).map_err(|e| loop_error(&args.mesh, e))?)

@@ -151,13 +151,30 @@ pub struct SubdivideArgs {
     pub keep_corners: bool,
 }
 
-/// Families of reversible schemes.
+/// Reversible schemes: the family, and the rule the mesh is assumed to come from (the
+/// names of `subdivide --scheme`; `reverse(subdivide(C))` is `C` with zero details when
+/// the two name the same rule).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ReverseScheme {
-    /// Reverse Loop subdivision.
+    /// Reverse Loop subdivision with Loop's original vertex weights.
     Loop,
-    /// Reverse Doo-Sabin subdivision.
+    /// Reverse Loop subdivision with Warren's simplified weights.
+    LoopWarren,
+    /// Reverse Doo-Sabin subdivision with the original weights (the same as `doo-sabin`).
     Doo,
+    /// Reverse Doo-Sabin subdivision with the original weights.
+    DooSabin,
+    /// Reverse Doo-Sabin with the simple averaging rule.
+    DooSimple,
+    /// Reverse Doo-Sabin topology with the centroid-contraction rule (a = 1/2).
+    DooCentroid,
+}
+
+impl ReverseScheme {
+    /// True for the Loop schemes.
+    pub fn is_loop(self) -> bool {
+        matches!(self, Self::Loop | Self::LoopWarren)
+    }
 }
 
 /// Options of `reverse`.
@@ -176,6 +193,10 @@ pub struct ReverseArgs {
     /// A face known to come from a coarse face (Doo-Sabin); found automatically if absent.
     #[arg(long)]
     pub seed_face: Option<u32>,
+    /// The mesh was subdivided with boundary corners (valence-2 boundary vertices) kept
+    /// fixed (Loop schemes).
+    #[arg(long)]
+    pub keep_corners: bool,
 }
 
 /// Options of `decompose`.
@@ -197,6 +218,10 @@ pub struct DecomposeArgs {
     /// Print a rate-distortion table (fraction of details kept vs error).
     #[arg(long)]
     pub report: bool,
+    /// The mesh was subdivided with boundary corners (valence-2 boundary vertices) kept
+    /// fixed (Loop schemes).
+    #[arg(long)]
+    pub keep_corners: bool,
 }
 
 /// Options of `reconstruct`.
@@ -276,14 +301,20 @@ pub fn run(cli: Cli) -> CliResult {
                 doo_cmds::subdivide(&args)
             }
         },
-        Some(Command::Reverse(args)) => match args.scheme {
-            ReverseScheme::Loop => loop_cmds::reverse(&args),
-            ReverseScheme::Doo => doo_cmds::reverse(&args),
-        },
-        Some(Command::Decompose(args)) => match args.scheme {
-            ReverseScheme::Loop => loop_cmds::decompose(&args),
-            ReverseScheme::Doo => doo_cmds::decompose(&args),
-        },
+        Some(Command::Reverse(args)) => {
+            if args.scheme.is_loop() {
+                loop_cmds::reverse(&args)
+            } else {
+                doo_cmds::reverse(&args)
+            }
+        }
+        Some(Command::Decompose(args)) => {
+            if args.scheme.is_loop() {
+                loop_cmds::decompose(&args)
+            } else {
+                doo_cmds::decompose(&args)
+            }
+        }
         Some(Command::Reconstruct(args)) => reconstruct(&args),
         Some(Command::Analyze(args)) => match args.scheme {
             AnalyzeScheme::Loop
