@@ -39,6 +39,15 @@ pub enum CurveError {
         /// The allowed range, written out.
         range: String,
     },
+    /// Finite input whose result is not: the weighted sums overflow `f64` (coordinates
+    /// within a factor of a few of `f64::MAX`).
+    #[error("{what}: point {index} of the result is not finite (the input's coordinates are too large)")]
+    Overflow {
+        /// The operation.
+        what: &'static str,
+        /// Index of the first point of the result that is not finite.
+        index: usize,
+    },
     /// A subdivision rule is malformed (empty, non-finite weights, weights not summing to 1).
     #[error("invalid subdivision rule: {0}")]
     InvalidRule(String),

@@ -251,7 +251,9 @@ impl Framework {
     ///
     /// # Errors
     /// [`CurveError::FlagCount`], [`CurveError::TooFewPoints`], [`CurveError::NonFinite`];
-    /// [`CurveError::VirtualPoints`] if the exact-global system does not converge.
+    /// [`CurveError::VirtualPoints`] if the exact-global system does not converge;
+    /// [`CurveError::Overflow`] if finite coordinates near `f64::MAX` refine to points that
+    /// are not finite.
     ///
     /// ```
     /// use subdiv_curve::{CurveScheme, Framework, Topology};
@@ -315,6 +317,9 @@ impl Framework {
                 }
             }
         }
+        // Virtual points divide by the diagonal of their stencil: no cheap bound on how
+        // they grow, so the result is checked (one read of what was just written).
+        crate::point::check_result_finite("framework refinement", out)?;
         Ok(())
     }
 

@@ -164,6 +164,23 @@ pub fn check_finite<P: CurvePoint>(points: &[P]) -> Result<(), crate::CurveError
     Ok(())
 }
 
+/// Largest absolute coordinate (0 for no points).
+pub(crate) fn largest_coordinate<P: CurvePoint>(points: &[P]) -> f64 {
+    points.iter().flat_map(|p| (0..P::DIM).map(move |axis| p.coord(axis).abs())).fold(0.0, f64::max)
+}
+
+/// Checks that every point of a result computed from finite input is finite.
+///
+/// # Errors
+/// [`CurveError::Overflow`](crate::CurveError::Overflow) naming `what` and the first point
+/// that is not.
+pub(crate) fn check_result_finite<P: CurvePoint>(what: &'static str, points: &[P]) -> Result<(), crate::CurveError> {
+    match points.iter().position(|p| !p.is_finite()) {
+        Some(index) => Err(crate::CurveError::Overflow { what, index }),
+        None => Ok(()),
+    }
+}
+
 /// Diagonal of the bounding box (0 for empty input): the length scale of tolerances.
 pub(crate) fn bbox_diagonal<P: CurvePoint>(points: &[P]) -> f64 {
     let mut squared = 0.0;

@@ -273,7 +273,8 @@ impl<P: CurvePoint> Refiner<P> {
     ///
     /// # Errors
     /// [`CurveError::TooFewPoints`] (see [`CurveScheme::min_points`]),
-    /// [`CurveError::NonFinite`] for a NaN or infinite coordinate.
+    /// [`CurveError::NonFinite`] for a NaN or infinite coordinate, [`CurveError::Overflow`]
+    /// when finite coordinates near `f64::MAX` refine to points that are not finite.
     ///
     /// # Performance
     /// Linear in the output size; no allocation once the buffers have reached their size.
@@ -294,6 +295,9 @@ impl<P: CurvePoint> Refiner<P> {
     ) -> Result<(), CurveError> {
         scheme.validate(points, topology)?;
         self.refine_fused(scheme, points, topology, levels, out, block_len::<P>());
+        if !scheme.cannot_overflow(points, levels) {
+            crate::point::check_result_finite("refinement", out)?;
+        }
         Ok(())
     }
 
@@ -695,7 +699,8 @@ impl CurveScheme {
     ///
     /// # Errors
     /// [`CurveError::TooFewPoints`] (see [`CurveScheme::min_points`]),
-    /// [`CurveError::NonFinite`] for a NaN or infinite coordinate.
+    /// [`CurveError::NonFinite`] for a NaN or infinite coordinate, [`CurveError::Overflow`]
+    /// when finite coordinates near `f64::MAX` refine to points that are not finite.
     ///
     /// ```
     /// use glam::DVec3;

@@ -79,7 +79,8 @@ fn coarse_len(fine_len: usize, topology: Topology) -> Result<usize, CurveError> 
 /// # Errors
 /// [`CurveError::TooFewPoints`] (closed: fewer than 6 fine points, i.e. 3 coarse; open:
 /// fewer than 4), [`CurveError::IncompatibleLength`] for an odd number of points,
-/// [`CurveError::NonFinite`].
+/// [`CurveError::NonFinite`], [`CurveError::Overflow`] for coordinates so large (near
+/// `f64::MAX`) that a coarse point, a detail or a candidate point is not finite.
 ///
 /// ```
 /// use subdiv_curve::{Topology, reverse::reverse_chaikin};
@@ -119,6 +120,17 @@ pub fn reverse_chaikin<P: CurvePoint>(fine: &[P], topology: Topology) -> Result<
             details.push(r(n - 2).scale(1.5).minus(q(n - 2).scale(0.5)).minus(last));
         }
     }
+    // The weights sum to at most 2 in absolute value: only coordinates beyond half of
+    // `f64::MAX` overflow, which would otherwise pass on as infinities. Reconstruction
+    // forms the candidates `c_i + d_i` and `c_i - d_i` (`a_i`, `b_i`): a split whose
+    // candidates are not finite could not be rebuilt, so it is refused here.
+    crate::point::check_result_finite("reverse Chaikin (coarse points)", &coarse)?;
+    crate::point::check_result_finite("reverse Chaikin (details)", &details)?;
+    let candidates_finite =
+        |i: usize| coarse[i].plus(details[i]).is_finite() && coarse[i].minus(details[i]).is_finite();
+    if let Some(index) = (0..n).find(|&i| !candidates_finite(i)) {
+        return Err(CurveError::Overflow { what: "reverse Chaikin (candidate points)", index });
+    }
     Ok(ChaikinSplit { coarse, details })
 }
 
@@ -127,7 +139,8 @@ pub fn reverse_chaikin<P: CurvePoint>(fine: &[P], topology: Topology) -> Result<
 ///
 /// # Errors
 /// [`CurveError::IncompatibleLength`] if `details` and `coarse` differ in length,
-/// [`CurveError::TooFewPoints`] (closed: 3 coarse points, open: 2), [`CurveError::NonFinite`].
+/// [`CurveError::TooFewPoints`] (closed: 3 coarse points, open: 2), [`CurveError::NonFinite`],
+/// [`CurveError::Overflow`] if a fine point is not finite (coordinates near `f64::MAX`).
 ///
 /// ```
 /// use subdiv_curve::{CurveScheme, Topology, reverse::reconstruct_chaikin};
@@ -185,6 +198,7 @@ pub fn reconstruct_chaikin<P: CurvePoint>(
             fine.push(coarse[n - 1]);
         }
     }
+    crate::point::check_result_finite("Chaikin reconstruction", &fine)?;
     Ok(fine)
 }
 

@@ -420,6 +420,17 @@ impl CurveScheme {
         (left, right)
     }
 
+    /// True if refining `points` `levels` times cannot overflow: a level multiplies the
+    /// largest coordinate by at most the larger absolute weight sum of the two rules,
+    /// times 3 for the phantom points of open ends (`2 P_0 - P_1`). Only coordinates
+    /// within that factor of `f64::MAX` fail it, so the result is checked for them alone.
+    pub(crate) fn cannot_overflow<P: crate::CurvePoint>(&self, points: &[P], levels: u32) -> bool {
+        let absolute_sum = |rule: &Rule| rule.weights().iter().map(|w| w.abs()).sum::<f64>();
+        let growth = 3.0 * absolute_sum(self.even_rule()).max(absolute_sum(self.odd_rule()));
+        let bound = crate::point::largest_coordinate(points) * growth.powi(levels.min(i32::MAX as u32) as i32);
+        bound < f64::MAX / 2.0
+    }
+
     /// Checks that `points` can be refined: enough points, all finite.
     pub(crate) fn validate<P: crate::CurvePoint>(&self, points: &[P], topology: Topology) -> Result<(), CurveError> {
         let needed = self.min_points(topology);

@@ -158,3 +158,55 @@ fn open_end_rule_keeps_the_end_points_and_records_the_end_details() {
     assert!(max_difference(&split.coarse, &coarse) < 1e-15);
     assert!(split.details.iter().all(|d| d.length() < 1e-15));
 }
+
+#[test]
+fn coordinates_that_overflow_are_an_error_not_infinities() {
+    // Found by the `points_chaikin` fuzz target: finite points beyond half of `f64::MAX`
+    // reversed to infinite coarse points, and reconstruction then gave NaN.
+    let huge: Vec<[f64; 2]> = (0..6).map(|i| [1.7e308, f64::from(i)]).collect();
+    for topology in topologies() {
+        let error = reverse_chaikin(&huge, topology).unwrap_err();
+        assert!(matches!(error, CurveError::Overflow { .. }), "{error}");
+        assert!(error.to_string().starts_with("reverse Chaikin (coarse points): point "), "{error}");
+        assert!(decompose_chaikin(&huge, topology, 3).is_err());
+    }
+    // Details that push a reconstructed point past the largest `f64`.
+    let coarse = [[1e308, 0.0], [1e308, 1.0], [0.0, 1.0]];
+    let details = [[1e308, 0.0], [0.0, 0.0], [0.0, 0.0]];
+    let error = reconstruct_chaikin(&coarse, &details, Topology::Closed).unwrap_err();
+    assert_eq!(error, CurveError::Overflow { what: "Chaikin reconstruction", index: 0 });
+    // Finite coarse points and details whose candidates `c + d`, `c - d` are not: refused
+    // (reconstruction forms them). Found by the fuzz target after the first fix.
+    let text = "1.7e308 0\n-1.7e08 3\n1.7308 1\n1.7e308 2\n-1.e307 4\n1.7e208 5\n";
+    let subdiv_curve::io::PointSet::Planar(points) = subdiv_curve::io::parse_points(text).unwrap() else {
+        panic!("planar points")
+    };
+    let error = reverse_chaikin(&points, Topology::Closed).unwrap_err();
+    assert!(matches!(error, CurveError::Overflow { what: "reverse Chaikin (candidate points)", .. }), "{error}");
+    // Large coordinates that stay finite are reversed exactly.
+    let large: Vec<[f64; 2]> = (0..6).map(|i| [8.0e307 + f64::from(i) * 1e300, 1.0]).collect();
+    let split = reverse_chaikin(&large, Topology::Closed).unwrap();
+    let back = reconstruct_chaikin(&split.coarse, &split.details, Topology::Closed).unwrap();
+    assert!(back.iter().zip(&large).all(|(a, b)| (a[0] - b[0]).abs() <= 1e-15 * b[0]));
+}
+
+#[test]
+fn refinement_that_overflows_is_an_error_and_large_finite_input_is_not() {
+    // Found by the same fuzz target: the four-point rule (weights -1/16, 9/16, 9/16,
+    // -1/16) puts the new point between two points of 1.7e308 whose outer neighbours
+    // are -1.7e308 at 9/8 of that, past the largest `f64`.
+    let alternating: Vec<[f64; 2]> =
+        [1.7e308, -1.7e308, 1.7e308, -1.7e308, 1.7e308, 1.7e308].iter().map(|&x| [x, 1.0]).collect();
+    let four_point = CurveScheme::four_point(1.0 / 16.0).unwrap();
+    for topology in [Topology::Closed, Topology::open()] {
+        let error = four_point.refine(&alternating, topology, 1).unwrap_err();
+        assert!(matches!(error, CurveError::Overflow { what: "refinement", .. }), "{error}");
+    }
+    // Chaikin's weights are convex: the same points refine to finite points.
+    let fine = CurveScheme::chaikin().refine(&alternating, Topology::Closed, 3).unwrap();
+    assert!(fine.iter().all(|p| p[0].is_finite()));
+    // The framework checks its result too (every point interpolated: virtual points).
+    let framework = subdiv_curve::Framework::published();
+    let error = framework.refine(&alternating, &[true; 6], Topology::Closed, 2).unwrap_err();
+    assert!(matches!(error, CurveError::Overflow { what: "framework refinement", .. }), "{error}");
+}
