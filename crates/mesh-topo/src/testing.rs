@@ -74,6 +74,40 @@ pub fn scramble(soup: PolygonSoup, seed: u64, jitter: f64) -> PolygonSoup {
     out
 }
 
+/// Renumbers vertices, reorders faces and rotates each face's corner list, every choice
+/// made by `pick(k)`, a number in `0..=k` (out-of-range answers are clamped): the same
+/// surface in another order. For fuzz targets, which draw the choices from their input
+/// bytes; [`scramble`] draws them from a seed and keeps the face order.
+///
+/// ```
+/// use mesh_topo::{shapes, testing::shuffle};
+/// let cube = shapes::cube();
+/// let reversed = shuffle(&cube, |k| k);
+/// assert_eq!((reversed.vertex_count(), reversed.face_count()), (8, 6));
+/// assert_eq!(shuffle(&cube, |_| 0).face_count(), 6);
+/// ```
+pub fn shuffle(soup: &PolygonSoup, mut pick: impl FnMut(usize) -> usize) -> PolygonSoup {
+    let mut pick = move |k: usize| pick(k).min(k);
+    let n = soup.vertex_count();
+    let mut new_of_old: Vec<u32> = (0..n as u32).collect();
+    for i in (1..n).rev() {
+        new_of_old.swap(i, pick(i));
+    }
+    let mut positions = vec![DVec3::ZERO; n];
+    for (old, &new) in new_of_old.iter().enumerate() {
+        positions[new as usize] = soup.positions[old];
+    }
+    let mut faces: Vec<Vec<u32>> = soup.faces().map(|f| f.iter().map(|&v| new_of_old[v as usize]).collect()).collect();
+    for i in (1..faces.len()).rev() {
+        faces.swap(i, pick(i));
+    }
+    for face in &mut faces {
+        let shift = pick(face.len().saturating_sub(1));
+        face.rotate_left(shift);
+    }
+    PolygonSoup::from_faces(positions, faces)
+}
+
 /// A random valid polygon mesh soup (see the module docs).
 pub fn arb_mesh() -> impl Strategy<Value = PolygonSoup> {
     (arb_shape(), any::<u64>(), 0.0..0.2f64).prop_map(|(soup, seed, jitter)| scramble(soup, seed, jitter))

@@ -59,27 +59,6 @@ fn base_shape(u: &mut Unstructured<'_>) -> arbitrary::Result<PolygonSoup> {
     })
 }
 
-fn renumber(soup: &PolygonSoup, u: &mut Unstructured<'_>) -> arbitrary::Result<PolygonSoup> {
-    let n = soup.vertex_count();
-    let mut new_of_old: Vec<u32> = (0..n as u32).collect();
-    for i in (1..n).rev() {
-        new_of_old.swap(i, u.int_in_range(0..=i)?);
-    }
-    let mut positions = vec![DVec3::ZERO; n];
-    for (old, &new) in new_of_old.iter().enumerate() {
-        positions[new as usize] = soup.positions[old];
-    }
-    let mut faces: Vec<Vec<u32>> = soup.faces().map(|f| f.iter().map(|&v| new_of_old[v as usize]).collect()).collect();
-    for i in (1..faces.len()).rev() {
-        faces.swap(i, u.int_in_range(0..=i)?);
-    }
-    for face in &mut faces {
-        let shift = u.int_in_range(0..=face.len() - 1)?;
-        face.rotate_left(shift);
-    }
-    Ok(PolygonSoup::from_faces(positions, faces))
-}
-
 fn damage(soup: &PolygonSoup, u: &mut Unstructured<'_>) -> arbitrary::Result<PolygonSoup> {
     let mut faces: Vec<Vec<u32>> = soup.faces().map(<[u32]>::to_vec).collect();
     if faces.is_empty() {
@@ -158,7 +137,7 @@ fuzz_target!(|data: &[u8]| {
             doo_mesh = true;
         }
         if bool::arbitrary(u)? {
-            soup = renumber(&soup, u)?;
+            soup = mesh_topo::testing::shuffle(&soup, |k| u.int_in_range(0..=k).unwrap_or(0));
         }
         let damaged = bool::arbitrary(u)?;
         if damaged {
