@@ -275,3 +275,35 @@ fn bad_input_gives_one_error_line_and_no_output() {
     fails(&["reconstruct", "moved.mres", "out.obj", "--keep", "1.5"], d, "out.obj");
     fails(&["reconstruct", "moved.mres", "out.obj", "--keep", "NaN"], d, "out.obj");
 }
+
+#[test]
+fn the_chaikin_boundary_rule_subdivides_decomposes_and_rebuilds() {
+    // An open quad grid, three Chaikin-boundary steps, one boundary point moved: the
+    // pyramid of the same rule goes back to the grid and rebuilds the mesh exactly.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let grid = shapes::grid(3, 2, shapes::CellKind::Quads).unwrap();
+    write(&d.join("grid.obj"), &grid);
+    let printed = ok(
+        &["subdivide", "grid.obj", "fine.obj", "--scheme", "doo-sabin", "--levels", "3", "--boundary", "chaikin"],
+        d,
+    );
+    assert!(printed.contains("doo-sabin x3, chaikin boundary"), "{printed}");
+    let mut fine = read(&d.join("fine.obj"));
+    let last = fine.vertex_count() - 1;
+    fine.positions[last].z += 0.1;
+    write(&d.join("moved.obj"), &fine);
+    let printed =
+        ok(&["decompose", "moved.obj", "moved.mres", "--scheme", "doo-sabin", "--max", "--boundary", "chaikin"], d);
+    assert!(printed.contains("decomposed 3 Doo-Sabin level(s): base 12 vertices, 6 faces"), "{printed}");
+    let printed = ok(&["reconstruct", "moved.mres", "rebuilt.obj"], d);
+    assert!(printed.contains("chaikin boundary"), "{printed}");
+    assert!(relative_error(&read(&d.join("rebuilt.obj")), &fine) < 1e-12);
+    // reverse gives the grid back (up to vertex numbering: same faces and corners).
+    let printed =
+        ok(&["reverse", "fine.obj", "coarse.obj", "--scheme", "doo", "--levels", "3", "--boundary", "chaikin"], d);
+    assert!(printed.contains("-> 12 vertices, 6 faces"), "{printed}");
+    // Loop takes no --boundary.
+    let error = fails(&["subdivide", "grid.obj", "bad.obj", "--scheme", "loop", "--boundary", "chaikin"], d, "bad.obj");
+    assert!(error.contains("--boundary applies to the Doo-Sabin schemes only"), "{error}");
+}

@@ -12,12 +12,12 @@ use std::path::Path;
 use mesh_topo::io::WriteOptions;
 use subdiv_doo::analysis::{ReifReport, reif_check};
 use subdiv_doo::pyramid::{DecomposeOptions, Depth, DooPyramid, decompose as decompose_mesh};
-use subdiv_doo::{DooError, DooOptions, FaceRule, SeedChoice, subdivide_soup};
+use subdiv_doo::{BoundaryRule, DooError, DooOptions, FaceRule, SeedChoice, subdivide_soup};
 
 use super::common::{note_dropped, read_mesh, read_soup, write_soup};
 use super::{
-    AnalyzeArgs, AnalyzeScheme, CliError, CliResult, DecomposeArgs, ReconstructArgs, ReverseArgs, ReverseScheme,
-    SubdivideArgs, SurfaceScheme, input_error,
+    AnalyzeArgs, AnalyzeScheme, BoundaryArg, CliError, CliResult, DecomposeArgs, ReconstructArgs, ReverseArgs,
+    ReverseScheme, SubdivideArgs, SurfaceScheme, input_error,
 };
 
 /// The per-face rule that `reverse` and `decompose` invert: that of `subdivide` with the
@@ -37,6 +37,14 @@ fn reverse_rule(scheme: ReverseScheme, keep_corners: bool) -> Result<FaceRule, C
 /// Fractions of the rate-distortion table printed by `decompose --report`.
 const REPORT_FRACTIONS: [f64; 9] = [1.0, 0.5, 0.25, 0.1, 0.05, 0.02, 0.01, 0.005, 0.0];
 
+/// The boundary rule of `--boundary` (default: shrink).
+fn boundary_rule(arg: Option<BoundaryArg>) -> BoundaryRule {
+    match arg {
+        None | Some(BoundaryArg::Shrink) => BoundaryRule::Shrink,
+        Some(BoundaryArg::Chaikin) => BoundaryRule::Chaikin,
+    }
+}
+
 fn doo_error(path: &Path, error: DooError) -> CliError {
     input_error(path.display(), error)
 }
@@ -54,15 +62,17 @@ pub fn subdivide(args: &SubdivideArgs) -> CliResult {
     }
     let (soup, report) = read_soup(&args.mesh)?;
     note_dropped(&args.mesh, &report);
-    let fine = subdivide_soup(&soup, &DooOptions::new(rule, args.levels)).map_err(|e| doo_error(&args.mesh, e))?;
+    let options = DooOptions::new(rule, args.levels).with_boundary(boundary_rule(args.boundary));
+    let fine = subdivide_soup(&soup, &options).map_err(|e| doo_error(&args.mesh, e))?;
     drop(soup);
     let [ff, fe, fv] = fine.kind_counts();
     let (vertices, faces) = (fine.vertex_count(), fine.face_count());
     write_soup(&args.out, &fine.into_soup(), &WriteOptions::default())?;
     println!(
-        "{} x{}: {vertices} vertices, {faces} faces (last level: {ff} F_F, {fe} F_E, {fv} F_V)",
+        "{} x{}, {} boundary: {vertices} vertices, {faces} faces (last level: {ff} F_F, {fe} F_E, {fv} F_V)",
         rule.name(),
-        args.levels
+        args.levels,
+        options.boundary
     );
     Ok(())
 }
@@ -105,6 +115,7 @@ pub fn reverse(args: &ReverseArgs) -> CliResult {
         rule,
         depth: Depth::Levels(args.levels),
         seeds: args.seed_face.map(|f| vec![f as usize]).unwrap_or_default(),
+        boundary: boundary_rule(args.boundary),
     };
     let decomposition = decompose_mesh(&mesh, &options).map_err(|e| doo_error(&args.mesh, e))?;
     let pyramid = &decomposition.pyramid;
@@ -132,7 +143,7 @@ pub fn decompose(args: &DecomposeArgs) -> CliResult {
     let rule = reverse_rule(args.scheme, args.keep_corners)?;
     let mesh = read_mesh(&args.mesh)?;
     let depth = if args.max { Depth::Max } else { Depth::Levels(args.levels) };
-    let options = DecomposeOptions { rule, depth, seeds: Vec::new() };
+    let options = DecomposeOptions { rule, depth, seeds: Vec::new(), boundary: boundary_rule(args.boundary) };
     let decomposition = decompose_mesh(&mesh, &options).map_err(|e| doo_error(&args.mesh, e))?;
     let pyramid = &decomposition.pyramid;
     let report = if args.report {
@@ -194,9 +205,10 @@ pub fn reconstruct(args: &ReconstructArgs, bytes: &[u8]) -> CliResult {
     let soup = pyramid.reconstruct(level, args.keep).map_err(|e| doo_error(&args.input, e))?;
     write_soup(&args.out, &soup, &WriteOptions::default())?;
     println!(
-        "reconstructed level {level} of {} ({}): {} vertices, {} faces{}",
+        "reconstructed level {level} of {} ({}, {} boundary): {} vertices, {} faces{}",
         pyramid.level_count(),
         pyramid.rule.name(),
+        pyramid.boundary,
         soup.vertex_count(),
         soup.face_count(),
         args.keep.map_or(String::new(), |f| format!(" (keeping the largest {f} of the details)"))

@@ -133,6 +133,13 @@ pub enum SurfaceScheme {
     DooCentroid,
 }
 
+impl SurfaceScheme {
+    /// True for the Doo-Sabin schemes.
+    pub fn is_doo(self) -> bool {
+        matches!(self, Self::DooSabin | Self::DooSimple | Self::DooCentroid)
+    }
+}
+
 /// Options of `subdivide`.
 #[derive(Debug, Args)]
 pub struct SubdivideArgs {
@@ -149,6 +156,20 @@ pub struct SubdivideArgs {
     /// Keep boundary corners (valence-2 boundary vertices) fixed (Loop schemes).
     #[arg(long)]
     pub keep_corners: bool,
+    /// What the Doo-Sabin step does at the boundary: `shrink` (no faces there, the
+    /// default) or `chaikin` (boundary quads and vertex faces through the Chaikin points:
+    /// the boundary converges to the quadratic B-spline of the boundary polygon).
+    #[arg(long, value_enum)]
+    pub boundary: Option<BoundaryArg>,
+}
+
+/// Boundary rules of the Doo-Sabin schemes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BoundaryArg {
+    /// No faces at boundary edges and vertices (the mesh shrinks level by level).
+    Shrink,
+    /// Boundary quads and vertex faces through the Chaikin points of the boundary edges.
+    Chaikin,
 }
 
 /// Reversible schemes: the family, and the rule the mesh is assumed to come from (the
@@ -197,6 +218,11 @@ pub struct ReverseArgs {
     /// fixed (Loop schemes).
     #[arg(long)]
     pub keep_corners: bool,
+    /// The boundary rule the mesh was subdivided with: what the Doo-Sabin step does at the boundary: `shrink` (no faces there, the
+    /// default) or `chaikin` (boundary quads and vertex faces through the Chaikin points:
+    /// the boundary converges to the quadratic B-spline of the boundary polygon).
+    #[arg(long, value_enum)]
+    pub boundary: Option<BoundaryArg>,
 }
 
 /// Options of `decompose`.
@@ -222,6 +248,11 @@ pub struct DecomposeArgs {
     /// fixed (Loop schemes).
     #[arg(long)]
     pub keep_corners: bool,
+    /// The boundary rule the mesh was subdivided with: what the Doo-Sabin step does at the boundary: `shrink` (no faces there, the
+    /// default) or `chaikin` (boundary quads and vertex faces through the Chaikin points:
+    /// the boundary converges to the quadratic B-spline of the boundary polygon).
+    #[arg(long, value_enum)]
+    pub boundary: Option<BoundaryArg>,
 }
 
 /// Options of `reconstruct`.
@@ -292,6 +323,15 @@ pub fn run(cli: Cli) -> CliResult {
         Some(Command::Convert(args)) => mesh_cmds::convert(&args),
         Some(Command::Render(args)) => mesh_cmds::render(&args),
         Some(Command::Demo(args)) => demo::demo(&args),
+        Some(Command::Subdivide(args)) if args.boundary.is_some() && !args.scheme.is_doo() => {
+            Err(CliError::Input("--boundary applies to the Doo-Sabin schemes only".into()))
+        }
+        Some(Command::Reverse(args)) if args.boundary.is_some() && args.scheme.is_loop() => {
+            Err(CliError::Input("--boundary applies to the Doo-Sabin schemes only".into()))
+        }
+        Some(Command::Decompose(args)) if args.boundary.is_some() && args.scheme.is_loop() => {
+            Err(CliError::Input("--boundary applies to the Doo-Sabin schemes only".into()))
+        }
         Some(Command::Subdivide(args)) => match args.scheme {
             SurfaceScheme::Loop
             | SurfaceScheme::LoopWarren

@@ -239,6 +239,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         order: FineOrder::default(),
         choices: vec![choice],
         stats,
+        boundary: crate::BoundaryRule::Shrink,
     })
 }
 

@@ -308,9 +308,11 @@ pub enum FaceOrigin {
     /// An F_F face: the shrunken copy of coarse face `.0`.
     Face(u32),
     /// An F_E quad: across coarse edge `.0` (numbered as `mesh-topo` numbers the edges of
-    /// the coarse mesh: in order of first appearance, face by face, corner by corner).
+    /// the coarse mesh: in order of first appearance, face by face, corner by corner); or,
+    /// under [`crate::BoundaryRule::Chaikin`], the boundary quad of boundary edge `.0`.
     Edge(u32),
-    /// An F_V face: around interior coarse vertex `.0`.
+    /// An F_V face: around interior coarse vertex `.0`; or, under
+    /// [`crate::BoundaryRule::Chaikin`], the boundary vertex face of boundary vertex `.0`.
     Vertex(u32),
 }
 
@@ -355,6 +357,10 @@ pub(crate) struct DooTopology {
     pub vertex_parent: Option<Vec<u32>>,
     /// Fine corner twins and next corners, if asked for.
     pub adjacency: Option<(Vec<u32>, Vec<u32>)>,
+    /// Under the Chaikin boundary rule: coarse edge of each boundary quad, then coarse
+    /// vertex of each boundary vertex face (faces after the F_V faces; empty otherwise).
+    pub ring_edge_parent: Vec<u32>,
+    pub ring_vertex_parent: Vec<u32>,
 }
 
 impl DooTopology {
@@ -379,9 +385,15 @@ impl DooTopology {
         } else if f < fe_end {
             let q = f - self.ff_count;
             FaceOrigin::Edge(self.edge_parent.as_ref().map_or(q as u32, |p| p[q]))
-        } else {
+        } else if f < fe_end + self.fv_count {
             let k = f - fe_end;
             FaceOrigin::Vertex(self.vertex_parent.as_ref().map_or(k as u32, |p| p[k]))
+        } else {
+            let k = f - fe_end - self.fv_count;
+            match self.ring_edge_parent.get(k) {
+                Some(&e) => FaceOrigin::Edge(e),
+                None => FaceOrigin::Vertex(self.ring_vertex_parent[k - self.ring_edge_parent.len()]),
+            }
         }
     }
 }
@@ -510,7 +522,17 @@ pub(crate) fn doo_topology(coarse: &CornerMesh, with_adjacency: bool) -> Result<
     let fv_count = offsets.len() - 1 - faces - fe_count;
     check_size("fine faces", offsets.len() - 1)?;
     let adjacency = with_adjacency.then_some((twins, nexts));
-    Ok(DooTopology { offsets, indices, ff_count: faces, fe_count, fv_count, edge_parent, vertex_parent, adjacency })
+    Ok(DooTopology {
+        offsets,
+        indices,
+        ff_count: faces,
+        fe_count,
+        fv_count,
+        edge_parent,
+        vertex_parent,
+        adjacency,
+        ..DooTopology::default()
+    })
 }
 
 /// Splits `out` into pieces following whole faces, about `pieces` of them, so that

@@ -23,10 +23,14 @@
 //! [`DooMesh::face_origin`] tells each fine face's kind and parent element.
 //!
 //! # Boundaries
-//! As in the reverse-Doo paper and in CGAL: boundary edges get no F_E quad and boundary
-//! vertices no F_V face, so an open mesh shrinks a little at every level and its limit
-//! surface does not reach the coarse boundary. The fine boundary consists of F_F edges
-//! only, which is what makes the step exactly reversible ([`crate::reverse`](mod@crate::reverse)).
+//! By default ([`BoundaryRule::Shrink`]), as in the reverse-Doo paper and in CGAL:
+//! boundary edges get no F_E quad and boundary vertices no F_V face, so an open mesh
+//! shrinks a little at every level and its limit surface does not reach the coarse
+//! boundary. [`BoundaryRule::Chaikin`] adds a ring of boundary quads and boundary vertex
+//! faces through the Chaikin points of the boundary edges, so that the boundary
+//! converges to the quadratic B-spline curve of the boundary polygon
+//! ([`crate::boundary`]; its ring and points come after everything listed above). Both
+//! are exactly reversible ([`crate::reverse`](mod@crate::reverse)).
 //!
 //! # Isolated vertices
 //! A vertex that no face uses has no corner, so it has no image in the fine mesh: it is
@@ -44,6 +48,7 @@ use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 
 use crate::DooError;
+use crate::boundary::BoundaryRule;
 use crate::corner::{CornerMesh, DooTopology, FaceKind, FaceOrigin, doo_topology, face_points};
 use crate::rule::{FaceMaps, FaceRule};
 
@@ -54,18 +59,39 @@ pub struct DooOptions {
     pub rule: FaceRule,
     /// Number of steps (default 1). Zero returns the input mesh.
     pub levels: u32,
+    /// What happens at the boundary (default: [`BoundaryRule::Shrink`]).
+    pub boundary: BoundaryRule,
 }
 
 impl Default for DooOptions {
     fn default() -> Self {
-        Self { rule: FaceRule::DooSabin, levels: 1 }
+        Self { rule: FaceRule::DooSabin, levels: 1, boundary: BoundaryRule::Shrink }
     }
 }
 
 impl DooOptions {
-    /// `levels` steps of `rule`.
+    /// `levels` steps of `rule`, boundaries shrinking.
     pub fn new(rule: FaceRule, levels: u32) -> Self {
-        Self { rule, levels }
+        Self { rule, levels, boundary: BoundaryRule::Shrink }
+    }
+
+    /// The same options with the boundary rule `boundary`.
+    ///
+    /// ```
+    /// use subdiv_doo::{BoundaryRule, DooOptions, FaceRule, subdivide};
+    /// use mesh_topo::{HalfedgeMesh, shapes::{self, CellKind}};
+    /// // A flat 2 x 2 grid of quads: 9 vertices, 8 boundary edges.
+    /// let grid = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads)?)?;
+    /// let options = DooOptions::new(FaceRule::DooSabin, 1).with_boundary(BoundaryRule::Chaikin);
+    /// let fine = subdivide(&grid, &options)?;
+    /// // 16 corners and 2 Chaikin points per boundary edge; F_F, F_E (4 interior + 8
+    /// // boundary quads) and F_V (1 interior + 8 boundary vertex faces).
+    /// assert_eq!(fine.vertex_count(), 16 + 2 * 8);
+    /// assert_eq!(fine.kind_counts(), [4, 4 + 8, 1 + 8]);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn with_boundary(self, boundary: BoundaryRule) -> Self {
+        Self { boundary, ..self }
     }
 }
 
@@ -127,9 +153,16 @@ impl DooMesh {
         self.face_origin(f).kind()
     }
 
-    /// Numbers of F_F, F_E and F_V faces (the three consecutive blocks of faces).
+    /// Numbers of F_F, F_E and F_V faces. Under the Shrink rule they are three consecutive
+    /// blocks of faces; under the Chaikin rule the boundary quads (counted as F_E) and the
+    /// boundary vertex faces (counted as F_V) follow as two more blocks.
     pub fn kind_counts(&self) -> [usize; 3] {
-        [self.topology.ff_count, self.topology.fe_count, self.topology.fv_count]
+        let t = &self.topology;
+        [t.ff_count, t.fe_count + t.ring_edge_parent.len(), t.fv_count + t.ring_vertex_parent.len()]
+    }
+
+    pub(crate) fn from_parts(positions: Vec<DVec3>, topology: DooTopology) -> Self {
+        Self { positions, topology }
     }
 
     /// The mesh as a polygon soup (copies).
@@ -205,6 +238,9 @@ pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, D
         return Ok(DooMesh { positions: soup.positions, topology });
     }
     let corners = CornerMesh::from_halfedge(mesh);
+    if options.boundary == BoundaryRule::Chaikin {
+        return crate::boundary::subdivide_chaikin(corners, mesh.positions().to_vec(), options);
+    }
     subdivide_corner_mesh(corners, mesh.positions().to_vec(), options)
 }
 

@@ -27,18 +27,21 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
 use serde::{Deserialize, Serialize};
 
 use crate::DooError;
+use crate::boundary::{BoundaryRule, Ring, reverse_chaikin_corner_mesh};
 use crate::corner::{CornerMesh, NONE, doo_topology};
 use crate::forward::check_finite;
 use crate::reverse::{
-    CornersByVertex, FineOrder, ReverseOptions, SeedChoice, Session, corners_by_vertex, level_candidates,
-    level_from_candidates, reconstruct_level,
+    CornersByVertex, FineOrder, Level, ReverseOptions, SeedChoice, Session, corners_by_vertex, level_candidates,
+    level_from_candidates, reconstruct_level_with,
 };
 use crate::rule::FaceRule;
 
 /// Magic number of a Doo-Sabin `.mres` pyramid.
 pub const PYRAMID_MAGIC: [u8; 8] = *b"MRSDOO\0\0";
-/// Current version of the Doo-Sabin pyramid format.
-pub const PYRAMID_VERSION: u32 = 1;
+/// Current version of the Doo-Sabin pyramid format. Version 2 added the boundary rule
+/// ([`DooPyramid::boundary`]); version 1 files (always [`BoundaryRule::Shrink`]) are
+/// still read.
+pub const PYRAMID_VERSION: u32 = 2;
 
 /// True if `bytes` starts like a Doo-Sabin pyramid file.
 pub fn is_doo_pyramid(bytes: &[u8]) -> bool {
@@ -69,17 +72,24 @@ pub struct DecomposeOptions {
     /// Seed faces for the first (finest) reversal; coarser levels use the automatic
     /// choice (their F_F faces are found automatically).
     pub seeds: Vec<usize>,
+    /// The boundary rule the mesh is assumed to come from.
+    pub boundary: BoundaryRule,
 }
 
 impl DecomposeOptions {
     /// `levels` levels with automatic seeds.
     pub fn levels(rule: FaceRule, levels: u32) -> Self {
-        Self { rule, depth: Depth::Levels(levels), seeds: Vec::new() }
+        Self { rule, depth: Depth::Levels(levels), seeds: Vec::new(), boundary: BoundaryRule::Shrink }
     }
 
     /// As many levels as possible, automatic seeds.
     pub fn max(rule: FaceRule) -> Self {
-        Self { rule, depth: Depth::Max, seeds: Vec::new() }
+        Self { rule, depth: Depth::Max, seeds: Vec::new(), boundary: BoundaryRule::Shrink }
+    }
+
+    /// The same options for a mesh made with the boundary rule `boundary`.
+    pub fn with_boundary(self, boundary: BoundaryRule) -> Self {
+        Self { boundary, ..self }
     }
 }
 
@@ -101,6 +111,17 @@ pub struct DooPyramid {
     pub base: PolygonSoup,
     /// Levels from coarse to fine: `levels[0]` rebuilds level 1 from the base.
     pub levels: Vec<PyramidLevel>,
+    /// The boundary rule of every level (under [`BoundaryRule::Chaikin`] each level's
+    /// details end with two per boundary edge of the mesh it refines).
+    pub boundary: BoundaryRule,
+}
+
+/// The layout of version 1 files (no boundary rule: [`BoundaryRule::Shrink`]).
+#[derive(Deserialize)]
+struct DooPyramidV1 {
+    rule: FaceRule,
+    base: PolygonSoup,
+    levels: Vec<PyramidLevel>,
 }
 
 /// A pyramid and the reports of the reversals that made it.
@@ -161,7 +182,12 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
     // A mesh in the canonical order: the first level without the general search (the
     // same result; `None` when it does not apply, also when a position is not finite,
     // so that the check below names it).
-    let first = crate::canonical::reverse_canonical(mesh, &reverse_options(options, 0)).map(Step::from_reversal);
+    let first = match options.boundary {
+        BoundaryRule::Shrink => {
+            crate::canonical::reverse_canonical(mesh, &reverse_options(options, 0)).map(Step::from_reversal)
+        }
+        BoundaryRule::Chaikin => None,
+    };
     if first.is_none() {
         check_finite(mesh.positions())?;
     }
@@ -232,7 +258,8 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
         levels.push(PyramidLevel { details: step.details, order: step.order });
     }
     choices.reverse();
-    Ok(Decomposition { pyramid: DooPyramid { rule: options.rule, base, levels }, choices, stopped })
+    let pyramid = DooPyramid { rule: options.rule, base, levels, boundary: options.boundary };
+    Ok(Decomposition { pyramid, choices, stopped })
 }
 
 /// One reversal of a decomposition.
@@ -252,7 +279,11 @@ impl Step {
 }
 
 fn reverse_options(options: &DecomposeOptions, level: u32) -> ReverseOptions {
-    ReverseOptions { rule: options.rule, seeds: if level == 0 { options.seeds.clone() } else { Vec::new() } }
+    ReverseOptions {
+        rule: options.rule,
+        seeds: if level == 0 { options.seeds.clone() } else { Vec::new() },
+        boundary: options.boundary,
+    }
 }
 
 fn with_level(error: DooError, level: u32) -> DooError {
@@ -275,6 +306,15 @@ fn descend(
 ) -> Result<Vec<Step>, DooError> {
     if level == target {
         return Ok(Vec::new());
+    }
+    if options.boundary == BoundaryRule::Chaikin {
+        // One reading per level (the best that fits the boundary ring), no backtracking.
+        let reversal = reverse_chaikin_corner_mesh(fine, positions, &reverse_options(options, level))
+            .map_err(|e| with_level(e, level))?;
+        let step = Step::from_reversal(reversal);
+        let mut steps = descend(&step.coarse, &step.coarse_positions, options, level + 1, target)?;
+        steps.insert(0, step);
+        return Ok(steps);
     }
     let mut session =
         Session::new(fine, positions, &reverse_options(options, level)).map_err(|e| with_level(e, level))?;
@@ -309,6 +349,11 @@ fn greedy_step(
     options: &DecomposeOptions,
     level: u32,
 ) -> Result<Step, DooError> {
+    if options.boundary == BoundaryRule::Chaikin {
+        return reverse_chaikin_corner_mesh(fine, positions, &reverse_options(options, level))
+            .map(Step::from_reversal)
+            .map_err(|e| with_level(e, level));
+    }
     let mut session =
         Session::new(fine, positions, &reverse_options(options, level)).map_err(|e| with_level(e, level))?;
     let mut fallback = None;
@@ -425,7 +470,11 @@ impl DooPyramid {
     /// Checks the arrays of level `k` against the mesh it refines.
     fn check_level(&self, k: usize, coarse: &CornerMesh, data: &PyramidLevel) -> Result<(), DooError> {
         let fail = |what: String| Err(DooError::InvalidPyramid(format!("level {}: {what}", k + 1)));
-        let corners = coarse.corner_count();
+        let ring = match self.boundary {
+            BoundaryRule::Shrink => None,
+            BoundaryRule::Chaikin => Some(Ring::of(coarse).map_err(|e| DooError::InvalidPyramid(e.to_string()))?),
+        };
+        let corners = coarse.corner_count() + ring.as_ref().map_or(0, |r| 2 * r.quad_count());
         if data.details.len() + coarse.vertex_count != corners {
             return fail(format!(
                 "{} details for {} coarse vertices and {corners} fine vertices",
@@ -443,7 +492,11 @@ impl DooPyramid {
         if order.faces.is_empty() && order.rotations.is_empty() {
             return Ok(());
         }
-        let topology = doo_topology(coarse, false).map_err(|e| DooError::InvalidPyramid(e.to_string()))?;
+        let mut topology = doo_topology(coarse, false).map_err(|e| DooError::InvalidPyramid(e.to_string()))?;
+        if let Some(ring) = &ring {
+            let base = *topology.offsets.last().expect("internal: offsets start with 0");
+            topology.offsets.extend(ring.offsets[1..].iter().map(|&o| base + o));
+        }
         let faces = topology.offsets.len() - 1;
         if !order.faces.is_empty() && !is_permutation(&order.faces, faces) {
             return fail("the face order is not a permutation of the fine faces".into());
@@ -526,7 +579,14 @@ impl DooPyramid {
     /// [`DooError::Binary`] for a truncated, corrupted or foreign file;
     /// [`DooError::InvalidPyramid`] if the content is inconsistent.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, DooError> {
-        let pyramid: DooPyramid = binary::decode(bytes, PYRAMID_MAGIC, PYRAMID_VERSION, "multires Doo-Sabin pyramid")?;
+        const WHAT: &str = "multires Doo-Sabin pyramid";
+        let pyramid: DooPyramid = match binary::decode(bytes, PYRAMID_MAGIC, PYRAMID_VERSION, WHAT) {
+            Err(binary::BinaryError::UnsupportedVersion { found: 1, .. }) => {
+                let DooPyramidV1 { rule, base, levels } = binary::decode(bytes, PYRAMID_MAGIC, 1, WHAT)?;
+                DooPyramid { rule, base, levels, boundary: BoundaryRule::Shrink }
+            }
+            decoded => decoded?,
+        };
         pyramid.validate()?;
         Ok(pyramid)
     }
@@ -546,7 +606,8 @@ impl DooPyramid {
                 // Connectivity only: zero positions and details.
                 let zeros = vec![DVec3::ZERO; mesh.vertex_count];
                 let details = vec![DVec3::ZERO; data.details.len()];
-                mesh = reconstruct_level(&mesh, &zeros, &details, &data.order, self.rule, true)
+                let level = Level { details: &details, order: &data.order, rule: self.rule, boundary: self.boundary };
+                mesh = reconstruct_level_with(&mesh, &zeros, &level, true)
                     .map_err(|e| DooError::InvalidPyramid(format!("level {}: {e}", k + 1)))?
                     .0;
             }
@@ -603,6 +664,16 @@ impl PreparedDooPyramid<'_> {
                     &filtered
                 }
             };
+            if pyramid.boundary == BoundaryRule::Chaikin {
+                // Ring and Chaikin points on top of the Shrink step (a non-finite detail
+                // is named; an overflow of finite ones is not an error, as below).
+                check_finite(details).map_err(|e| DooError::InvalidPyramid(format!("level {}: detail {e}", k + 1)))?;
+                let data = Level { details, order: &data.order, rule: pyramid.rule, boundary: pyramid.boundary };
+                let next = reconstruct_level_with(mesh, positions, &data, k + 1 < level)
+                    .map_err(|e| DooError::InvalidPyramid(format!("level {}: {e}", k + 1)))?;
+                refined = Some(next);
+                continue;
+            }
             let (candidates, finite) = if k == 0 {
                 level_candidates(&self.base_corners, positions, details)
             } else {
@@ -643,6 +714,29 @@ mod tests {
     use super::*;
     use crate::{DooOptions, subdivide};
     use mesh_topo::shapes;
+
+    #[test]
+    fn version_1_files_are_read_as_shrinking_pyramids() {
+        #[derive(Serialize)]
+        struct Version1<'a> {
+            rule: FaceRule,
+            base: &'a PolygonSoup,
+            levels: &'a [PyramidLevel],
+        }
+        let pyramid = cube_pyramid();
+        assert_eq!(pyramid.boundary, BoundaryRule::Shrink);
+        let old = Version1 { rule: pyramid.rule, base: &pyramid.base, levels: &pyramid.levels };
+        let bytes = binary::encode(PYRAMID_MAGIC, 1, &old).unwrap();
+        assert_eq!(DooPyramid::from_bytes(&bytes).unwrap(), pyramid);
+        // The version is checked before the layout: a version 2 payload under a version 1
+        // header is an error, not a misread.
+        let mut relabelled = pyramid.to_bytes().unwrap();
+        relabelled[8..12].copy_from_slice(&1u32.to_le_bytes());
+        assert!(DooPyramid::from_bytes(&relabelled).is_err());
+        let mut future = pyramid.to_bytes().unwrap();
+        future[8..12].copy_from_slice(&3u32.to_le_bytes());
+        assert!(matches!(DooPyramid::from_bytes(&future), Err(DooError::Binary(_))));
+    }
 
     fn cube_pyramid() -> DooPyramid {
         let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();

@@ -124,6 +124,7 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use serde::{Deserialize, Serialize};
 
 use crate::DooError;
+use crate::boundary::BoundaryRule;
 use crate::canonical::distinct;
 use crate::corner::{
     CornerMesh, NONE, VertexCorners, doo_topology, expand_faces, face_points_in_place, faces_of_corners, group_by_key,
@@ -140,18 +141,25 @@ pub struct ReverseOptions {
     /// Seed faces known to be F_F faces, at most one per connected component; components
     /// without a seed are resolved automatically (see the module docs).
     pub seeds: Vec<usize>,
+    /// The boundary rule the fine mesh is assumed to come from ([`BoundaryRule`]).
+    pub boundary: BoundaryRule,
 }
 
 impl ReverseOptions {
     /// Automatic seeds for every component.
     pub fn auto(rule: FaceRule) -> Self {
-        Self { rule, seeds: Vec::new() }
+        Self { rule, seeds: Vec::new(), boundary: BoundaryRule::Shrink }
     }
 
     /// One given seed face (for a mesh with one component; other components are
     /// resolved automatically).
     pub fn with_seed(rule: FaceRule, seed: usize) -> Self {
-        Self { rule, seeds: vec![seed] }
+        Self { rule, seeds: vec![seed], boundary: BoundaryRule::Shrink }
+    }
+
+    /// The same options for a fine mesh made with the boundary rule `boundary`.
+    pub fn with_boundary(self, boundary: BoundaryRule) -> Self {
+        Self { boundary, ..self }
     }
 }
 
@@ -278,6 +286,7 @@ pub struct DooReversal {
     pub(crate) order: FineOrder,
     pub(crate) choices: Vec<SeedChoice>,
     pub(crate) stats: ReverseStats,
+    pub(crate) boundary: BoundaryRule,
 }
 
 impl DooReversal {
@@ -305,6 +314,13 @@ impl DooReversal {
     /// The rule assumed.
     pub fn rule(&self) -> FaceRule {
         self.rule
+    }
+
+    /// The boundary rule assumed. Under [`BoundaryRule::Chaikin`] the details end with
+    /// two per coarse boundary edge (the offsets of its Chaikin points, see
+    /// [`crate::boundary`]).
+    pub fn boundary(&self) -> BoundaryRule {
+        self.boundary
     }
 
     /// The numbering of the input relative to the canonical Doo-Sabin order.
@@ -338,9 +354,9 @@ impl DooReversal {
     /// # Ok::<(), subdiv_doo::DooError>(())
     /// ```
     pub fn reconstruct(&self) -> PolygonSoup {
-        let (mesh, positions) =
-            reconstruct_level(&self.coarse, &self.coarse_positions, &self.details, &self.order, self.rule, false)
-                .expect("internal: a reversal reconstructs");
+        let level = Level { details: &self.details, order: &self.order, rule: self.rule, boundary: self.boundary };
+        let (mesh, positions) = reconstruct_level_with(&self.coarse, &self.coarse_positions, &level, false)
+            .expect("internal: a reversal reconstructs");
         PolygonSoup { positions, offsets: mesh.offsets, indices: mesh.corner_vertex }
     }
 
@@ -373,6 +389,9 @@ impl DooReversal {
 /// mesh without faces; [`DooError::NonFinite`]; [`DooError::SeedOutOfRange`] and [`DooError::DuplicateSeed`] for bad seeds;
 /// [`DooError::InvalidParameter`] for a bad centroid parameter.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
+    if options.boundary == BoundaryRule::Chaikin {
+        return crate::boundary::reverse_chaikin(fine, options);
+    }
     // `None` also when a position is not finite, so that the check below names it.
     if let Some(reversal) = crate::canonical::reverse_canonical(fine, options) {
         return Ok(reversal);
@@ -1709,7 +1728,16 @@ impl<'a> Search<'a> {
         let mut stats = self.stats;
         stats.candidate_edges = coarse_corners;
         let energies = vec![vertex_energy.iter().sum()];
-        let reversal = DooReversal { rule, coarse, coarse_positions, details, order, choices: Vec::new(), stats };
+        let reversal = DooReversal {
+            rule,
+            coarse,
+            coarse_positions,
+            details,
+            order,
+            choices: Vec::new(),
+            stats,
+            boundary: BoundaryRule::Shrink,
+        };
         Some(Closed { reversal, energies, fv_faces })
     }
 
@@ -1922,7 +1950,16 @@ impl<'a> Search<'a> {
         }
         let mut stats = self.stats;
         stats.candidate_edges = candidate_edges;
-        let reversal = DooReversal { rule, coarse, coarse_positions, details, order, choices: Vec::new(), stats };
+        let reversal = DooReversal {
+            rule,
+            coarse,
+            coarse_positions,
+            details,
+            order,
+            choices: Vec::new(),
+            stats,
+            boundary: BoundaryRule::Shrink,
+        };
         Ok((reversal, energies))
     }
 }
@@ -2321,6 +2358,71 @@ pub(crate) fn reconstruct_level(
     level_from_candidates(coarse, candidates, order, rule, with_adjacency)
 }
 
+/// What one level adds to its coarse mesh: details, numbering and rules.
+pub(crate) struct Level<'a> {
+    pub details: &'a [DVec3],
+    pub order: &'a FineOrder,
+    pub rule: FaceRule,
+    pub boundary: BoundaryRule,
+}
+
+/// [`reconstruct_level`] under either boundary rule. Under [`BoundaryRule::Chaikin`] the
+/// details of the coarse vertices come first (`corners - vertices` of them), then two
+/// per coarse boundary edge; the canonical mesh is the Shrink step plus the boundary ring
+/// ([`crate::boundary`]).
+pub(crate) fn reconstruct_level_with(
+    coarse: &CornerMesh,
+    coarse_positions: &[DVec3],
+    level: &Level<'_>,
+    with_adjacency: bool,
+) -> Result<(CornerMesh, Vec<DVec3>), DooError> {
+    if level.boundary == BoundaryRule::Shrink {
+        return reconstruct_level(coarse, coarse_positions, level.details, level.order, level.rule, with_adjacency);
+    }
+    let vertex_details = coarse.corner_count() - coarse.vertex_count;
+    if level.details.len() < vertex_details {
+        return Err(DooError::InvalidPyramid(format!(
+            "{} details for a coarse mesh of {} corners and {} vertices",
+            level.details.len(),
+            coarse.corner_count(),
+            coarse.vertex_count
+        )));
+    }
+    let (vertex_part, chaikin_part) = level.details.split_at(vertex_details);
+    let (mut positions, _) = level_candidates(&corners_by_vertex(coarse), coarse_positions, vertex_part);
+    face_points_in_place(&coarse.offsets, &FaceMaps::new(level.rule), &mut positions);
+    let topology = doo_topology(coarse, false)?;
+    let (mut offsets, mut indices) = (topology.offsets, topology.indices);
+    crate::boundary::append_ring_level(
+        coarse,
+        coarse_positions,
+        chaikin_part,
+        &mut offsets,
+        &mut indices,
+        &mut positions,
+    )?;
+    let vertex_count = positions.len();
+    let canonical = if with_adjacency {
+        let soup = PolygonSoup { positions: Vec::new(), offsets, indices };
+        let soup = PolygonSoup { positions: vec![DVec3::ZERO; vertex_count], ..soup };
+        CornerMesh::from_soup(&soup).map_err(|reason| {
+            DooError::InvalidPyramid(format!("a Chaikin boundary level is not a manifold mesh: {reason}"))
+        })?
+    } else {
+        CornerMesh {
+            corner_next: next_of_corners(&offsets),
+            offsets,
+            corner_vertex: indices,
+            vertex_count,
+            ..CornerMesh::default()
+        }
+    };
+    if level.order.is_identity() {
+        return Ok((canonical, positions));
+    }
+    Ok(apply_order(canonical, positions, level.order, with_adjacency))
+}
+
 /// The candidates of one level (per coarse corner): each coarse vertex plus the offsets
 /// `d_1 = e_1`, `d_j = e_j - e_{j-1}`, `d_r = -e_{r-1}` decoded from its details, vertex
 /// by vertex. Also tells whether every candidate is finite (so that the caller checks
@@ -2663,7 +2765,7 @@ mod tests {
         // The F_F faces come first: face 6 is the torus's first F_F face.
         let torus_face = 6;
         for seeds in [vec![0], vec![torus_face], vec![0, torus_face], vec![torus_face, 0]] {
-            let options = ReverseOptions { rule: FaceRule::DooSabin, seeds: seeds.clone() };
+            let options = ReverseOptions { rule: FaceRule::DooSabin, seeds: seeds.clone(), ..Default::default() };
             let seeded = reverse(&fine, &options).unwrap();
             assert_eq!(seeded.choices().len(), 2);
             assert_eq!(seeded.choices()[0].given, seeds.contains(&0), "{seeds:?}");
@@ -2673,7 +2775,7 @@ mod tests {
             assert!(max_distance(&seeded.reconstruct().positions, fine.positions()) < 1e-13);
         }
         // Two seeds in one component.
-        let options = ReverseOptions { rule: FaceRule::DooSabin, seeds: vec![1, torus_face, 0] };
+        let options = ReverseOptions { rule: FaceRule::DooSabin, seeds: vec![1, torus_face, 0], ..Default::default() };
         assert!(matches!(reverse(&fine, &options), Err(DooError::DuplicateSeed { first: 1, second: 0 })));
     }
 

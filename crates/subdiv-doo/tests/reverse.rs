@@ -206,9 +206,9 @@ fn several_components_and_genus() {
     assert_eq!(reversal.coarse().face_count(), soup.face_count());
     assert!(max_distance(&reversal.reconstruct().positions, fine.positions()) < 1e-13);
     // Seeds: one per component; two in one component is an error.
-    let seeds = ReverseOptions { rule: FaceRule::DooSabin, seeds: vec![0, 5] };
+    let seeds = ReverseOptions { rule: FaceRule::DooSabin, seeds: vec![0, 5], ..Default::default() };
     assert!(matches!(reverse(&fine, &seeds), Err(DooError::DuplicateSeed { first: 0, second: 5 })));
-    let seeds = ReverseOptions { rule: FaceRule::DooSabin, seeds: vec![1_000_000] };
+    let seeds = ReverseOptions { rule: FaceRule::DooSabin, seeds: vec![1_000_000], ..Default::default() };
     assert!(matches!(reverse(&fine, &seeds), Err(DooError::SeedOutOfRange { .. })));
 }
 

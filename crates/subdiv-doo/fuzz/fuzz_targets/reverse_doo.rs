@@ -2,7 +2,8 @@
 //!
 //! Inputs are built structurally from the fuzz bytes: a procedural base shape (closed or
 //! open, triangles, quads or mixed) or a raw polygon soup, optionally refined one or two
-//! Doo-Sabin steps under any of the three face rules, with some vertices moved (so that
+//! Doo-Sabin steps under any of the three face rules and either boundary rule (read back
+//! with the same boundary rule), with some vertices moved (so that
 //! many inputs do have Doo-Sabin connectivity without being Doo-Sabin surfaces), then
 //! renumbered, and optionally damaged (a face removed, a face turned over, or one corner
 //! of a face sent to another vertex). Whatever comes out, `reverse` and `decompose` must
@@ -18,7 +19,7 @@ use libfuzzer_sys::fuzz_target;
 use mesh_topo::shapes::{self, CellKind};
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use subdiv_doo::pyramid::{DecomposeOptions, Depth, DooPyramid, decompose};
-use subdiv_doo::{DooOptions, FaceRule, ReverseOptions, reverse, subdivide_soup};
+use subdiv_doo::{BoundaryRule, DooOptions, FaceRule, ReverseOptions, reverse, subdivide_soup};
 
 fn coordinate(u: &mut Unstructured<'_>) -> arbitrary::Result<f64> {
     Ok(i16::arbitrary(u)? as f64 / 256.0)
@@ -88,9 +89,9 @@ fn distance_to(fine: &PolygonSoup, rebuilt: &PolygonSoup) -> f64 {
     rebuilt.positions.iter().zip(&fine.positions).map(|(p, q)| p.distance(*q)).fold(0.0, f64::max) / scale
 }
 
-fn check(fine: &PolygonSoup, rule: FaceRule, seed: Option<usize>, must_succeed: bool) {
+fn check(fine: &PolygonSoup, rule: FaceRule, boundary: BoundaryRule, seed: Option<usize>, must_succeed: bool) {
     let Ok(mesh) = HalfedgeMesh::from_soup(fine) else { return };
-    let options = ReverseOptions { rule, seeds: seed.into_iter().collect() };
+    let options = ReverseOptions { rule, seeds: seed.into_iter().collect(), boundary };
     let reversal = match reverse(&mesh, &options) {
         Ok(reversal) => reversal,
         Err(error) => {
@@ -105,7 +106,7 @@ fn check(fine: &PolygonSoup, rule: FaceRule, seed: Option<usize>, must_succeed: 
     assert!(error <= 1e-9, "reconstruction error {error}");
 
     let seeds = options.seeds;
-    let decomposition = decompose(&mesh, &DecomposeOptions { rule, depth: Depth::Max, seeds })
+    let decomposition = decompose(&mesh, &DecomposeOptions { rule, depth: Depth::Max, seeds, boundary })
         .expect("a mesh that reverses decomposes");
     let pyramid = decomposition.pyramid;
     let rebuilt = pyramid.reconstruct(pyramid.level_count(), None).expect("valid pyramid");
@@ -121,11 +122,12 @@ fuzz_target!(|data: &[u8]| {
     let mut u = Unstructured::new(data);
     let run = |u: &mut Unstructured<'_>| -> arbitrary::Result<()> {
         let rule = face_rule(u)?;
+        let boundary = if bool::arbitrary(u)? { BoundaryRule::Chaikin } else { BoundaryRule::Shrink };
         let mut soup = base_shape(u)?;
         let refinements = u.int_in_range(0..=2)?;
         let mut doo_mesh = false;
         if refinements > 0 {
-            let Ok(fine) = subdivide_soup(&soup, &DooOptions::new(rule, refinements)) else { return Ok(()) };
+            let Ok(fine) = subdivide_soup(&soup, &DooOptions::new(rule, refinements).with_boundary(boundary)) else { return Ok(()) };
             soup = fine.into_soup();
             if soup.face_count() == 0 {
                 return Ok(());
@@ -144,7 +146,7 @@ fuzz_target!(|data: &[u8]| {
             soup = damage(&soup, u)?;
         }
         let seed = if bool::arbitrary(u)? { Some(u.int_in_range(0..=soup.face_count() + 2)?) } else { None };
-        check(&soup, rule, seed, doo_mesh && !damaged);
+        check(&soup, rule, boundary, seed, doo_mesh && !damaged);
         Ok(())
     };
     let _ = run(&mut u);

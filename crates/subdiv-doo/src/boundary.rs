@@ -1,0 +1,592 @@
+//! Boundary rules: what a Doo-Sabin step puts at the boundary of an open mesh, and the
+//! reversal of the Chaikin rule.
+//!
+//! # The two rules
+//! - [`BoundaryRule::Shrink`] (the default, as in the reverse-Doo paper and in CGAL):
+//!   boundary edges get no F_E quad and boundary vertices no F_V face, so an open mesh
+//!   shrinks a little at every level and its limit surface does not reach the coarse
+//!   boundary.
+//! - [`BoundaryRule::Chaikin`]: every coarse boundary edge `u -> v` also gets its two
+//!   Chaikin points `a = ¾u + ¼v` and `b = ¼u + ¾v` as fine vertices, a *boundary quad*
+//!   `(ṽ_f(v), ṽ_f(u), a, b)` between them and the face's two corners at `u` and `v`, and
+//!   every coarse boundary vertex gets a *boundary vertex face*: its Chaikin point on the
+//!   outgoing boundary edge, its corners counter-clockwise, its Chaikin point on the
+//!   incoming boundary edge (`k + 2` sides for a vertex of `k` faces). The fine boundary
+//!   is then exactly the Chaikin refinement of the coarse boundary polygon, so the
+//!   boundary of the limit surface is the quadratic B-spline curve of the boundary
+//!   polygon of the coarsest mesh (for a flat open grid: of its outline). On a closed
+//!   mesh both rules are the same.
+//!
+//! # Order (an extension of the canonical order of [`crate::forward`])
+//! The fine mesh of the Shrink rule comes first, unchanged: fine vertex `c` is coarse
+//! corner `c`, then the F_F, F_E and F_V faces. Then the Chaikin points, two per coarse
+//! boundary edge (`a`, then `b`), the boundary edges in corner order (each is named by
+//! its one corner); then the boundary quads in the same order; then the boundary vertex
+//! faces in vertex order, each starting at its outgoing Chaikin point. So a Shrink step is
+//! a prefix of the Chaikin step of the same mesh, vertices and faces both.
+//!
+//! # Reversal
+//! The fine boundary vertices are the Chaikin points, and the faces that touch them are
+//! the boundary ring (boundary quads and boundary vertex faces). Without the ring the
+//! mesh is a Shrink step, reversed by [`crate::reverse`](mod@crate::reverse) as usual (its readings in turn,
+//! best first, until one fits the ring); the ring is then checked face by face against
+//! the boundary of the coarse mesh found. The coarse vertices are the means of their
+//! F_F candidates alone, and each Chaikin point gets one detail: its offset from the
+//! Chaikin point of the coarse boundary edge (`a - (¾u + ¼v)`, `b - (¼u + ¾v)`). The
+//! choice keeps the interior reversal (and its automatic reading) exactly that of the
+//! Shrink rule, makes a boundary detail the error of predicting the boundary by
+//! Chaikin's rule (zero for a Chaikin step; dropped by compression, the boundary falls
+//! back to the Chaikin points of the coarse boundary), and keeps the count: coarse
+//! vertices plus details are as many 3-vectors as the fine mesh has vertices (two
+//! Chaikin points and two details per boundary edge). Reconstruction adds each detail to
+//! its Chaikin point: exact up to one rounding.
+
+use glam::DVec3;
+use mesh_topo::{HalfedgeMesh, PolygonSoup};
+use serde::{Deserialize, Serialize};
+
+use crate::DooError;
+use crate::corner::{CornerMesh, DooTopology, NONE, doo_topology, face_points, prev_of_corners};
+use crate::forward::{DooMesh, DooOptions};
+use crate::reverse::{DooReversal, FineOrder, ReverseOptions, SeedChoice, Session};
+use crate::rule::FaceMaps;
+
+/// What a Doo-Sabin step does at the boundary of an open mesh (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+pub enum BoundaryRule {
+    /// No faces at boundary edges and vertices: the mesh shrinks level by level (the
+    /// reverse-Doo paper's rule and CGAL's).
+    #[default]
+    Shrink,
+    /// Boundary quads and boundary vertex faces through the Chaikin points of the
+    /// boundary edges: the boundary converges to the quadratic B-spline curve of the
+    /// boundary polygon.
+    Chaikin,
+}
+
+impl std::fmt::Display for BoundaryRule {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            BoundaryRule::Shrink => "shrink",
+            BoundaryRule::Chaikin => "chaikin",
+        })
+    }
+}
+
+/// The boundary ring of one Chaikin step: which coarse elements it comes from and its
+/// faces (fine vertex numbers, Chaikin points from `corner_count` on).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Ring {
+    /// The coarse boundary corners (one per boundary edge `vertex(c) -> vertex(next(c))`),
+    /// in corner order.
+    pub edges: Vec<u32>,
+    /// The `mesh-topo` edge number of each boundary edge.
+    pub edge_numbers: Vec<u32>,
+    /// The coarse boundary vertices, in vertex order.
+    pub vertices: Vec<u32>,
+    /// Faces of the ring (boundary quads, then boundary vertex faces), as offsets from 0
+    /// and corner vertices.
+    pub offsets: Vec<u32>,
+    pub indices: Vec<u32>,
+}
+
+impl Ring {
+    /// The ring of the Chaikin step of `coarse` (module docs), or a
+    /// [`DooError::TooLarge`] if its vertices would not fit `u32` indices.
+    pub(crate) fn of(coarse: &CornerMesh) -> Result<Self, DooError> {
+        let corners = coarse.corner_count();
+        let twin = &coarse.corner_twin;
+        let mut ring = Ring::default();
+        let mut slot = vec![NONE; corners];
+        let mut outgoing = vec![NONE; coarse.vertex_count];
+        let mut edge_number = 0u32;
+        for (c, &t) in twin.iter().enumerate() {
+            if t == NONE {
+                slot[c] = ring.edges.len() as u32;
+                ring.edges.push(c as u32);
+                ring.edge_numbers.push(edge_number);
+                outgoing[coarse.corner_vertex[c] as usize] = c as u32;
+            }
+            if t == NONE || (c as u32) < t {
+                edge_number += 1;
+            }
+        }
+        let base = corners;
+        if base + 2 * ring.edges.len() >= NONE as usize {
+            return Err(DooError::TooLarge {
+                what: "fine vertices",
+                count: base + 2 * ring.edges.len(),
+                max: NONE as usize - 1,
+            });
+        }
+        let chaikin = |edge: u32, second: u32| (base as u32) + 2 * edge + second;
+        ring.offsets.push(0);
+        for (j, &c) in ring.edges.iter().enumerate() {
+            ring.indices.extend_from_slice(&[coarse.next(c), c, chaikin(j as u32, 0), chaikin(j as u32, 1)]);
+            ring.offsets.push(ring.indices.len() as u32);
+        }
+        let prev = prev_of_corners(&coarse.offsets);
+        for (v, &out) in outgoing.iter().enumerate() {
+            if out == NONE {
+                continue;
+            }
+            ring.vertices.push(v as u32);
+            ring.indices.push(chaikin(slot[out as usize], 0));
+            // The corners of `v` counter-clockwise: from the outgoing boundary edge's
+            // corner across each edge into `v`, up to the face whose edge into `v` is the
+            // incoming boundary edge. A manifold vertex has one fan: at most one step per
+            // corner.
+            let mut corner = out;
+            for _ in 0..corners {
+                ring.indices.push(corner);
+                let before = prev[corner as usize];
+                match twin[before as usize] {
+                    NONE => {
+                        ring.indices.push(chaikin(slot[before as usize], 1));
+                        break;
+                    }
+                    across => corner = across,
+                }
+            }
+            ring.offsets.push(ring.indices.len() as u32);
+        }
+        Ok(ring)
+    }
+
+    /// Number of boundary quads.
+    pub(crate) fn quad_count(&self) -> usize {
+        self.edges.len()
+    }
+
+    /// Number of faces.
+    pub(crate) fn face_count(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    fn face(&self, k: usize) -> &[u32] {
+        &self.indices[self.offsets[k] as usize..self.offsets[k + 1] as usize]
+    }
+
+    /// The Chaikin points of the boundary edges (`a`, `b` per edge, in edge order) from
+    /// the coarse `positions`, each plus its detail when `details` are given.
+    pub(crate) fn chaikin_points(
+        &self,
+        coarse: &CornerMesh,
+        positions: &[DVec3],
+        details: Option<&[DVec3]>,
+    ) -> Vec<DVec3> {
+        let mut points = Vec::with_capacity(2 * self.edges.len());
+        for &c in &self.edges {
+            let u = positions[coarse.corner_vertex[c as usize] as usize];
+            let v = positions[coarse.corner_vertex[coarse.next(c) as usize] as usize];
+            points.push(0.75 * u + 0.25 * v);
+            points.push(0.25 * u + 0.75 * v);
+        }
+        if let Some(details) = details {
+            for (p, d) in points.iter_mut().zip(details) {
+                *p += *d;
+            }
+        }
+        points
+    }
+}
+
+/// Appends the ring to a Shrink step's connectivity: its faces after the F_V faces, their
+/// parents for [`DooTopology::origin`].
+fn append_ring(topology: &mut DooTopology, ring: &Ring) {
+    let base = *topology.offsets.last().expect("internal: offsets start with 0");
+    topology.offsets.extend(ring.offsets[1..].iter().map(|&o| base + o));
+    topology.indices.extend_from_slice(&ring.indices);
+    topology.ring_edge_parent = ring.edge_numbers.clone();
+    topology.ring_vertex_parent = ring.vertices.clone();
+}
+
+/// Doo-Sabin subdivision with the Chaikin boundary rule, on corner arrays. Each level is
+/// the Shrink step plus the ring; the next level's corner arrays are read from the
+/// result (the ring breaks the index arithmetic of the Shrink steps).
+pub(crate) fn subdivide_chaikin(
+    mut corners: CornerMesh,
+    mut positions: Vec<DVec3>,
+    options: &DooOptions,
+) -> Result<DooMesh, DooError> {
+    let maps = FaceMaps::new(options.rule);
+    for level in 1..=options.levels {
+        let mut topology = doo_topology(&corners, false)?;
+        let ring = Ring::of(&corners)?;
+        let mut fine_positions = {
+            let vertex = &corners.corner_vertex;
+            let coarse = &positions;
+            face_points(&corners.offsets, &maps, |c| coarse[vertex[c] as usize])
+        };
+        fine_positions.extend(ring.chaikin_points(&corners, &positions, None));
+        append_ring(&mut topology, &ring);
+        if topology.offsets.len() > NONE as usize || topology.indices.len() >= NONE as usize {
+            return Err(DooError::TooLarge {
+                what: "fine corners",
+                count: topology.indices.len(),
+                max: NONE as usize - 1,
+            });
+        }
+        if level == options.levels {
+            return Ok(DooMesh::from_parts(fine_positions, topology));
+        }
+        let soup = PolygonSoup { positions: fine_positions, offsets: topology.offsets, indices: topology.indices };
+        // A Chaikin step of a manifold mesh is a manifold mesh (tested on every shape).
+        corners = CornerMesh::from_soup(&soup).map_err(|reason| DooError::NotDooConnectivity {
+            face: 0,
+            reason: format!("internal: a Chaikin boundary step is not a manifold mesh: {reason}"),
+        })?;
+        positions = soup.positions;
+    }
+    unreachable!("internal: levels >= 1 return in the loop")
+}
+
+/// Reverse Doo-Sabin of a mesh made with the Chaikin boundary rule (module docs).
+pub(crate) fn reverse_chaikin(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
+    crate::forward::check_finite(fine.positions())?;
+    let corners = CornerMesh::from_halfedge(fine);
+    reverse_chaikin_corner_mesh(&corners, fine.positions(), options)
+}
+
+/// [`reverse_chaikin`] on corner arrays.
+pub(crate) fn reverse_chaikin_corner_mesh(
+    fine: &CornerMesh,
+    positions: &[DVec3],
+    options: &ReverseOptions,
+) -> Result<DooReversal, DooError> {
+    let face_count = fine.face_count();
+    for &s in &options.seeds {
+        if s >= face_count {
+            return Err(DooError::SeedOutOfRange { face: s, face_count });
+        }
+    }
+    let faces_of = crate::corner::faces_of_corners(&fine.offsets);
+    // The fine boundary vertices: the Chaikin points.
+    let mut on_boundary = vec![false; fine.vertex_count];
+    for (c, &t) in fine.corner_twin.iter().enumerate() {
+        if t == NONE {
+            on_boundary[fine.corner_vertex[c] as usize] = true;
+        }
+    }
+    // The ring: the faces that touch a boundary vertex.
+    let in_ring: Vec<bool> = fine
+        .offsets
+        .windows(2)
+        .map(|w| fine.corner_vertex[w[0] as usize..w[1] as usize].iter().any(|&v| on_boundary[v as usize]))
+        .collect();
+    let ring_faces = in_ring.iter().filter(|&&r| r).count();
+    for &s in &options.seeds {
+        if in_ring[s] {
+            return Err(DooError::NotDooConnectivity {
+                face: s,
+                reason: "the seed face touches the boundary: under the Chaikin boundary rule it is a boundary quad or \
+                         a boundary vertex face, not an F_F face"
+                    .into(),
+            });
+        }
+    }
+    // The mesh without the ring, its vertices and faces renumbered in order.
+    let mut inner_vertex = vec![NONE; fine.vertex_count];
+    let mut vertex_of_inner = Vec::new();
+    let mut face_of_inner = Vec::new();
+    let mut inner = PolygonSoup { positions: Vec::new(), offsets: vec![0], indices: Vec::new() };
+    for (f, w) in fine.offsets.windows(2).enumerate() {
+        if in_ring[f] {
+            continue;
+        }
+        face_of_inner.push(f as u32);
+        for &v in &fine.corner_vertex[w[0] as usize..w[1] as usize] {
+            if inner_vertex[v as usize] == NONE {
+                inner_vertex[v as usize] = vertex_of_inner.len() as u32;
+                vertex_of_inner.push(v);
+            }
+        }
+        inner
+            .indices
+            .extend(fine.corner_vertex[w[0] as usize..w[1] as usize].iter().map(|&v| inner_vertex[v as usize]));
+        inner.offsets.push(inner.indices.len() as u32);
+    }
+    if ring_faces == 0 {
+        // No boundary: both rules are the same.
+        let mut reversal = crate::reverse::reverse_corner_mesh(fine, positions, options)?;
+        reversal.boundary = BoundaryRule::Chaikin;
+        return Ok(reversal);
+    }
+    if face_of_inner.is_empty() {
+        return Err(DooError::NotDooConnectivity {
+            face: 0,
+            reason: "every face touches the boundary: under the Chaikin boundary rule a Doo-Sabin step has F_F faces \
+                     away from it"
+                .into(),
+        });
+    }
+    // Every vertex is a Chaikin point or on a face away from the boundary.
+    if let Some(v) = (0..fine.vertex_count).find(|&v| !on_boundary[v] && inner_vertex[v] == NONE) {
+        let face = match fine.first_corner(v) {
+            NONE => return Err(DooError::IsolatedVertex { vertex: v }),
+            c => faces_of[c as usize] as usize,
+        };
+        return Err(DooError::NotDooConnectivity {
+            face,
+            reason: format!(
+                "vertex {v} is neither on the boundary nor on a face away from it: under the Chaikin boundary rule \
+                 every fine vertex is a Chaikin point or a corner of an F_F face"
+            ),
+        });
+    }
+    inner.positions = vertex_of_inner.iter().map(|&v| positions[v as usize]).collect();
+    let to_input = |error: DooError| map_error(error, &face_of_inner, &vertex_of_inner);
+    let inner_corners = CornerMesh::from_soup(&inner).map_err(|reason| DooError::NotDooConnectivity {
+        face: face_of_inner[0] as usize,
+        reason: format!("without the faces that touch the boundary the mesh is not a manifold mesh: {reason}"),
+    })?;
+    let inner_options = ReverseOptions {
+        rule: options.rule,
+        seeds: options
+            .seeds
+            .iter()
+            .map(|&s| {
+                face_of_inner
+                    .binary_search(&(s as u32))
+                    .expect("internal: a seed off the ring is a face of the inner mesh")
+            })
+            .collect(),
+        boundary: BoundaryRule::Shrink,
+    };
+    let mut session = Session::new(&inner_corners, &inner.positions, &inner_options).map_err(to_input)?;
+    let mut first_error = None;
+    for picks in session.alternatives() {
+        let attempt = session.build(picks).map_err(to_input).and_then(|reversal| {
+            let input = Input {
+                fine,
+                positions,
+                faces_of: &faces_of,
+                on_boundary: &on_boundary,
+                in_ring: &in_ring,
+                ring_faces,
+            };
+            attach_ring(reversal, &input, &face_of_inner, &vertex_of_inner)
+        });
+        match attempt {
+            Ok(reversal) => return Ok(reversal),
+            Err(error) => {
+                first_error.get_or_insert(error);
+            }
+        }
+    }
+    Err(first_error.expect("internal: there is always a first reading"))
+}
+
+/// The input of [`attach_ring`].
+struct Input<'a> {
+    fine: &'a CornerMesh,
+    positions: &'a [DVec3],
+    faces_of: &'a [u32],
+    on_boundary: &'a [bool],
+    in_ring: &'a [bool],
+    ring_faces: usize,
+}
+
+/// Error numbers of the mesh without the ring turned into those of the input.
+fn map_error(error: DooError, face_of_inner: &[u32], vertex_of_inner: &[u32]) -> DooError {
+    let face = |f: usize| face_of_inner.get(f).map_or(f, |&g| g as usize);
+    let vertex = |v: usize| vertex_of_inner.get(v).map_or(v, |&u| u as usize);
+    match error {
+        DooError::NotDooConnectivity { face: f, reason } => DooError::NotDooConnectivity {
+            face: face(f),
+            reason: format!("{reason} (in the mesh without the faces that touch the boundary)"),
+        },
+        DooError::IsolatedVertex { vertex: v } => DooError::IsolatedVertex { vertex: vertex(v) },
+        DooError::NonFinite { vertex: v, value } => DooError::NonFinite { vertex: vertex(v), value },
+        DooError::DuplicateSeed { first, second } => {
+            DooError::DuplicateSeed { first: face(first), second: face(second) }
+        }
+        other => other,
+    }
+}
+
+/// Matches the ring of the input against the ring of the coarse mesh of `reversal` (a
+/// reversal of the mesh without its ring), and makes the reversal of the whole input:
+/// its numbering, and the details of the Chaikin points.
+fn attach_ring(
+    mut reversal: DooReversal,
+    input: &Input<'_>,
+    face_of_inner: &[u32],
+    vertex_of_inner: &[u32],
+) -> Result<DooReversal, DooError> {
+    let Input { fine, positions, faces_of, on_boundary, in_ring, ring_faces } = *input;
+    let coarse = &reversal.coarse;
+    let ring = Ring::of(coarse)?;
+    let canonical_corners = coarse.corner_count();
+    let order = &reversal.order;
+    // Input vertex of each canonical fine vertex (the Chaikin points found below).
+    let mut vertices: Vec<u32> = (0..canonical_corners as u32)
+        .map(|c| {
+            let inner = if order.vertices.is_empty() { c } else { order.vertices[c as usize] };
+            vertex_of_inner[inner as usize]
+        })
+        .collect();
+    vertices.resize(canonical_corners + 2 * ring.quad_count(), NONE);
+    let inner_faces = face_of_inner.len();
+    let mut faces: Vec<u32> = (0..inner_faces as u32)
+        .map(|k| face_of_inner[if order.faces.is_empty() { k } else { order.faces[k as usize] } as usize])
+        .collect();
+    let mut rotations: Vec<u32> =
+        if order.rotations.is_empty() { vec![0; inner_faces] } else { order.rotations.clone() };
+    // Input corner of each coarse corner (the canonical F_F corner), through the F_F faces.
+    let mut input_corner = vec![NONE; canonical_corners];
+    for k in 0..coarse.face_count() {
+        let (b, e) = (coarse.offsets[k] as usize, coarse.offsets[k + 1] as usize);
+        let m = e - b;
+        let g = faces[k] as usize;
+        let r = rotations[k] as usize;
+        for j in 0..m {
+            // Corner i of the input face is canonical corner (i + r) mod m.
+            input_corner[b + j] = fine.offsets[g] + ((j + m - r) % m) as u32;
+        }
+    }
+    let mut claimed_face = vec![false; fine.face_count()];
+    let mut claimed_vertex = vec![false; fine.vertex_count];
+    let broken = |face: usize, reason: String| DooError::NotDooConnectivity {
+        face,
+        reason: format!("{reason} (Chaikin boundary rule)"),
+    };
+    let face_corners = |f: usize| fine.offsets[f]..fine.offsets[f + 1];
+    // Boundary quads: across each coarse boundary edge's F_F edge.
+    let mut quad_corner_at_u = vec![NONE; ring.quad_count()];
+    for (j, &c) in ring.edges.iter().enumerate() {
+        let ic = input_corner[c as usize];
+        let ff_face = faces_of[ic as usize] as usize;
+        let t = fine.corner_twin[ic as usize];
+        if t == NONE {
+            return Err(broken(ff_face, "an F_F face at the coarse boundary has an edge on the fine boundary".into()));
+        }
+        let h = faces_of[t as usize] as usize;
+        let corners = face_corners(h);
+        if corners.len() != 4 {
+            return Err(broken(h, format!("next to F_F face {ff_face} at the coarse boundary: not a quad")));
+        }
+        let [a_corner, b_corner] = [fine.next(fine.next(t)), fine.next(fine.next(fine.next(t)))];
+        for v in [fine.corner_vertex[a_corner as usize], fine.corner_vertex[b_corner as usize]] {
+            if !on_boundary[v as usize] || std::mem::replace(&mut claimed_vertex[v as usize], true) {
+                return Err(broken(h, format!("vertex {v} is not a Chaikin point of this boundary quad alone")));
+            }
+        }
+        if std::mem::replace(&mut claimed_face[h], true) {
+            return Err(broken(h, "the face is the boundary quad of two coarse edges".into()));
+        }
+        vertices[canonical_corners + 2 * j] = fine.corner_vertex[a_corner as usize];
+        vertices[canonical_corners + 2 * j + 1] = fine.corner_vertex[b_corner as usize];
+        quad_corner_at_u[j] = fine.next(t);
+        faces.push(h as u32);
+        rotations.push((4 - (t - fine.offsets[h])) % 4);
+    }
+    // Boundary vertex faces: across the edge from the outgoing Chaikin point.
+    let quads = ring.quad_count();
+    let mut slot = vec![NONE; canonical_corners];
+    for (j, &c) in ring.edges.iter().enumerate() {
+        slot[c as usize] = j as u32;
+    }
+    for k in quads..ring.face_count() {
+        let expected = ring.face(k);
+        let out_edge = slot[expected[1] as usize] as usize;
+        let at_u = quad_corner_at_u[out_edge];
+        let quad_face = faces_of[at_u as usize] as usize;
+        let start = fine.corner_twin[at_u as usize];
+        if start == NONE {
+            return Err(broken(quad_face, "a boundary quad has its side edge on the fine boundary".into()));
+        }
+        let h = faces_of[start as usize] as usize;
+        let corners = face_corners(h);
+        let matches = corners.len() == expected.len() && {
+            let mut corner = start;
+            expected.iter().all(|&w| {
+                let same = fine.corner_vertex[corner as usize] == vertices[w as usize];
+                corner = fine.next(corner);
+                same
+            })
+        };
+        if !matches {
+            return Err(broken(
+                h,
+                format!(
+                    "not the boundary vertex face of coarse vertex {} ({} sides expected)",
+                    ring.vertices[k - quads],
+                    expected.len()
+                ),
+            ));
+        }
+        if std::mem::replace(&mut claimed_face[h], true) {
+            return Err(broken(h, "the face is the boundary face of two coarse elements".into()));
+        }
+        faces.push(h as u32);
+        let m = expected.len() as u32;
+        rotations.push((m - (start - fine.offsets[h])) % m);
+    }
+    if ring.face_count() != ring_faces || 2 * quads != on_boundary.iter().filter(|&&b| b).count() {
+        let face = (0..fine.face_count()).find(|&f| !claimed_face[f] && in_ring[f]);
+        let vertex = (0..fine.vertex_count).find(|&v| on_boundary[v] && !claimed_vertex[v]);
+        let face = face.or_else(|| vertex.map(|v| faces_of[fine.first_corner(v) as usize] as usize)).unwrap_or(0);
+        return Err(broken(
+            face,
+            format!(
+                "the faces that touch the boundary are not the boundary quads and vertex faces of the coarse boundary \
+                 ({} faces and {} boundary vertices; the coarse boundary needs {} faces and {} Chaikin points)",
+                ring_faces,
+                on_boundary.iter().filter(|&&b| b).count(),
+                ring.face_count(),
+                2 * quads
+            ),
+        ));
+    }
+    // Details of the Chaikin points: their offsets from the coarse boundary's.
+    let predicted = ring.chaikin_points(coarse, &reversal.coarse_positions, None);
+    let chaikin_vertices = &vertices[canonical_corners..];
+    reversal.details.extend(predicted.iter().zip(chaikin_vertices).map(|(p, &v)| positions[v as usize] - *p));
+    let identity = |values: &[u32]| values.iter().enumerate().all(|(i, &x)| x == i as u32);
+    reversal.order = FineOrder {
+        vertices: if identity(&vertices) { Vec::new() } else { vertices },
+        faces: if identity(&faces) { Vec::new() } else { faces },
+        rotations: if rotations.iter().all(|&r| r == 0) { Vec::new() } else { rotations },
+    };
+    for choice in &mut reversal.choices {
+        map_choice(choice, face_of_inner);
+    }
+    reversal.boundary = BoundaryRule::Chaikin;
+    Ok(reversal)
+}
+
+/// Seed faces of the mesh without the ring as faces of the input.
+fn map_choice(choice: &mut SeedChoice, face_of_inner: &[u32]) {
+    let face = |f: usize| face_of_inner.get(f).map_or(f, |&g| g as usize);
+    choice.seed_face = face(choice.seed_face);
+    for trial in &mut choice.trials {
+        trial.seed_face = face(trial.seed_face);
+    }
+}
+
+/// One level of reconstruction under the Chaikin rule: the Shrink step's canonical mesh
+/// and positions from the candidates, then the ring and the Chaikin points plus their
+/// details, in canonical order (the caller applies the fine order).
+pub(crate) fn append_ring_level(
+    coarse: &CornerMesh,
+    coarse_positions: &[DVec3],
+    chaikin_details: &[DVec3],
+    offsets: &mut Vec<u32>,
+    indices: &mut Vec<u32>,
+    positions: &mut Vec<DVec3>,
+) -> Result<(), DooError> {
+    let ring = Ring::of(coarse)?;
+    if chaikin_details.len() != 2 * ring.quad_count() {
+        return Err(DooError::InvalidPyramid(format!(
+            "{} boundary details for {} Chaikin points",
+            chaikin_details.len(),
+            2 * ring.quad_count()
+        )));
+    }
+    positions.extend(ring.chaikin_points(coarse, coarse_positions, Some(chaikin_details)));
+    let base = *offsets.last().expect("internal: offsets start with 0");
+    offsets.extend(ring.offsets[1..].iter().map(|&o| base + o));
+    indices.extend_from_slice(&ring.indices);
+    Ok(())
+}
