@@ -2,8 +2,8 @@
 //! reconstructs and compresses without panicking.
 //!
 //! Random bytes rarely get past the format's header and length prefixes, so most
-//! inputs start from a valid file (a small shape refined and decomposed, details
-//! nudged) and damage it: bytes overwritten, a range cut out, or the file truncated.
+//! inputs start from a valid file (a small shape refined and decomposed under either
+//! boundary rule, details nudged) and damage it: bytes overwritten, a range cut out, or the file truncated.
 
 #![no_main]
 
@@ -12,7 +12,7 @@ use libfuzzer_sys::fuzz_target;
 use mesh_topo::HalfedgeMesh;
 use mesh_topo::shapes::{self, CellKind};
 use subdiv_doo::pyramid::{DecomposeOptions, DooPyramid, decompose};
-use subdiv_doo::{DooOptions, FaceRule, subdivide};
+use subdiv_doo::{BoundaryRule, DooOptions, FaceRule, subdivide};
 
 fn valid_file(u: &mut Unstructured<'_>) -> arbitrary::Result<Option<Vec<u8>>> {
     let base = match u.int_in_range(0..=3)? {
@@ -23,13 +23,14 @@ fn valid_file(u: &mut Unstructured<'_>) -> arbitrary::Result<Option<Vec<u8>>> {
     };
     let rule = *u.choose(&[FaceRule::DooSabin, FaceRule::Simple, FaceRule::CENTROID_HALF])?;
     let levels = u.int_in_range(1..=2)?;
+    let boundary = if bool::arbitrary(u)? { BoundaryRule::Chaikin } else { BoundaryRule::Shrink };
     let Ok(mesh) = HalfedgeMesh::from_soup(&base) else { return Ok(None) };
-    let Ok(fine) = subdivide(&mesh, &DooOptions::new(rule, levels)) else { return Ok(None) };
+    let Ok(fine) = subdivide(&mesh, &DooOptions::new(rule, levels).with_boundary(boundary)) else { return Ok(None) };
     let Ok(mut fine) = fine.to_mesh() else { return Ok(None) };
     if let Some(p) = fine.positions_mut().first_mut() {
         p.x += f64::from(i8::arbitrary(u)?) / 64.0;
     }
-    let Ok(decomposition) = decompose(&fine, &DecomposeOptions::levels(rule, levels)) else { return Ok(None) };
+    let Ok(decomposition) = decompose(&fine, &DecomposeOptions::levels(rule, levels).with_boundary(boundary)) else { return Ok(None) };
     Ok(decomposition.pyramid.to_bytes().ok())
 }
 
