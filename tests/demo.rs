@@ -13,6 +13,8 @@ const PROMISED: &[&str] = &[
     "bunny-doo-sabin-3.ply",
     "loop-levels.png",
     "doo-sabin-levels.png",
+    "doo-sabin-boundary-shrink.png",
+    "doo-sabin-boundary-chaikin.png",
     "bunny-loop-bumpy.mres",
     "bunny-doo-sabin-bumpy.mres",
     "loop-compression.png",

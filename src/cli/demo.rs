@@ -2,7 +2,8 @@
 //! Stanford bunny embedded in the binary. Every step prints what it did and writes its
 //! files into the output directory; `index.html` there shows the pictures and tables.
 //!
-//! Steps: the input mesh; Loop and Doo-Sabin subdivision to level 3; decomposition of
+//! Steps: the input mesh; Loop and Doo-Sabin subdivision to level 3; the two boundary
+//! rules of Doo-Sabin on an open grid; decomposition of
 //! bumpy level-3 meshes back to the base mesh with details and exact reconstruction;
 //! compression by keeping the largest details; triangular splines fitted by LSPIA over
 //! reverse-Loop control nets; curves; fractals; a closing summary.
@@ -14,7 +15,9 @@ use std::time::Instant;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use mesh_topo::io::{self, Format, PlyEncoding, ReadReport, WriteOptions};
+use mesh_topo::shapes::{self, CellKind};
 use mesh_topo::{DVec3, HalfedgeMesh, PolygonSoup};
+use multires::doo::{self, BoundaryRule, DooOptions, FaceRule};
 use multires::loop_subdiv::pyramid::bounding_box_diagonal;
 use multires::{Depth, Pyramid, SurfaceScheme, decompose};
 
@@ -75,6 +78,7 @@ const STEPS: &[(&str, Step)] = &[
     ("the input mesh", input_mesh),
     ("Loop subdivision", loop_subdivision),
     ("Doo-Sabin subdivision", doo_subdivision),
+    ("Doo-Sabin boundaries", doo_boundaries),
     ("decomposition and exact reconstruction", multiresolution),
     ("compression: keeping the largest details", compression),
     ("fitting triangular splines", spline_fit),
@@ -139,6 +143,78 @@ fn doo_subdivision(demo: &mut Demo) -> CliResult<String> {
         SurfaceScheme::DooSabin,
         "Doo-Sabin subdivision (original weights), levels 0 to 3: faces from faces, edges and vertices.",
     )
+}
+
+/// An open wavy grid refined by Doo-Sabin under its two boundary rules: shrinking (no
+/// faces at the boundary) and Chaikin (boundary quads and vertex faces through the
+/// Chaikin points), with the distance of each level's boundary to the Chaikin refinement
+/// of the grid's outline.
+fn doo_boundaries(demo: &mut Demo) -> CliResult<String> {
+    let mut grid = shapes::grid(6, 4, CellKind::Quads).map_err(|e| input_error("grid", e))?;
+    for p in &mut grid.positions {
+        p.z = 0.35 * (1.1 * p.x).sin() * (0.9 * p.y + 0.3).cos();
+    }
+    let mesh = HalfedgeMesh::from_soup(&grid).map_err(|e| input_error("grid", e))?;
+    let outline = boundary_polygon(&mesh);
+    let mut table =
+        String::from("rule     level  vertices  faces  boundary vertices  max distance to Chaikin outline\n");
+    let mut pictures = Vec::new();
+    let mut gap = 0.0;
+    for boundary in [BoundaryRule::Shrink, BoundaryRule::Chaikin] {
+        let mut levels = vec![grid.clone()];
+        let mut expected = outline.clone();
+        for level in 1..=LEVELS {
+            let options = DooOptions::new(FaceRule::DooSabin, level).with_boundary(boundary);
+            let fine = doo::subdivide(&mesh, &options).map_err(|e| input_error("grid", e))?.into_soup();
+            let fine_mesh = HalfedgeMesh::from_soup(&fine).map_err(|e| input_error("grid", e))?;
+            let found = boundary_polygon(&fine_mesh);
+            expected = expected
+                .iter()
+                .zip(expected.iter().cycle().skip(1))
+                .flat_map(|(&p, &q)| [0.75 * p + 0.25 * q, 0.25 * p + 0.75 * q])
+                .collect();
+            // Each boundary vertex's distance to the nearest point of the refined outline.
+            let distance = found
+                .iter()
+                .map(|p| expected.iter().map(|q| p.distance(*q)).fold(f64::INFINITY, f64::min))
+                .fold(0.0, f64::max);
+            if boundary == BoundaryRule::Chaikin {
+                gap = f64::max(gap, distance);
+            }
+            writeln!(
+                table,
+                "{:<8} {level:>5} {:>9} {:>6} {:>18} {distance:>32.3e}",
+                boundary.to_string(),
+                fine.vertex_count(),
+                fine.face_count(),
+                found.len()
+            )
+            .expect("string");
+            levels.push(fine);
+        }
+        let picture = format!("doo-sabin-boundary-{boundary}.png");
+        write_picture_view(&demo.out.join(&picture), &levels.iter().collect::<Vec<_>>(), (30.0, 55.0))?;
+        pictures.push(picture);
+    }
+    print_out(&table)?;
+    let names: Vec<&str> = pictures.iter().map(String::as_str).collect();
+    section(
+        demo,
+        "Doo-Sabin at the boundary",
+        "An open wavy grid, levels 0 to 3, under the two boundary rules: shrinking (top: no faces at the boundary, \
+         as in the reverse-Doo paper and CGAL) and Chaikin (bottom: boundary quads and vertex faces through the \
+         Chaikin points, so that the boundary is the Chaikin refinement of the grid's outline and converges to its \
+         quadratic B-spline). Both reverse exactly.",
+        &names,
+        &table,
+    );
+    Ok(format!("Chaikin boundary within {gap:.1e} of the refined outline"))
+}
+
+/// The positions of the first boundary loop of `mesh`, in order.
+fn boundary_polygon(mesh: &HalfedgeMesh) -> Vec<DVec3> {
+    let loops = mesh.boundary_loops();
+    loops.first().map_or_else(Vec::new, |l| l.iter().map(|&h| mesh.position(mesh.origin(h))).collect())
 }
 
 /// Levels 0..=LEVELS of `scheme`: a counts table, the finest mesh as binary PLY, and a
