@@ -37,7 +37,7 @@ use mesh_topo::{DVec3, HalfedgeMesh, PolygonSoup};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use subdiv_doo::pyramid::{DecomposeOptions, decompose};
-use subdiv_doo::{DooOptions, FaceRule, subdivide, subdivide_soup};
+use subdiv_doo::{BoundaryRule, DooOptions, FaceRule, subdivide, subdivide_soup};
 
 /// The bunny of `tests/data` (a minimal OBJ reader: positions and faces only).
 fn bunny() -> HalfedgeMesh {
@@ -180,5 +180,39 @@ fn multires(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, forward, multires);
+/// The two boundary rules on an open quad grid of 512 x 512 faces (one step forward, and
+/// one decomposition level of the step with every fine vertex moved, automatic and with
+/// a given seed face), one thread: the
+/// Chaikin rule rebuilds the next level's corner arrays from the soup and reverses through
+/// the general path (the ring stripped, the rest searched), the Shrink rule has the index
+/// arithmetic and, for the decomposition of a canonical mesh, the streaming path.
+fn boundary_rules(c: &mut Criterion) {
+    let one = single_thread();
+    let mut group = c.benchmark_group("doo_boundary");
+    group.sample_size(10).measurement_time(Duration::from_secs(3)).warm_up_time(Duration::from_secs(1));
+    let grid = HalfedgeMesh::from_soup(&shapes::grid(512, 512, CellKind::Quads).unwrap()).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(0xb0_0d);
+    for boundary in [BoundaryRule::Shrink, BoundaryRule::Chaikin] {
+        let options = DooOptions::new(FaceRule::DooSabin, 1).with_boundary(boundary);
+        group.bench_function(BenchmarkId::new("forward_1thread", boundary), |b| {
+            b.iter(|| one.install(|| subdivide(black_box(&grid), &options).unwrap()))
+        });
+        let mut fine = subdivide(&grid, &options).unwrap().to_mesh().unwrap();
+        for p in fine.positions_mut() {
+            p.z += 1e-3 * (rng.random::<f64>() - 0.5);
+        }
+        let decompose_options = DecomposeOptions::levels(FaceRule::DooSabin, 1).with_boundary(boundary);
+        group.bench_function(BenchmarkId::new("decompose_1thread", boundary), |b| {
+            b.iter(|| one.install(|| decompose(black_box(&fine), &decompose_options).unwrap()))
+        });
+        // Face 0 is the F_F face of coarse face 0 under both rules: the reading given.
+        let seeded = DecomposeOptions { seeds: vec![0], ..decompose_options.clone() };
+        group.bench_function(BenchmarkId::new("decompose_seed_1thread", boundary), |b| {
+            b.iter(|| one.install(|| decompose(black_box(&fine), &seeded).unwrap()))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, forward, multires, boundary_rules);
 criterion_main!(benches);
