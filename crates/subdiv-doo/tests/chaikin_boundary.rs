@@ -341,3 +341,34 @@ fn pyramids_decompose_rebuild_compress_and_round_trip_through_bytes() {
     let four = DecomposeOptions::levels(FaceRule::DooSabin, 4).with_boundary(BoundaryRule::Chaikin);
     assert!(decompose(&fine, &four).is_err());
 }
+
+#[test]
+fn single_faces_and_two_components_reverse_and_stop_cleanly() {
+    use subdiv_doo::pyramid::{DecomposeOptions, decompose};
+    let triangle = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]]);
+    let quad =
+        PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.2), DVec3::Y], [[0u32, 1, 2, 3]]);
+    // A closed cube and an open grid side by side: one seed-free reading per component.
+    let mut two = shapes::cube();
+    let grid = wavy_grid(2, 2, CellKind::Triangles);
+    let shift = two.vertex_count() as u32;
+    let mut faces: Vec<Vec<u32>> = two.faces().map(<[u32]>::to_vec).collect();
+    faces.extend(grid.faces().map(|f| f.iter().map(|&v| v + shift).collect::<Vec<u32>>()));
+    two.positions.extend(grid.positions.iter().map(|&p| p + DVec3::new(3.0, 0.0, 0.0)));
+    let two = PolygonSoup::from_faces(two.positions, faces);
+    for soup in [triangle, quad, two] {
+        let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+        let fine = subdivide(&mesh, &chaikin_options(FaceRule::DooSabin, 2)).unwrap().to_mesh().unwrap();
+        let options = DecomposeOptions::max(FaceRule::DooSabin).with_boundary(BoundaryRule::Chaikin);
+        let decomposition = decompose(&fine, &options).unwrap();
+        let pyramid = decomposition.pyramid;
+        // Two levels, then the base cannot be reversed (every face of a lone polygon
+        // touches the boundary; the cube is not a Doo-Sabin step).
+        assert_eq!(pyramid.level_count(), 2, "{:?}", decomposition.stopped);
+        assert_eq!(pyramid.base.face_count(), soup.face_count());
+        assert!(pyramid.levels.iter().all(|l| l.details.iter().all(|d| d.length() < 1e-13)));
+        let rebuilt = pyramid.reconstruct(2, None).unwrap();
+        assert_eq!(rebuilt.indices, fine.to_soup().indices);
+        assert!(max_distance(&rebuilt.positions, fine.positions()) < 1e-13);
+    }
+}
