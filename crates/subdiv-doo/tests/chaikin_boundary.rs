@@ -288,6 +288,37 @@ proptest! {
         prop_assert_eq!(&rebuilt.indices, &moved.to_soup().indices);
         prop_assert!(max_distance(&rebuilt.positions, moved.positions()) < 1e-12 * size);
     }
+
+    /// Small topology damage (a face removed, or turned over) never panics; whatever
+    /// still reverses rebuilds exactly.
+    #[test]
+    fn damaged_chaikin_steps_are_errors_or_exact(soup in arb_mesh(), pick in any::<u32>(), turn in any::<bool>()) {
+        let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+        let Ok(fine) = subdivide(&mesh, &chaikin_options(FaceRule::Simple, 1)) else { return Ok(()) };
+        let fine = fine.to_soup();
+        let victim = pick as usize % fine.face_count();
+        let faces: Vec<Vec<u32>> = fine
+            .faces()
+            .enumerate()
+            .filter(|&(f, _)| turn || f != victim)
+            .map(|(f, face)| {
+                let mut face = face.to_vec();
+                if turn && f == victim {
+                    face.reverse();
+                }
+                face
+            })
+            .collect();
+        let Ok(damaged) = HalfedgeMesh::from_soup(&PolygonSoup::from_faces(fine.positions.clone(), faces)) else {
+            return Ok(());
+        };
+        if let Ok(reversal) = reverse(&damaged, &chaikin_reverse(FaceRule::Simple)) {
+            let rebuilt = reversal.reconstruct();
+            prop_assert_eq!(&rebuilt.indices, &damaged.to_soup().indices);
+            let size = fine.positions.iter().map(|p| p.length()).fold(1.0, f64::max);
+            prop_assert!(max_distance(&rebuilt.positions, damaged.positions()) < 1e-12 * size);
+        }
+    }
 }
 
 #[test]
