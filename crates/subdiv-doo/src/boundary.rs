@@ -42,14 +42,12 @@
 //! its Chaikin point: exact up to one rounding.
 
 use glam::DVec3;
-use mesh_topo::{HalfedgeMesh, PolygonSoup};
+use mesh_topo::PolygonSoup;
 use serde::{Deserialize, Serialize};
 
 use crate::DooError;
-use crate::corner::{CornerMesh, DooTopology, NONE, doo_topology, face_points, prev_of_corners};
-use crate::forward::{DooMesh, DooOptions};
+use crate::corner::{CornerMesh, DooTopology, NONE, prev_of_corners};
 use crate::reverse::{DooReversal, FineOrder, ReverseOptions, SeedChoice, Session};
-use crate::rule::FaceMaps;
 
 /// What a Doo-Sabin step does at the boundary of an open mesh (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
@@ -163,6 +161,24 @@ impl Ring {
         self.offsets.len() - 1
     }
 
+    /// Appends the ring's faces after those of `offsets` / `indices` (a Shrink step's
+    /// connectivity; `indices` may be `None` when only the face sizes are wanted).
+    pub(crate) fn append_faces(&self, offsets: &mut Vec<u32>, indices: Option<&mut Vec<u32>>) {
+        let base = *offsets.last().expect("internal: offsets start with 0");
+        offsets.extend(self.offsets[1..].iter().map(|&o| base + o));
+        if let Some(indices) = indices {
+            indices.extend_from_slice(&self.indices);
+        }
+    }
+
+    /// Appends the ring to a Shrink step's connectivity, with the parents of its faces for
+    /// [`DooTopology::origin`].
+    pub(crate) fn append_to(&self, topology: &mut DooTopology) {
+        self.append_faces(&mut topology.offsets, Some(&mut topology.indices));
+        topology.ring_edge_parent = self.edge_numbers.clone();
+        topology.ring_vertex_parent = self.vertices.clone();
+    }
+
     fn face(&self, k: usize) -> &[u32] {
         &self.indices[self.offsets[k] as usize..self.offsets[k + 1] as usize]
     }
@@ -191,64 +207,8 @@ impl Ring {
     }
 }
 
-/// Appends the ring to a Shrink step's connectivity: its faces after the F_V faces, their
-/// parents for [`DooTopology::origin`].
-fn append_ring(topology: &mut DooTopology, ring: &Ring) {
-    let base = *topology.offsets.last().expect("internal: offsets start with 0");
-    topology.offsets.extend(ring.offsets[1..].iter().map(|&o| base + o));
-    topology.indices.extend_from_slice(&ring.indices);
-    topology.ring_edge_parent = ring.edge_numbers.clone();
-    topology.ring_vertex_parent = ring.vertices.clone();
-}
-
-/// Doo-Sabin subdivision with the Chaikin boundary rule, on corner arrays. Each level is
-/// the Shrink step plus the ring; the next level's corner arrays are read from the
-/// result (the ring breaks the index arithmetic of the Shrink steps).
-pub(crate) fn subdivide_chaikin(
-    mut corners: CornerMesh,
-    mut positions: Vec<DVec3>,
-    options: &DooOptions,
-) -> Result<DooMesh, DooError> {
-    let maps = FaceMaps::new(options.rule);
-    for level in 1..=options.levels {
-        let mut topology = doo_topology(&corners, false)?;
-        let ring = Ring::of(&corners)?;
-        let mut fine_positions = {
-            let vertex = &corners.corner_vertex;
-            let coarse = &positions;
-            face_points(&corners.offsets, &maps, |c| coarse[vertex[c] as usize])
-        };
-        fine_positions.extend(ring.chaikin_points(&corners, &positions, None));
-        append_ring(&mut topology, &ring);
-        if topology.offsets.len() > NONE as usize || topology.indices.len() >= NONE as usize {
-            return Err(DooError::TooLarge {
-                what: "fine corners",
-                count: topology.indices.len(),
-                max: NONE as usize - 1,
-            });
-        }
-        if level == options.levels {
-            return Ok(DooMesh::from_parts(fine_positions, topology));
-        }
-        let soup = PolygonSoup { positions: fine_positions, offsets: topology.offsets, indices: topology.indices };
-        // A Chaikin step of a manifold mesh is a manifold mesh (tested on every shape).
-        corners = CornerMesh::from_soup(&soup).map_err(|reason| DooError::NotDooConnectivity {
-            face: 0,
-            reason: format!("internal: a Chaikin boundary step is not a manifold mesh: {reason}"),
-        })?;
-        positions = soup.positions;
-    }
-    unreachable!("internal: levels >= 1 return in the loop")
-}
-
-/// Reverse Doo-Sabin of a mesh made with the Chaikin boundary rule (module docs).
-pub(crate) fn reverse_chaikin(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
-    crate::forward::check_finite(fine.positions())?;
-    let corners = CornerMesh::from_halfedge(fine);
-    reverse_chaikin_corner_mesh(&corners, fine.positions(), options)
-}
-
-/// [`reverse_chaikin`] on corner arrays.
+/// Reverse Doo-Sabin of a mesh made with the Chaikin boundary rule (module docs), on
+/// corner arrays.
 pub(crate) fn reverse_chaikin_corner_mesh(
     fine: &CornerMesh,
     positions: &[DVec3],
@@ -585,8 +545,6 @@ pub(crate) fn append_ring_level(
         )));
     }
     positions.extend(ring.chaikin_points(coarse, coarse_positions, Some(chaikin_details)));
-    let base = *offsets.last().expect("internal: offsets start with 0");
-    offsets.extend(ring.offsets[1..].iter().map(|&o| base + o));
-    indices.extend_from_slice(&ring.indices);
+    ring.append_faces(offsets, Some(indices));
     Ok(())
 }

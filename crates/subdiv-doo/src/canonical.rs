@@ -231,16 +231,8 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         }
     };
     choice.detail_energy = detail_energy;
-    Some(DooReversal {
-        rule: options.rule,
-        coarse,
-        coarse_positions,
-        details,
-        order: FineOrder::default(),
-        choices: vec![choice],
-        stats,
-        boundary: crate::BoundaryRule::Shrink,
-    })
+    let reversal = DooReversal::shrink(options.rule, coarse, coarse_positions, details, FineOrder::default(), stats);
+    Some(DooReversal { choices: vec![choice], ..reversal })
 }
 
 /// The F_F side of the first reading, as [`coarse_vertices`] reads it.

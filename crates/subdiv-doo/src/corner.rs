@@ -133,9 +133,24 @@ impl CornerMesh {
     /// order (CSR: `(offsets, corners)`, as [`group_by_key`] gives them), which the check
     /// computes anyway.
     pub fn from_soup_grouped(soup: &PolygonSoup) -> Result<(Self, VertexCorners), String> {
-        let vertex_count = soup.positions.len();
-        let indices = &soup.indices;
-        let offsets = if soup.offsets.is_empty() { vec![0] } else { soup.offsets.clone() };
+        Self::from_faces_grouped(soup.offsets.clone(), soup.indices.clone(), soup.positions.len())
+    }
+
+    /// [`Self::from_soup`] on face offsets and corner vertices that the mesh takes over
+    /// (no positions needed: the check is on connectivity only).
+    pub fn from_faces(offsets: Vec<u32>, indices: Vec<u32>, vertex_count: usize) -> Result<Self, String> {
+        Self::from_faces_grouped(offsets, indices, vertex_count).map(|(mesh, _)| mesh)
+    }
+
+    /// [`Self::from_faces`], also returning the corners of each vertex as
+    /// [`Self::from_soup_grouped`] does.
+    pub fn from_faces_grouped(
+        offsets: Vec<u32>,
+        corner_vertex: Vec<u32>,
+        vertex_count: usize,
+    ) -> Result<(Self, VertexCorners), String> {
+        let offsets = if offsets.is_empty() { vec![0] } else { offsets };
+        let indices = &corner_vertex;
         if offsets[0] != 0 || offsets[offsets.len() - 1] as usize != indices.len() {
             return Err("the face offsets do not cover the corner list".into());
         }
@@ -208,7 +223,7 @@ impl CornerMesh {
         }
         let mesh = Self {
             offsets,
-            corner_vertex: indices.clone(),
+            corner_vertex,
             corner_twin,
             corner_next: next,
             vertex_count,

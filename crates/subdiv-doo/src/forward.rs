@@ -48,8 +48,8 @@ use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 
 use crate::DooError;
-use crate::boundary::BoundaryRule;
-use crate::corner::{CornerMesh, DooTopology, FaceKind, FaceOrigin, doo_topology, face_points};
+use crate::boundary::{BoundaryRule, Ring};
+use crate::corner::{CornerMesh, DooTopology, FaceKind, FaceOrigin, NONE, doo_topology, face_points};
 use crate::rule::{FaceMaps, FaceRule};
 
 /// Options of [`subdivide`].
@@ -161,10 +161,6 @@ impl DooMesh {
         [t.ff_count, t.fe_count + t.ring_edge_parent.len(), t.fv_count + t.ring_vertex_parent.len()]
     }
 
-    pub(crate) fn from_parts(positions: Vec<DVec3>, topology: DooTopology) -> Self {
-        Self { positions, topology }
-    }
-
     /// The mesh as a polygon soup (copies).
     pub fn to_soup(&self) -> PolygonSoup {
         PolygonSoup {
@@ -238,9 +234,6 @@ pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, D
         return Ok(DooMesh { positions: soup.positions, topology });
     }
     let corners = CornerMesh::from_halfedge(mesh);
-    if options.boundary == BoundaryRule::Chaikin {
-        return crate::boundary::subdivide_chaikin(corners, mesh.positions().to_vec(), options);
-    }
     subdivide_corner_mesh(corners, mesh.positions().to_vec(), options)
 }
 
@@ -262,29 +255,52 @@ pub fn subdivide_soup(soup: &PolygonSoup, options: &DooOptions) -> Result<DooMes
     subdivide(&mesh, options)
 }
 
-/// The subdivision loop on corner arrays.
+/// The subdivision loop on corner arrays. Under the Shrink rule each level's corner
+/// arrays follow from the previous ones by index arithmetic; under the Chaikin rule the
+/// ring ([`Ring`]) is appended to each level and the next level's corner arrays are read
+/// from the result (the ring breaks the index arithmetic).
 pub(crate) fn subdivide_corner_mesh(
     mut corners: CornerMesh,
     mut positions: Vec<DVec3>,
     options: &DooOptions,
 ) -> Result<DooMesh, DooError> {
     let maps = FaceMaps::new(options.rule);
+    let chaikin = options.boundary == BoundaryRule::Chaikin;
     let mut level = 0;
     loop {
         level += 1;
         let last = level == options.levels;
-        let topology = doo_topology(&corners, !last)?;
-        let fine_positions = {
+        let mut topology = doo_topology(&corners, !last && !chaikin)?;
+        let mut fine_positions = {
             let vertex = &corners.corner_vertex;
             let coarse = &positions;
             face_points(&corners.offsets, &maps, |c| coarse[vertex[c] as usize])
         };
+        if chaikin {
+            let ring = Ring::of(&corners)?;
+            fine_positions.extend(ring.chaikin_points(&corners, &positions, None));
+            ring.append_to(&mut topology);
+            if topology.indices.len() >= NONE as usize {
+                let count = topology.indices.len();
+                return Err(DooError::TooLarge { what: "fine corners", count, max: NONE as usize - 1 });
+            }
+        }
         if last {
             return Ok(DooMesh { positions: fine_positions, topology });
         }
         let vertex_count = fine_positions.len();
         positions = fine_positions;
-        corners = topology.into_corner_mesh(vertex_count);
+        corners = if chaikin {
+            // A Chaikin step of a manifold mesh is a manifold mesh (tested on every shape).
+            CornerMesh::from_faces(topology.offsets, topology.indices, vertex_count).map_err(|reason| {
+                DooError::NotDooConnectivity {
+                    face: 0,
+                    reason: format!("internal: a Chaikin boundary step is not a manifold mesh: {reason}"),
+                }
+            })?
+        } else {
+            topology.into_corner_mesh(vertex_count)
+        };
     }
 }
 

@@ -494,8 +494,7 @@ impl DooPyramid {
         }
         let mut topology = doo_topology(coarse, false).map_err(|e| DooError::InvalidPyramid(e.to_string()))?;
         if let Some(ring) = &ring {
-            let base = *topology.offsets.last().expect("internal: offsets start with 0");
-            topology.offsets.extend(ring.offsets[1..].iter().map(|&o| base + o));
+            ring.append_faces(&mut topology.offsets, None);
         }
         let faces = topology.offsets.len() - 1;
         if !order.faces.is_empty() && !is_permutation(&order.faces, faces) {

@@ -290,6 +290,20 @@ pub struct DooReversal {
 }
 
 impl DooReversal {
+    /// A reversal under the Shrink boundary rule, before its seed choices are recorded.
+    pub(crate) fn shrink(
+        rule: FaceRule,
+        coarse: CornerMesh,
+        coarse_positions: Vec<DVec3>,
+        details: Vec<DVec3>,
+        order: FineOrder,
+        stats: ReverseStats,
+    ) -> Self {
+        let choices = Vec::new();
+        let boundary = BoundaryRule::Shrink;
+        Self { rule, coarse, coarse_positions, details, order, choices, stats, boundary }
+    }
+
     /// The coarse mesh: vertices at the means of their candidates, faces in the order of
     /// their F_F faces in the input, each starting at its F_F face's first corner.
     pub fn coarse(&self) -> PolygonSoup {
@@ -389,16 +403,18 @@ impl DooReversal {
 /// mesh without faces; [`DooError::NonFinite`]; [`DooError::SeedOutOfRange`] and [`DooError::DuplicateSeed`] for bad seeds;
 /// [`DooError::InvalidParameter`] for a bad centroid parameter.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
-    if options.boundary == BoundaryRule::Chaikin {
-        return crate::boundary::reverse_chaikin(fine, options);
-    }
     // `None` also when a position is not finite, so that the check below names it.
-    if let Some(reversal) = crate::canonical::reverse_canonical(fine, options) {
+    if options.boundary == BoundaryRule::Shrink
+        && let Some(reversal) = crate::canonical::reverse_canonical(fine, options)
+    {
         return Ok(reversal);
     }
     check_finite(fine.positions())?;
     let corners = CornerMesh::from_halfedge(fine);
-    reverse_corner_mesh(&corners, fine.positions(), options)
+    match options.boundary {
+        BoundaryRule::Shrink => reverse_corner_mesh(&corners, fine.positions(), options),
+        BoundaryRule::Chaikin => crate::boundary::reverse_chaikin_corner_mesh(&corners, fine.positions(), options),
+    }
 }
 
 /// [`reverse`] on corner arrays.
@@ -1728,16 +1744,7 @@ impl<'a> Search<'a> {
         let mut stats = self.stats;
         stats.candidate_edges = coarse_corners;
         let energies = vec![vertex_energy.iter().sum()];
-        let reversal = DooReversal {
-            rule,
-            coarse,
-            coarse_positions,
-            details,
-            order,
-            choices: Vec::new(),
-            stats,
-            boundary: BoundaryRule::Shrink,
-        };
+        let reversal = DooReversal::shrink(rule, coarse, coarse_positions, details, order, stats);
         Some(Closed { reversal, energies, fv_faces })
     }
 
@@ -1950,16 +1957,7 @@ impl<'a> Search<'a> {
         }
         let mut stats = self.stats;
         stats.candidate_edges = candidate_edges;
-        let reversal = DooReversal {
-            rule,
-            coarse,
-            coarse_positions,
-            details,
-            order,
-            choices: Vec::new(),
-            stats,
-            boundary: BoundaryRule::Shrink,
-        };
+        let reversal = DooReversal::shrink(rule, coarse, coarse_positions, details, order, stats);
         Ok((reversal, energies))
     }
 }
