@@ -41,6 +41,14 @@ pub enum Error {
         /// The scheme.
         scheme: SurfaceScheme,
     },
+    /// A boundary option ([`Boundaries`](crate::Boundaries)) that the scheme does not have.
+    #[error("{scheme} does not take {option}")]
+    NotApplicable {
+        /// The scheme.
+        scheme: SurfaceScheme,
+        /// The option and the schemes it belongs to.
+        option: &'static str,
+    },
     /// The bytes start with neither the Loop nor the Doo-Sabin pyramid magic number.
     #[error("not a multiresolution pyramid (.mres) file: unknown magic number")]
     NotAPyramid,

@@ -90,8 +90,8 @@ mod pyramid;
 mod scheme;
 
 pub use error::Error;
-pub use pyramid::{Depth, Pyramid, RateDistortion, decompose};
-pub use scheme::SurfaceScheme;
+pub use pyramid::{Depth, Pyramid, RateDistortion, decompose, decompose_with};
+pub use scheme::{Boundaries, SurfaceScheme};
 
 pub use ifs_nonlinear as ifs;
 pub use mesh_topo as mesh;
@@ -103,5 +103,5 @@ pub use tri_spline as spline;
 /// The names most programs need: `use multires::prelude::*;`.
 pub mod prelude {
     pub use crate::mesh::{HalfedgeMesh, MeshError, PolygonSoup, shapes};
-    pub use crate::{Depth, Error, Pyramid, RateDistortion, SurfaceScheme, decompose};
+    pub use crate::{Boundaries, Depth, Error, Pyramid, RateDistortion, SurfaceScheme, decompose, decompose_with};
 }

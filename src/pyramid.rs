@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use subdiv_doo::DooPyramid;
 use subdiv_loop::pyramid::LoopPyramid;
 
-use crate::{Error, SurfaceScheme};
+use crate::{Boundaries, Error, SurfaceScheme};
 
 /// How many levels [`decompose`] reverses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -63,7 +63,37 @@ pub struct RateDistortion {
 /// error, e.g. when the mesh does not have the scheme's subdivision connectivity (it
 /// names where the structure breaks).
 pub fn decompose(mesh: &HalfedgeMesh, scheme: SurfaceScheme, depth: Depth) -> Result<Pyramid, Error> {
-    if let Some(rules) = scheme.loop_options() {
+    decompose_with(mesh, scheme, depth, &Boundaries::default())
+}
+
+/// [`decompose`] inverting the boundary rules of `boundaries` (those that made the mesh:
+/// a mesh made with other rules has non-zero details, or no reading at all).
+///
+/// ```
+/// use multires::prelude::*;
+///
+/// // Two Doo-Sabin steps with the Chaikin boundary rule on an open grid, reversed.
+/// let grid = HalfedgeMesh::from_soup(&shapes::grid(3, 3, shapes::CellKind::Quads)?)?;
+/// let boundaries = Boundaries::chaikin();
+/// let fine = HalfedgeMesh::from_soup(&SurfaceScheme::DooSabin.subdivide_with(&grid, 2, &boundaries)?)?;
+/// let pyramid = decompose_with(&fine, SurfaceScheme::DooSabin, Depth::Levels(2), &boundaries)?;
+/// assert_eq!(pyramid.base().face_count(), 9);
+/// let rebuilt = pyramid.reconstruct(2)?;
+/// let worst = rebuilt.positions.iter().zip(fine.positions()).map(|(p, q)| p.distance(*q)).fold(0.0, f64::max);
+/// assert!(worst < 1e-12);
+/// # Ok::<(), multires::Error>(())
+/// ```
+///
+/// # Errors
+/// As [`decompose`], and [`Error::NotApplicable`] for a boundary option of another family.
+pub fn decompose_with(
+    mesh: &HalfedgeMesh,
+    scheme: SurfaceScheme,
+    depth: Depth,
+    boundaries: &Boundaries,
+) -> Result<Pyramid, Error> {
+    boundaries.check(scheme)?;
+    if let Some(rules) = scheme.loop_options_with(boundaries) {
         let levels = match depth {
             Depth::Levels(n) => subdiv_loop::pyramid::Levels::Count(n as usize),
             Depth::Max => subdiv_loop::pyramid::Levels::Max,
@@ -75,7 +105,8 @@ pub fn decompose(mesh: &HalfedgeMesh, scheme: SurfaceScheme, depth: Depth) -> Re
         let options = match depth {
             Depth::Levels(n) => subdiv_doo::DecomposeOptions::levels(rule, n),
             Depth::Max => subdiv_doo::DecomposeOptions::max(rule),
-        };
+        }
+        .with_boundary(boundaries.doo);
         return Ok(Pyramid::Doo(subdiv_doo::decompose(mesh, &options)?.pyramid));
     }
     Err(Error::NotReversible { scheme })
@@ -245,6 +276,34 @@ mod tests {
             let table = pyramid.rate_distortion(&[0.0, 1.0]).unwrap();
             assert!(table[1].max_error < 1e-12 && table[0].max_error > 0.0, "{scheme}: {table:?}");
         }
+    }
+
+    #[test]
+    fn boundary_options_are_inverted_with_zero_details() {
+        let triangles = HalfedgeMesh::from_soup(&shapes::grid(4, 3, shapes::CellKind::Triangles).unwrap()).unwrap();
+        let quads = HalfedgeMesh::from_soup(&shapes::grid(4, 3, shapes::CellKind::Quads).unwrap()).unwrap();
+        let cases = [
+            (SurfaceScheme::Loop, &triangles, Boundaries::keep_corners()),
+            (SurfaceScheme::LoopWarren, &triangles, Boundaries::keep_corners()),
+            (SurfaceScheme::DooSabin, &quads, Boundaries::chaikin()),
+            (SurfaceScheme::DooCentroid, &quads, Boundaries::chaikin()),
+        ];
+        for (scheme, coarse, boundaries) in cases {
+            let fine = HalfedgeMesh::from_soup(&scheme.subdivide_with(coarse, 2, &boundaries).unwrap()).unwrap();
+            let pyramid = decompose_with(&fine, scheme, Depth::Levels(2), &boundaries).unwrap();
+            assert_eq!(pyramid.base().face_count(), coarse.face_count(), "{scheme}");
+            let pyramid = Pyramid::from_bytes(&pyramid.to_bytes().unwrap()).unwrap();
+            // Keeping no detail rebuilds the mesh: every detail is zero.
+            let table = pyramid.rate_distortion(&[0.0]).unwrap();
+            assert!(table[0].max_error < 1e-12, "{scheme}: {table:?}");
+            // With the default rules the same mesh has details (Loop) or no reading (Doo-Sabin).
+            match decompose(&fine, scheme, Depth::Levels(2)) {
+                Ok(default) => assert!(default.rate_distortion(&[0.0]).unwrap()[0].max_error > 1e-6, "{scheme}"),
+                Err(error) => assert!(matches!(error, Error::Doo(_)), "{scheme}: {error}"),
+            }
+        }
+        let error = decompose_with(&triangles, SurfaceScheme::Loop, Depth::Max, &Boundaries::chaikin()).unwrap_err();
+        assert!(matches!(error, Error::NotApplicable { .. }), "{error}");
     }
 
     #[test]

@@ -5,7 +5,7 @@ use std::fmt;
 use std::str::FromStr;
 
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
-use subdiv_doo::{DooOptions, FaceRule};
+use subdiv_doo::{BoundaryRule, DooOptions, FaceRule};
 use subdiv_loop::forward::{LoopOptions, VertexWeights};
 use subdiv_loop::mband::TernaryOptions;
 
@@ -108,21 +108,52 @@ impl SurfaceScheme {
     /// The member crate's error ([`Error::Loop`] or [`Error::Doo`]): a non-triangle face
     /// for the Loop family, non-finite positions, a mesh without faces.
     pub fn subdivide(self, mesh: &HalfedgeMesh, levels: u32) -> Result<PolygonSoup, Error> {
+        self.subdivide_with(mesh, levels, &Boundaries::default())
+    }
+
+    /// `levels` steps of this scheme on `mesh` with the boundary rules of `boundaries`.
+    ///
+    /// ```
+    /// use multires::prelude::*;
+    ///
+    /// // An open 3 x 3 quad grid: Doo-Sabin's default rule shrinks it, the Chaikin rule
+    /// // keeps a face ring along the boundary.
+    /// let grid = HalfedgeMesh::from_soup(&shapes::grid(3, 3, shapes::CellKind::Quads)?)?;
+    /// let shrunk = SurfaceScheme::DooSabin.subdivide(&grid, 1)?;
+    /// let ringed = SurfaceScheme::DooSabin.subdivide_with(&grid, 1, &Boundaries::chaikin())?;
+    /// assert_eq!(shrunk.face_count(), 9 + 12 + 4);
+    /// // Plus one face per boundary edge and one per boundary vertex (12 of each).
+    /// assert_eq!(ringed.face_count(), 9 + 12 + 4 + 12 + 12);
+    /// # Ok::<(), multires::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`Self::subdivide`], and [`Error::NotApplicable`] for a boundary option of
+    /// another family (keeping corners for Doo-Sabin or ternary Loop, the Chaikin rule for
+    /// the Loop family).
+    pub fn subdivide_with(
+        self,
+        mesh: &HalfedgeMesh,
+        levels: u32,
+        boundaries: &Boundaries,
+    ) -> Result<PolygonSoup, Error> {
+        boundaries.check(self)?;
+        let loop_options = |weights| LoopOptions { weights, keep_corners: boundaries.keep_corners };
         let soup = match self {
-            SurfaceScheme::Loop => subdiv_loop::forward::subdivide(mesh, levels, &LoopOptions::default())?.into_soup(),
-            SurfaceScheme::LoopWarren => {
-                let options = LoopOptions { weights: VertexWeights::Warren, ..LoopOptions::default() };
+            SurfaceScheme::Loop | SurfaceScheme::LoopWarren => {
+                let options = self.loop_options_with(boundaries).expect("internal: Loop family");
                 subdiv_loop::forward::subdivide(mesh, levels, &options)?.into_soup()
             }
             SurfaceScheme::TernaryLoop => {
                 subdiv_loop::mband::ternary_subdivide(mesh, levels, &TernaryOptions::default())?.into_soup()
             }
             SurfaceScheme::QuaternaryLoop => {
-                subdiv_loop::mband::quaternary_subdivide(mesh, levels, &LoopOptions::default())?.into_soup()
+                subdiv_loop::mband::quaternary_subdivide(mesh, levels, &loop_options(VertexWeights::Loop))?.into_soup()
             }
             SurfaceScheme::DooSabin | SurfaceScheme::DooSimple | SurfaceScheme::DooCentroid => {
                 let rule = self.doo_rule().expect("internal: Doo-Sabin family");
-                subdiv_doo::subdivide(mesh, &DooOptions::new(rule, levels))?.into_soup()
+                let options = DooOptions::new(rule, levels).with_boundary(boundaries.doo);
+                subdiv_doo::subdivide(mesh, &options)?.into_soup()
             }
         };
         Ok(soup)
@@ -140,11 +171,66 @@ impl SurfaceScheme {
 
     /// The Loop rules of a reversible Loop-family scheme, `None` otherwise.
     pub fn loop_options(self) -> Option<LoopOptions> {
-        match self {
-            SurfaceScheme::Loop => Some(LoopOptions::default()),
-            SurfaceScheme::LoopWarren => Some(LoopOptions { weights: VertexWeights::Warren, ..LoopOptions::default() }),
-            _ => None,
+        self.loop_options_with(&Boundaries::default())
+    }
+
+    /// [`Self::loop_options`] with the corner rule of `boundaries`.
+    pub(crate) fn loop_options_with(self, boundaries: &Boundaries) -> Option<LoopOptions> {
+        let weights = match self {
+            SurfaceScheme::Loop => VertexWeights::Loop,
+            SurfaceScheme::LoopWarren => VertexWeights::Warren,
+            _ => return None,
+        };
+        Some(LoopOptions { weights, keep_corners: boundaries.keep_corners })
+    }
+}
+
+/// What the surface schemes do at the boundary of an open mesh. The default is each
+/// family's usual rule (Loop: boundary curves are cubic B-splines through smoothed
+/// corners; Doo-Sabin: no faces on boundary edges and vertices, so that open meshes
+/// shrink, as in CGAL). Each option belongs to one family, and the other families refuse
+/// it ([`Error::NotApplicable`]) rather than ignore it.
+///
+/// ```
+/// use multires::prelude::*;
+///
+/// assert_eq!(Boundaries::default().doo, multires::doo::BoundaryRule::Shrink);
+/// assert!(Boundaries::keep_corners().keep_corners);
+/// assert_eq!(Boundaries::chaikin().doo, multires::doo::BoundaryRule::Chaikin);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub struct Boundaries {
+    /// Loop and quaternary Loop: boundary vertices with one incident face (valence 2)
+    /// stay where they are.
+    pub keep_corners: bool,
+    /// Doo-Sabin family: [`BoundaryRule::Shrink`] (default) or [`BoundaryRule::Chaikin`]
+    /// (a face ring along the boundary, which then follows Chaikin's corner cutting).
+    pub doo: BoundaryRule,
+}
+
+impl Boundaries {
+    /// Loop's corner rule: valence-2 boundary vertices stay fixed.
+    pub fn keep_corners() -> Self {
+        Self { keep_corners: true, ..Self::default() }
+    }
+
+    /// Doo-Sabin's Chaikin boundary rule.
+    pub fn chaikin() -> Self {
+        Self { doo: BoundaryRule::Chaikin, ..Self::default() }
+    }
+
+    /// [`Error::NotApplicable`] if an option is set that `scheme` does not have.
+    pub(crate) fn check(&self, scheme: SurfaceScheme) -> Result<(), Error> {
+        let corners_apply =
+            matches!(scheme, SurfaceScheme::Loop | SurfaceScheme::LoopWarren | SurfaceScheme::QuaternaryLoop);
+        if self.keep_corners && !corners_apply {
+            return Err(Error::NotApplicable { scheme, option: "keep_corners (Loop and quaternary Loop only)" });
         }
+        if self.doo != BoundaryRule::Shrink && scheme.doo_rule().is_none() {
+            return Err(Error::NotApplicable { scheme, option: "the Chaikin boundary rule (Doo-Sabin family only)" });
+        }
+        Ok(())
     }
 }
 
@@ -205,6 +291,48 @@ mod tests {
         for scheme in SurfaceScheme::ALL.into_iter().filter(|s| !s.accepts_polygons()) {
             let error = scheme.subdivide(&cube, 1).unwrap_err();
             assert!(error.to_string().contains("face"), "{scheme}: {error}");
+        }
+    }
+
+    #[test]
+    fn boundary_options_reach_the_member_crates_and_other_families_refuse_them() {
+        let triangles = HalfedgeMesh::from_soup(&shapes::grid(3, 2, shapes::CellKind::Triangles).unwrap()).unwrap();
+        let quads = HalfedgeMesh::from_soup(&shapes::grid(3, 2, shapes::CellKind::Quads).unwrap()).unwrap();
+        // Loop with fixed corners: the same output as the member crate's option.
+        for scheme in [SurfaceScheme::Loop, SurfaceScheme::LoopWarren, SurfaceScheme::QuaternaryLoop] {
+            let fixed = scheme.subdivide_with(&triangles, 2, &Boundaries::keep_corners()).unwrap();
+            let smoothed = scheme.subdivide(&triangles, 2).unwrap();
+            let options = LoopOptions { keep_corners: true, ..scheme.loop_options().unwrap_or_default() };
+            let direct = match scheme {
+                SurfaceScheme::QuaternaryLoop => subdiv_loop::mband::quaternary_subdivide(&triangles, 2, &options),
+                _ => subdiv_loop::forward::subdivide(&triangles, 2, &options),
+            }
+            .unwrap()
+            .into_soup();
+            assert_eq!(fixed, direct, "{scheme}");
+            assert_ne!(fixed.positions, smoothed.positions, "{scheme}: the corners move without the option");
+        }
+        // Doo-Sabin with the Chaikin rule: the member crate's output.
+        for scheme in SurfaceScheme::ALL.into_iter().filter(|s| s.accepts_polygons()) {
+            let ringed = scheme.subdivide_with(&quads, 2, &Boundaries::chaikin()).unwrap();
+            let options = DooOptions::new(scheme.doo_rule().unwrap(), 2).with_boundary(BoundaryRule::Chaikin);
+            assert_eq!(ringed, subdiv_doo::subdivide(&quads, &options).unwrap().into_soup(), "{scheme}");
+        }
+        // Each option is refused by the families that do not have it, naming the option.
+        for scheme in SurfaceScheme::ALL {
+            let mesh = if scheme.accepts_polygons() { &quads } else { &triangles };
+            let chaikin = scheme.subdivide_with(mesh, 1, &Boundaries::chaikin());
+            assert_eq!(chaikin.is_ok(), scheme.accepts_polygons(), "{scheme}");
+            let corners = scheme.subdivide_with(mesh, 1, &Boundaries::keep_corners());
+            let corners_apply =
+                matches!(scheme, SurfaceScheme::Loop | SurfaceScheme::LoopWarren | SurfaceScheme::QuaternaryLoop);
+            assert_eq!(corners.is_ok(), corners_apply, "{scheme}");
+            for result in [chaikin, corners] {
+                if let Err(error) = result {
+                    assert!(matches!(error, Error::NotApplicable { .. }), "{scheme}: {error}");
+                    assert!(error.to_string().starts_with(&format!("{scheme} does not take ")), "{error}");
+                }
+            }
         }
     }
 }
