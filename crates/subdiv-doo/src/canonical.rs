@@ -10,6 +10,10 @@
 //! from the F_V faces are found in three streaming passes over the half-edge arrays,
 //! without the corner arrays of the general path, its search and its face matching.
 //!
+//! Without a seed face the automatic choice is made here too: on a closed mesh by
+//! [`automatic`] (the dual reading summed from the structure), on an open one by
+//! [`automatic_open`] (the other readings' searches replayed to their errors).
+//!
 //! Every fine face is still checked, and every check of the general path is either made
 //! here or follows from the ones made (see [`reverse_canonical`]): the result is the one
 //! the general path gives, bit for bit. Any mismatch (a mesh in another order, a broken
@@ -73,11 +77,11 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
         None => walk_ff_faces(fine)?,
     };
     let FfFaces { offsets, next: coarse_next, twins, across, quads, on_boundary, unreached, layout } = ff_faces;
-    // Without a seed, the choice is made here only on closed meshes with F_E quads and
-    // F_V faces (see [`automatic`]); anything else goes to the general path now, before
-    // the work below is done for nothing.
+    // Without a seed, the choice is made here only on meshes with F_E quads and F_V
+    // faces (see [`automatic`] and [`automatic_open`]); anything else goes to the general
+    // path now, before the work below is done for nothing.
     let automatic_choice = seed.is_none();
-    if automatic_choice && (on_boundary || quads == 0) {
+    if automatic_choice && quads == 0 {
         return None;
     }
     let ff_count = offsets.len() - 1;
@@ -218,7 +222,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
                 ReverseStats { visited_faces: ff_count, edges_crossed: vertices, candidate_edges, interpretations: 0 };
             (SeedChoice::given(0, seed), stats)
         }
-        None => {
+        None if closed => {
             let mut choice = automatic(fine, &maps, &coarse, detail_energy, scale, &fv, candidates)?;
             let visited = if choice.trials.len() == 1 { ff_count } else { ff_count + interior + 1 };
             // Every valid reading was searched in full; the ones whose sum stopped early
@@ -228,6 +232,11 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
             let edges_crossed = valid * vertices + choice.trials.len() - valid;
             choice.component = 0;
             (choice, ReverseStats { visited_faces: visited, edges_crossed, candidate_edges, interpretations })
+        }
+        None => {
+            let first = FirstReading { coarse: &coarse, energy: detail_energy, scale };
+            let (choice, stats) = automatic_open(&arrays, &first, fv_first)?;
+            (choice, ReverseStats { candidate_edges, ..stats })
         }
     };
     choice.detail_energy = detail_energy;
@@ -926,6 +935,121 @@ fn automatic(
     Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason })
 }
 
+/// The first reading of an open canonical mesh, as [`automatic_open`] reads it.
+struct FirstReading<'a> {
+    coarse: &'a CornerMesh,
+    /// Its detail energy (the general path sums its groups in the result's vertex order).
+    energy: f64,
+    /// The bounding-box diagonal of all vertices (the scale of the zero test).
+    scale: f64,
+}
+
+/// The automatic choice of the general path on an open canonical mesh (one with F_E
+/// quads and F_V faces), made as it makes it: the lowest face as F_F (the first reading,
+/// valid), then, unless its details are all zero, the lowest F_V face and the lowest F_E
+/// quad as F_F, in that order. On an open mesh these usually fail within a few faces of
+/// their seed (the F_E quads of the dual reading meet the boundary): each search is
+/// replayed on the half-edge arrays ([`search_fails`]), for the same error and the same
+/// counters. `None` if one of them does not fail (the general path ranks the readings).
+///
+/// Returns the choice and the counters of the search (without `candidate_edges`).
+fn automatic_open(
+    arrays: &HalfedgeArrays<'_>,
+    first: &FirstReading<'_>,
+    fv_first: usize,
+) -> Option<(SeedChoice, ReverseStats)> {
+    let FirstReading { coarse, energy, scale } = *first;
+    let ff_count = coarse.face_count();
+    let mut stats = ReverseStats {
+        visited_faces: ff_count,
+        edges_crossed: arrays.vertices,
+        candidate_edges: 0,
+        interpretations: 1,
+    };
+    let mut trials = vec![SeedTrial::valid(0, "F_F", energy, false)];
+    let reason = if energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * arrays.faces as f64 {
+        "face 0 as F_F gives all details zero (exact Doo-Sabin refinement); no other reading tried".to_string()
+    } else {
+        for (seed, class) in [(fv_first, "F_V"), (ff_count, "F_E")] {
+            let (error, visited, crossed) = search_fails(arrays, seed)?;
+            stats.visited_faces += visited;
+            stats.edges_crossed += crossed;
+            trials.push(SeedTrial::invalid(seed, class, &error));
+        }
+        "face 0 as F_F is the only valid reading found".to_string()
+    };
+    Some((SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason }, stats))
+}
+
+/// The breadth-first search of the general path from `seed` as an F_F face, replayed on
+/// the half-edge arrays (the corners of a face are its half-edges from its first one;
+/// see `Search::classify`): the error it stops at, with the faces it visited and the
+/// edges it crossed, or `None` if it does not stop.
+fn search_fails(arrays: &HalfedgeArrays<'_>, seed: usize) -> Option<(DooError, usize, usize)> {
+    const FF: u8 = 1;
+    const FE: u8 = 2;
+    let HalfedgeArrays { next, face_of, face_halfedge, faces, .. } = *arrays;
+    let broken = |face: usize, reason: String| DooError::NotDooConnectivity { face, reason };
+    let mut role = vec![0u8; faces];
+    role[seed] = FF;
+    let mut queue = vec![seed as u32];
+    let (mut visited, mut crossed) = (0, 0);
+    let mut head = 0;
+    while let Some(&f) = queue.get(head) {
+        head += 1;
+        visited += 1;
+        let f = f as usize;
+        let start = face_halfedge[f];
+        let mut h = start;
+        loop {
+            crossed += 1;
+            let g = face_of[(h ^ 1) as usize];
+            if g != NONE {
+                let g = g as usize;
+                // The quad across, its opposite edge, and the face beyond.
+                let mut sides = 1;
+                let mut x = next[(h ^ 1) as usize];
+                while x != h ^ 1 {
+                    sides += 1;
+                    x = next[x as usize];
+                }
+                if sides != 4 {
+                    let reason = format!("it lies across an edge of F_F face {f} but has {sides} sides, not 4");
+                    return Some((broken(g, reason), visited, crossed));
+                }
+                let far = next[next[(h ^ 1) as usize] as usize];
+                let beyond = face_of[(far ^ 1) as usize];
+                if beyond == NONE {
+                    let reason = format!("this F_E quad (next to F_F face {f}) has its opposite edge on the boundary");
+                    return Some((broken(g, reason), visited, crossed));
+                }
+                if role[g] == FF {
+                    let reason = format!("F_F faces {f} and {g} share an edge (expected a quad between)");
+                    return Some((broken(g, reason), visited, crossed));
+                }
+                role[g] = FE;
+                let beyond = beyond as usize;
+                match role[beyond] {
+                    FE => {
+                        let reason = format!("it is both an F_E quad and, across quad {g}, an F_F face");
+                        return Some((broken(beyond, reason), visited, crossed));
+                    }
+                    FF => {}
+                    _ => {
+                        role[beyond] = FF;
+                        queue.push(beyond as u32);
+                    }
+                }
+            }
+            h = next[h as usize];
+            if h == start {
+                break;
+            }
+        }
+    }
+    None
+}
+
 /// The F_F faces of the dual reading at or above which [`DualReading::sum_in_pairs`]
 /// splits its sum (each piece expands again the F_V faces it shares with the previous
 /// one: pieces of many rows of faces keep that small).
@@ -1126,6 +1250,85 @@ mod tests {
         assert!(automatic >= 4, "{automatic}");
     }
 
+    /// `soup` without the faces `removed` (an open mesh).
+    fn without(soup: &PolygonSoup, removed: &[usize]) -> PolygonSoup {
+        let faces = soup.faces().enumerate().filter(|(f, _)| !removed.contains(f)).map(|(_, face)| face.to_vec());
+        PolygonSoup::from_faces(soup.positions.clone(), faces)
+    }
+
+    #[test]
+    fn an_open_canonical_mesh_gives_the_general_choice() {
+        let torus = shapes::torus(8, 6, CellKind::Quads).unwrap();
+        let soups = [
+            shapes::grid(4, 3, CellKind::Quads).unwrap(),
+            shapes::grid(6, 5, CellKind::Triangles).unwrap(),
+            shapes::grid(5, 7, CellKind::Mixed).unwrap(),
+            without(&shapes::cube(), &[2]),
+            without(&torus, &[0, 28]),
+            without(&shapes::icosahedron(), &[0]),
+        ];
+        for soup in &soups {
+            for rule in [FaceRule::DooSabin, FaceRule::Simple, FaceRule::CENTROID_HALF] {
+                let auto = ReverseOptions::auto(rule);
+                let exact = subdivide_soup(soup, &DooOptions::new(rule, 1)).unwrap().to_mesh().unwrap();
+                for fine in [refine(soup, rule), exact] {
+                    assert!(fine.vertices().any(|v| fine.is_boundary_vertex(v)));
+                    let fast = reverse_canonical(&fine, &auto).expect("an open mesh in the canonical order");
+                    let general = general(&fine, &auto);
+                    // The same reversal, choice, trials (errors word for word) and counters.
+                    assert_eq!(fast, general);
+                    // Face 0 as F_F; unless its details are zero, the dual reading and the
+                    // F_E reading tried and refused.
+                    let choice = &fast.choices()[0];
+                    assert_eq!((choice.seed_face, choice.trials[0].class.as_str()), (0, "F_F"));
+                    // The winner's sum is the result's detail energy, bit for bit.
+                    assert_eq!(choice.trials[0].outcome, Ok(choice.detail_energy));
+                    let classes: Vec<&str> = choice.trials[1..].iter().map(|t| t.class.as_str()).collect();
+                    assert!(classes.is_empty() || classes == ["F_V", "F_E"], "{choice:?}");
+                    assert!(choice.trials[1..].iter().all(|t| t.outcome.is_err()), "{choice:?}");
+                }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+        /// Random open meshes (grids and tori with faces removed, every face rule, moved
+        /// vertices): the automatic choice on the canonical path is the general path's.
+        #[test]
+        fn open_meshes_give_the_general_choice(
+            width in 1u32..7,
+            height in 1u32..6,
+            kind in 0usize..3,
+            torus in proptest::bool::ANY,
+            removed in proptest::collection::vec(0usize..200, 0..4),
+            rule in 0usize..3,
+            shift in -1.0f64..1.0,
+        ) {
+            let kind = [CellKind::Quads, CellKind::Triangles, CellKind::Mixed][kind];
+            let rule = [FaceRule::DooSabin, FaceRule::Simple, FaceRule::CENTROID_HALF][rule];
+            let soup = if torus {
+                shapes::torus(width + 2, height + 2, kind).unwrap()
+            } else {
+                shapes::grid(width, height, kind).unwrap()
+            };
+            let removed: Vec<usize> = removed.iter().map(|&f| f % soup.face_count()).collect();
+            let soup = without(&soup, &removed);
+            // Only manifold meshes with faces left, without isolated vertices.
+            proptest::prop_assume!(soup.face_count() > 0);
+            let Ok(coarse) = HalfedgeMesh::from_soup(&soup) else { return Ok(()) };
+            proptest::prop_assume!(coarse.vertices().all(|v| coarse.vertex_halfedge(v).is_some()));
+            let mut fine = subdivide_soup(&soup, &DooOptions::new(rule, 1)).unwrap().to_mesh().unwrap();
+            for (i, p) in fine.positions_mut().iter_mut().enumerate() {
+                p.z += shift * 1e-2 * ((i * 31) % 7) as f64;
+            }
+            let auto = ReverseOptions::auto(rule);
+            if let Some(fast) = reverse_canonical(&fine, &auto) {
+                proptest::prop_assert_eq!(fast, general(&fine, &auto));
+            }
+        }
+    }
+
     #[test]
     fn the_dual_reading_stops_once_it_cannot_win() {
         // Moved vertices: the first reading has small details, the dual one larger.
@@ -1163,6 +1366,7 @@ mod tests {
             (&closed, ReverseOptions::auto(FaceRule::DooSabin)),
             (&closed, ReverseOptions::with_seed(FaceRule::DooSabin, 5)),
             (&open, ReverseOptions::with_seed(FaceRule::DooSabin, 0)),
+            (&open, ReverseOptions::auto(FaceRule::DooSabin)),
         ] {
             let parallel = two.install(|| reverse_canonical(fine, &options)).expect("canonical order");
             assert_eq!(parallel, one.install(|| reverse_canonical(fine, &options)).unwrap());

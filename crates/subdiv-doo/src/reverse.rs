@@ -102,10 +102,14 @@
 //! corner arrays, the search and the face matching: its numbering says which faces are
 //! F_F, F_E and F_V, and three streaming passes over the half-edge arrays check every
 //! fine face against it while they build the coarse mesh. This covers a given seed face
-//! and, on closed meshes, the automatic choice (the same readings evaluated with the same
-//! sums in the same order). The result is bit for bit the one of the general path; any
-//! mesh it does not fit (another order, a boundary in automatic mode, several
-//! components, a broken mesh) goes to the general path, which names the face at fault.
+//! and the automatic choice (the same readings evaluated with the same sums in the same
+//! order; on an open mesh the searches of the other readings, which meet the boundary
+//! within a few faces of their seeds, are replayed on the half-edge arrays up to the
+//! error they stop at). The result is bit for bit the one of the general path (choice,
+//! trials and counters included); any mesh it does not fit (another order, several
+//! components, no F_E quads or no interior coarse vertex in automatic mode, another
+//! reading that does not fail on an open mesh, a broken mesh) goes to the general path,
+//! which names the face at fault.
 //!
 //! # Boundaries and components
 //! Coarse boundary edges are the F_F edges on the fine boundary (the default boundary
@@ -1138,22 +1142,16 @@ impl<'a> Search<'a> {
         if defer {
             return Ok(Energy { energy: f64::NAN, size, stopped_early: false, deferred: true });
         }
-        self.group_sum(queue_start, component_faces, ff_corners, cutoff, size)
+        self.group_sum(component_faces, ff_corners, cutoff, size)
     }
 
     /// Completes a deferred [`Self::energy`] of the whole mesh, whose ranks and
     /// candidates were kept (`kept`, given back with them on success): its sum over the
     /// groups, without a cutoff.
-    fn complete_energy(
-        &mut self,
-        kept: &mut Kept,
-        queue_start: usize,
-        faces: FaceSet<'_>,
-        size: f64,
-    ) -> Result<f64, DooError> {
+    fn complete_energy(&mut self, kept: &mut Kept, faces: FaceSet<'_>, size: f64) -> Result<f64, DooError> {
         self.ff_corner_of_vertex = std::mem::take(&mut kept.corner_of_vertex);
         self.candidate = std::mem::take(&mut kept.candidates);
-        let result = self.group_sum(queue_start, faces, self.fine.vertex_count, NO_CUTOFF, size);
+        let result = self.group_sum(faces, self.fine.vertex_count, NO_CUTOFF, size);
         if result.is_ok() {
             kept.corner_of_vertex = std::mem::take(&mut self.ff_corner_of_vertex);
             kept.candidates = std::mem::take(&mut self.candidate);
@@ -1169,7 +1167,6 @@ impl<'a> Search<'a> {
     /// the component's size).
     fn group_sum(
         &mut self,
-        queue_start: usize,
         component_faces: FaceSet<'_>,
         ff_corners: usize,
         cutoff: f64,
@@ -1205,9 +1202,16 @@ impl<'a> Search<'a> {
         // Groups of boundary coarse vertices: walk both ways around the coarse vertex
         // (clockwise: across the quad, then the next corner; counter-clockwise: the
         // previous corner, then across), stopping at the boundary or at a grouped vertex.
+        // Each is met at its first F_F corner in memory order, the order in which the
+        // result numbers the boundary vertices, so that the sum is the result's detail
+        // energy (and a canonical mesh sums it without replaying the search order). The
+        // search has crossed every F_F edge already: no walk meets a broken quad.
         let mut group = std::mem::take(&mut self.group);
-        for i in queue_start..self.queue.len() {
-            let f = self.queue[i] as usize;
+        for f in component_faces.iter() {
+            let f = f as usize;
+            if self.role[f] != FF {
+                continue;
+            }
             for fc in fine.offsets[f]..fine.offsets[f + 1] {
                 if self.mark_grouped(fine.corner_vertex[fc as usize]) {
                     continue;
@@ -1399,7 +1403,7 @@ impl<'a> Search<'a> {
                             self.stats.interpretations += 1;
                             closed.energies[0]
                         }
-                        (true, None) => match self.complete_energy(&mut kept, queue_start, faces, size) {
+                        (true, None) => match self.complete_energy(&mut kept, faces, size) {
                             Ok(energy) => energy,
                             Err(error) => {
                                 trials.push(SeedTrial::invalid(seed, class, &error));
