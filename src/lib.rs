@@ -2,9 +2,10 @@
 //!
 //! This facade re-exports the member crates of the workspace, one module each, and adds
 //! the few types that span them: [`SurfaceScheme`] (every surface scheme behind one name,
-//! so a comparison over schemes is a loop), [`Pyramid`] and [`decompose`]
-//! (multiresolution by reverse Loop or reverse Doo-Sabin, one file format), and one
-//! [`Error`]. It defines no algorithm of its own. Depend on a member crate alone when you
+//! so a comparison over schemes is a loop), [`Boundaries`] (the boundary rules of open
+//! meshes: Loop's fixed corners, Doo-Sabin's Chaikin ring), [`Pyramid`], [`decompose`]
+//! and [`decompose_with`] (multiresolution by reverse Loop or reverse Doo-Sabin, one file
+//! format), and one [`Error`]. It defines no algorithm of its own. Depend on a member crate alone when you
 //! need only one job; none of them pulls in the command-line dependencies.
 //!
 //! | module | crate | what |
@@ -15,7 +16,6 @@
 //! | [`doo`] | `subdiv-doo` | Doo-Sabin subdivision, reverse Doo-Sabin, pyramids, analysis |
 //! | [`spline`] | `tri-spline` | triangular Bézier, B-patch and DMS splines; PIA / LSPIA fitting |
 //! | [`ifs`] | `ifs-nonlinear` | subdivision as IFS, complex-parameter and nonlinear subdivision, fractal rendering |
-//! | [`spline`] | `tri-spline` | triangular Bézier, B-patch and DMS splines; PIA / LSPIA fitting |
 //!
 //! # Subdivide with every scheme
 //! ```
@@ -41,6 +41,28 @@
 //! assert_eq!(pyramid.base().face_count(), 6); // the cube again, all details zero
 //! let half = pyramid.reconstruct_keeping(3, 0.5)?;
 //! assert_eq!(half.face_count(), fine.face_count());
+//! # Ok::<(), multires::Error>(())
+//! ```
+//!
+//! # Open meshes
+//! ```
+//! use multires::prelude::*;
+//!
+//! // Doo-Sabin with the Chaikin boundary ring, two steps on an open grid and back.
+//! let grid = HalfedgeMesh::from_soup(&shapes::grid(5, 4, shapes::CellKind::Mixed)?)?;
+//! let ring = Boundaries::chaikin();
+//! let fine = HalfedgeMesh::from_soup(&SurfaceScheme::DooSabin.subdivide_with(&grid, 2, &ring)?)?;
+//! let pyramid = decompose_with(&fine, SurfaceScheme::DooSabin, Depth::Max, &ring)?;
+//! assert_eq!((pyramid.level_count(), pyramid.base().face_count()), (2, grid.face_count()));
+//! // Loop with fixed corners: the vertices with one face stay where they are (the fine
+//! // mesh lists the coarse vertices first, in their order).
+//! let triangles = HalfedgeMesh::from_soup(&shapes::grid(3, 3, shapes::CellKind::Triangles)?)?;
+//! let fixed = SurfaceScheme::Loop.subdivide_with(&triangles, 2, &Boundaries::keep_corners())?;
+//! let corners: Vec<_> = triangles.vertices().filter(|&v| triangles.vertex_faces(v).count() == 1).collect();
+//! assert_eq!(corners.len(), 2);
+//! for v in corners {
+//!     assert_eq!(fixed.positions[v.index()], triangles.positions()[v.index()]);
+//! }
 //! # Ok::<(), multires::Error>(())
 //! ```
 //!
