@@ -138,7 +138,6 @@ impl SurfaceScheme {
         boundaries: &Boundaries,
     ) -> Result<PolygonSoup, Error> {
         boundaries.check(self)?;
-        let loop_options = |weights| LoopOptions { weights, keep_corners: boundaries.keep_corners };
         let soup = match self {
             SurfaceScheme::Loop | SurfaceScheme::LoopWarren => {
                 let options = self.loop_options_with(boundaries).expect("internal: Loop family");
@@ -148,7 +147,9 @@ impl SurfaceScheme {
                 subdiv_loop::mband::ternary_subdivide(mesh, levels, &TernaryOptions::default())?.into_soup()
             }
             SurfaceScheme::QuaternaryLoop => {
-                subdiv_loop::mband::quaternary_subdivide(mesh, levels, &loop_options(VertexWeights::Loop))?.into_soup()
+                // Quaternary Loop has Loop's weights; only the corner rule is an option.
+                let options = SurfaceScheme::Loop.loop_options_with(boundaries).expect("internal: Loop");
+                subdiv_loop::mband::quaternary_subdivide(mesh, levels, &options)?.into_soup()
             }
             SurfaceScheme::DooSabin | SurfaceScheme::DooSimple | SurfaceScheme::DooCentroid => {
                 let rule = self.doo_rule().expect("internal: Doo-Sabin family");

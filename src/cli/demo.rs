@@ -150,6 +150,8 @@ fn doo_subdivision(demo: &mut Demo) -> CliResult<String> {
 /// Chaikin points), with the distance of each level's boundary to the Chaikin refinement
 /// of the grid's outline.
 fn doo_boundaries(demo: &mut Demo) -> CliResult<String> {
+    use multires::curve::{CurveScheme, Topology};
+
     let mut grid = shapes::grid(6, 4, CellKind::Quads).map_err(|e| input_error("grid", e))?;
     for p in &mut grid.positions {
         p.z = 0.35 * (1.1 * p.x).sin() * (0.9 * p.y + 0.3).cos();
@@ -162,17 +164,17 @@ fn doo_boundaries(demo: &mut Demo) -> CliResult<String> {
     let mut gap = 0.0;
     for boundary in [BoundaryRule::Shrink, BoundaryRule::Chaikin] {
         let mut levels = vec![grid.clone()];
-        let mut expected = outline.clone();
+        let options = DooOptions::new(FaceRule::DooSabin, 1).with_boundary(boundary);
+        let mut coarse = mesh.clone();
         for level in 1..=LEVELS {
-            let options = DooOptions::new(FaceRule::DooSabin, level).with_boundary(boundary);
-            let fine = doo::subdivide(&mesh, &options).map_err(|e| input_error("grid", e))?.into_soup();
+            // One step from the level before (the same mesh as `level` steps from the grid).
+            let fine = doo::subdivide(&coarse, &options).map_err(|e| input_error("grid", e))?.into_soup();
             let fine_mesh = HalfedgeMesh::from_soup(&fine).map_err(|e| input_error("grid", e))?;
             let found = boundary_polygon(&fine_mesh);
-            expected = expected
-                .iter()
-                .zip(expected.iter().cycle().skip(1))
-                .flat_map(|(&p, &q)| [0.75 * p + 0.25 * q, 0.25 * p + 0.75 * q])
-                .collect();
+            // The reference: the outline refined by the curve crate's Chaikin scheme.
+            let expected = CurveScheme::chaikin()
+                .refine(&outline, Topology::Closed, level)
+                .map_err(|e| input_error("grid outline", e))?;
             // Each boundary vertex's distance to the nearest point of the refined outline.
             let distance = found
                 .iter()
@@ -191,6 +193,7 @@ fn doo_boundaries(demo: &mut Demo) -> CliResult<String> {
             )
             .expect("string");
             levels.push(fine);
+            coarse = fine_mesh;
         }
         let picture = format!("doo-sabin-boundary-{boundary}.png");
         write_picture_view(&demo.out.join(&picture), &levels.iter().collect::<Vec<_>>(), (30.0, 55.0))?;

@@ -42,7 +42,6 @@
 //! its Chaikin point: exact up to one rounding.
 
 use glam::DVec3;
-use mesh_topo::PolygonSoup;
 use serde::{Deserialize, Serialize};
 
 use crate::DooError;
@@ -249,7 +248,7 @@ pub(crate) fn reverse_chaikin_corner_mesh(
     let mut inner_vertex = vec![NONE; fine.vertex_count];
     let mut vertex_of_inner = Vec::new();
     let mut face_of_inner = Vec::new();
-    let mut inner = PolygonSoup { positions: Vec::new(), offsets: vec![0], indices: Vec::new() };
+    let (mut inner_offsets, mut inner_indices) = (vec![0u32], Vec::new());
     for (f, w) in fine.offsets.windows(2).enumerate() {
         if in_ring[f] {
             continue;
@@ -261,10 +260,9 @@ pub(crate) fn reverse_chaikin_corner_mesh(
                 vertex_of_inner.push(v);
             }
         }
-        inner
-            .indices
+        inner_indices
             .extend(fine.corner_vertex[w[0] as usize..w[1] as usize].iter().map(|&v| inner_vertex[v as usize]));
-        inner.offsets.push(inner.indices.len() as u32);
+        inner_offsets.push(inner_indices.len() as u32);
     }
     if ring_faces == 0 {
         // No boundary: both rules are the same.
@@ -294,12 +292,15 @@ pub(crate) fn reverse_chaikin_corner_mesh(
             ),
         });
     }
-    inner.positions = vertex_of_inner.iter().map(|&v| positions[v as usize]).collect();
+    let inner_positions: Vec<DVec3> = vertex_of_inner.iter().map(|&v| positions[v as usize]).collect();
     let to_input = |error: DooError| map_error(error, &face_of_inner, &vertex_of_inner);
-    let inner_corners = CornerMesh::from_soup(&inner).map_err(|reason| DooError::NotDooConnectivity {
-        face: face_of_inner[0] as usize,
-        reason: format!("without the faces that touch the boundary the mesh is not a manifold mesh: {reason}"),
-    })?;
+    let inner_corners =
+        CornerMesh::from_faces(inner_offsets, inner_indices, inner_positions.len()).map_err(|reason| {
+            DooError::NotDooConnectivity {
+                face: face_of_inner[0] as usize,
+                reason: format!("without the faces that touch the boundary the mesh is not a manifold mesh: {reason}"),
+            }
+        })?;
     let inner_options = ReverseOptions {
         rule: options.rule,
         seeds: options
@@ -313,7 +314,7 @@ pub(crate) fn reverse_chaikin_corner_mesh(
             .collect(),
         boundary: BoundaryRule::Shrink,
     };
-    let mut session = Session::new(&inner_corners, &inner.positions, &inner_options).map_err(to_input)?;
+    let mut session = Session::new(&inner_corners, &inner_positions, &inner_options).map_err(to_input)?;
     let mut first_error = None;
     for picks in session.alternatives() {
         let attempt = session.build(picks).map_err(to_input).and_then(|reversal| {

@@ -26,9 +26,10 @@ use glam::DVec3;
 use crate::DooError;
 use crate::corner::{CornerMesh, NONE, faces_of_corners, group_by_key, next_of_corners};
 use crate::reverse::{
-    CornersByVertex, DooReversal, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial,
-    check_coarse_manifold, corners_by_vertex, dual_group_energy, insertion_sort, means_and_details,
-    means_and_details_in, ranking_reason,
+    CornersByVertex, DooReversal, FE, FF, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial,
+    check_coarse_manifold, corners_by_vertex, details_are_zero, dual_group_energy, ff_faces_share_an_edge,
+    insertion_sort, means_and_details, means_and_details_in, not_a_quad, only_valid_reason, quad_on_boundary,
+    quad_read_as_ff_face, ranking_reason, zero_details_reason,
 };
 use crate::rule::FaceMaps;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -234,8 +235,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
             (choice, ReverseStats { visited_faces: visited, edges_crossed, candidate_edges, interpretations })
         }
         None => {
-            let first = FirstReading { coarse: &coarse, energy: detail_energy, scale };
-            let (choice, stats) = automatic_open(&arrays, &first, fv_first)?;
+            let (choice, stats) = automatic_open(&arrays, detail_energy, scale, ff_count, fv_first)?;
             (choice, ReverseStats { candidate_edges, ..stats })
         }
     };
@@ -882,17 +882,9 @@ fn automatic(
     let ff_count = ff_offsets.len() - 1;
     let faces = fine.face_count();
     let mut trials = vec![SeedTrial::valid(0, "F_F", energy, false)];
-    let zero_choice = |trials| {
-        let reason =
-            "face 0 as F_F gives all details zero (exact Doo-Sabin refinement); no other reading tried".to_string();
-        Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason })
-    };
-    if energy == 0.0 {
-        // Zero at any scale.
-        return zero_choice(trials);
-    }
-    if energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * faces as f64 {
-        return zero_choice(trials);
+    if details_are_zero(energy, scale, faces) {
+        let reason = zero_details_reason(0);
+        return Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason });
     }
     // The lowest F_E quad as F_F: the face across its first edge must be a quad.
     let quad = ff_count;
@@ -926,22 +918,10 @@ fn automatic(
     }
     let fv_seed = fv.first;
     trials.push(SeedTrial::valid(fv_seed, "F_V", dual_energy, true));
-    let error = DooError::NotDooConnectivity {
-        face: across,
-        reason: format!("it lies across an edge of F_F face {quad} but has {across_size} sides, not 4"),
-    };
+    let error = not_a_quad(quad, across, across_size as usize);
     trials.push(SeedTrial::invalid(quad, "F_E", &error));
     let reason = ranking_reason(energy, &[(fv_seed, dual_energy, true)]);
     Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason })
-}
-
-/// The first reading of an open canonical mesh, as [`automatic_open`] reads it.
-struct FirstReading<'a> {
-    coarse: &'a CornerMesh,
-    /// Its detail energy (the general path sums its groups in the result's vertex order).
-    energy: f64,
-    /// The bounding-box diagonal of all vertices (the scale of the zero test).
-    scale: f64,
 }
 
 /// The automatic choice of the general path on an open canonical mesh (one with F_E
@@ -952,14 +932,17 @@ struct FirstReading<'a> {
 /// replayed on the half-edge arrays ([`search_fails`]), for the same error and the same
 /// counters. `None` if one of them does not fail (the general path ranks the readings).
 ///
-/// Returns the choice and the counters of the search (without `candidate_edges`).
+/// `energy`: the first reading's detail energy (the general path sums its groups in the
+/// result's vertex order); `scale`: the bounding-box diagonal of all vertices; the F_E
+/// quads start at face `ff_count`, the F_V faces at `fv_first`. Returns the choice and
+/// the counters of the search (without `candidate_edges`).
 fn automatic_open(
     arrays: &HalfedgeArrays<'_>,
-    first: &FirstReading<'_>,
+    energy: f64,
+    scale: f64,
+    ff_count: usize,
     fv_first: usize,
 ) -> Option<(SeedChoice, ReverseStats)> {
-    let FirstReading { coarse, energy, scale } = *first;
-    let ff_count = coarse.face_count();
     let mut stats = ReverseStats {
         visited_faces: ff_count,
         edges_crossed: arrays.vertices,
@@ -967,8 +950,8 @@ fn automatic_open(
         interpretations: 1,
     };
     let mut trials = vec![SeedTrial::valid(0, "F_F", energy, false)];
-    let reason = if energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * arrays.faces as f64 {
-        "face 0 as F_F gives all details zero (exact Doo-Sabin refinement); no other reading tried".to_string()
+    let reason = if details_are_zero(energy, scale, arrays.faces) {
+        zero_details_reason(0)
     } else {
         for (seed, class) in [(fv_first, "F_V"), (ff_count, "F_E")] {
             let (error, visited, crossed) = search_fails(arrays, seed)?;
@@ -976,7 +959,7 @@ fn automatic_open(
             stats.edges_crossed += crossed;
             trials.push(SeedTrial::invalid(seed, class, &error));
         }
-        "face 0 as F_F is the only valid reading found".to_string()
+        only_valid_reason(0)
     };
     Some((SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason }, stats))
 }
@@ -986,10 +969,7 @@ fn automatic_open(
 /// see `Search::classify`): the error it stops at, with the faces it visited and the
 /// edges it crossed, or `None` if it does not stop.
 fn search_fails(arrays: &HalfedgeArrays<'_>, seed: usize) -> Option<(DooError, usize, usize)> {
-    const FF: u8 = 1;
-    const FE: u8 = 2;
     let HalfedgeArrays { next, face_of, face_halfedge, faces, .. } = *arrays;
-    let broken = |face: usize, reason: String| DooError::NotDooConnectivity { face, reason };
     let mut role = vec![0u8; faces];
     role[seed] = FF;
     let mut queue = vec![seed as u32];
@@ -1014,26 +994,20 @@ fn search_fails(arrays: &HalfedgeArrays<'_>, seed: usize) -> Option<(DooError, u
                     x = next[x as usize];
                 }
                 if sides != 4 {
-                    let reason = format!("it lies across an edge of F_F face {f} but has {sides} sides, not 4");
-                    return Some((broken(g, reason), visited, crossed));
+                    return Some((not_a_quad(f, g, sides), visited, crossed));
                 }
                 let far = next[next[(h ^ 1) as usize] as usize];
                 let beyond = face_of[(far ^ 1) as usize];
                 if beyond == NONE {
-                    let reason = format!("this F_E quad (next to F_F face {f}) has its opposite edge on the boundary");
-                    return Some((broken(g, reason), visited, crossed));
+                    return Some((quad_on_boundary(f, g), visited, crossed));
                 }
                 if role[g] == FF {
-                    let reason = format!("F_F faces {f} and {g} share an edge (expected a quad between)");
-                    return Some((broken(g, reason), visited, crossed));
+                    return Some((ff_faces_share_an_edge(f, g), visited, crossed));
                 }
                 role[g] = FE;
                 let beyond = beyond as usize;
                 match role[beyond] {
-                    FE => {
-                        let reason = format!("it is both an F_E quad and, across quad {g}, an F_F face");
-                        return Some((broken(beyond, reason), visited, crossed));
-                    }
+                    FE => return Some((quad_read_as_ff_face(beyond, g), visited, crossed)),
                     FF => {}
                     _ => {
                         role[beyond] = FF;

@@ -230,6 +230,23 @@ impl SeedTrial {
     }
 }
 
+/// Whether a reading's total squared detail norm `energy` is zero at the scale of its
+/// mesh (`scale`: bounding-box diagonal; `faces`: its number of faces): below
+/// `(1e-12 scale)^2` per face, round-off of an exact refinement.
+pub(crate) fn details_are_zero(energy: f64, scale: f64, faces: usize) -> bool {
+    energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * faces as f64
+}
+
+/// The reason of a choice whose first reading (`seed` as F_F) has zero details.
+pub(crate) fn zero_details_reason(seed: usize) -> String {
+    format!("face {seed} as F_F gives all details zero (exact Doo-Sabin refinement); no other reading tried")
+}
+
+/// The reason of a choice whose other readings all failed.
+pub(crate) fn only_valid_reason(seed: usize) -> String {
+    format!("face {seed} as F_F is the only valid reading found")
+}
+
 /// Why the automatic mode kept a reading of total squared detail norm `energy` against
 /// the other valid ones (`others`: seed face, total or partial sum, stopped early).
 pub(crate) fn ranking_reason(energy: f64, others: &[(usize, f64, bool)]) -> String {
@@ -779,8 +796,41 @@ struct Closed {
 type Ranked = Vec<(usize, f64)>;
 
 const UNKNOWN: u8 = 0;
-const FF: u8 = 1;
-const FE: u8 = 2;
+pub(crate) const FF: u8 = 1;
+pub(crate) const FE: u8 = 2;
+
+// The errors of the search from a seed face (`Search::classify`), also made by its
+// replay on canonical meshes (`crate::canonical`), which must word them alike.
+
+/// Face `g`, across an edge of F_F face `f`, is not a quad (it has `m` sides).
+#[cold]
+#[inline(never)]
+pub(crate) fn not_a_quad(f: usize, g: usize, m: usize) -> DooError {
+    let reason = format!("it lies across an edge of F_F face {f} but has {m} sides, not 4");
+    DooError::NotDooConnectivity { face: g, reason }
+}
+
+/// Quad `g`, across an edge of F_F face `f`, has its opposite edge on the boundary.
+#[cold]
+#[inline(never)]
+pub(crate) fn quad_on_boundary(f: usize, g: usize) -> DooError {
+    let reason = format!("this F_E quad (next to F_F face {f}) has its opposite edge on the boundary");
+    DooError::NotDooConnectivity { face: g, reason }
+}
+
+/// F_F face `g` lies across an edge of F_F face `f`, with no quad between.
+#[cold]
+pub(crate) fn ff_faces_share_an_edge(f: usize, g: usize) -> DooError {
+    let reason = format!("F_F faces {f} and {g} share an edge (expected a quad between)");
+    DooError::NotDooConnectivity { face: g, reason }
+}
+
+/// Face `h`, an F_E quad already, is reached across quad `g` as an F_F face.
+#[cold]
+pub(crate) fn quad_read_as_ff_face(h: usize, g: usize) -> DooError {
+    let reason = format!("it is both an F_E quad and, across quad {g}, an F_F face");
+    DooError::NotDooConnectivity { face: h, reason }
+}
 
 /// State of the F_F search over the fine mesh.
 struct Search<'a> {
@@ -889,27 +939,15 @@ impl<'a> Search<'a> {
         let g = self.corner_face[ft as usize] as usize;
         let first = fine.offsets[g];
         if fine.offsets[g + 1] - first != 4 {
-            return Err(Self::not_a_quad(f, g, self.face_size(g)));
+            return Err(not_a_quad(f, g, self.face_size(g)));
         }
         // The opposite corner of the quad, by index arithmetic (corners are face by face).
         let far = first + ((ft - first + 2) & 3);
         let gt = fine.corner_twin[far as usize];
         if gt == NONE {
-            return Err(Self::quad_on_boundary(f, g));
+            return Err(quad_on_boundary(f, g));
         }
         Ok(Some((g as u32, gt)))
-    }
-
-    #[cold]
-    #[inline(never)]
-    fn not_a_quad(f: usize, g: usize, m: usize) -> DooError {
-        Self::broken(g, format!("it lies across an edge of F_F face {f} but has {m} sides, not 4"))
-    }
-
-    #[cold]
-    #[inline(never)]
-    fn quad_on_boundary(f: usize, g: usize) -> DooError {
-        Self::broken(g, format!("this F_E quad (next to F_F face {f}) has its opposite edge on the boundary"))
     }
 
     /// Breadth-first search from `seed` as an F_F face; marks the roles. On error the
@@ -928,22 +966,12 @@ impl<'a> Search<'a> {
                 let Some((g, gt)) = self.across_quad(f, fc)? else { continue };
                 let g = g as usize;
                 match self.role[g] {
-                    FF => {
-                        return Err(Self::broken(
-                            g,
-                            format!("F_F faces {f} and {g} share an edge (expected a quad between)"),
-                        ));
-                    }
+                    FF => return Err(ff_faces_share_an_edge(f, g)),
                     _ => self.role[g] = FE,
                 }
                 let h = self.corner_face[gt as usize] as usize;
                 match self.role[h] {
-                    FE => {
-                        return Err(Self::broken(
-                            h,
-                            format!("it is both an F_E quad and, across quad {g}, an F_F face"),
-                        ));
-                    }
+                    FE => return Err(quad_read_as_ff_face(h, g)),
                     FF => {}
                     _ => {
                         self.role[h] = FF;
@@ -1434,7 +1462,7 @@ impl<'a> Search<'a> {
         let Some(first) = found.first() else {
             return Err(first_error.expect("internal: a failed search leaves an error"));
         };
-        let zero = |energy: f64| energy <= (1e-12 * scale.max(f64::MIN_POSITIVE)).powi(2) * faces.len() as f64;
+        let zero = |energy: f64| details_are_zero(energy, scale, faces.len());
         if !zero(first.energy) {
             // The smallest total so far: a reading whose sum reaches it cannot win.
             let mut cutoff = first.energy;
@@ -1502,9 +1530,9 @@ impl<'a> Search<'a> {
         let (seed, energy) = (found[best].seed, found[best].energy);
         debug_assert!(!found[best].stopped_early, "internal: a reading stopped early is never the best");
         let reason = if found.len() == 1 && zero(energy) {
-            format!("face {seed} as F_F gives all details zero (exact Doo-Sabin refinement); no other reading tried")
+            zero_details_reason(seed)
         } else if found.len() == 1 {
-            format!("face {seed} as F_F is the only valid reading found")
+            only_valid_reason(seed)
         } else {
             let others: Vec<(usize, f64, bool)> =
                 found.iter().filter(|f| f.seed != seed).map(|f| (f.seed, f.energy, f.stopped_early)).collect();
@@ -2405,9 +2433,7 @@ pub(crate) fn reconstruct_level_with(
     )?;
     let vertex_count = positions.len();
     let canonical = if with_adjacency {
-        let soup = PolygonSoup { positions: Vec::new(), offsets, indices };
-        let soup = PolygonSoup { positions: vec![DVec3::ZERO; vertex_count], ..soup };
-        CornerMesh::from_soup(&soup).map_err(|reason| {
+        CornerMesh::from_faces(offsets, indices, vertex_count).map_err(|reason| {
             DooError::InvalidPyramid(format!("a Chaikin boundary level is not a manifold mesh: {reason}"))
         })?
     } else {
