@@ -572,16 +572,17 @@ fn face_chunks<'a, T>(offsets: &[u32], mut out: &'a mut [T], target: usize) -> V
 const PARALLEL_FACES: usize = 1 << 14;
 
 /// Runs `work(first, end, slice)` on runs of whole faces `first..end`, `slice` being the
-/// part of `out` that holds their corners: one run for small meshes, else pieces spread
-/// over the rayon pool. Each corner is written by one task, so results do not depend on
-/// the thread count.
+/// part of `out` that holds their corners: one run for small meshes or a one-thread pool
+/// (handing the run to that thread from outside the pool costs a wake-up and brings
+/// nothing), else pieces spread over the rayon pool. Each corner is written by one task,
+/// so results do not depend on the thread count.
 fn for_face_runs<T, W>(offsets: &[u32], out: &mut [T], work: W)
 where
     T: Send,
     W: Fn(usize, usize, &mut [T]) + Sync,
 {
     let faces = offsets.len().saturating_sub(1);
-    if faces < PARALLEL_FACES {
+    if faces < PARALLEL_FACES || rayon::current_num_threads() == 1 {
         work(0, faces, out);
     } else {
         let target = rayon::current_num_threads() * 8;

@@ -1959,22 +1959,21 @@ impl<'a> Search<'a> {
         // run side by side (each is computed by one task, so the results and the first
         // error reported are those of the sequential order).
         let by_vertex = corners_by_vertex(&coarse);
-        let (checked, geometry) = rayon::join(
-            || {
-                check_coarse_manifold(&coarse, &ff_faces, &by_vertex)?;
-                match_fine_faces(fine, &ff_faces, &coarse, &vertex_of, &quad_face, &vertex_face)
-            },
-            || {
-                // Candidates, means and details.
-                let candidates = if ready && buffer.len() == vertex_of.len() {
-                    buffer
-                } else {
-                    expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize], buffer)
-                };
-                let (coarse_positions, details, vertex_energy) = means_and_details(&by_vertex, &candidates);
-                (coarse_positions, details, vertex_energy)
-            },
-        );
+        let check = || {
+            check_coarse_manifold(&coarse, &ff_faces, &by_vertex)?;
+            match_fine_faces(fine, &ff_faces, &coarse, &vertex_of, &quad_face, &vertex_face)
+        };
+        let geometry = || {
+            // Candidates, means and details.
+            let candidates = if ready && buffer.len() == vertex_of.len() {
+                buffer
+            } else {
+                expand_faces(&coarse.offsets, &self.maps, |c| self.positions[vertex_of[c] as usize], buffer)
+            };
+            means_and_details(&by_vertex, &candidates)
+        };
+        let (checked, geometry) =
+            if rayon::current_num_threads() > 1 { rayon::join(check, geometry) } else { (check(), geometry()) };
         let order = checked?;
         let (coarse_positions, details, vertex_energy) = geometry;
         debug_assert_eq!(coarse_positions.len() + details.len(), fine.vertex_count);

@@ -20,7 +20,7 @@ use rayon::prelude::*;
 
 use crate::LoopError;
 use crate::forward::buffer::{Output, Slots};
-use crate::forward::kernel;
+use crate::forward::kernel::{self, map_indices, splits};
 use crate::forward::topology::{BASE_BITS, INVALID as TOPOLOGY_INVALID, MeshTriangles, Topology};
 
 /// "No element": a boundary twin, an isolated vertex's corner.
@@ -50,7 +50,7 @@ fn first_pillow_face(twin: &[u32]) -> Option<usize> {
         other(0) == other(1) || other(1) == other(2) || other(2) == other(0)
     };
     let search = |(i, chunk): (usize, &[u32])| chunk.chunks_exact(3).position(pillow).map(|f| i * FACE_CHUNK + f);
-    if twin.len() <= 3 * FACE_CHUNK {
+    if !splits(twin.len(), 3 * FACE_CHUNK) {
         search((0, twin))
     } else {
         twin.par_chunks(3 * FACE_CHUNK).enumerate().map(search).find_first(Option::is_some).flatten()
@@ -194,7 +194,7 @@ impl CornerTable {
     /// The vertex and twin of every corner, side by side.
     pub(crate) fn corners(&self) -> Vec<Corner> {
         let pair = |(&vertex, &twin): (&u32, &u32)| Corner { vertex, twin };
-        if self.corner_vertex.len() <= 3 * FACE_CHUNK {
+        if !splits(self.corner_vertex.len(), 3 * FACE_CHUNK) {
             self.corner_vertex.iter().zip(&self.twin).map(pair).collect()
         } else {
             self.corner_vertex.par_iter().zip(&self.twin).with_min_len(3 * FACE_CHUNK).map(pair).collect()
@@ -237,7 +237,7 @@ impl CornerTable {
                     }
                 }
             };
-            if faces <= FACE_CHUNK {
+            if !splits(faces, FACE_CHUNK) {
                 pieces.into_iter().for_each(fill);
             } else {
                 pieces.into_par_iter().for_each(fill);
@@ -276,22 +276,28 @@ impl CornerTable {
         let mut corner_vertex = vec![0u32; 3 * faces];
         let mut twin = vec![0u32; 3 * faces];
         let mut corner_edge = vec![0u32; 3 * faces];
-        corner_vertex
-            .par_chunks_mut(3)
-            .zip(twin.par_chunks_mut(3))
-            .zip(corner_edge.par_chunks_mut(3))
-            .enumerate()
-            .with_min_len(FACE_CHUNK)
-            .for_each(|(f, ((vertices, twins), edges))| {
-                let h = face_halfedges(f as u32);
-                for k in 0..3 {
-                    // Corner k holds the origin of half-edge k: the target of half-edge k - 1.
-                    vertices[k] = targets[h[(k + 2) % 3] as usize];
-                    edges[k] = h[k] >> 1;
-                    // NONE for a boundary half-edge (it has no face).
-                    twins[k] = corner_of_halfedge[(h[k] ^ 1) as usize];
-                }
-            });
+        let fill = |f: usize, vertices: &mut [u32], twins: &mut [u32], edges: &mut [u32]| {
+            let h = face_halfedges(f as u32);
+            for k in 0..3 {
+                // Corner k holds the origin of half-edge k: the target of half-edge k - 1.
+                vertices[k] = targets[h[(k + 2) % 3] as usize];
+                edges[k] = h[k] >> 1;
+                // NONE for a boundary half-edge (it has no face).
+                twins[k] = corner_of_halfedge[(h[k] ^ 1) as usize];
+            }
+        };
+        if splits(faces, FACE_CHUNK) {
+            corner_vertex
+                .par_chunks_mut(3)
+                .zip(twin.par_chunks_mut(3))
+                .zip(corner_edge.par_chunks_mut(3))
+                .enumerate()
+                .with_min_len(FACE_CHUNK)
+                .for_each(|(f, ((vertices, twins), edges))| fill(f, vertices, twins, edges));
+        } else {
+            let faces = corner_vertex.chunks_mut(3).zip(twin.chunks_mut(3)).zip(corner_edge.chunks_mut(3));
+            faces.enumerate().for_each(|(f, ((vertices, twins), edges))| fill(f, vertices, twins, edges));
+        }
         let corner_of = |h: u32| corner_of_halfedge[h as usize];
         if let Some(face) = first_pillow_face(&twin) {
             // Two triangles sharing two edges share all three (a closed "pillow"):
@@ -299,19 +305,16 @@ impl CornerTable {
             return Err(LoopError::InteriorValenceTwo { vertex: corner_vertex[3 * face], face });
         }
         // The mesh numbers edges the same way (half-edges 2e, 2e + 1; 2e has a face).
-        let edge_corner =
-            (0..mesh.edge_count() as u32).into_par_iter().with_min_len(FACE_CHUNK).map(|e| corner_of(2 * e)).collect();
-        let vertex_corner: Vec<u32> = (0..mesh.vertex_count())
-            .into_par_iter()
-            .with_min_len(FACE_CHUNK)
-            .map(|v| match mesh.vertex_halfedge(mesh.vertex(v).expect("internal: vertex in range")) {
+        let edge_corner = map_indices(mesh.edge_count(), FACE_CHUNK, |e| corner_of(2 * e));
+        let vertex_corner = map_indices(mesh.vertex_count(), FACE_CHUNK, |v| {
+            match mesh.vertex_halfedge(mesh.vertex(v as usize).expect("internal: vertex in range")) {
                 None => NONE,
                 // A boundary vertex starts at the face half-edge along the boundary: the
                 // twin of the boundary half-edge that arrives at it.
                 Some(h) if mesh.is_boundary_halfedge(h) => corner_of(mesh.prev(h).twin().raw()),
                 Some(h) => corner_of(h.raw()),
-            })
-            .collect();
+            }
+        });
         let table = Self {
             vertex_count: mesh.vertex_count(),
             corner_vertex,

@@ -447,11 +447,17 @@ fn check_coarse_mesh(coarsening: &Coarsening) -> Result<(), LoopError> {
 /// (edges bucketed by their lower end point, a counting sort). Linear, and equivalent
 /// for the verdict (the detailed check runs only when this fails).
 fn coarse_mesh_is_valid(coarse: &CornerTable) -> bool {
-    let faces_ok = (0..coarse.face_count() as u32).into_par_iter().with_min_len(GROUP_CHUNK).all(|f| {
+    let face_ok = |f: u32| {
         let c = 3 * f as usize;
         let corners = |a: &[u32]| [a[c], a[c + 1], a[c + 2]];
         coarse_face_is_valid(corners(coarse.corner_vertices()), corners(coarse.twins()))
-    });
+    };
+    let faces = coarse.face_count() as u32;
+    let faces_ok = if kernel::splits(faces as usize, GROUP_CHUNK) {
+        (0..faces).into_par_iter().with_min_len(GROUP_CHUNK).all(face_ok)
+    } else {
+        (0..faces).all(face_ok)
+    };
     faces_ok && coarse_edges_are_simple(coarse)
 }
 
@@ -604,8 +610,9 @@ pub(crate) fn canonical_groups(
             }
             Some((largest, smallest))
         };
-        // One chunk is read on the calling thread: handing it to the pool costs a wake-up.
-        if groups <= GROUP_CHUNK {
+        // One chunk (or a one-thread pool) is read on the calling thread: handing it to
+        // the pool costs a wake-up.
+        if !kernel::splits(groups, GROUP_CHUNK) {
             chunk((0..groups, xs, ms))?
         } else {
             let pieces: Vec<_> = (0..groups)
@@ -967,7 +974,7 @@ pub(crate) fn renumber_to_canonical(
     };
     // The edge points in order of first appearance: the only sequential part (beside
     // the rest on another thread, when the pool has one).
-    let number_edges = || {
+    let mut number_edges = || {
         let mut canonical_of_fine = vec![NONE; nv];
         let prefetching = worth_prefetching(size_of_val(&canonical_of_fine[..]));
         let mut edge_point = Vec::with_capacity(3 * sorted.len());
@@ -1016,7 +1023,7 @@ pub(crate) fn renumber_to_canonical(
                     codes.push(3 * inner + (3 - r as u32) % 3);
                 }
             };
-            if pieces.len() > 1 {
+            if pieces.len() > 1 && kernel::pool_has_threads() {
                 pieces.into_par_iter().for_each(run);
             } else {
                 pieces.into_iter().for_each(run);
@@ -1024,7 +1031,11 @@ pub(crate) fn renumber_to_canonical(
         }
         (coarse_vertex.into_vec(), face_of_canonical.into_vec())
     };
-    let (edge_point, (coarse_vertex, face_of_canonical)) = rayon::join(number_edges, corners_and_faces);
+    let (edge_point, (coarse_vertex, face_of_canonical)) = if kernel::pool_has_threads() {
+        rayon::join(number_edges, corners_and_faces)
+    } else {
+        (number_edges(), corners_and_faces())
+    };
     if vertex_of_canonical.len() != nv {
         return None;
     }

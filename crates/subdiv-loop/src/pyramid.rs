@@ -210,7 +210,7 @@ pub(crate) fn check_input_positions(positions: &[DVec3]) -> Result<(), LoopError
 /// compiler vectorises, in parallel on large inputs (the error path then finds where).
 pub(crate) fn all_finite(positions: &[DVec3]) -> bool {
     let chunk_ok = |chunk: &[DVec3]| chunk.iter().fold(0, |bad, &p| bad | non_finite_bits(p)) == 0;
-    if positions.len() >= FINITE_CHUNK * 2 {
+    if positions.len() >= FINITE_CHUNK * 2 && crate::forward::kernel::pool_has_threads() {
         positions.par_chunks(FINITE_CHUNK).all(chunk_ok)
     } else {
         chunk_ok(positions)

@@ -341,14 +341,9 @@ fn edge_rule(coarse: &CornerTable, positions: &[DVec3], e: u32) -> DVec3 {
     }
 }
 
-/// Maps `f` over `0..n`, in parallel for large `n` (each output written by one task, so
-/// the result does not depend on the thread count).
+/// Maps `f` over `0..n`, in parallel for large `n` (see [`kernel::map_indices`]).
 fn map_indices<T: Send>(n: usize, f: impl Fn(u32) -> T + Sync + Send) -> Vec<T> {
-    if n >= PARALLEL_THRESHOLD {
-        (0..n as u32).into_par_iter().map(f).collect()
-    } else {
-        (0..n as u32).map(f).collect()
-    }
+    kernel::map_indices(n, PARALLEL_THRESHOLD, f)
 }
 
 /// Coarse positions and details of a detected level.
@@ -504,7 +499,7 @@ fn gather(values: &[DVec3], indices: &[u32]) -> Vec<DVec3> {
                 piece.push(values[v as usize]);
             }
         };
-        if pieces.len() > 1 {
+        if pieces.len() > 1 && kernel::pool_has_threads() {
             pieces.into_par_iter().for_each(run);
         } else {
             pieces.into_iter().for_each(run);
@@ -763,7 +758,7 @@ fn canonical_details(
             Some(zeros.is_finite())
         };
         let both = |a: bool, b: bool| Some(a && b);
-        if faces >= PARALLEL_THRESHOLD / 4 {
+        if faces >= PARALLEL_THRESHOLD / 4 && kernel::pool_has_threads() {
             pieces.into_par_iter().map(run).try_reduce(|| true, both)
         } else {
             pieces.into_iter().map(run).try_fold(true, |a, b| both(a, b?))

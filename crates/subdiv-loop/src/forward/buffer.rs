@@ -141,7 +141,8 @@ impl<T> Drop for Slots<'_, T> {
     }
 }
 
-/// The vector `[value(0), value(1), ..., value(len - 1)]`, computed in parallel.
+/// The vector `[value(0), value(1), ..., value(len - 1)]`, computed in parallel when
+/// large (see [`splits`](super::kernel::splits)).
 pub(crate) fn par_fill<T: Send>(len: usize, value: impl Fn(usize) -> T + Sync) -> Vec<T> {
     const CHUNK: usize = 1 << 16;
     let mut output = Output::new(len);
@@ -149,11 +150,16 @@ pub(crate) fn par_fill<T: Send>(len: usize, value: impl Fn(usize) -> T + Sync) -
         let mut slots = output.slots();
         let pieces: Vec<(usize, Slots<'_, T>)> =
             (0..len).step_by(CHUNK).map(|start| (start, slots.take_front(CHUNK.min(len - start)))).collect();
-        pieces.into_par_iter().for_each(|(start, mut piece)| {
+        let run = |(start, mut piece): (usize, Slots<'_, T>)| {
             for i in start..start + piece.len() {
                 piece.push(value(i));
             }
-        });
+        };
+        if super::kernel::splits(len, CHUNK) {
+            pieces.into_par_iter().for_each(run);
+        } else {
+            pieces.into_iter().for_each(run);
+        }
     }
     output.into_vec()
 }

@@ -27,7 +27,32 @@ pub(crate) const PARALLEL_MIN_FACES: usize = 4096;
 /// Whether a pass over `faces` faces is split over the current `rayon` pool: only for
 /// [`PARALLEL_MIN_FACES`] faces or more, and on more than one thread.
 pub(crate) fn runs_in_parallel(faces: usize) -> bool {
-    faces >= PARALLEL_MIN_FACES && rayon::current_num_threads() > 1
+    faces >= PARALLEL_MIN_FACES && pool_has_threads()
+}
+
+/// Whether a pass over `items` items, cut into pieces of `piece` items, is handed to the
+/// current `rayon` pool: only if it makes more than one piece and the pool has more than
+/// one thread. A one-thread pool would run the pieces one after the other anyway, after
+/// a hand-over to its thread (and back) when called from outside it, which on a small
+/// level costs as much as the pass.
+pub(crate) fn splits(items: usize, piece: usize) -> bool {
+    items > piece && pool_has_threads()
+}
+
+/// `[f(0), f(1), .., f(n - 1)]`, in parallel when [`splits`]`(n, piece)` (each output
+/// written by one task, so the result does not depend on the thread count).
+pub(crate) fn map_indices<T: Send>(n: usize, piece: usize, f: impl Fn(u32) -> T + Sync + Send) -> Vec<T> {
+    if splits(n, piece) {
+        (0..n as u32).into_par_iter().with_min_len(piece).map(f).collect()
+    } else {
+        (0..n as u32).map(f).collect()
+    }
+}
+
+/// True if the current `rayon` pool (the global one outside any pool) has more than one
+/// thread.
+pub(crate) fn pool_has_threads() -> bool {
+    rayon::current_num_threads() > 1
 }
 
 /// Valences whose weights are tabulated.
