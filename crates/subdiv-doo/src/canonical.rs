@@ -1185,6 +1185,17 @@ mod tests {
         fine
     }
 
+    /// A closed prism over a regular `n`-gon: two caps of `n` sides and `n` quads.
+    fn prism(n: u32) -> PolygonSoup {
+        let angle = |i: u32| std::f64::consts::TAU * i as f64 / n as f64;
+        let positions = (0..2 * n)
+            .map(|i| DVec3::new(angle(i % n).cos(), angle(i % n).sin(), (i / n) as f64 + 0.01 * i as f64))
+            .collect();
+        let mut faces = vec![(0..n).rev().collect::<Vec<u32>>(), (n..2 * n).collect()];
+        faces.extend((0..n).map(|i| vec![i, (i + 1) % n, n + (i + 1) % n, n + i]));
+        PolygonSoup::from_faces(positions, faces)
+    }
+
     #[test]
     fn a_canonical_mesh_gives_the_general_result() {
         let soups = [
@@ -1193,6 +1204,10 @@ mod tests {
             shapes::torus(6, 4, CellKind::Mixed).unwrap(),
             shapes::grid(4, 3, CellKind::Quads).unwrap(),
             shapes::grid(5, 4, CellKind::Mixed).unwrap(),
+            // Caps of 10 sides (the general circulant) and of 20 (above `DENSE_MAX`: the
+            // O(m) forms of the inverse map).
+            prism(10),
+            prism(20),
         ];
         let mut automatic = 0;
         for soup in &soups {
