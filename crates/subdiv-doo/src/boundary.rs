@@ -40,12 +40,23 @@
 //! vertices plus details are as many 3-vectors as the fine mesh has vertices (two
 //! Chaikin points and two details per boundary edge). Reconstruction adds each detail to
 //! its Chaikin point: exact up to one rounding.
+//!
+//! A Chaikin step in the order above (as [`crate::subdivide`] and reconstruction write
+//! it) is reversed without the general search: its ring is the last faces and its
+//! Chaikin points the last vertices, so the half-edge arrays with the ring's faces
+//! masked are those of a Shrink step in the canonical order, which the streaming path
+//! of [`crate::canonical`] reverses (reading, automatic choice and all, as the general
+//! path would); the ring is then attached as on the general path. Any other order, or a
+//! ring that does not fit, takes the general path.
 
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
+use mesh_topo::HalfedgeMesh;
+
 use crate::DooError;
-use crate::corner::{CornerMesh, DooTopology, NONE, prev_of_corners};
+use crate::canonical::{HalfedgeArrays, reverse_canonical, reverse_canonical_arrays};
+use crate::corner::{CornerMesh, DooTopology, NONE, faces_of_corners, prev_of_corners};
 use crate::reverse::{DooReversal, FineOrder, ReverseOptions, SeedChoice, Session};
 
 /// What a Doo-Sabin step does at the boundary of an open mesh (module docs).
@@ -348,6 +359,76 @@ struct Input<'a> {
     ring_faces: usize,
 }
 
+/// [`reverse_chaikin_corner_mesh`] on a Chaikin step in the canonical order (as
+/// [`crate::subdivide`] writes it, see the module docs), without the general search:
+/// its faces that touch the boundary (the ring) are its last faces and its Chaikin
+/// points its last vertices, so the rest is a Shrink step in the canonical order, which
+/// [`crate::canonical`] reverses from the half-edge arrays with the ring's faces masked
+/// ([`HalfedgeArrays::prefix`]); the ring is then attached as on the general path.
+/// `None` when anything differs (the general path then decides and names what is
+/// wrong), when a position is not finite, or when the ring does not fit the reading
+/// found (the general path then tries the other readings). Otherwise the result is the
+/// general path's, bit for bit: its mesh without the ring is the same mesh, whose first
+/// reading is the one found here, and that reading fits the ring.
+pub(crate) fn reverse_chaikin_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -> Option<DooReversal> {
+    let (to, face_of) = (fine.raw_halfedge_targets(), fine.raw_halfedge_faces());
+    let (vertices, faces) = (fine.vertex_count(), fine.face_count());
+    // The Chaikin points: the fine boundary vertices (the targets of boundary half-edges).
+    let mut on_boundary = vec![false; vertices];
+    for (&v, &f) in to.iter().zip(face_of) {
+        if f == NONE {
+            on_boundary[v as usize] = true;
+        }
+    }
+    let chaikin_points = on_boundary.iter().filter(|&&b| b).count();
+    if chaikin_points == 0 {
+        // Closed: both rules are the same.
+        let mut reversal = reverse_canonical(fine, options)?;
+        reversal.boundary = BoundaryRule::Chaikin;
+        return Some(reversal);
+    }
+    let inner_vertices = vertices - chaikin_points;
+    let chaikin_positions = &fine.positions()[inner_vertices..];
+    if on_boundary[..inner_vertices].contains(&true) || !chaikin_positions.iter().all(|p| p.is_finite()) {
+        return None;
+    }
+    // The ring: the faces with a Chaikin point, which must be the last ones.
+    let mut in_ring = vec![false; faces];
+    for (&v, &f) in to.iter().zip(face_of) {
+        if f != NONE && v as usize >= inner_vertices {
+            in_ring[f as usize] = true;
+        }
+    }
+    let inner_faces = in_ring.iter().position(|&r| r)?;
+    if inner_faces == 0 || !in_ring[inner_faces..].iter().all(|&r| r) || options.seeds.iter().any(|&s| s >= inner_faces)
+    {
+        return None;
+    }
+    // The half-edges of the kept faces and their twins, the first ones in the canonical
+    // layout (the ring's own edges are numbered after them), with the ring masked.
+    let halfedges =
+        face_of.iter().enumerate().filter(|&(_, &f)| (f as usize) < inner_faces).map(|(h, _)| h | 1).max()? + 1;
+    let masked: Vec<u32> =
+        face_of[..halfedges].iter().map(|&f| if (f as usize) < inner_faces { f } else { NONE }).collect();
+    let arrays = HalfedgeArrays::prefix(fine, inner_vertices, inner_faces, &masked);
+    let inner_options = ReverseOptions { boundary: BoundaryRule::Shrink, ..options.clone() };
+    let reversal = reverse_canonical_arrays(&arrays, &inner_options)?;
+    drop(masked);
+    let corners = CornerMesh::from_halfedge(fine);
+    let faces_of = faces_of_corners(&corners.offsets);
+    let input = Input {
+        fine: &corners,
+        positions: fine.positions(),
+        faces_of: &faces_of,
+        on_boundary: &on_boundary,
+        in_ring: &in_ring,
+        ring_faces: faces - inner_faces,
+    };
+    let face_of_inner: Vec<u32> = (0..inner_faces as u32).collect();
+    let vertex_of_inner: Vec<u32> = (0..inner_vertices as u32).collect();
+    attach_ring(reversal, &input, &face_of_inner, &vertex_of_inner).ok()
+}
+
 /// Error numbers of the mesh without the ring turned into those of the input.
 fn map_error(error: DooError, face_of_inner: &[u32], vertex_of_inner: &[u32]) -> DooError {
     let face = |f: usize| face_of_inner.get(f).map_or(f, |&g| g as usize);
@@ -548,4 +629,89 @@ pub(crate) fn append_ring_level(
     positions.extend(ring.chaikin_points(coarse, coarse_positions, Some(chaikin_details)));
     ring.append_faces(offsets, Some(indices));
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{DooOptions, FaceRule, subdivide_soup};
+    use mesh_topo::PolygonSoup;
+    use mesh_topo::shapes::{self, CellKind};
+    use mesh_topo::testing::scramble;
+
+    /// One Chaikin step of `soup` (canonical order), every position moved if `moved`.
+    fn chaikin_step(soup: &PolygonSoup, rule: FaceRule, moved: bool) -> HalfedgeMesh {
+        let options = DooOptions::new(rule, 1).with_boundary(BoundaryRule::Chaikin);
+        let mut fine = subdivide_soup(soup, &options).unwrap().to_mesh().unwrap();
+        if moved {
+            for (i, p) in fine.positions_mut().iter_mut().enumerate() {
+                *p += 1e-3 * DVec3::new((i as f64 * 0.7).sin(), (i as f64 * 1.3).cos(), (i as f64 * 2.1).sin());
+            }
+        }
+        fine
+    }
+
+    fn without(soup: &PolygonSoup, removed: &[usize]) -> PolygonSoup {
+        let faces: Vec<Vec<u32>> =
+            (0..soup.face_count()).filter(|f| !removed.contains(f)).map(|f| soup.face(f).to_vec()).collect();
+        PolygonSoup::from_faces(soup.positions.clone(), faces)
+    }
+
+    fn general(fine: &HalfedgeMesh, options: &ReverseOptions) -> DooReversal {
+        reverse_chaikin_corner_mesh(&CornerMesh::from_halfedge(fine), fine.positions(), options).unwrap()
+    }
+
+    #[test]
+    fn a_canonical_chaikin_step_gives_the_general_result() {
+        let soups = [
+            shapes::grid(4, 3, CellKind::Quads).unwrap(),
+            shapes::grid(5, 4, CellKind::Mixed).unwrap(),
+            shapes::grid(3, 3, CellKind::Triangles).unwrap(),
+            without(&shapes::cube(), &[2]),
+            without(&shapes::icosahedron(), &[0]),
+            without(&shapes::torus(6, 4, CellKind::Mixed).unwrap(), &[3]),
+            // Closed: both rules are the same.
+            shapes::torus(5, 4, CellKind::Triangles).unwrap(),
+        ];
+        for soup in &soups {
+            for rule in [FaceRule::DooSabin, FaceRule::Simple, FaceRule::CENTROID_HALF] {
+                for moved in [false, true] {
+                    let fine = chaikin_step(soup, rule, moved);
+                    let auto = ReverseOptions::auto(rule).with_boundary(BoundaryRule::Chaikin);
+                    let seeded = |seed| ReverseOptions::with_seed(rule, seed).with_boundary(BoundaryRule::Chaikin);
+                    for options in [auto, seeded(0), seeded(soup.face_count() - 1)] {
+                        let fast = reverse_chaikin_canonical(&fine, &options).expect("a canonical Chaikin step");
+                        assert_eq!(fast, general(&fine, &options), "{options:?}");
+                        assert_eq!(fast.boundary, BoundaryRule::Chaikin);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn other_orders_broken_rings_and_ring_seeds_are_left_to_the_general_path() {
+        let soup = shapes::grid(4, 3, CellKind::Mixed).unwrap();
+        let fine = chaikin_step(&soup, FaceRule::DooSabin, true);
+        let auto = ReverseOptions::auto(FaceRule::DooSabin).with_boundary(BoundaryRule::Chaikin);
+        // Renumbered: the general path reverses it.
+        let scrambled = HalfedgeMesh::from_soup(&scramble(fine.to_soup(), 3, 0.0)).unwrap();
+        assert!(reverse_chaikin_canonical(&scrambled, &auto).is_none());
+        assert!(crate::reverse(&scrambled, &auto).is_ok());
+        // A seed on the ring: the general path names the error.
+        let ring_face = fine.face_count() - 1;
+        let on_ring = ReverseOptions::with_seed(FaceRule::DooSabin, ring_face).with_boundary(BoundaryRule::Chaikin);
+        assert!(reverse_chaikin_canonical(&fine, &on_ring).is_none());
+        assert!(crate::reverse(&fine, &on_ring).is_err());
+        // A ring face removed: not a Chaikin step.
+        let broken = HalfedgeMesh::from_soup(&without(&fine.to_soup(), &[ring_face])).unwrap();
+        assert!(reverse_chaikin_canonical(&broken, &auto).is_none());
+        assert!(crate::reverse(&broken, &auto).is_err());
+        // A Chaikin point that is not finite.
+        let mut infinite = fine.clone();
+        let last = infinite.vertex_count() - 1;
+        infinite.positions_mut()[last] = DVec3::new(f64::NAN, 0.0, 0.0);
+        assert!(reverse_chaikin_canonical(&infinite, &auto).is_none());
+        assert!(matches!(crate::reverse(&infinite, &auto), Err(DooError::NonFinite { .. })));
+    }
 }

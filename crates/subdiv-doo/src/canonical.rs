@@ -59,23 +59,28 @@ use std::sync::atomic::{AtomicBool, Ordering};
 /// - the coarse mesh is connected (one component: the given seed covers the mesh), the
 ///   seed is an F_F face, and the coarse mesh passes the same manifold check.
 pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -> Option<DooReversal> {
+    reverse_canonical_arrays(&HalfedgeArrays::of(fine), options)
+}
+
+/// [`reverse_canonical`] on the half-edge arrays of a mesh: a whole mesh, or the part of
+/// one that [`HalfedgeArrays::prefix`] keeps.
+pub(crate) fn reverse_canonical_arrays(arrays: &HalfedgeArrays<'_>, options: &ReverseOptions) -> Option<DooReversal> {
     let seed = match options.seeds[..] {
         [seed] => Some(seed),
         [] => None,
         _ => return None,
     };
     options.rule.validate().ok()?;
-    let arrays = HalfedgeArrays::of(fine);
-    let HalfedgeArrays { vertices, faces, .. } = arrays;
+    let HalfedgeArrays { vertices, faces, positions, .. } = *arrays;
     if vertices == 0 || vertices >= NONE as usize || faces >= NONE as usize {
         return None;
     }
 
     // F_F faces and coarse twins: from the half-edge layout in streaming passes, or else
     // one walk around each F_F face.
-    let ff_faces = match stream_ff_faces(fine) {
+    let ff_faces = match stream_ff_faces(arrays) {
         Some(ff_faces) => ff_faces,
-        None => walk_ff_faces(fine)?,
+        None => walk_ff_faces(arrays)?,
     };
     let FfFaces { offsets, next: coarse_next, twins, across, quads, on_boundary, unreached, layout } = ff_faces;
     // Without a seed, the choice is made here only on meshes with F_E quads and F_V
@@ -109,10 +114,9 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
     // The coarse vertices (from the connectivity) and the candidates (from the positions)
     // do not depend on each other: on several threads they are found side by side.
     let maps = FaceMaps::new(options.rule);
-    let positions = fine.positions();
     let find_vertices = || {
         let ff = FfParts { offsets: &offsets, next: &coarse_next, twins: &twins, layout, closed };
-        coarse_vertices(&arrays, &ff, fv_first, quads as usize, automatic_choice)
+        coarse_vertices(arrays, &ff, fv_first, quads as usize, automatic_choice)
     };
     let expand = || expand_in_order(&offsets, &maps, positions, automatic_choice);
     let (found, (candidates, scale)) = if rayon::current_num_threads() > 1 && vertices >= PARALLEL_VERTICES {
@@ -224,7 +228,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
             (SeedChoice::given(0, seed), stats)
         }
         None if closed => {
-            let mut choice = automatic(fine, &maps, &coarse, detail_energy, scale, &fv, candidates)?;
+            let mut choice = automatic(arrays, &maps, &coarse, detail_energy, scale, &fv, candidates)?;
             let visited = if choice.trials.len() == 1 { ff_count } else { ff_count + interior + 1 };
             // Every valid reading was searched in full; the ones whose sum stopped early
             // are not counted as evaluated.
@@ -235,7 +239,7 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
             (choice, ReverseStats { visited_faces: visited, edges_crossed, candidate_edges, interpretations })
         }
         None => {
-            let (choice, stats) = automatic_open(&arrays, detail_energy, scale, ff_count, fv_first)?;
+            let (choice, stats) = automatic_open(arrays, detail_energy, scale, ff_count, fv_first)?;
             (choice, ReverseStats { candidate_edges, ..stats })
         }
     };
@@ -398,7 +402,8 @@ fn coarse_vertices(
 }
 
 /// The flat arrays of a half-edge mesh that the canonical passes read, and its sizes.
-struct HalfedgeArrays<'a> {
+#[derive(Clone, Copy)]
+pub(crate) struct HalfedgeArrays<'a> {
     /// Target vertex of each half-edge.
     to: &'a [u32],
     /// Next half-edge around its face or boundary loop.
@@ -407,6 +412,8 @@ struct HalfedgeArrays<'a> {
     face_of: &'a [u32],
     /// The half-edge leaving the first corner of each face.
     face_halfedge: &'a [u32],
+    /// The position of each vertex.
+    positions: &'a [DVec3],
     vertices: usize,
     faces: usize,
 }
@@ -419,8 +426,30 @@ impl<'a> HalfedgeArrays<'a> {
             next: mesh.raw_halfedge_next(),
             face_of: mesh.raw_halfedge_faces(),
             face_halfedge,
+            positions: mesh.positions(),
             vertices: mesh.vertex_count(),
             faces: face_halfedge.len(),
+        }
+    }
+
+    /// The first `faces` faces of `mesh` alone, on its first `vertices` vertices and the
+    /// first `face_of.len()` half-edges: `face_of` is the mesh's with every face from
+    /// `faces` on replaced by [`NONE`], so that the edges the other faces share with the
+    /// kept ones read as boundary edges. The passes of this module follow `next` only
+    /// from half-edges that have a face, so the boundary loops, which this view does not
+    /// have (the `next` of such a half-edge goes on into a face that is not kept), are
+    /// never walked. For the part of a Chaikin step without its boundary ring (see
+    /// [`crate::boundary`]).
+    pub(crate) fn prefix(mesh: &'a HalfedgeMesh, vertices: usize, faces: usize, face_of: &'a [u32]) -> Self {
+        let halfedges = face_of.len();
+        Self {
+            to: &mesh.raw_halfedge_targets()[..halfedges],
+            next: &mesh.raw_halfedge_next()[..halfedges],
+            face_of,
+            face_halfedge: &mesh.raw_face_halfedges()[..faces],
+            positions: &mesh.positions()[..vertices],
+            vertices,
+            faces,
         }
     }
 }
@@ -480,8 +509,8 @@ struct FfFaces {
 ///
 /// A valid mesh is assumed (as `HalfedgeMesh` guarantees): `next` is a permutation
 /// whose cycles are the faces and boundary loops.
-fn stream_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
-    let HalfedgeArrays { to, next, face_of, face_halfedge, vertices, faces } = HalfedgeArrays::of(fine);
+fn stream_ff_faces(arrays: &HalfedgeArrays<'_>) -> Option<FfFaces> {
+    let HalfedgeArrays { to, next, face_of, face_halfedge, vertices, faces, .. } = *arrays;
     let halfedges = to.len();
     if halfedges >= NONE as usize || halfedges < 2 * vertices || !(halfedges - 2 * vertices).is_multiple_of(4) {
         return None;
@@ -570,8 +599,8 @@ fn stream_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
 /// The F_F faces and the coarse twins of a mesh in the canonical order, whatever its
 /// half-edge numbering: one walk around each F_F face, through the F_E quad across each
 /// edge (the checks of [`reverse_canonical`]); `None` at the first mismatch.
-fn walk_ff_faces(fine: &HalfedgeMesh) -> Option<FfFaces> {
-    let HalfedgeArrays { to, next, face_of, face_halfedge, vertices, faces } = HalfedgeArrays::of(fine);
+fn walk_ff_faces(arrays: &HalfedgeArrays<'_>) -> Option<FfFaces> {
+    let HalfedgeArrays { to, next, face_of, face_halfedge, vertices, faces, .. } = *arrays;
     let mut offsets = Vec::with_capacity(vertices / 3 + 2);
     offsets.push(0u32);
     let mut twins = Vec::with_capacity(vertices);
@@ -869,7 +898,7 @@ struct FvFaces<'a> {
 /// `scale`: the bounding-box diagonal of all vertices (the scale of the zero test);
 /// `dual`: scratch, one entry per fine vertex.
 fn automatic(
-    fine: &HalfedgeMesh,
+    arrays: &HalfedgeArrays<'_>,
     maps: &FaceMaps,
     coarse: &CornerMesh,
     energy: f64,
@@ -878,9 +907,8 @@ fn automatic(
     mut dual: Vec<DVec3>,
 ) -> Option<SeedChoice> {
     let (ff_offsets, coarse_vertex) = (&coarse.offsets[..], &coarse.corner_vertex[..]);
-    let positions = fine.positions();
     let ff_count = ff_offsets.len() - 1;
-    let faces = fine.face_count();
+    let (faces, positions) = (arrays.faces, arrays.positions);
     let mut trials = vec![SeedTrial::valid(0, "F_F", energy, false)];
     if details_are_zero(energy, scale, faces) {
         let reason = zero_details_reason(0);
@@ -889,8 +917,8 @@ fn automatic(
     // The lowest F_E quad as F_F: the face across its first edge must be a quad.
     let quad = ff_count;
     debug_assert!(fv.first > quad, "internal: the automatic choice needs F_E quads");
-    let h = fine.raw_face_halfedges()[quad];
-    let across = fine.raw_halfedge_faces()[(h ^ 1) as usize] as usize;
+    let h = arrays.face_halfedge[quad];
+    let across = arrays.face_of[(h ^ 1) as usize] as usize;
     let across_size =
         if across >= fv.first { fv.sizes_of[across - fv.first] } else { ff_offsets[across + 1] - ff_offsets[across] };
     if across_size == 4 {
@@ -899,7 +927,7 @@ fn automatic(
     // The dual reading: its candidates are the F_V faces expanded (every vertex is on
     // one F_V face), its groups the F_F faces.
     debug_assert_eq!(dual.len(), positions.len());
-    let reading = DualReading { arrays: HalfedgeArrays::of(fine), maps, positions, ff_offsets, coarse_vertex, fv };
+    let reading = DualReading { arrays: *arrays, maps, positions, ff_offsets, coarse_vertex, fv };
     let mut dual_energy = 0.0;
     let mut stopped = false;
     if rayon::current_num_threads() > 1 && positions.len() >= PARALLEL_VERTICES {
@@ -1368,7 +1396,7 @@ mod tests {
         // Pieces of at least `DUAL_PIECE` faces: a torus of several pieces.
         let soup = shapes::torus(96, 48, CellKind::Triangles).unwrap();
         let fine = refine(&soup, FaceRule::DooSabin);
-        let ff = stream_ff_faces(&fine).expect("the layout of a canonical mesh");
+        let ff = stream_ff_faces(&HalfedgeArrays::of(&fine)).expect("the layout of a canonical mesh");
         let (offsets, quads) = (ff.offsets.clone(), ff.quads as usize);
         let faces = offsets.len() - 1;
         assert!(faces > 2 * DUAL_PIECE, "{faces}");
@@ -1422,8 +1450,8 @@ mod tests {
         ];
         for soup in &soups {
             let fine = refine(soup, FaceRule::DooSabin);
-            let streamed = stream_ff_faces(&fine).expect("the layout of a canonical mesh");
-            let walked = walk_ff_faces(&fine).expect("a canonical mesh");
+            let streamed = stream_ff_faces(&HalfedgeArrays::of(&fine)).expect("the layout of a canonical mesh");
+            let walked = walk_ff_faces(&HalfedgeArrays::of(&fine)).expect("a canonical mesh");
             assert!(streamed.layout && !walked.layout);
             assert_eq!(streamed.offsets, walked.offsets);
             assert_eq!(streamed.next, walked.next);
@@ -1436,15 +1464,24 @@ mod tests {
         // Off the layout: both give up on another order, the walk alone on nothing here.
         let soup = subdivide_soup(&shapes::cube(), &DooOptions::default()).unwrap().into_soup();
         let scrambled = HalfedgeMesh::from_soup(&scramble(soup.clone(), 3, 0.0)).unwrap();
-        assert!(stream_ff_faces(&scrambled).is_none() && walk_ff_faces(&scrambled).is_none());
+        assert!(
+            stream_ff_faces(&HalfedgeArrays::of(&scrambled)).is_none()
+                && walk_ff_faces(&HalfedgeArrays::of(&scrambled)).is_none()
+        );
         // An F_E quad rotated: its sides are numbered in another order.
         let mut faces: Vec<Vec<u32>> = soup.faces().map(<[u32]>::to_vec).collect();
         faces[6].rotate_left(1);
         let rotated = HalfedgeMesh::from_soup(&PolygonSoup::from_faces(soup.positions.clone(), faces)).unwrap();
-        assert!(stream_ff_faces(&rotated).is_none() && walk_ff_faces(&rotated).is_none());
+        assert!(
+            stream_ff_faces(&HalfedgeArrays::of(&rotated)).is_none()
+                && walk_ff_faces(&HalfedgeArrays::of(&rotated)).is_none()
+        );
         // The raw coarse cube (its faces share edges): no F_F faces.
         let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
-        assert!(stream_ff_faces(&cube).is_none() && walk_ff_faces(&cube).is_none());
+        assert!(
+            stream_ff_faces(&HalfedgeArrays::of(&cube)).is_none()
+                && walk_ff_faces(&HalfedgeArrays::of(&cube)).is_none()
+        );
     }
 
     #[test]
@@ -1456,7 +1493,7 @@ mod tests {
         ] {
             let fine = refine(&soup, FaceRule::DooSabin);
             let arrays = HalfedgeArrays::of(&fine);
-            let ff = stream_ff_faces(&fine).expect("the layout of a soup in the canonical order");
+            let ff = stream_ff_faces(&HalfedgeArrays::of(&fine)).expect("the layout of a soup in the canonical order");
             let fv_first = ff.offsets.len() - 1 + ff.quads as usize;
             let StreamedFvFaces { labels, first_corners: first, sizes, by_vertex, ends } =
                 stream_fv_faces(&arrays, fv_first, ff.quads as usize).expect("closed");
@@ -1484,12 +1521,12 @@ mod tests {
             let mut faces: Vec<Vec<u32>> = fine.to_soup().faces().map(<[u32]>::to_vec).collect();
             faces.last_mut().unwrap().rotate_left(1);
             let rotated = HalfedgeMesh::from_soup(&PolygonSoup::from_faces(fine.positions().to_vec(), faces)).unwrap();
-            let ff = stream_ff_faces(&rotated).expect("the layout of the F_F faces and quads");
+            let ff = stream_ff_faces(&HalfedgeArrays::of(&rotated)).expect("the layout of the F_F faces and quads");
             assert!(stream_fv_faces(&HalfedgeArrays::of(&rotated), fv_first, ff.quads as usize).is_none());
         }
         // With a boundary the F_V sides are not all quad twins: the walk decides.
         let open = refine(&shapes::grid(4, 3, CellKind::Quads).unwrap(), FaceRule::DooSabin);
-        let ff = stream_ff_faces(&open).expect("layout");
+        let ff = stream_ff_faces(&HalfedgeArrays::of(&open)).expect("layout");
         let fv_first = ff.offsets.len() - 1 + ff.quads as usize;
         assert!(stream_fv_faces(&HalfedgeArrays::of(&open), fv_first, ff.quads as usize).is_none());
     }
@@ -1522,7 +1559,7 @@ mod tests {
             faces.swap(1, last);
             let soup = PolygonSoup::from_faces(grid.positions.clone(), faces);
             let fine = refine(&soup, FaceRule::DooSabin);
-            let ff = stream_ff_faces(&fine).expect("the layout of a canonical mesh");
+            let ff = stream_ff_faces(&HalfedgeArrays::of(&fine)).expect("the layout of a canonical mesh");
             let next = next_of_corners(&ff.offsets);
             assert!(!ff.unreached.iter().all(|&k| reaches_lower_in_two(&ff.offsets, &ff.twins, &next, k)));
             let options = ReverseOptions::with_seed(FaceRule::DooSabin, 0);
@@ -1536,7 +1573,7 @@ mod tests {
         // In the triangle torus, the first triangle of some cells has neighbours above it
         // only, one of which (its cell's other triangle) has one below it.
         let fine = refine(&shapes::torus(6, 4, CellKind::Triangles).unwrap(), FaceRule::DooSabin);
-        let ff = stream_ff_faces(&fine).expect("the layout of a canonical mesh");
+        let ff = stream_ff_faces(&HalfedgeArrays::of(&fine)).expect("the layout of a canonical mesh");
         let next = next_of_corners(&ff.offsets);
         assert!(!ff.unreached.is_empty());
         assert!(ff.unreached.iter().all(|&k| reaches_lower_in_two(&ff.offsets, &ff.twins, &next, k)));

@@ -186,7 +186,9 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
         BoundaryRule::Shrink => {
             crate::canonical::reverse_canonical(mesh, &reverse_options(options, 0)).map(Step::from_reversal)
         }
-        BoundaryRule::Chaikin => None,
+        BoundaryRule::Chaikin => {
+            crate::boundary::reverse_chaikin_canonical(mesh, &reverse_options(options, 0)).map(Step::from_reversal)
+        }
     };
     if first.is_none() {
         check_finite(mesh.positions())?;

@@ -425,9 +425,11 @@ impl DooReversal {
 /// [`DooError::InvalidParameter`] for a bad centroid parameter.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
     // `None` also when a position is not finite, so that the check below names it.
-    if options.boundary == BoundaryRule::Shrink
-        && let Some(reversal) = crate::canonical::reverse_canonical(fine, options)
-    {
+    let canonical = match options.boundary {
+        BoundaryRule::Shrink => crate::canonical::reverse_canonical(fine, options),
+        BoundaryRule::Chaikin => crate::boundary::reverse_chaikin_canonical(fine, options),
+    };
+    if let Some(reversal) = canonical {
         return Ok(reversal);
     }
     check_finite(fine.positions())?;
