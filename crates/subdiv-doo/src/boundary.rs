@@ -56,7 +56,7 @@ use mesh_topo::HalfedgeMesh;
 
 use crate::DooError;
 use crate::canonical::{HalfedgeArrays, reverse_canonical, reverse_canonical_arrays};
-use crate::corner::{CornerMesh, DooTopology, NONE, faces_of_corners, prev_of_corners};
+use crate::corner::{CornerMesh, DooTopology, NONE, prev_of_corners};
 use crate::reverse::{DooReversal, FineOrder, ReverseOptions, SeedChoice, Session};
 
 /// What a Doo-Sabin step does at the boundary of an open mesh (module docs).
@@ -330,9 +330,8 @@ pub(crate) fn reverse_chaikin_corner_mesh(
     for picks in session.alternatives() {
         let attempt = session.build(picks).map_err(to_input).and_then(|reversal| {
             let input = Input {
-                fine,
+                fine: &CornerFaces { mesh: fine, faces_of: &faces_of },
                 positions,
-                faces_of: &faces_of,
                 on_boundary: &on_boundary,
                 in_ring: &in_ring,
                 ring_faces,
@@ -350,13 +349,143 @@ pub(crate) fn reverse_chaikin_corner_mesh(
 }
 
 /// The input of [`attach_ring`].
-struct Input<'a> {
-    fine: &'a CornerMesh,
+struct Input<'a, F: FaceCorners> {
+    fine: &'a F,
     positions: &'a [DVec3],
-    faces_of: &'a [u32],
     on_boundary: &'a [bool],
     in_ring: &'a [bool],
     ring_faces: usize,
+}
+
+/// The faces of the input as [`attach_ring`] reads them: a few corners near the
+/// boundary. From corner arrays, or straight from the half-edge arrays, so that the
+/// streaming path builds no corner arrays of the whole mesh for them.
+trait FaceCorners {
+    fn face_count(&self) -> usize;
+    fn vertex_count(&self) -> usize;
+    /// Corner `j` of face `f`, `j` below its size.
+    fn corner(&self, f: usize, j: usize) -> u32;
+    /// The face of corner `c` and the place of `c` in it.
+    fn face_and_place(&self, c: u32) -> (usize, u32);
+    /// The number of corners of face `f`.
+    fn size(&self, f: usize) -> usize;
+    /// The corner across the edge from corner `c` to the next one ([`NONE`] on the
+    /// boundary).
+    fn twin(&self, c: u32) -> u32;
+    fn next(&self, c: u32) -> u32;
+    fn vertex(&self, c: u32) -> u32;
+    /// A face at vertex `v`, if any (for errors).
+    fn face_at(&self, v: usize) -> Option<usize>;
+}
+
+/// Corner arrays and the face of each corner.
+struct CornerFaces<'a> {
+    mesh: &'a CornerMesh,
+    faces_of: &'a [u32],
+}
+
+impl FaceCorners for CornerFaces<'_> {
+    fn face_count(&self) -> usize {
+        self.mesh.face_count()
+    }
+
+    fn vertex_count(&self) -> usize {
+        self.mesh.vertex_count
+    }
+
+    fn corner(&self, f: usize, j: usize) -> u32 {
+        self.mesh.offsets[f] + j as u32
+    }
+
+    fn face_and_place(&self, c: u32) -> (usize, u32) {
+        let f = self.faces_of[c as usize] as usize;
+        (f, c - self.mesh.offsets[f])
+    }
+
+    fn size(&self, f: usize) -> usize {
+        (self.mesh.offsets[f + 1] - self.mesh.offsets[f]) as usize
+    }
+
+    fn twin(&self, c: u32) -> u32 {
+        self.mesh.corner_twin[c as usize]
+    }
+
+    fn next(&self, c: u32) -> u32 {
+        self.mesh.next(c)
+    }
+
+    fn vertex(&self, c: u32) -> u32 {
+        self.mesh.corner_vertex[c as usize]
+    }
+
+    fn face_at(&self, v: usize) -> Option<usize> {
+        match self.mesh.first_corner(v) {
+            NONE => None,
+            c => Some(self.faces_of[c as usize] as usize),
+        }
+    }
+}
+
+/// A half-edge mesh read as corners: corner `h` is the corner that half-edge `h` leaves
+/// (the numbering of [`CornerMesh::from_halfedge`] aside, the same corners, next
+/// corners and twins).
+struct HalfedgeFaces<'a> {
+    mesh: &'a HalfedgeMesh,
+}
+
+impl FaceCorners for HalfedgeFaces<'_> {
+    fn face_count(&self) -> usize {
+        self.mesh.face_count()
+    }
+
+    fn vertex_count(&self) -> usize {
+        self.mesh.vertex_count()
+    }
+
+    fn corner(&self, f: usize, j: usize) -> u32 {
+        let mut h = self.mesh.raw_face_halfedges()[f];
+        for _ in 0..j {
+            h = self.next(h);
+        }
+        h
+    }
+
+    fn face_and_place(&self, c: u32) -> (usize, u32) {
+        let f = self.mesh.raw_halfedge_faces()[c as usize] as usize;
+        let (mut h, mut place) = (self.mesh.raw_face_halfedges()[f], 0);
+        while h != c {
+            h = self.next(h);
+            place += 1;
+        }
+        (f, place)
+    }
+
+    fn size(&self, f: usize) -> usize {
+        let first = self.mesh.raw_face_halfedges()[f];
+        let (mut h, mut size) = (self.next(first), 1);
+        while h != first {
+            h = self.next(h);
+            size += 1;
+        }
+        size
+    }
+
+    fn twin(&self, c: u32) -> u32 {
+        if self.mesh.raw_halfedge_faces()[(c ^ 1) as usize] == NONE { NONE } else { c ^ 1 }
+    }
+
+    fn next(&self, c: u32) -> u32 {
+        self.mesh.raw_halfedge_next()[c as usize]
+    }
+
+    fn vertex(&self, c: u32) -> u32 {
+        self.mesh.raw_halfedge_targets()[(c ^ 1) as usize]
+    }
+
+    fn face_at(&self, v: usize) -> Option<usize> {
+        let (to, face_of) = (self.mesh.raw_halfedge_targets(), self.mesh.raw_halfedge_faces());
+        (0..to.len()).find(|&h| to[h ^ 1] as usize == v && face_of[h] != NONE).map(|h| face_of[h] as usize)
+    }
 }
 
 /// [`reverse_chaikin_corner_mesh`] on a Chaikin step in the canonical order (as
@@ -405,21 +534,19 @@ pub(crate) fn reverse_chaikin_canonical(fine: &HalfedgeMesh, options: &ReverseOp
         return None;
     }
     // The half-edges of the kept faces and their twins, the first ones in the canonical
-    // layout (the ring's own edges are numbered after them), with the ring masked.
-    let halfedges =
-        face_of.iter().enumerate().filter(|&(_, &f)| (f as usize) < inner_faces).map(|(h, _)| h | 1).max()? + 1;
-    let masked: Vec<u32> =
-        face_of[..halfedges].iter().map(|&f| if (f as usize) < inner_faces { f } else { NONE }).collect();
+    // layout (the ring's own edges are numbered after them), with the ring masked: the
+    // whole array masked, then cut after the last edge with a kept face (a short scan
+    // back over the ring's own edges).
+    let mut masked: Vec<u32> = face_of.iter().map(|&f| if (f as usize) < inner_faces { f } else { NONE }).collect();
+    let halfedges = (masked.iter().rposition(|&f| f != NONE)? | 1) + 1;
+    masked.truncate(halfedges);
     let arrays = HalfedgeArrays::prefix(fine, inner_vertices, inner_faces, &masked);
     let inner_options = ReverseOptions { boundary: BoundaryRule::Shrink, ..options.clone() };
     let reversal = reverse_canonical_arrays(&arrays, &inner_options)?;
     drop(masked);
-    let corners = CornerMesh::from_halfedge(fine);
-    let faces_of = faces_of_corners(&corners.offsets);
     let input = Input {
-        fine: &corners,
+        fine: &HalfedgeFaces { mesh: fine },
         positions: fine.positions(),
-        faces_of: &faces_of,
         on_boundary: &on_boundary,
         in_ring: &in_ring,
         ring_faces: faces - inner_faces,
@@ -450,13 +577,13 @@ fn map_error(error: DooError, face_of_inner: &[u32], vertex_of_inner: &[u32]) ->
 /// Matches the ring of the input against the ring of the coarse mesh of `reversal` (a
 /// reversal of the mesh without its ring), and makes the reversal of the whole input:
 /// its numbering, and the details of the Chaikin points.
-fn attach_ring(
+fn attach_ring<F: FaceCorners>(
     mut reversal: DooReversal,
-    input: &Input<'_>,
+    input: &Input<'_, F>,
     face_of_inner: &[u32],
     vertex_of_inner: &[u32],
 ) -> Result<DooReversal, DooError> {
-    let Input { fine, positions, faces_of, on_boundary, in_ring, ring_faces } = *input;
+    let Input { fine, positions, on_boundary, in_ring, ring_faces } = *input;
     let coarse = &reversal.coarse;
     let ring = Ring::of(coarse)?;
     let canonical_corners = coarse.corner_count();
@@ -475,41 +602,36 @@ fn attach_ring(
         .collect();
     let mut rotations: Vec<u32> =
         if order.rotations.is_empty() { vec![0; inner_faces] } else { order.rotations.clone() };
-    // Input corner of each coarse corner (the canonical F_F corner), through the F_F faces.
-    let mut input_corner = vec![NONE; canonical_corners];
-    for k in 0..coarse.face_count() {
-        let (b, e) = (coarse.offsets[k] as usize, coarse.offsets[k + 1] as usize);
-        let m = e - b;
-        let g = faces[k] as usize;
+    // Input corner of a coarse corner (the canonical F_F corner), through its F_F face.
+    let input_corner = |c: u32| {
+        let k = coarse.offsets.partition_point(|&b| b <= c) - 1;
+        let (b, e) = (coarse.offsets[k], coarse.offsets[k + 1]);
+        let (m, j) = ((e - b) as usize, (c - b) as usize);
         let r = rotations[k] as usize;
-        for j in 0..m {
-            // Corner i of the input face is canonical corner (i + r) mod m.
-            input_corner[b + j] = fine.offsets[g] + ((j + m - r) % m) as u32;
-        }
-    }
+        // Corner i of the input face is canonical corner (i + r) mod m.
+        fine.corner(faces[k] as usize, (j + m - r) % m)
+    };
+    let edge_corners: Vec<u32> = ring.edges.iter().map(|&c| input_corner(c)).collect();
     let mut claimed_face = vec![false; fine.face_count()];
-    let mut claimed_vertex = vec![false; fine.vertex_count];
+    let mut claimed_vertex = vec![false; fine.vertex_count()];
     let broken = |face: usize, reason: String| DooError::NotDooConnectivity {
         face,
         reason: format!("{reason} (Chaikin boundary rule)"),
     };
-    let face_corners = |f: usize| fine.offsets[f]..fine.offsets[f + 1];
     // Boundary quads: across each coarse boundary edge's F_F edge.
     let mut quad_corner_at_u = vec![NONE; ring.quad_count()];
-    for (j, &c) in ring.edges.iter().enumerate() {
-        let ic = input_corner[c as usize];
-        let ff_face = faces_of[ic as usize] as usize;
-        let t = fine.corner_twin[ic as usize];
+    for (j, &ic) in edge_corners.iter().enumerate() {
+        let (ff_face, _) = fine.face_and_place(ic);
+        let t = fine.twin(ic);
         if t == NONE {
             return Err(broken(ff_face, "an F_F face at the coarse boundary has an edge on the fine boundary".into()));
         }
-        let h = faces_of[t as usize] as usize;
-        let corners = face_corners(h);
-        if corners.len() != 4 {
+        let (h, t_place) = fine.face_and_place(t);
+        if fine.size(h) != 4 {
             return Err(broken(h, format!("next to F_F face {ff_face} at the coarse boundary: not a quad")));
         }
         let [a_corner, b_corner] = [fine.next(fine.next(t)), fine.next(fine.next(fine.next(t)))];
-        for v in [fine.corner_vertex[a_corner as usize], fine.corner_vertex[b_corner as usize]] {
+        for v in [fine.vertex(a_corner), fine.vertex(b_corner)] {
             if !on_boundary[v as usize] || std::mem::replace(&mut claimed_vertex[v as usize], true) {
                 return Err(broken(h, format!("vertex {v} is not a Chaikin point of this boundary quad alone")));
             }
@@ -517,11 +639,11 @@ fn attach_ring(
         if std::mem::replace(&mut claimed_face[h], true) {
             return Err(broken(h, "the face is the boundary quad of two coarse edges".into()));
         }
-        vertices[canonical_corners + 2 * j] = fine.corner_vertex[a_corner as usize];
-        vertices[canonical_corners + 2 * j + 1] = fine.corner_vertex[b_corner as usize];
+        vertices[canonical_corners + 2 * j] = fine.vertex(a_corner);
+        vertices[canonical_corners + 2 * j + 1] = fine.vertex(b_corner);
         quad_corner_at_u[j] = fine.next(t);
         faces.push(h as u32);
-        rotations.push((4 - (t - fine.offsets[h])) % 4);
+        rotations.push((4 - t_place) % 4);
     }
     // Boundary vertex faces: across the edge from the outgoing Chaikin point.
     let quads = ring.quad_count();
@@ -533,17 +655,16 @@ fn attach_ring(
         let expected = ring.face(k);
         let out_edge = slot[expected[1] as usize] as usize;
         let at_u = quad_corner_at_u[out_edge];
-        let quad_face = faces_of[at_u as usize] as usize;
-        let start = fine.corner_twin[at_u as usize];
+        let (quad_face, _) = fine.face_and_place(at_u);
+        let start = fine.twin(at_u);
         if start == NONE {
             return Err(broken(quad_face, "a boundary quad has its side edge on the fine boundary".into()));
         }
-        let h = faces_of[start as usize] as usize;
-        let corners = face_corners(h);
-        let matches = corners.len() == expected.len() && {
+        let (h, start_place) = fine.face_and_place(start);
+        let matches = fine.size(h) == expected.len() && {
             let mut corner = start;
             expected.iter().all(|&w| {
-                let same = fine.corner_vertex[corner as usize] == vertices[w as usize];
+                let same = fine.vertex(corner) == vertices[w as usize];
                 corner = fine.next(corner);
                 same
             })
@@ -563,12 +684,12 @@ fn attach_ring(
         }
         faces.push(h as u32);
         let m = expected.len() as u32;
-        rotations.push((m - (start - fine.offsets[h])) % m);
+        rotations.push((m - start_place) % m);
     }
     if ring.face_count() != ring_faces || 2 * quads != on_boundary.iter().filter(|&&b| b).count() {
         let face = (0..fine.face_count()).find(|&f| !claimed_face[f] && in_ring[f]);
-        let vertex = (0..fine.vertex_count).find(|&v| on_boundary[v] && !claimed_vertex[v]);
-        let face = face.or_else(|| vertex.map(|v| faces_of[fine.first_corner(v) as usize] as usize)).unwrap_or(0);
+        let vertex = (0..fine.vertex_count()).find(|&v| on_boundary[v] && !claimed_vertex[v]);
+        let face = face.or_else(|| vertex.and_then(|v| fine.face_at(v))).unwrap_or(0);
         return Err(broken(
             face,
             format!(
