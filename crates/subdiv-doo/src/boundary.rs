@@ -45,7 +45,7 @@
 //! it) is reversed without the general search: its ring is the last faces and its
 //! Chaikin points the last vertices, so the half-edge arrays with the ring's faces
 //! masked are those of a Shrink step in the canonical order, which the streaming path
-//! of [`crate::canonical`] reverses (reading, automatic choice and all, as the general
+//! of the canonical module reverses (reading, automatic choice and all, as the general
 //! path would); the ring is then attached as on the general path. Any other order, or a
 //! ring that does not fit, takes the general path.
 
