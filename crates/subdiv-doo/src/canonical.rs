@@ -24,7 +24,7 @@ use mesh_topo::HalfedgeMesh;
 use glam::DVec3;
 
 use crate::DooError;
-use crate::corner::{CornerMesh, NONE, faces_of_corners, group_by_key, next_of_corners};
+use crate::corner::{CornerMesh, NONE, faces_of_corners, group_by_key, next_of_corners, prev_of_corners};
 use crate::reverse::{
     CornersByVertex, DooReversal, FE, FF, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial,
     check_coarse_manifold, corners_by_vertex, details_are_zero, dual_group_energy, ff_faces_share_an_edge,
@@ -228,13 +228,14 @@ pub(crate) fn reverse_canonical_arrays(arrays: &HalfedgeArrays<'_>, options: &Re
             (SeedChoice::given(0, seed), stats)
         }
         None if closed => {
-            let mut choice = automatic(arrays, &maps, &coarse, detail_energy, scale, &fv, candidates)?;
+            let (mut choice, rejected_crossings) =
+                automatic(arrays, &maps, &coarse, detail_energy, scale, &fv, candidates)?;
             let visited = if choice.trials.len() == 1 { ff_count } else { ff_count + interior + 1 };
             // Every valid reading was searched in full; the ones whose sum stopped early
             // are not counted as evaluated.
             let valid = choice.trials.iter().filter(|t| t.outcome.is_ok()).count();
             let interpretations = choice.trials.iter().filter(|t| t.outcome.is_ok() && !t.stopped_early).count();
-            let edges_crossed = valid * vertices + choice.trials.len() - valid;
+            let edges_crossed = valid * vertices + rejected_crossings;
             choice.component = 0;
             (choice, ReverseStats { visited_faces: visited, edges_crossed, candidate_edges, interpretations })
         }
@@ -402,7 +403,7 @@ fn coarse_vertices(
 }
 
 /// The flat arrays of a half-edge mesh that the canonical passes read, and its sizes.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 pub(crate) struct HalfedgeArrays<'a> {
     /// Target vertex of each half-edge.
     to: &'a [u32],
@@ -419,7 +420,7 @@ pub(crate) struct HalfedgeArrays<'a> {
 }
 
 impl<'a> HalfedgeArrays<'a> {
-    fn of(mesh: &'a HalfedgeMesh) -> Self {
+    pub(crate) fn of(mesh: &'a HalfedgeMesh) -> Self {
         let face_halfedge = mesh.raw_face_halfedges();
         Self {
             to: mesh.raw_halfedge_targets(),
@@ -450,6 +451,112 @@ impl<'a> HalfedgeArrays<'a> {
             positions: &mesh.positions()[..vertices],
             vertices,
             faces,
+        }
+    }
+}
+
+/// Half-edge arrays built from corner arrays, numbered as `HalfedgeMesh::from_soup`
+/// numbers the same faces (edges in order of first appearance, corner by corner;
+/// half-edge `2e` the first appearance, `2e + 1` its twin or the boundary): the view a
+/// coarse mesh of a reversal needs for the canonical path of the next level, without a
+/// half-edge mesh built and validated (a pyramid's coarser levels are corner arrays).
+pub(crate) struct CornerHalfedges {
+    to: Vec<u32>,
+    next: Vec<u32>,
+    face_of: Vec<u32>,
+    face_halfedge: Vec<u32>,
+}
+
+impl CornerHalfedges {
+    /// The half-edges of `mesh`, or `None` if its twins are not an involution (the
+    /// canonical path then does not apply and the general one decides). Linear: each
+    /// boundary half-edge's successor is found by one turn around its vertex, and a
+    /// vertex has one outgoing boundary half-edge (more only at a vertex where two
+    /// boundary loops touch, which the turn then still ends).
+    pub(crate) fn of(mesh: &CornerMesh) -> Option<Self> {
+        let corners = mesh.corner_count();
+        if 2 * corners >= NONE as usize {
+            return None;
+        }
+        let twin = &mesh.corner_twin;
+        let mut halfedge_of = Vec::with_capacity(corners);
+        let mut edges = 0u32;
+        let mut boundary = false;
+        for c in 0..corners as u32 {
+            let t = twin[c as usize];
+            let h = if t == NONE || t > c {
+                boundary |= t == NONE;
+                edges += 1;
+                2 * (edges - 1)
+            } else {
+                // The twin comes first: its edge was numbered there, `c` is its odd half.
+                if twin[t as usize] != c {
+                    return None;
+                }
+                halfedge_of[t as usize] | 1
+            };
+            halfedge_of.push(h);
+        }
+        // Twins that point forward are checked from the other side above, unless the
+        // other side points elsewhere too.
+        if twin.iter().enumerate().any(|(c, &t)| t != NONE && (t as usize >= corners || twin[t as usize] != c as u32)) {
+            return None;
+        }
+        let halfedges = 2 * edges as usize;
+        let (mut to, mut next, mut face_of) = (vec![0u32; halfedges], vec![NONE; halfedges], vec![NONE; halfedges]);
+        let mut face_halfedge = Vec::with_capacity(mesh.face_count());
+        for (f, w) in mesh.offsets.windows(2).enumerate() {
+            let (begin, end) = (w[0] as usize, w[1] as usize);
+            face_halfedge.push(halfedge_of[begin]);
+            for c in begin..end {
+                let n = if c + 1 == end { begin } else { c + 1 };
+                let h = halfedge_of[c] as usize;
+                to[h] = mesh.corner_vertex[n];
+                next[h] = halfedge_of[n];
+                face_of[h] = f as u32;
+                if twin[c] == NONE {
+                    // The boundary half-edge runs back along the edge.
+                    to[h ^ 1] = mesh.corner_vertex[c];
+                }
+            }
+        }
+        if boundary {
+            // The boundary half-edge opposite corner `c` ends at `c`'s vertex; the next
+            // one leaves it along the last edge of the fan that starts at `c`.
+            let prev = prev_of_corners(&mesh.offsets);
+            for c in 0..corners {
+                if twin[c] != NONE {
+                    continue;
+                }
+                let mut x = c;
+                let mut turns = 0;
+                let last = loop {
+                    let p = prev[x] as usize;
+                    match twin[p] {
+                        NONE => break p,
+                        t => x = t as usize,
+                    }
+                    turns += 1;
+                    if turns > corners {
+                        return None;
+                    }
+                };
+                next[(halfedge_of[c] ^ 1) as usize] = halfedge_of[last] ^ 1;
+            }
+        }
+        Some(Self { to, next, face_of, face_halfedge })
+    }
+
+    /// The arrays with the vertex positions (`vertices` of them).
+    pub(crate) fn view<'a>(&'a self, positions: &'a [DVec3]) -> HalfedgeArrays<'a> {
+        HalfedgeArrays {
+            to: &self.to,
+            next: &self.next,
+            face_of: &self.face_of,
+            face_halfedge: &self.face_halfedge,
+            positions,
+            vertices: positions.len(),
+            faces: self.face_halfedge.len(),
         }
     }
 }
@@ -881,13 +988,66 @@ struct FvFaces<'a> {
     sizes_of: &'a [u32],
 }
 
+/// The error the general search meets on the edges of face `quad` read as an F_F face
+/// (the first checks it makes, in the same order, with the same roles: each face across
+/// must be a quad whose far side has a face, no face may be both an F_F face and a quad),
+/// and the number of edges it crossed up to it (its statistics), or `None` when every edge
+/// passes and the search would go on beyond them (the general path then runs it).
+/// `size_of`: the number of sides of each face.
+fn quad_seed_error(
+    arrays: &HalfedgeArrays<'_>,
+    quad: usize,
+    size_of: impl Fn(usize) -> usize,
+) -> Option<(DooError, usize)> {
+    let HalfedgeArrays { next, face_of, face_halfedge, .. } = *arrays;
+    // The faces the search has given a role so far: (face, whether it is an F_F face).
+    let mut roles = vec![(quad, true)];
+    let role_of = |roles: &[(usize, bool)], face: usize| roles.iter().find(|r| r.0 == face).map(|r| r.1);
+    let first = face_halfedge[quad];
+    let mut h = first;
+    let mut crossed = 0;
+    loop {
+        crossed += 1;
+        let twin = (h ^ 1) as usize;
+        if face_of[twin] != NONE {
+            let g = face_of[twin] as usize;
+            let sides = size_of(g);
+            if sides != 4 {
+                return Some((not_a_quad(quad, g, sides), crossed));
+            }
+            let far = next[next[twin] as usize];
+            let beyond = face_of[(far ^ 1) as usize];
+            if beyond == NONE {
+                return Some((quad_on_boundary(quad, g), crossed));
+            }
+            match role_of(&roles, g) {
+                Some(true) => return Some((ff_faces_share_an_edge(quad, g), crossed)),
+                Some(false) => {}
+                None => roles.push((g, false)),
+            }
+            let beyond = beyond as usize;
+            match role_of(&roles, beyond) {
+                Some(false) => return Some((quad_read_as_ff_face(beyond, g), crossed)),
+                Some(true) => {}
+                None => roles.push((beyond, true)),
+            }
+        }
+        h = next[h as usize];
+        if h == first {
+            return None;
+        }
+    }
+}
+
 /// The automatic choice of the general path on a closed canonical mesh, made as it makes
 /// it (the same readings in the same order, the same sums in the same order, the same
 /// report): the lowest face as F_F (`energy`, summed by the caller over its groups, the
 /// F_V faces), then, unless its details are all zero, the lowest F_F face of the dual
-/// reading, and the lowest F_E quad as F_F (rejected at once when the face across its
-/// first edge is not a quad). The dual reading (the lowest F_V face as F_F: valid on a
-/// closed connected mesh) groups its candidates by the F_F faces; its sum runs over them
+/// reading, and the lowest F_E quad as F_F (rejected by its own edges, see
+/// [`quad_seed_error`]: a face across one of them is not a quad, as on every mesh refined
+/// from one with a face or a vertex of degree other than 4). The dual reading (the lowest
+/// F_V face as F_F: valid on a closed connected mesh) groups its candidates by the F_F
+/// faces; its sum runs over them
 /// in face order, each F_V face expanded when a group first needs it, and stops as soon
 /// as it reaches `energy` (the dual reading cannot win then), so that a mesh whose
 /// details are small in its first reading expands only a few F_V faces. `None` when the
@@ -896,7 +1056,8 @@ struct FvFaces<'a> {
 ///
 /// `coarse`: the coarse mesh of the first reading (interior vertex `i` is F_V face `i`);
 /// `scale`: the bounding-box diagonal of all vertices (the scale of the zero test);
-/// `dual`: scratch, one entry per fine vertex.
+/// `dual`: scratch, one entry per fine vertex. With the choice, the number of edges the
+/// rejected F_E search crossed (the general path's statistics count them).
 fn automatic(
     arrays: &HalfedgeArrays<'_>,
     maps: &FaceMaps,
@@ -905,25 +1066,27 @@ fn automatic(
     scale: f64,
     fv: &FvFaces<'_>,
     mut dual: Vec<DVec3>,
-) -> Option<SeedChoice> {
+) -> Option<(SeedChoice, usize)> {
     let (ff_offsets, coarse_vertex) = (&coarse.offsets[..], &coarse.corner_vertex[..]);
     let ff_count = ff_offsets.len() - 1;
     let (faces, positions) = (arrays.faces, arrays.positions);
     let mut trials = vec![SeedTrial::valid(0, "F_F", energy, false)];
     if details_are_zero(energy, scale, faces) {
         let reason = zero_details_reason(0);
-        return Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason });
+        return Some((
+            SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason },
+            0,
+        ));
     }
-    // The lowest F_E quad as F_F: the face across its first edge must be a quad.
+    // The lowest F_E quad as F_F: rejected by its own edges, or left to the general path.
     let quad = ff_count;
     debug_assert!(fv.first > quad, "internal: the automatic choice needs F_E quads");
-    let h = arrays.face_halfedge[quad];
-    let across = arrays.face_of[(h ^ 1) as usize] as usize;
-    let across_size =
-        if across >= fv.first { fv.sizes_of[across - fv.first] } else { ff_offsets[across + 1] - ff_offsets[across] };
-    if across_size == 4 {
-        return None;
-    }
+    let size_of = |g: usize| match g {
+        _ if g >= fv.first => fv.sizes_of[g - fv.first] as usize,
+        _ if g >= ff_count => 4,
+        _ => (ff_offsets[g + 1] - ff_offsets[g]) as usize,
+    };
+    let (quad_error, quad_crossings) = quad_seed_error(arrays, quad, size_of)?;
     // The dual reading: its candidates are the F_V faces expanded (every vertex is on
     // one F_V face), its groups the F_F faces.
     debug_assert_eq!(dual.len(), positions.len());
@@ -946,10 +1109,12 @@ fn automatic(
     }
     let fv_seed = fv.first;
     trials.push(SeedTrial::valid(fv_seed, "F_V", dual_energy, true));
-    let error = not_a_quad(quad, across, across_size as usize);
-    trials.push(SeedTrial::invalid(quad, "F_E", &error));
+    trials.push(SeedTrial::invalid(quad, "F_E", &quad_error));
     let reason = ranking_reason(energy, &[(fv_seed, dual_energy, true)]);
-    Some(SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason })
+    Some((
+        SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason },
+        quad_crossings,
+    ))
 }
 
 /// The automatic choice of the general path on an open canonical mesh (one with F_E

@@ -8,6 +8,16 @@
 //! connectivity, and positions come from coarse vertices plus details. The base mesh
 //! plus all details are exactly as many 3-vectors as the finest mesh has vertices.
 //!
+//! # Speed
+//! A mesh refined several times by [`crate::subdivide`] (or rebuilt from a pyramid) is
+//! in the canonical order at every level: the coarse mesh of a canonical reversal is the
+//! mesh it was refined from, in its own order. Each level is then reversed by the
+//! streaming path of the canonical module, from half-edge arrays built from the previous
+//! level's corner arrays in one linear pass, and the general search runs only where
+//! that path does not apply (another order, an F_E quad read as F_F that the general
+//! search would have to follow further, as on quad meshes, or a level whose best
+//! reading cannot go on): the result is the general path's, bit for bit, at every level.
+//!
 //! # Compression (`keep`)
 //! [`DooPyramid::reconstruct`] can keep only a fraction of the detail vectors, the
 //! others being set to zero. Details are ranked by their Euclidean norm (the stored
@@ -28,6 +38,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::DooError;
 use crate::boundary::{BoundaryRule, Ring, reverse_chaikin_corner_mesh};
+use crate::canonical::{CornerHalfedges, reverse_canonical_arrays};
 use crate::corner::{CornerMesh, NONE, doo_topology};
 use crate::forward::check_finite;
 use crate::reverse::{
@@ -181,8 +192,9 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
     }
     // A mesh in the canonical order: the first level without the general search (the
     // same result; `None` when it does not apply, also when a position is not finite,
-    // so that the check below names it).
+    // so that the check below names it). The coarser levels try it in turn.
     let first = match options.boundary {
+        _ if !canonical_enabled() => None,
         BoundaryRule::Shrink => {
             crate::canonical::reverse_canonical(mesh, &reverse_options(options, 0)).map(Step::from_reversal)
         }
@@ -197,28 +209,32 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
     let mut stopped = None;
     match options.depth {
         Depth::Levels(n) => {
-            steps = match first {
-                Some(step) => {
-                    let rest = descend(&step.coarse, &step.coarse_positions, options, 1, n)?;
+            let rest = match &first {
+                Some(step) => descend(&step.coarse, &step.coarse_positions, options, 1, n).ok(),
+                None => None,
+            };
+            steps = match (first, rest) {
+                (Some(step), Some(rest)) => {
                     let mut steps = vec![step];
                     steps.extend(rest);
                     steps
                 }
-                None => descend(&CornerMesh::from_halfedge(mesh), mesh.positions(), options, 0, n)?,
+                // The general search over this level's readings (the first of which is
+                // the canonical one, if any, which could not go on).
+                (first, _) => {
+                    descend_from(&CornerMesh::from_halfedge(mesh), mesh.positions(), options, 0, n, first.is_none())?
+                }
             };
         }
         Depth::Max => {
-            let (mut current, start) = match first {
-                Some(step) => {
-                    let current = (step.coarse.clone(), step.coarse_positions.clone());
-                    steps.push(step);
-                    (current, 1)
-                }
-                None => ((CornerMesh::from_halfedge(mesh), mesh.positions().to_vec()), 0),
-            };
+            // The mesh of the current level (`None`: the input, whose corner arrays are
+            // built only if the general path needs them) and, once the canonical path has
+            // been tried on it, what it gave.
+            let mut current: Option<(CornerMesh, Vec<DVec3>)> = None;
+            let mut tried = Some(first);
             // Faces of the mesh that the last step reversed.
             let mut reversed_faces = mesh.face_count();
-            for level in start..MAX_LEVELS {
+            for level in 0..MAX_LEVELS {
                 // No F_E and no F_V face: as many coarse faces as fine ones (see `Depth::Max`).
                 if let Some(last) = steps.last()
                     && last.coarse.face_count() == reversed_faces
@@ -229,16 +245,48 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
                     ));
                     break;
                 }
-                reversed_faces = current.0.face_count();
-                let step = match greedy_step(&current.0, &current.1, options, level) {
-                    Ok(step) => step,
-                    Err(error) if level > 0 => {
-                        stopped = Some(format!("level {} is not a Doo-Sabin refinement: {error}", level + 1));
-                        break;
+                let canonical = match tried.take() {
+                    Some(result) => result,
+                    None => {
+                        current.as_ref().and_then(|(fine, positions)| canonical_step(fine, positions, options, level))
                     }
-                    Err(error) => return Err(error),
                 };
-                current = (step.coarse.clone(), step.coarse_positions.clone());
+                // Kept as `greedy_step` keeps the best reading: when its coarse mesh can be
+                // reversed in turn (shown by the canonical path, whose reversal then serves
+                // the next level, or by the general search's check).
+                let accepted = canonical.filter(|step| {
+                    let next = canonical_step(&step.coarse, &step.coarse_positions, options, level + 1);
+                    let reversible = options.boundary == BoundaryRule::Chaikin
+                        || next.is_some()
+                        || Session::new(&step.coarse, &step.coarse_positions, &ReverseOptions::auto(options.rule))
+                            .is_ok();
+                    tried = Some(next);
+                    reversible
+                });
+                let step = match accepted {
+                    Some(step) => step,
+                    None => {
+                        tried = None;
+                        let input;
+                        let (fine, positions) = match &current {
+                            Some((fine, positions)) => (fine, positions.as_slice()),
+                            None => {
+                                input = CornerMesh::from_halfedge(mesh);
+                                (&input, mesh.positions())
+                            }
+                        };
+                        match greedy_step(fine, positions, options, level) {
+                            Ok(step) => step,
+                            Err(error) if level > 0 => {
+                                stopped = Some(format!("level {} is not a Doo-Sabin refinement: {error}", level + 1));
+                                break;
+                            }
+                            Err(error) => return Err(error),
+                        }
+                    }
+                };
+                reversed_faces = current.as_ref().map_or(mesh.face_count(), |(fine, _)| fine.face_count());
+                current = Some((step.coarse.clone(), step.coarse_positions.clone()));
                 steps.push(step);
             }
             if stopped.is_none() {
@@ -306,8 +354,30 @@ fn descend(
     level: u32,
     target: u32,
 ) -> Result<Vec<Step>, DooError> {
+    descend_from(fine, positions, options, level, target, true)
+}
+
+/// [`descend`], first trying the canonical path on this level if `try_canonical` (its
+/// reading is the general search's best; if the levels below it cannot all be reversed,
+/// the search goes over this level's readings as without it).
+fn descend_from(
+    fine: &CornerMesh,
+    positions: &[DVec3],
+    options: &DecomposeOptions,
+    level: u32,
+    target: u32,
+    try_canonical: bool,
+) -> Result<Vec<Step>, DooError> {
     if level == target {
         return Ok(Vec::new());
+    }
+    if try_canonical
+        && let Some(step) = canonical_step(fine, positions, options, level)
+        && let Ok(rest) = descend(&step.coarse, &step.coarse_positions, options, level + 1, target)
+    {
+        let mut steps = vec![step];
+        steps.extend(rest);
+        return Ok(steps);
     }
     if options.boundary == BoundaryRule::Chaikin {
         // One reading per level (the best that fits the boundary ring), no backtracking.
@@ -341,6 +411,32 @@ fn descend(
         }
     }
     Err(first_error.expect("internal: there is always a first reading"))
+}
+
+/// The reversal of one level's corner mesh by the canonical path (see the canonical
+/// module): the general search's best reading, bit for bit, when the mesh is in the
+/// canonical order (as the coarse mesh of a canonical reversal of a mesh refined several
+/// times is); `None` when it does not apply (another order, the Chaikin boundary rule, a
+/// broken mesh), and the general path decides.
+fn canonical_step(fine: &CornerMesh, positions: &[DVec3], options: &DecomposeOptions, level: u32) -> Option<Step> {
+    if !canonical_enabled() || options.boundary != BoundaryRule::Shrink || positions.len() != fine.vertex_count {
+        return None;
+    }
+    let halfedges = CornerHalfedges::of(fine)?;
+    reverse_canonical_arrays(&halfedges.view(positions), &reverse_options(options, level)).map(Step::from_reversal)
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Tests: every level by the general path, to compare the canonical path with.
+    static GENERAL_ONLY: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+fn canonical_enabled() -> bool {
+    #[cfg(test)]
+    return !GENERAL_ONLY.get();
+    #[cfg(not(test))]
+    true
 }
 
 /// One level of [`Depth::Max`]: the best reading whose coarse mesh can itself be reversed
@@ -737,6 +833,95 @@ mod tests {
         let mut future = pyramid.to_bytes().unwrap();
         future[8..12].copy_from_slice(&3u32.to_le_bytes());
         assert!(matches!(DooPyramid::from_bytes(&future), Err(DooError::Binary(_))));
+    }
+
+    /// `coarse` refined `levels` times, every fine vertex moved (fixed seed).
+    fn refined_and_moved(coarse: &PolygonSoup, rule: FaceRule, levels: u32) -> HalfedgeMesh {
+        let coarse = HalfedgeMesh::from_soup(coarse).unwrap();
+        let mut fine = subdivide(&coarse, &DooOptions::new(rule, levels)).unwrap().to_mesh().unwrap();
+        for (i, p) in fine.positions_mut().iter_mut().enumerate() {
+            let t = i as f64;
+            *p += 1e-3 * DVec3::new((1.3 * t).sin(), (2.1 * t).cos(), (0.7 * t).sin());
+        }
+        fine
+    }
+
+    fn general_only<T>(run: impl FnOnce() -> T) -> T {
+        GENERAL_ONLY.set(true);
+        let result = run();
+        GENERAL_ONLY.set(false);
+        result
+    }
+
+    #[test]
+    fn corner_halfedges_are_those_of_the_half_edge_mesh() {
+        let open = shapes::grid(5, 4, shapes::CellKind::Quads).unwrap();
+        let mut holed = shapes::torus(8, 6, shapes::CellKind::Triangles).unwrap();
+        let faces: Vec<Vec<u32>> = holed.faces().map(<[u32]>::to_vec).collect();
+        holed = PolygonSoup::from_faces(
+            holed.positions.clone(),
+            faces.iter().enumerate().filter(|(f, _)| *f != 3 && *f != 50).map(|(_, f)| f.clone()),
+        );
+        for soup in [shapes::cube(), open, holed, shapes::tetrahedron()] {
+            let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+            let arrays = CornerHalfedges::of(&CornerMesh::from_halfedge(&mesh)).unwrap();
+            let view = arrays.view(mesh.positions());
+            let expected = crate::canonical::HalfedgeArrays::of(&mesh);
+            assert_eq!(format!("{view:?}"), format!("{expected:?}"));
+        }
+    }
+
+    #[test]
+    fn coarser_levels_of_a_canonical_mesh_give_the_general_result() {
+        let holed = {
+            let torus = shapes::torus(12, 8, shapes::CellKind::Quads).unwrap();
+            let faces: Vec<Vec<u32>> = torus.faces().map(<[u32]>::to_vec).collect();
+            PolygonSoup::from_faces(
+                torus.positions.clone(),
+                faces.into_iter().enumerate().filter(|(f, _)| f % 25 != 5).map(|(_, f)| f),
+            )
+        };
+        // (mesh, rule, levels, whether the automatic choice of every level is the
+        // canonical path's: not on quad meshes, where the lowest F_E quad read as F_F
+        // finds quads all around it and the general search goes on).
+        let cases = [
+            (shapes::torus(10, 6, shapes::CellKind::Triangles).unwrap(), FaceRule::DooSabin, 3, true),
+            (shapes::icosahedron(), FaceRule::Centroid { a: 0.5 }, 3, true),
+            (shapes::cube(), FaceRule::Simple, 3, false),
+            (holed, FaceRule::DooSabin, 2, false),
+        ];
+        for (coarse, rule, levels, canonical_all_the_way) in cases {
+            let fine = refined_and_moved(&coarse, rule, levels);
+            if canonical_all_the_way {
+                let auto = ReverseOptions::auto(rule);
+                let first = crate::canonical::reverse_canonical(&fine, &auto).expect("canonical order");
+                let mut step = Step::from_reversal(first);
+                for level in 1..levels {
+                    let options = DecomposeOptions::levels(rule, levels);
+                    step = canonical_step(&step.coarse, &step.coarse_positions, &options, level).expect("canonical");
+                }
+            }
+            for options in [
+                DecomposeOptions::levels(rule, levels),
+                DecomposeOptions::levels(rule, 1),
+                DecomposeOptions::max(rule),
+                DecomposeOptions { seeds: vec![0], ..DecomposeOptions::levels(rule, levels) },
+            ] {
+                let fast = decompose(&fine, &options).unwrap();
+                let general = general_only(|| decompose(&fine, &options).unwrap());
+                assert_eq!(format!("{fast:?}"), format!("{general:?}"), "{rule:?} {:?}", options.depth);
+                let rebuilt = fast.pyramid.reconstruct(fast.pyramid.level_count(), None).unwrap();
+                assert_eq!(rebuilt.indices, fine.to_soup().indices);
+                for (p, q) in rebuilt.positions.iter().zip(fine.positions()) {
+                    assert!(p.distance(*q) < 1e-12, "{p} against {q}");
+                }
+            }
+            // More levels than the mesh has: the same error on both paths.
+            let too_deep = DecomposeOptions::levels(rule, levels + 3);
+            let fast = decompose(&fine, &too_deep).map(|d| d.pyramid.level_count());
+            let general = general_only(|| decompose(&fine, &too_deep).map(|d| d.pyramid.level_count()));
+            assert_eq!(format!("{fast:?}"), format!("{general:?}"));
+        }
     }
 
     fn cube_pyramid() -> DooPyramid {
