@@ -9,6 +9,10 @@
 //! `decompose_renumbered` times the general path on the same mesh renumbered, and
 //! `forward_renumbered` the forward step of the coarse mesh renumbered the same way.
 //!
+//! `doo_multilevel` times a pyramid of three levels (`decompose` to three levels and to
+//! the maximum depth, and `reconstruct` of all three) at three sizes, next to three levels
+//! of forward subdivision from the same base mesh; the throughput is in finest vertices.
+//!
 //! "The forward Doo-Sabin step of the same size" is one level of subdivision of the
 //! coarse mesh, to the very fine mesh (connectivity and positions) that `decompose` takes
 //! apart and `reconstruct` rebuilds, each starting from what its user holds: `forward`
@@ -214,5 +218,40 @@ fn boundary_rules(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, forward, multires, boundary_rules);
+/// Three levels: a torus of `n x m x 2` triangles, refined three times with every finest
+/// vertex moved (the pyramid of `multires_pair`'s one level, three levels deep).
+fn multilevel(c: &mut Criterion) {
+    let one = single_thread();
+    let mut group = c.benchmark_group("doo_multilevel");
+    group.sample_size(10).measurement_time(Duration::from_secs(3)).warm_up_time(Duration::from_secs(1));
+    for (n, m) in [(32u32, 16u32), (64, 32), (128, 64)] {
+        let mut rng = ChaCha8Rng::seed_from_u64(0x3_1e7e1 + n as u64);
+        let base = HalfedgeMesh::from_soup(&shapes::torus(n, m, CellKind::Triangles).unwrap()).unwrap();
+        let forward_options = DooOptions::new(FaceRule::DooSabin, 3);
+        let mut fine = subdivide(&base, &forward_options).unwrap().to_mesh().unwrap();
+        for p in fine.positions_mut() {
+            *p += (0.01 / n as f64) * DVec3::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5, 0.0);
+        }
+        let fine_vertices = fine.vertex_count();
+        group.throughput(Throughput::Elements(fine_vertices as u64));
+        let three = DecomposeOptions::levels(FaceRule::DooSabin, 3);
+        let deepest = DecomposeOptions::max(FaceRule::DooSabin);
+        let pyramid = decompose(&fine, &three).unwrap().pyramid;
+        group.bench_with_input(BenchmarkId::new("forward3_1thread", fine_vertices), &base, |b, base| {
+            b.iter(|| one.install(|| subdivide(black_box(base), &forward_options).unwrap()))
+        });
+        group.bench_with_input(BenchmarkId::new("decompose3_1thread", fine_vertices), &fine, |b, fine| {
+            b.iter(|| one.install(|| decompose(black_box(fine), &three).unwrap()))
+        });
+        group.bench_with_input(BenchmarkId::new("decompose_max_1thread", fine_vertices), &fine, |b, fine| {
+            b.iter(|| one.install(|| decompose(black_box(fine), &deepest).unwrap()))
+        });
+        group.bench_with_input(BenchmarkId::new("reconstruct3_1thread", fine_vertices), &pyramid, |b, pyramid| {
+            b.iter(|| one.install(|| black_box(pyramid).reconstruct(3, None).unwrap()))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, forward, multires, boundary_rules, multilevel);
 criterion_main!(benches);
