@@ -479,6 +479,9 @@ impl CornerHalfedges {
             return None;
         }
         let twin = &mesh.corner_twin;
+        if twin.iter().enumerate().any(|(c, &t)| t != NONE && (t as usize >= corners || twin[t as usize] != c as u32)) {
+            return None;
+        }
         let mut halfedge_of = Vec::with_capacity(corners);
         let mut edges = 0u32;
         let mut boundary = false;
@@ -490,17 +493,9 @@ impl CornerHalfedges {
                 2 * (edges - 1)
             } else {
                 // The twin comes first: its edge was numbered there, `c` is its odd half.
-                if twin[t as usize] != c {
-                    return None;
-                }
                 halfedge_of[t as usize] | 1
             };
             halfedge_of.push(h);
-        }
-        // Twins that point forward are checked from the other side above, unless the
-        // other side points elsewhere too.
-        if twin.iter().enumerate().any(|(c, &t)| t != NONE && (t as usize >= corners || twin[t as usize] != c as u32)) {
-            return None;
         }
         let halfedges = 2 * edges as usize;
         let (mut to, mut next, mut face_of) = (vec![0u32; halfedges], vec![NONE; halfedges], vec![NONE; halfedges]);
@@ -1359,7 +1354,7 @@ impl DualReading<'_> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::reverse::reverse_corner_mesh;
     use crate::{DooOptions, FaceRule, subdivide_soup};
@@ -1433,7 +1428,7 @@ mod tests {
     }
 
     /// `soup` without the faces `removed` (an open mesh).
-    fn without(soup: &PolygonSoup, removed: &[usize]) -> PolygonSoup {
+    pub(crate) fn without(soup: &PolygonSoup, removed: &[usize]) -> PolygonSoup {
         let faces = soup.faces().enumerate().filter(|(f, _)| !removed.contains(f)).map(|(_, face)| face.to_vec());
         PolygonSoup::from_faces(soup.positions.clone(), faces)
     }

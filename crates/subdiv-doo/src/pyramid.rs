@@ -809,6 +809,7 @@ fn kept_count(fraction: f64, total: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::canonical::tests::without;
     use crate::{DooOptions, subdivide};
     use mesh_topo::shapes;
 
@@ -856,12 +857,7 @@ mod tests {
     #[test]
     fn corner_halfedges_are_those_of_the_half_edge_mesh() {
         let open = shapes::grid(5, 4, shapes::CellKind::Quads).unwrap();
-        let mut holed = shapes::torus(8, 6, shapes::CellKind::Triangles).unwrap();
-        let faces: Vec<Vec<u32>> = holed.faces().map(<[u32]>::to_vec).collect();
-        holed = PolygonSoup::from_faces(
-            holed.positions.clone(),
-            faces.iter().enumerate().filter(|(f, _)| *f != 3 && *f != 50).map(|(_, f)| f.clone()),
-        );
+        let holed = without(&shapes::torus(8, 6, shapes::CellKind::Triangles).unwrap(), &[3, 50]);
         for soup in [shapes::cube(), open, holed, shapes::tetrahedron()] {
             let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
             let arrays = CornerHalfedges::of(&CornerMesh::from_halfedge(&mesh)).unwrap();
@@ -873,14 +869,8 @@ mod tests {
 
     #[test]
     fn coarser_levels_of_a_canonical_mesh_give_the_general_result() {
-        let holed = {
-            let torus = shapes::torus(12, 8, shapes::CellKind::Quads).unwrap();
-            let faces: Vec<Vec<u32>> = torus.faces().map(<[u32]>::to_vec).collect();
-            PolygonSoup::from_faces(
-                torus.positions.clone(),
-                faces.into_iter().enumerate().filter(|(f, _)| f % 25 != 5).map(|(_, f)| f),
-            )
-        };
+        // Faces 5, 30, 55, 80 removed: holes that share no vertex.
+        let holed = without(&shapes::torus(12, 8, shapes::CellKind::Quads).unwrap(), &[5, 30, 55, 80]);
         // (mesh, rule, levels, whether the automatic choice of every level is the
         // canonical path's: not on quad meshes, where the lowest F_E quad read as F_F
         // finds quads all around it and the general search goes on).
