@@ -867,10 +867,18 @@ pub(crate) fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark:
 fn expand_in_order(offsets: &[u32], maps: &FaceMaps, positions: &[DVec3], diagonal: bool) -> (Vec<DVec3>, f64) {
     let mut out = Vec::with_capacity(offsets.last().map_or(0, |&n| n as usize));
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    // Faces of up to [`SHORT`] sides are expanded on the stack and appended (no zeros
+    // written first to be overwritten).
+    let mut short = [DVec3::ZERO; SHORT];
     for w in offsets.windows(2) {
         let (b, e) = (w[0] as usize, w[1] as usize);
-        out.resize(e, DVec3::ZERO);
-        maps.inverse(&positions[b..e], &mut out[b..e]);
+        if e - b <= SHORT {
+            maps.inverse(&positions[b..e], &mut short[..e - b]);
+            out.extend_from_slice(&short[..e - b]);
+        } else {
+            out.resize(e, DVec3::ZERO);
+            maps.inverse(&positions[b..e], &mut out[b..e]);
+        }
         if diagonal {
             for &p in &positions[b..e] {
                 lo = lo.min(p);

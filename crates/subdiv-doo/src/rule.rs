@@ -201,8 +201,12 @@ impl FaceRule {
 
 /// `cos(2π j / m)`, exact at multiples of a quarter and of a sixth of a turn (so that
 /// triangle and quad weights are exact: `(9, 3, 1, 3)/16` on quads).
+///
+/// Computed from the shorter way round (`min(j, m - j)`), so that `cos_turns(j, m)` and
+/// `cos_turns(m - j, m)` are the same number: the weights are exactly symmetric, as
+/// [`symmetric_fixed`] needs.
 fn cos_turns(j: usize, m: usize) -> f64 {
-    let j = j % m;
+    let j = (j % m).min(m - j % m);
     match (12 * j).checked_rem(m) {
         Some(0) => match 12 * j / m {
             0 => 1.0,
@@ -248,23 +252,10 @@ impl FaceMaps {
         let m = points.len();
         debug_assert!(m >= 3 && out.len() == m);
         match m {
-            3 => {
-                let w = &self.forward[3];
-                let (w0, w1) = (w[0], w[1]);
-                let [a, b, c] = [points[0], points[1], points[2]];
-                out[0] = w0 * a + w1 * (b + c);
-                out[1] = w0 * b + w1 * (c + a);
-                out[2] = w0 * c + w1 * (a + b);
-            }
-            4 => {
-                let w = &self.forward[4];
-                let (w0, w1, w2) = (w[0], w[1], w[2]);
-                let [a, b, c, d] = [points[0], points[1], points[2], points[3]];
-                out[0] = w0 * a + w1 * (b + d) + w2 * c;
-                out[1] = w0 * b + w1 * (c + a) + w2 * d;
-                out[2] = w0 * c + w1 * (d + b) + w2 * a;
-                out[3] = w0 * d + w1 * (a + c) + w2 * b;
-            }
+            3 => symmetric_fixed::<3>(&self.forward[3], points, out),
+            4 => symmetric_fixed::<4>(&self.forward[4], points, out),
+            5 => symmetric_fixed::<5>(&self.forward[5], points, out),
+            6 => symmetric_fixed::<6>(&self.forward[6], points, out),
             _ if m <= DENSE_MAX => circulant(&self.forward[m], points, out),
             _ => self.forward_large(points, out),
         }
@@ -276,11 +267,11 @@ impl FaceMaps {
         let m = points.len();
         debug_assert!(m >= 3 && out.len() == m);
         match m {
-            3 => circulant_fixed::<3>(&self.inverse[3], points, out),
-            4 => circulant_fixed::<4>(&self.inverse[4], points, out),
+            3 => symmetric_fixed::<3>(&self.inverse[3], points, out),
+            4 => symmetric_fixed::<4>(&self.inverse[4], points, out),
             // The usual valences (F_V faces, and the F_F faces of their reading).
-            5 => circulant_fixed::<5>(&self.inverse[5], points, out),
-            6 => circulant_fixed::<6>(&self.inverse[6], points, out),
+            5 => symmetric_fixed::<5>(&self.inverse[5], points, out),
+            6 => symmetric_fixed::<6>(&self.inverse[6], points, out),
             _ if m <= DENSE_MAX => circulant(&self.inverse[m], points, out),
             _ => self.inverse_large(points, out),
         }
@@ -348,16 +339,21 @@ fn circulant(w: &[f64], points: &[DVec3], out: &mut [DVec3]) {
     }
 }
 
-/// [`circulant`] for a size known at compile time (unrolled; the same operations in the
-/// same order, so the same bits).
+/// [`circulant`] for a size known at compile time, with weights symmetric as those of
+/// every rule are (`w_k = w_{M-k}`, as the maps commute with reflections of the face):
+/// each pair of corners at the same distance is added before it is weighted, about half
+/// the products of the plain sum.
 #[inline]
-fn circulant_fixed<const M: usize>(w: &[f64], points: &[DVec3], out: &mut [DVec3]) {
+fn symmetric_fixed<const M: usize>(w: &[f64], points: &[DVec3], out: &mut [DVec3]) {
     let (w, points, out) = (&w[..M], &points[..M], &mut out[..M]);
+    debug_assert!((1..M).all(|k| w[k] == w[M - k]), "internal: symmetric weights");
     for (i, o) in out.iter_mut().enumerate() {
-        let mut acc = DVec3::ZERO;
-        for (k, &wk) in w.iter().enumerate() {
-            let idx = if i + k >= M { i + k - M } else { i + k };
-            acc += wk * points[idx];
+        let mut acc = w[0] * points[i];
+        for (k, &wk) in w.iter().enumerate().take(M.div_ceil(2)).skip(1) {
+            acc += wk * (points[(i + k) % M] + points[(i + M - k) % M]);
+        }
+        if M.is_multiple_of(2) {
+            acc += w[M / 2] * points[(i + M / 2) % M];
         }
         *o = acc;
     }
@@ -515,7 +511,7 @@ mod tests {
     fn dense_and_large_paths_agree_and_invert() {
         for rule in RULES {
             let maps = FaceMaps::new(rule);
-            for m in [3, 4, 5, 7, 16, 17, 40, 257] {
+            for m in [3, 4, 5, 6, 7, 16, 17, 40, 257] {
                 let p = polygon(m);
                 let scale = p.iter().map(|q| q.length()).fold(1.0, f64::max);
                 let mut small = vec![DVec3::ZERO; m];
