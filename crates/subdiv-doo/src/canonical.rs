@@ -99,9 +99,15 @@ pub(crate) fn reverse_canonical_arrays(arrays: &HalfedgeArrays<'_>, options: &Re
     if fv_first > faces {
         return None;
     }
-    if !unreached.iter().all(|&k| reaches_lower_in_two(&offsets, &twins, &coarse_next, k)) {
+    // (Checked on a mesh known to be connected too when debug assertions are on, to
+    // test the claim.)
+    if (!arrays.connected || cfg!(debug_assertions))
+        && !unreached.iter().all(|&k| reaches_lower_in_two(&offsets, &twins, &coarse_next, k))
+    {
         let across = if layout { across_of_twins(&offsets, &twins) } else { across };
-        if !connected(&offsets, &across) {
+        let one_component = connected(&offsets, &across);
+        debug_assert!(one_component || !arrays.connected, "internal: a connected mesh has a connected coarse mesh");
+        if !one_component {
             return None;
         }
     }
@@ -417,9 +423,17 @@ pub(crate) struct HalfedgeArrays<'a> {
     positions: &'a [DVec3],
     vertices: usize,
     faces: usize,
+    /// The mesh is known to be one connected component: then so is the coarse mesh of a
+    /// canonical reading (see [`reverse_canonical`]), and its check is skipped.
+    connected: bool,
 }
 
 impl<'a> HalfedgeArrays<'a> {
+    /// The same arrays, known to be one connected component if `connected`.
+    pub(crate) fn known_connected(self, connected: bool) -> Self {
+        Self { connected, ..self }
+    }
+
     pub(crate) fn of(mesh: &'a HalfedgeMesh) -> Self {
         let face_halfedge = mesh.raw_face_halfedges();
         Self {
@@ -430,6 +444,7 @@ impl<'a> HalfedgeArrays<'a> {
             positions: mesh.positions(),
             vertices: mesh.vertex_count(),
             faces: face_halfedge.len(),
+            connected: false,
         }
     }
 
@@ -451,6 +466,7 @@ impl<'a> HalfedgeArrays<'a> {
             positions: &mesh.positions()[..vertices],
             vertices,
             faces,
+            connected: false,
         }
     }
 }
@@ -552,6 +568,7 @@ impl CornerHalfedges {
             positions,
             vertices: positions.len(),
             faces: self.face_halfedge.len(),
+            connected: false,
         }
     }
 }
@@ -867,17 +884,22 @@ pub(crate) fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark:
 fn expand_in_order(offsets: &[u32], maps: &FaceMaps, positions: &[DVec3], diagonal: bool) -> (Vec<DVec3>, f64) {
     let mut out = Vec::with_capacity(offsets.last().map_or(0, |&n| n as usize));
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    // Faces of up to [`SHORT`] sides are expanded on the stack and appended (no zeros
-    // written first to be overwritten).
-    let mut short = [DVec3::ZERO; SHORT];
+    // Triangles and quads are expanded on the stack and appended, a copy of known size
+    // (no zeros written first to be overwritten).
+    fn append<const M: usize>(maps: &FaceMaps, face: &[DVec3], out: &mut Vec<DVec3>) {
+        let mut expanded = [DVec3::ZERO; M];
+        maps.inverse(face, &mut expanded);
+        out.extend_from_slice(&expanded);
+    }
     for w in offsets.windows(2) {
         let (b, e) = (w[0] as usize, w[1] as usize);
-        if e - b <= SHORT {
-            maps.inverse(&positions[b..e], &mut short[..e - b]);
-            out.extend_from_slice(&short[..e - b]);
-        } else {
-            out.resize(e, DVec3::ZERO);
-            maps.inverse(&positions[b..e], &mut out[b..e]);
+        match e - b {
+            3 => append::<3>(maps, &positions[b..e], &mut out),
+            4 => append::<4>(maps, &positions[b..e], &mut out),
+            _ => {
+                out.resize(e, DVec3::ZERO);
+                maps.inverse(&positions[b..e], &mut out[b..e]);
+            }
         }
         if diagonal {
             for &p in &positions[b..e] {

@@ -210,7 +210,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
     match options.depth {
         Depth::Levels(n) => {
             let rest = match &first {
-                Some(step) => descend(&step.coarse, &step.coarse_positions, options, 1, n).ok(),
+                Some(step) => descend(&step.coarse, &step.coarse_positions, options, 1, n, step.connected).ok(),
                 None => None,
             };
             steps = match (first, rest) {
@@ -222,15 +222,15 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
                 // The general search over this level's readings (the first of which is
                 // the canonical one, if any, which could not go on).
                 (first, _) => {
-                    descend_from(&CornerMesh::from_halfedge(mesh), mesh.positions(), options, 0, n, first.is_none())?
+                    let fine = CornerMesh::from_halfedge(mesh);
+                    descend_from(&fine, mesh.positions(), options, 0, n, false, first.is_none())?
                 }
             };
         }
         Depth::Max => {
-            // The mesh of the current level (`None`: the input, whose corner arrays are
-            // built only if the general path needs them) and, once the canonical path has
-            // been tried on it, what it gave.
-            let mut current: Option<(CornerMesh, Vec<DVec3>)> = None;
+            // The mesh of the current level is the last step's coarse mesh (none yet: the
+            // input, whose corner arrays are built only if the general path needs them);
+            // once the canonical path has been tried on it, what it gave.
             let mut tried = Some(first);
             // Faces of the mesh that the last step reversed.
             let mut reversed_faces = mesh.face_count();
@@ -247,15 +247,15 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
                 }
                 let canonical = match tried.take() {
                     Some(result) => result,
-                    None => {
-                        current.as_ref().and_then(|(fine, positions)| canonical_step(fine, positions, options, level))
-                    }
+                    None => steps.last().and_then(|last: &Step| {
+                        canonical_step(&last.coarse, &last.coarse_positions, options, level, last.connected)
+                    }),
                 };
                 // Kept as `greedy_step` keeps the best reading: when its coarse mesh can be
                 // reversed in turn (shown by the canonical path, whose reversal then serves
                 // the next level, or by the general search's check).
                 let accepted = canonical.filter(|step| {
-                    let next = canonical_step(&step.coarse, &step.coarse_positions, options, level + 1);
+                    let next = canonical_step(&step.coarse, &step.coarse_positions, options, level + 1, step.connected);
                     let reversible = options.boundary == BoundaryRule::Chaikin
                         || next.is_some()
                         || Session::new(&step.coarse, &step.coarse_positions, &ReverseOptions::auto(options.rule))
@@ -268,8 +268,8 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
                     None => {
                         tried = None;
                         let input;
-                        let (fine, positions) = match &current {
-                            Some((fine, positions)) => (fine, positions.as_slice()),
+                        let (fine, positions) = match steps.last() {
+                            Some(last) => (&last.coarse, last.coarse_positions.as_slice()),
                             None => {
                                 input = CornerMesh::from_halfedge(mesh);
                                 (&input, mesh.positions())
@@ -285,8 +285,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
                         }
                     }
                 };
-                reversed_faces = current.as_ref().map_or(mesh.face_count(), |(fine, _)| fine.face_count());
-                current = Some((step.coarse.clone(), step.coarse_positions.clone()));
+                reversed_faces = steps.last().map_or(mesh.face_count(), |last| last.coarse.face_count());
                 steps.push(step);
             }
             if stopped.is_none() {
@@ -319,12 +318,16 @@ struct Step {
     details: Vec<DVec3>,
     order: FineOrder,
     choices: Vec<SeedChoice>,
+    /// The coarse mesh is known to be one connected component (the canonical path
+    /// checks it); false when not known.
+    connected: bool,
 }
 
 impl Step {
+    /// A step of the general path (whose coarse mesh may have several components).
     fn from_reversal(reversal: crate::DooReversal) -> Self {
         let (coarse, coarse_positions, details, order, choices) = reversal.into_parts();
-        Self { coarse, coarse_positions, details, order, choices }
+        Self { coarse, coarse_positions, details, order, choices, connected: false }
     }
 }
 
@@ -347,14 +350,17 @@ fn with_level(error: DooError, level: u32) -> DooError {
 
 /// Exactly `target - level` more levels: depth-first over the readings of each level,
 /// best first, backtracking when a reading's coarse mesh cannot be reversed far enough.
+///
+/// `connected`: `fine` is known to be one connected component (see [`canonical_step`]).
 fn descend(
     fine: &CornerMesh,
     positions: &[DVec3],
     options: &DecomposeOptions,
     level: u32,
     target: u32,
+    connected: bool,
 ) -> Result<Vec<Step>, DooError> {
-    descend_from(fine, positions, options, level, target, true)
+    descend_from(fine, positions, options, level, target, connected, true)
 }
 
 /// [`descend`], first trying the canonical path on this level if `try_canonical` (its
@@ -366,14 +372,15 @@ fn descend_from(
     options: &DecomposeOptions,
     level: u32,
     target: u32,
+    connected: bool,
     try_canonical: bool,
 ) -> Result<Vec<Step>, DooError> {
     if level == target {
         return Ok(Vec::new());
     }
     if try_canonical
-        && let Some(step) = canonical_step(fine, positions, options, level)
-        && let Ok(rest) = descend(&step.coarse, &step.coarse_positions, options, level + 1, target)
+        && let Some(step) = canonical_step(fine, positions, options, level, connected)
+        && let Ok(rest) = descend(&step.coarse, &step.coarse_positions, options, level + 1, target, step.connected)
     {
         let mut steps = vec![step];
         steps.extend(rest);
@@ -384,7 +391,7 @@ fn descend_from(
         let reversal = reverse_chaikin_corner_mesh(fine, positions, &reverse_options(options, level))
             .map_err(|e| with_level(e, level))?;
         let step = Step::from_reversal(reversal);
-        let mut steps = descend(&step.coarse, &step.coarse_positions, options, level + 1, target)?;
+        let mut steps = descend(&step.coarse, &step.coarse_positions, options, level + 1, target, step.connected)?;
         steps.insert(0, step);
         return Ok(steps);
     }
@@ -399,7 +406,7 @@ fn descend_from(
                 continue;
             }
         };
-        match descend(&step.coarse, &step.coarse_positions, options, level + 1, target) {
+        match descend(&step.coarse, &step.coarse_positions, options, level + 1, target, step.connected) {
             Ok(rest) => {
                 let mut steps = vec![step];
                 steps.extend(rest);
@@ -418,12 +425,26 @@ fn descend_from(
 /// canonical order (as the coarse mesh of a canonical reversal of a mesh refined several
 /// times is); `None` when it does not apply (another order, the Chaikin boundary rule, a
 /// broken mesh), and the general path decides.
-fn canonical_step(fine: &CornerMesh, positions: &[DVec3], options: &DecomposeOptions, level: u32) -> Option<Step> {
+///
+/// `connected`: `fine` is known to be one connected component, as the coarse mesh of a
+/// canonical step is (the canonical path checks it). A connected fine mesh that passes
+/// the canonical checks has a connected coarse mesh (each fine face lies on a coarse face,
+/// edge or interior vertex, and the faces around an interior vertex are joined by its
+/// edges), so that check is then skipped.
+fn canonical_step(
+    fine: &CornerMesh,
+    positions: &[DVec3],
+    options: &DecomposeOptions,
+    level: u32,
+    connected: bool,
+) -> Option<Step> {
     if !canonical_enabled() || options.boundary != BoundaryRule::Shrink || positions.len() != fine.vertex_count {
         return None;
     }
     let halfedges = CornerHalfedges::of(fine)?;
-    reverse_canonical_arrays(&halfedges.view(positions), &reverse_options(options, level)).map(Step::from_reversal)
+    let arrays = halfedges.view(positions).known_connected(connected);
+    let reversal = reverse_canonical_arrays(&arrays, &reverse_options(options, level))?;
+    Some(Step { connected: true, ..Step::from_reversal(reversal) })
 }
 
 #[cfg(test)]
@@ -888,7 +909,8 @@ mod tests {
                 let mut step = Step::from_reversal(first);
                 for level in 1..levels {
                     let options = DecomposeOptions::levels(rule, levels);
-                    step = canonical_step(&step.coarse, &step.coarse_positions, &options, level).expect("canonical");
+                    step = canonical_step(&step.coarse, &step.coarse_positions, &options, level, step.connected)
+                        .expect("canonical");
                 }
             }
             for options in [
