@@ -46,7 +46,9 @@
 //! Chaikin points the last vertices, so the half-edge arrays with the ring's faces
 //! masked are those of a Shrink step in the canonical order, which the streaming path
 //! of the canonical module reverses (reading, automatic choice and all, as the general
-//! path would); the ring is then attached as on the general path. Any other order, or a
+//! path would); the ring is then attached as on the general path. The coarse mesh it
+//! gives is in the same order, so every level of a pyramid takes this path (the half-edge
+//! arrays of a coarser level are built from its corner arrays). Any other order, or a
 //! ring that does not fit, takes the general path.
 
 use glam::DVec3;
@@ -55,7 +57,7 @@ use serde::{Deserialize, Serialize};
 use mesh_topo::HalfedgeMesh;
 
 use crate::DooError;
-use crate::canonical::{HalfedgeArrays, reverse_canonical, reverse_canonical_arrays};
+use crate::canonical::{HalfedgeArrays, reverse_canonical_arrays};
 use crate::corner::{CornerMesh, DooTopology, NONE, prev_of_corners};
 use crate::reverse::{DooReversal, FineOrder, ReverseOptions, SeedChoice, Session};
 
@@ -426,24 +428,24 @@ impl FaceCorners for CornerFaces<'_> {
     }
 }
 
-/// A half-edge mesh read as corners: corner `h` is the corner that half-edge `h` leaves
+/// Half-edge arrays read as corners: corner `h` is the corner that half-edge `h` leaves
 /// (the numbering of [`CornerMesh::from_halfedge`] aside, the same corners, next
 /// corners and twins).
 struct HalfedgeFaces<'a> {
-    mesh: &'a HalfedgeMesh,
+    arrays: HalfedgeArrays<'a>,
 }
 
 impl FaceCorners for HalfedgeFaces<'_> {
     fn face_count(&self) -> usize {
-        self.mesh.face_count()
+        self.arrays.faces
     }
 
     fn vertex_count(&self) -> usize {
-        self.mesh.vertex_count()
+        self.arrays.vertices
     }
 
     fn corner(&self, f: usize, j: usize) -> u32 {
-        let mut h = self.mesh.raw_face_halfedges()[f];
+        let mut h = self.arrays.face_halfedge[f];
         for _ in 0..j {
             h = self.next(h);
         }
@@ -451,8 +453,8 @@ impl FaceCorners for HalfedgeFaces<'_> {
     }
 
     fn face_and_place(&self, c: u32) -> (usize, u32) {
-        let f = self.mesh.raw_halfedge_faces()[c as usize] as usize;
-        let (mut h, mut place) = (self.mesh.raw_face_halfedges()[f], 0);
+        let f = self.arrays.face_of[c as usize] as usize;
+        let (mut h, mut place) = (self.arrays.face_halfedge[f], 0);
         while h != c {
             h = self.next(h);
             place += 1;
@@ -461,7 +463,7 @@ impl FaceCorners for HalfedgeFaces<'_> {
     }
 
     fn size(&self, f: usize) -> usize {
-        let first = self.mesh.raw_face_halfedges()[f];
+        let first = self.arrays.face_halfedge[f];
         let (mut h, mut size) = (self.next(first), 1);
         while h != first {
             h = self.next(h);
@@ -471,19 +473,19 @@ impl FaceCorners for HalfedgeFaces<'_> {
     }
 
     fn twin(&self, c: u32) -> u32 {
-        if self.mesh.raw_halfedge_faces()[(c ^ 1) as usize] == NONE { NONE } else { c ^ 1 }
+        if self.arrays.face_of[(c ^ 1) as usize] == NONE { NONE } else { c ^ 1 }
     }
 
     fn next(&self, c: u32) -> u32 {
-        self.mesh.raw_halfedge_next()[c as usize]
+        self.arrays.next[c as usize]
     }
 
     fn vertex(&self, c: u32) -> u32 {
-        self.mesh.raw_halfedge_targets()[(c ^ 1) as usize]
+        self.arrays.to[(c ^ 1) as usize]
     }
 
     fn face_at(&self, v: usize) -> Option<usize> {
-        let (to, face_of) = (self.mesh.raw_halfedge_targets(), self.mesh.raw_halfedge_faces());
+        let HalfedgeArrays { to, face_of, .. } = self.arrays;
         (0..to.len()).find(|&h| to[h ^ 1] as usize == v && face_of[h] != NONE).map(|h| face_of[h] as usize)
     }
 }
@@ -500,8 +502,14 @@ impl FaceCorners for HalfedgeFaces<'_> {
 /// general path's, bit for bit: its mesh without the ring is the same mesh, whose first
 /// reading is the one found here, and that reading fits the ring.
 pub(crate) fn reverse_chaikin_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -> Option<DooReversal> {
-    let (to, face_of) = (fine.raw_halfedge_targets(), fine.raw_halfedge_faces());
-    let (vertices, faces) = (fine.vertex_count(), fine.face_count());
+    reverse_chaikin_arrays(&HalfedgeArrays::of(fine), options)
+}
+
+/// [`reverse_chaikin_canonical`] on the half-edge arrays of a mesh (a half-edge mesh, or
+/// the corner arrays of a pyramid's coarser level, see
+/// [`crate::canonical::CornerHalfedges`]).
+pub(crate) fn reverse_chaikin_arrays(fine: &HalfedgeArrays<'_>, options: &ReverseOptions) -> Option<DooReversal> {
+    let HalfedgeArrays { to, face_of, vertices, faces, positions, .. } = *fine;
     // The Chaikin points: the fine boundary vertices (the targets of boundary half-edges).
     let mut on_boundary = vec![false; vertices];
     for (&v, &f) in to.iter().zip(face_of) {
@@ -512,12 +520,12 @@ pub(crate) fn reverse_chaikin_canonical(fine: &HalfedgeMesh, options: &ReverseOp
     let chaikin_points = on_boundary.iter().filter(|&&b| b).count();
     if chaikin_points == 0 {
         // Closed: both rules are the same.
-        let mut reversal = reverse_canonical(fine, options)?;
+        let mut reversal = reverse_canonical_arrays(fine, options)?;
         reversal.boundary = BoundaryRule::Chaikin;
         return Some(reversal);
     }
     let inner_vertices = vertices - chaikin_points;
-    let chaikin_positions = &fine.positions()[inner_vertices..];
+    let chaikin_positions = &positions[inner_vertices..];
     if on_boundary[..inner_vertices].contains(&true) || !chaikin_positions.iter().all(|p| p.is_finite()) {
         return None;
     }
@@ -540,13 +548,13 @@ pub(crate) fn reverse_chaikin_canonical(fine: &HalfedgeMesh, options: &ReverseOp
     let mut masked: Vec<u32> = face_of.iter().map(|&f| if (f as usize) < inner_faces { f } else { NONE }).collect();
     let halfedges = (masked.iter().rposition(|&f| f != NONE)? | 1) + 1;
     masked.truncate(halfedges);
-    let arrays = HalfedgeArrays::prefix(fine, inner_vertices, inner_faces, &masked);
+    let arrays = fine.prefix(inner_vertices, inner_faces, &masked);
     let inner_options = ReverseOptions { boundary: BoundaryRule::Shrink, ..options.clone() };
     let reversal = reverse_canonical_arrays(&arrays, &inner_options)?;
     drop(masked);
     let input = Input {
-        fine: &HalfedgeFaces { mesh: fine },
-        positions: fine.positions(),
+        fine: &HalfedgeFaces { arrays: *fine },
+        positions,
         on_boundary: &on_boundary,
         in_ring: &in_ring,
         ring_faces: faces - inner_faces,

@@ -412,17 +412,17 @@ fn coarse_vertices(
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct HalfedgeArrays<'a> {
     /// Target vertex of each half-edge.
-    to: &'a [u32],
+    pub(crate) to: &'a [u32],
     /// Next half-edge around its face or boundary loop.
-    next: &'a [u32],
+    pub(crate) next: &'a [u32],
     /// Face of each half-edge ([`NONE`] on the boundary).
-    face_of: &'a [u32],
+    pub(crate) face_of: &'a [u32],
     /// The half-edge leaving the first corner of each face.
-    face_halfedge: &'a [u32],
+    pub(crate) face_halfedge: &'a [u32],
     /// The position of each vertex.
-    positions: &'a [DVec3],
-    vertices: usize,
-    faces: usize,
+    pub(crate) positions: &'a [DVec3],
+    pub(crate) vertices: usize,
+    pub(crate) faces: usize,
     /// The mesh is known to be one connected component: then so is the coarse mesh of a
     /// canonical reading (see [`reverse_canonical`]), and its check is skipped.
     connected: bool,
@@ -448,22 +448,22 @@ impl<'a> HalfedgeArrays<'a> {
         }
     }
 
-    /// The first `faces` faces of `mesh` alone, on its first `vertices` vertices and the
-    /// first `face_of.len()` half-edges: `face_of` is the mesh's with every face from
+    /// The first `faces` faces alone, on the first `vertices` vertices and the first
+    /// `face_of.len()` half-edges: `face_of` is the mesh's with every face from
     /// `faces` on replaced by [`NONE`], so that the edges the other faces share with the
     /// kept ones read as boundary edges. The passes of this module follow `next` only
     /// from half-edges that have a face, so the boundary loops, which this view does not
     /// have (the `next` of such a half-edge goes on into a face that is not kept), are
     /// never walked. For the part of a Chaikin step without its boundary ring (see
     /// [`crate::boundary`]).
-    pub(crate) fn prefix(mesh: &'a HalfedgeMesh, vertices: usize, faces: usize, face_of: &'a [u32]) -> Self {
+    pub(crate) fn prefix(self, vertices: usize, faces: usize, face_of: &'a [u32]) -> Self {
         let halfedges = face_of.len();
         Self {
-            to: &mesh.raw_halfedge_targets()[..halfedges],
-            next: &mesh.raw_halfedge_next()[..halfedges],
+            to: &self.to[..halfedges],
+            next: &self.next[..halfedges],
             face_of,
-            face_halfedge: &mesh.raw_face_halfedges()[..faces],
-            positions: &mesh.positions()[..vertices],
+            face_halfedge: &self.face_halfedge[..faces],
+            positions: &self.positions[..vertices],
             vertices,
             faces,
             connected: false,

@@ -37,7 +37,7 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
 use serde::{Deserialize, Serialize};
 
 use crate::DooError;
-use crate::boundary::{BoundaryRule, Ring, reverse_chaikin_corner_mesh};
+use crate::boundary::{BoundaryRule, Ring, reverse_chaikin_arrays, reverse_chaikin_corner_mesh};
 use crate::canonical::{CornerHalfedges, reverse_canonical_arrays};
 use crate::corner::{CornerMesh, NONE, doo_topology};
 use crate::forward::check_finite;
@@ -423,7 +423,7 @@ fn descend_from(
 /// The reversal of one level's corner mesh by the canonical path (see the canonical
 /// module): the general search's best reading, bit for bit, when the mesh is in the
 /// canonical order (as the coarse mesh of a canonical reversal of a mesh refined several
-/// times is); `None` when it does not apply (another order, the Chaikin boundary rule, a
+/// times is), under either boundary rule; `None` when it does not apply (another order, a
 /// broken mesh), and the general path decides.
 ///
 /// `connected`: `fine` is known to be one connected component, as the coarse mesh of a
@@ -438,13 +438,21 @@ fn canonical_step(
     level: u32,
     connected: bool,
 ) -> Option<Step> {
-    if !canonical_enabled() || options.boundary != BoundaryRule::Shrink || positions.len() != fine.vertex_count {
+    if !canonical_enabled() || positions.len() != fine.vertex_count {
         return None;
     }
     let halfedges = CornerHalfedges::of(fine)?;
-    let arrays = halfedges.view(positions).known_connected(connected);
-    let reversal = reverse_canonical_arrays(&arrays, &reverse_options(options, level))?;
-    Some(Step { connected: true, ..Step::from_reversal(reversal) })
+    let arrays = halfedges.view(positions);
+    let options = reverse_options(options, level);
+    match options.boundary {
+        BoundaryRule::Shrink => {
+            let reversal = reverse_canonical_arrays(&arrays.known_connected(connected), &options)?;
+            Some(Step { connected: true, ..Step::from_reversal(reversal) })
+        }
+        // (Its coarse mesh is not claimed connected: the claim is made for the Shrink
+        // rule, whose fine faces all lie on coarse faces, edges or interior vertices.)
+        BoundaryRule::Chaikin => reverse_chaikin_arrays(&arrays, &options).map(Step::from_reversal),
+    }
 }
 
 #[cfg(test)]
@@ -859,8 +867,18 @@ mod tests {
 
     /// `coarse` refined `levels` times, every fine vertex moved (fixed seed).
     fn refined_and_moved(coarse: &PolygonSoup, rule: FaceRule, levels: u32) -> HalfedgeMesh {
+        refined_and_moved_with(coarse, rule, levels, BoundaryRule::Shrink)
+    }
+
+    fn refined_and_moved_with(
+        coarse: &PolygonSoup,
+        rule: FaceRule,
+        levels: u32,
+        boundary: BoundaryRule,
+    ) -> HalfedgeMesh {
         let coarse = HalfedgeMesh::from_soup(coarse).unwrap();
-        let mut fine = subdivide(&coarse, &DooOptions::new(rule, levels)).unwrap().to_mesh().unwrap();
+        let options = DooOptions { boundary, ..DooOptions::new(rule, levels) };
+        let mut fine = subdivide(&coarse, &options).unwrap().to_mesh().unwrap();
         for (i, p) in fine.positions_mut().iter_mut().enumerate() {
             let t = i as f64;
             *p += 1e-3 * DVec3::new((1.3 * t).sin(), (2.1 * t).cos(), (0.7 * t).sin());
@@ -930,6 +948,48 @@ mod tests {
             }
             // More levels than the mesh has: the same error on both paths.
             let too_deep = DecomposeOptions::levels(rule, levels + 3);
+            let fast = decompose(&fine, &too_deep).map(|d| d.pyramid.level_count());
+            let general = general_only(|| decompose(&fine, &too_deep).map(|d| d.pyramid.level_count()));
+            assert_eq!(format!("{fast:?}"), format!("{general:?}"));
+        }
+    }
+
+    #[test]
+    fn coarser_chaikin_levels_of_a_canonical_mesh_give_the_general_result() {
+        let holed = without(&shapes::torus(12, 8, shapes::CellKind::Quads).unwrap(), &[5, 30, 55, 80]);
+        let open_triangles = without(&shapes::torus(10, 6, shapes::CellKind::Triangles).unwrap(), &[0, 1]);
+        let closed = shapes::torus(6, 4, shapes::CellKind::Triangles).unwrap();
+        for (coarse, rule, levels) in
+            [(holed, FaceRule::DooSabin, 3), (open_triangles, FaceRule::Simple, 3), (closed, FaceRule::DooSabin, 2)]
+        {
+            let fine = refined_and_moved_with(&coarse, rule, levels, BoundaryRule::Chaikin);
+            let chaikin = |options: DecomposeOptions| DecomposeOptions { boundary: BoundaryRule::Chaikin, ..options };
+            // Every level by the canonical path.
+            let auto = ReverseOptions { boundary: BoundaryRule::Chaikin, ..ReverseOptions::auto(rule) };
+            let first = crate::boundary::reverse_chaikin_canonical(&fine, &auto).expect("canonical order");
+            let mut step = Step::from_reversal(first);
+            for level in 1..levels {
+                let options = chaikin(DecomposeOptions::levels(rule, levels));
+                step = canonical_step(&step.coarse, &step.coarse_positions, &options, level, step.connected)
+                    .unwrap_or_else(|| panic!("level {level} of {rule:?} by the canonical path"));
+            }
+            for options in [
+                DecomposeOptions::levels(rule, levels),
+                DecomposeOptions::levels(rule, 1),
+                DecomposeOptions::max(rule),
+                DecomposeOptions { seeds: vec![0], ..DecomposeOptions::levels(rule, levels) },
+            ] {
+                let options = chaikin(options);
+                let fast = decompose(&fine, &options).unwrap();
+                let general = general_only(|| decompose(&fine, &options).unwrap());
+                assert_eq!(format!("{fast:?}"), format!("{general:?}"), "{rule:?} {:?}", options.depth);
+                let rebuilt = fast.pyramid.reconstruct(fast.pyramid.level_count(), None).unwrap();
+                assert_eq!(rebuilt.indices, fine.to_soup().indices);
+                for (p, q) in rebuilt.positions.iter().zip(fine.positions()) {
+                    assert!(p.distance(*q) < 1e-12, "{p} against {q}");
+                }
+            }
+            let too_deep = chaikin(DecomposeOptions::levels(rule, levels + 3));
             let fast = decompose(&fine, &too_deep).map(|d| d.pyramid.level_count());
             let general = general_only(|| decompose(&fine, &too_deep).map(|d| d.pyramid.level_count()));
             assert_eq!(format!("{fast:?}"), format!("{general:?}"));
