@@ -210,7 +210,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
     match options.depth {
         Depth::Levels(n) => {
             let rest = match &first {
-                Some(step) => descend(&step.coarse, &step.coarse_positions, options, 1, n, step.connected).ok(),
+                Some(step) => descend_below(step, options, 0, n).ok(),
                 None => None,
             };
             steps = match (first, rest) {
@@ -363,6 +363,11 @@ fn descend(
     descend_from(fine, positions, options, level, target, connected, true)
 }
 
+/// [`descend`] from the coarse mesh of `step`, the reversal of level `level`.
+fn descend_below(step: &Step, options: &DecomposeOptions, level: u32, target: u32) -> Result<Vec<Step>, DooError> {
+    descend(&step.coarse, &step.coarse_positions, options, level + 1, target, step.connected)
+}
+
 /// [`descend`], first trying the canonical path on this level if `try_canonical` (its
 /// reading is the general search's best; if the levels below it cannot all be reversed,
 /// the search goes over this level's readings as without it).
@@ -380,7 +385,7 @@ fn descend_from(
     }
     if try_canonical
         && let Some(step) = canonical_step(fine, positions, options, level, connected)
-        && let Ok(rest) = descend(&step.coarse, &step.coarse_positions, options, level + 1, target, step.connected)
+        && let Ok(rest) = descend_below(&step, options, level, target)
     {
         let mut steps = vec![step];
         steps.extend(rest);
@@ -391,7 +396,7 @@ fn descend_from(
         let reversal = reverse_chaikin_corner_mesh(fine, positions, &reverse_options(options, level))
             .map_err(|e| with_level(e, level))?;
         let step = Step::from_reversal(reversal);
-        let mut steps = descend(&step.coarse, &step.coarse_positions, options, level + 1, target, step.connected)?;
+        let mut steps = descend_below(&step, options, level, target)?;
         steps.insert(0, step);
         return Ok(steps);
     }
@@ -406,7 +411,7 @@ fn descend_from(
                 continue;
             }
         };
-        match descend(&step.coarse, &step.coarse_positions, options, level + 1, target, step.connected) {
+        match descend_below(&step, options, level, target) {
             Ok(rest) => {
                 let mut steps = vec![step];
                 steps.extend(rest);
