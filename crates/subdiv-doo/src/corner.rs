@@ -569,7 +569,19 @@ fn face_chunks<'a, T>(offsets: &[u32], mut out: &'a mut [T], target: usize) -> V
 }
 
 /// Faces per parallel task below which a single task does everything.
-const PARALLEL_FACES: usize = 1 << 14;
+pub(crate) const PARALLEL_FACES: usize = 1 << 14;
+
+/// `(a(), b())`, side by side on the rayon pool for a step of at least
+/// [`PARALLEL_FACES`] coarse faces when the pool has several threads (a step's fine
+/// connectivity and its positions do not depend on each other), else one after the
+/// other on this thread.
+pub(crate) fn side_by_side<A: Send, B: Send>(
+    faces: usize,
+    a: impl FnOnce() -> A + Send,
+    b: impl FnOnce() -> B + Send,
+) -> (A, B) {
+    if faces >= PARALLEL_FACES && rayon::current_num_threads() > 1 { rayon::join(a, b) } else { (a(), b()) }
+}
 
 /// Runs `work(first, end, slice)` on runs of whole faces `first..end`, `slice` being the
 /// part of `out` that holds their corners: one run for small meshes or a one-thread pool

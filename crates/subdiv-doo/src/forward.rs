@@ -49,7 +49,7 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup};
 
 use crate::DooError;
 use crate::boundary::{BoundaryRule, Ring};
-use crate::corner::{CornerMesh, DooTopology, FaceKind, FaceOrigin, NONE, doo_topology, face_points};
+use crate::corner::{CornerMesh, DooTopology, FaceKind, FaceOrigin, NONE, doo_topology, face_points, side_by_side};
 use crate::rule::{FaceMaps, FaceRule};
 
 /// Options of [`subdivide`].
@@ -270,12 +270,17 @@ pub(crate) fn subdivide_corner_mesh(
     loop {
         level += 1;
         let last = level == options.levels;
-        let mut topology = doo_topology(&corners, !last && !chaikin)?;
-        let mut fine_positions = {
+        // The connectivity (from the coarse connectivity) and the positions (from the
+        // coarse positions) do not depend on each other: on a pool of several threads
+        // they are built side by side (the positions split further across the pool).
+        let topology = || doo_topology(&corners, !last && !chaikin);
+        let points = || {
             let vertex = &corners.corner_vertex;
             let coarse = &positions;
             face_points(&corners.offsets, &maps, |c| coarse[vertex[c] as usize])
         };
+        let (topology, mut fine_positions) = side_by_side(corners.face_count(), topology, points);
+        let mut topology = topology?;
         if chaikin {
             let ring = Ring::of(&corners)?;
             fine_positions.extend(ring.chaikin_points(&corners, &positions, None));
@@ -311,6 +316,32 @@ mod tests {
 
     fn doo(soup: &PolygonSoup, rule: FaceRule, levels: u32) -> DooMesh {
         subdivide_soup(soup, &DooOptions::new(rule, levels)).unwrap()
+    }
+
+    #[test]
+    fn two_threads_give_the_one_thread_result() {
+        // Above `PARALLEL_FACES` the connectivity and the positions are built side by
+        // side, and the positions in pieces: the same mesh, bit for bit.
+        let torus = shapes::torus(128, 64, CellKind::Triangles).unwrap();
+        let grid = shapes::grid(128, 128, CellKind::Quads).unwrap();
+        for (soup, boundary) in [(torus, BoundaryRule::Shrink), (grid, BoundaryRule::Chaikin)] {
+            assert!(soup.face_count() >= crate::corner::PARALLEL_FACES);
+            let options = DooOptions { boundary, ..DooOptions::new(FaceRule::DooSabin, 2) };
+            let on = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                pool.install(|| subdivide_soup(&soup, &options).unwrap())
+            };
+            assert_eq!(on(1), on(2), "{boundary:?}");
+            // The reconstruction builds each level the same way.
+            let fine = on(1).to_mesh().unwrap();
+            let decompose = crate::pyramid::DecomposeOptions::levels(FaceRule::DooSabin, 2).with_boundary(boundary);
+            let pyramid = crate::pyramid::decompose(&fine, &decompose).unwrap().pyramid;
+            let rebuilt = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                pool.install(|| pyramid.reconstruct(2, None).unwrap())
+            };
+            assert_eq!(rebuilt(1), rebuilt(2), "{boundary:?}");
+        }
     }
 
     #[test]

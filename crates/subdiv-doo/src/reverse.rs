@@ -132,7 +132,7 @@ use crate::boundary::BoundaryRule;
 use crate::canonical::distinct;
 use crate::corner::{
     CornerMesh, NONE, VertexCorners, doo_topology, expand_faces, face_points_in_place, faces_of_corners, group_by_key,
-    next_of_corners, prev_of_corners,
+    next_of_corners, prev_of_corners, side_by_side,
 };
 use crate::forward::check_finite;
 use crate::rule::{FaceMaps, FaceRule};
@@ -2420,9 +2420,13 @@ pub(crate) fn reconstruct_level_with(
         )));
     }
     let (vertex_part, chaikin_part) = level.details.split_at(vertex_details);
-    let (mut positions, _) = level_candidates(&corners_by_vertex(coarse), coarse_positions, vertex_part);
-    face_points_in_place(&coarse.offsets, &FaceMaps::new(level.rule), &mut positions);
-    let topology = doo_topology(coarse, false)?;
+    let points = || {
+        let (mut positions, _) = level_candidates(&corners_by_vertex(coarse), coarse_positions, vertex_part);
+        face_points_in_place(&coarse.offsets, &FaceMaps::new(level.rule), &mut positions);
+        positions
+    };
+    let (topology, mut positions) = side_by_side(coarse.face_count(), || doo_topology(coarse, false), points);
+    let topology = topology?;
     let (mut offsets, mut indices) = (topology.offsets, topology.indices);
     crate::boundary::append_ring_level(
         coarse,
@@ -2493,9 +2497,13 @@ pub(crate) fn level_from_candidates(
     with_adjacency: bool,
 ) -> Result<(CornerMesh, Vec<DVec3>), DooError> {
     let maps = FaceMaps::new(rule);
-    face_points_in_place(&coarse.offsets, &maps, &mut candidates);
-    let canonical_positions = candidates;
-    let topology = doo_topology(coarse, with_adjacency)?;
+    let points = || {
+        face_points_in_place(&coarse.offsets, &maps, &mut candidates);
+        candidates
+    };
+    let (topology, canonical_positions) =
+        side_by_side(coarse.face_count(), || doo_topology(coarse, with_adjacency), points);
+    let topology = topology?;
     let vertex_count = canonical_positions.len();
     let canonical = if with_adjacency {
         topology.into_corner_mesh(vertex_count)
