@@ -218,9 +218,10 @@ pub struct ReverseArgs {
     /// fixed (Loop schemes).
     #[arg(long)]
     pub keep_corners: bool,
-    /// The boundary rule the mesh was subdivided with: what the Doo-Sabin step does at the boundary: `shrink` (no faces there, the
-    /// default) or `chaikin` (boundary quads and vertex faces through the Chaikin points:
-    /// the boundary converges to the quadratic B-spline of the boundary polygon).
+    /// The boundary rule the mesh was subdivided with (Doo-Sabin): `shrink` (no faces at
+    /// the boundary, the default) or `chaikin` (boundary quads and vertex faces through
+    /// the Chaikin points: the boundary converges to the quadratic B-spline of the
+    /// boundary polygon).
     #[arg(long, value_enum)]
     pub boundary: Option<BoundaryArg>,
 }
@@ -248,9 +249,10 @@ pub struct DecomposeArgs {
     /// fixed (Loop schemes).
     #[arg(long)]
     pub keep_corners: bool,
-    /// The boundary rule the mesh was subdivided with: what the Doo-Sabin step does at the boundary: `shrink` (no faces there, the
-    /// default) or `chaikin` (boundary quads and vertex faces through the Chaikin points:
-    /// the boundary converges to the quadratic B-spline of the boundary polygon).
+    /// The boundary rule the mesh was subdivided with (Doo-Sabin): `shrink` (no faces at
+    /// the boundary, the default) or `chaikin` (boundary quads and vertex faces through
+    /// the Chaikin points: the boundary converges to the quadratic B-spline of the
+    /// boundary polygon).
     #[arg(long, value_enum)]
     pub boundary: Option<BoundaryArg>,
 }
