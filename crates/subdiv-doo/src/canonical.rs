@@ -884,23 +884,10 @@ pub(crate) fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark:
 fn expand_in_order(offsets: &[u32], maps: &FaceMaps, positions: &[DVec3], diagonal: bool) -> (Vec<DVec3>, f64) {
     let mut out = Vec::with_capacity(offsets.last().map_or(0, |&n| n as usize));
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    // Triangles and quads are expanded on the stack and appended, a copy of known size
-    // (no zeros written first to be overwritten).
-    fn append<const M: usize>(maps: &FaceMaps, face: &[DVec3], out: &mut Vec<DVec3>) {
-        let mut expanded = [DVec3::ZERO; M];
-        maps.inverse(face, &mut expanded);
-        out.extend_from_slice(&expanded);
-    }
     for w in offsets.windows(2) {
         let (b, e) = (w[0] as usize, w[1] as usize);
-        match e - b {
-            3 => append::<3>(maps, &positions[b..e], &mut out),
-            4 => append::<4>(maps, &positions[b..e], &mut out),
-            _ => {
-                out.resize(e, DVec3::ZERO);
-                maps.inverse(&positions[b..e], &mut out[b..e]);
-            }
-        }
+        out.resize(e, DVec3::ZERO);
+        maps.inverse(&positions[b..e], &mut out[b..e]);
         if diagonal {
             for &p in &positions[b..e] {
                 lo = lo.min(p);

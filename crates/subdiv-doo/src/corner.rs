@@ -580,7 +580,13 @@ pub(crate) fn side_by_side<A: Send, B: Send>(
     a: impl FnOnce() -> A + Send,
     b: impl FnOnce() -> B + Send,
 ) -> (A, B) {
-    if faces >= PARALLEL_FACES && rayon::current_num_threads() > 1 { rayon::join(a, b) } else { (a(), b()) }
+    if splits(faces) { rayon::join(a, b) } else { (a(), b()) }
+}
+
+/// Whether work over `faces` coarse faces is spread over the pool: it has several
+/// threads and the faces are at least [`PARALLEL_FACES`].
+fn splits(faces: usize) -> bool {
+    faces >= PARALLEL_FACES && rayon::current_num_threads() > 1
 }
 
 /// Runs `work(first, end, slice)` on runs of whole faces `first..end`, `slice` being the
@@ -594,11 +600,11 @@ where
     W: Fn(usize, usize, &mut [T]) + Sync,
 {
     let faces = offsets.len().saturating_sub(1);
-    if faces < PARALLEL_FACES || rayon::current_num_threads() == 1 {
-        work(0, faces, out);
-    } else {
+    if splits(faces) {
         let target = rayon::current_num_threads() * 8;
         face_chunks(offsets, out, target).into_par_iter().for_each(|(first, end, slice)| work(first, end, slice));
+    } else {
+        work(0, faces, out);
     }
 }
 

@@ -911,6 +911,32 @@ mod tests {
         }
     }
 
+    /// Decompositions of `fine` (refined `levels` times under `boundary`) to every depth,
+    /// seeded and automatic, equal to the general path's (Debug text, bit for bit) and
+    /// reconstructing `fine`; and more levels than it has: the same error on both paths.
+    fn assert_both_paths_agree(fine: &HalfedgeMesh, rule: FaceRule, levels: u32, boundary: BoundaryRule) {
+        for options in [
+            DecomposeOptions::levels(rule, levels),
+            DecomposeOptions::levels(rule, 1),
+            DecomposeOptions::max(rule),
+            DecomposeOptions { seeds: vec![0], ..DecomposeOptions::levels(rule, levels) },
+        ] {
+            let options = options.with_boundary(boundary);
+            let fast = decompose(fine, &options).unwrap();
+            let general = general_only(|| decompose(fine, &options).unwrap());
+            assert_eq!(format!("{fast:?}"), format!("{general:?}"), "{rule:?} {boundary:?} {:?}", options.depth);
+            let rebuilt = fast.pyramid.reconstruct(fast.pyramid.level_count(), None).unwrap();
+            assert_eq!(rebuilt.indices, fine.to_soup().indices);
+            for (p, q) in rebuilt.positions.iter().zip(fine.positions()) {
+                assert!(p.distance(*q) < 1e-12, "{p} against {q}");
+            }
+        }
+        let too_deep = DecomposeOptions::levels(rule, levels + 3).with_boundary(boundary);
+        let fast = decompose(fine, &too_deep).map(|d| d.pyramid.level_count());
+        let general = general_only(|| decompose(fine, &too_deep).map(|d| d.pyramid.level_count()));
+        assert_eq!(format!("{fast:?}"), format!("{general:?}"));
+    }
+
     #[test]
     fn coarser_levels_of_a_canonical_mesh_give_the_general_result() {
         // Faces 5, 30, 55, 80 removed: holes that share no vertex.
@@ -936,26 +962,7 @@ mod tests {
                         .expect("canonical");
                 }
             }
-            for options in [
-                DecomposeOptions::levels(rule, levels),
-                DecomposeOptions::levels(rule, 1),
-                DecomposeOptions::max(rule),
-                DecomposeOptions { seeds: vec![0], ..DecomposeOptions::levels(rule, levels) },
-            ] {
-                let fast = decompose(&fine, &options).unwrap();
-                let general = general_only(|| decompose(&fine, &options).unwrap());
-                assert_eq!(format!("{fast:?}"), format!("{general:?}"), "{rule:?} {:?}", options.depth);
-                let rebuilt = fast.pyramid.reconstruct(fast.pyramid.level_count(), None).unwrap();
-                assert_eq!(rebuilt.indices, fine.to_soup().indices);
-                for (p, q) in rebuilt.positions.iter().zip(fine.positions()) {
-                    assert!(p.distance(*q) < 1e-12, "{p} against {q}");
-                }
-            }
-            // More levels than the mesh has: the same error on both paths.
-            let too_deep = DecomposeOptions::levels(rule, levels + 3);
-            let fast = decompose(&fine, &too_deep).map(|d| d.pyramid.level_count());
-            let general = general_only(|| decompose(&fine, &too_deep).map(|d| d.pyramid.level_count()));
-            assert_eq!(format!("{fast:?}"), format!("{general:?}"));
+            assert_both_paths_agree(&fine, rule, levels, BoundaryRule::Shrink);
         }
     }
 
@@ -968,36 +975,16 @@ mod tests {
             [(holed, FaceRule::DooSabin, 3), (open_triangles, FaceRule::Simple, 3), (closed, FaceRule::DooSabin, 2)]
         {
             let fine = refined_and_moved_with(&coarse, rule, levels, BoundaryRule::Chaikin);
-            let chaikin = |options: DecomposeOptions| DecomposeOptions { boundary: BoundaryRule::Chaikin, ..options };
             // Every level by the canonical path.
             let auto = ReverseOptions { boundary: BoundaryRule::Chaikin, ..ReverseOptions::auto(rule) };
             let first = crate::boundary::reverse_chaikin_canonical(&fine, &auto).expect("canonical order");
             let mut step = Step::from_reversal(first);
             for level in 1..levels {
-                let options = chaikin(DecomposeOptions::levels(rule, levels));
+                let options = DecomposeOptions::levels(rule, levels).with_boundary(BoundaryRule::Chaikin);
                 step = canonical_step(&step.coarse, &step.coarse_positions, &options, level, step.connected)
                     .unwrap_or_else(|| panic!("level {level} of {rule:?} by the canonical path"));
             }
-            for options in [
-                DecomposeOptions::levels(rule, levels),
-                DecomposeOptions::levels(rule, 1),
-                DecomposeOptions::max(rule),
-                DecomposeOptions { seeds: vec![0], ..DecomposeOptions::levels(rule, levels) },
-            ] {
-                let options = chaikin(options);
-                let fast = decompose(&fine, &options).unwrap();
-                let general = general_only(|| decompose(&fine, &options).unwrap());
-                assert_eq!(format!("{fast:?}"), format!("{general:?}"), "{rule:?} {:?}", options.depth);
-                let rebuilt = fast.pyramid.reconstruct(fast.pyramid.level_count(), None).unwrap();
-                assert_eq!(rebuilt.indices, fine.to_soup().indices);
-                for (p, q) in rebuilt.positions.iter().zip(fine.positions()) {
-                    assert!(p.distance(*q) < 1e-12, "{p} against {q}");
-                }
-            }
-            let too_deep = chaikin(DecomposeOptions::levels(rule, levels + 3));
-            let fast = decompose(&fine, &too_deep).map(|d| d.pyramid.level_count());
-            let general = general_only(|| decompose(&fine, &too_deep).map(|d| d.pyramid.level_count()));
-            assert_eq!(format!("{fast:?}"), format!("{general:?}"));
+            assert_both_paths_agree(&fine, rule, levels, BoundaryRule::Chaikin);
         }
     }
 
