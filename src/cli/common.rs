@@ -5,7 +5,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use mesh_topo::io::{self, IoError, ReadReport, WriteOptions};
-use mesh_topo::{HalfedgeMesh, PolygonSoup};
+use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 
 use super::{CliError, CliResult};
 
@@ -32,8 +32,12 @@ pub fn note_dropped(path: &Path, report: &ReadReport) {
 
 /// Builds the half-edge mesh of a soup read from `path`.
 pub fn build_mesh(path: &Path, soup: &PolygonSoup) -> CliResult<HalfedgeMesh> {
-    HalfedgeMesh::from_soup(soup)
-        .map_err(|e| CliError::Input(format!("{}: not a manifold, consistently oriented mesh: {e}", path.display())))
+    HalfedgeMesh::from_soup(soup).map_err(|e| invalid_mesh(path, e))
+}
+
+/// The error of a mesh file whose soup is not a valid mesh.
+pub fn invalid_mesh(path: &Path, error: MeshError) -> CliError {
+    CliError::Input(format!("{}: not a manifold, consistently oriented mesh: {error}", path.display()))
 }
 
 /// Reads a mesh file and builds its half-edge mesh; notes dropped attributes on stderr.

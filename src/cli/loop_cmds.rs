@@ -2,12 +2,13 @@
 
 use std::path::Path;
 
+use mesh_topo::PolygonSoup;
 use mesh_topo::io::WriteOptions;
 use subdiv_loop::LoopError;
 use subdiv_loop::forward::{LoopOptions, VertexWeights};
 use subdiv_loop::pyramid::{self, DecomposeOptions, Levels, LoopPyramid};
 
-use super::common::{read_mesh, write_soup};
+use super::common::{invalid_mesh, note_dropped, read_soup, write_soup};
 use super::{
     AnalyzeArgs, CliError, CliResult, DecomposeArgs, ReconstructArgs, ReverseArgs, ReverseScheme, SubdivideArgs,
     input_error,
@@ -20,8 +21,8 @@ pub fn subdivide(args: &SubdivideArgs) -> CliResult {
 
     use super::SurfaceScheme;
 
-    let (soup, report) = super::common::read_soup(&args.mesh)?;
-    super::common::note_dropped(&args.mesh, &report);
+    let (soup, report) = read_soup(&args.mesh)?;
+    note_dropped(&args.mesh, &report);
     if let Some(face) = soup.faces().position(|f| f.len() != 3) {
         return Err(CliError::Input(format!(
             "{}: face {face} has {} corners; Loop schemes need triangles",
@@ -69,6 +70,20 @@ fn no_seed_face(args_seed_face: Option<u32>) -> CliResult {
     }
 }
 
+/// Reads a mesh file and decomposes it from its face list (`pyramid::decompose_soup`:
+/// a file written by Loop subdivision is reversed without building its half-edge mesh);
+/// the soup read and the pyramid. A file that is not a valid mesh is reported as the
+/// other commands report it.
+fn decompose_file(path: &Path, options: &DecomposeOptions) -> CliResult<(PolygonSoup, LoopPyramid)> {
+    let (soup, report) = read_soup(path)?;
+    note_dropped(path, &report);
+    match pyramid::decompose_soup(&soup, options) {
+        Ok(pyramid) => Ok((soup, pyramid)),
+        Err(LoopError::Mesh(error)) => Err(invalid_mesh(path, error)),
+        Err(error) => Err(loop_error(path, error)),
+    }
+}
+
 /// `reverse --scheme loop`: the coarse mesh after `--levels` reverse Loop steps (the
 /// details are dropped; `decompose` keeps them).
 pub fn reverse(args: &ReverseArgs) -> CliResult {
@@ -76,19 +91,18 @@ pub fn reverse(args: &ReverseArgs) -> CliResult {
     if args.levels == 0 {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
-    let mesh = read_mesh(&args.mesh)?;
     let options = DecomposeOptions {
         rules: reverse_rules(args.scheme, args.keep_corners),
         levels: Levels::Count(args.levels as usize),
         seed_vertex: None,
     };
-    let pyramid = pyramid::decompose(&mesh, &options).map_err(|e| loop_error(&args.mesh, e))?;
+    let (fine, pyramid) = decompose_file(&args.mesh, &options)?;
     write_soup(&args.out, &pyramid.base, &WriteOptions::default())?;
     println!(
         "reversed {} Loop level(s): {} vertices, {} faces -> {} vertices, {} faces",
         pyramid.level_count(),
-        mesh.vertex_count(),
-        mesh.face_count(),
+        fine.vertex_count(),
+        fine.face_count(),
         pyramid.base.vertex_count(),
         pyramid.base.face_count()
     );
@@ -103,10 +117,9 @@ pub fn decompose(args: &DecomposeArgs) -> CliResult {
     if !args.max && args.levels == 0 {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
-    let mesh = read_mesh(&args.mesh)?;
     let levels = if args.max { Levels::Max } else { Levels::Count(args.levels as usize) };
     let options = DecomposeOptions { rules: reverse_rules(args.scheme, args.keep_corners), levels, seed_vertex: None };
-    let pyramid = pyramid::decompose(&mesh, &options).map_err(|e| loop_error(&args.mesh, e))?;
+    let (_, pyramid) = decompose_file(&args.mesh, &options)?;
     let report = if args.report {
         Some(pyramid.rate_distortion(&REPORT_FRACTIONS).map_err(|e| loop_error(&args.mesh, e))?)
     } else {

@@ -18,6 +18,9 @@
 //!   `reconstruct` validates its base mesh).
 //! - `reconstruct_prepared` (pyramid with its base mesh built, `LoopPyramid::prepare`)
 //!   against `forward_mesh`.
+//! - `decompose_soup` (fine soup to a pyramid, as from a file: the canonical soup is
+//!   read from its face list, no half-edge mesh built) against `forward_soup`, both
+//!   starting from a soup.
 //!
 //! What each side writes: `decompose` a pyramid (the base soup, one detail per coarse
 //! edge of every level), `forward_mesh` and `forward_soup` a `LoopMesh` (fine positions
@@ -36,6 +39,15 @@
 //! fine numbering's order). Its counterpart `forward_renumbered` is Loop subdivision of
 //! the bunny renumbered the same way to the same level (scattered reads on both sides).
 //!
+//! # One level
+//! `decompose_one_level` reverses the last step alone (to the mesh one level coarser)
+//! and `forward_one_level` refines that coarser mesh, given as a `HalfedgeMesh`, by one
+//! step: the same fine mesh written and read, each side starting from a built half-edge
+//! mesh, as in the Doo-Sabin bench. This is the "forward subdivision of the same size"
+//! for one level; `forward_mesh` is cheaper per fine vertex than it (it builds only the
+//! bunny's connectivity and refines the levels above by index arithmetic), so the
+//! `decompose` / `forward_mesh` ratio is the stricter of the two.
+//!
 //! Ratios are only meaningful within one run (the machine is shared): group `levelL`
 //! times the operations of size `L` back to back; compare `levelL/decompose` with
 //! `levelL/forward_mesh`, `levelL/decompose_renumbered` with
@@ -50,7 +62,7 @@ use glam::DVec3;
 use mesh_topo::testing::scramble;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use subdiv_loop::forward::{LoopOptions, subdivide, subdivide_soup};
-use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, decompose};
+use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, decompose, decompose_soup};
 
 /// Minimal OBJ reader for the benchmark fixture (`v` and triangular `f` lines only).
 fn read_obj(text: &str) -> PolygonSoup {
@@ -112,6 +124,11 @@ fn benches(c: &mut Criterion) {
         group.bench_function("reconstruct", |b| {
             b.iter(|| black_box(&pyramid).reconstruct(level).expect("valid pyramid"))
         });
+        // From a soup, as read from a file: the fine faces read as they are.
+        let fine_soup = fine.to_soup();
+        group.bench_function("decompose_soup", |b| {
+            b.iter(|| decompose_soup(black_box(&fine_soup), &options).expect("Loop mesh"))
+        });
         group.bench_function("forward_soup", |b| {
             b.iter(|| subdivide_soup(black_box(&base), level as u32, &rules).expect("valid"))
         });
@@ -127,6 +144,19 @@ fn benches(c: &mut Criterion) {
         let base_renumbered = HalfedgeMesh::from_soup(&scramble(base.clone(), 7, 0.0)).expect("valid");
         group.bench_function("forward_renumbered", |b| {
             b.iter(|| subdivide(black_box(&base_renumbered), level as u32, &rules).expect("valid"))
+        });
+        // One level: the last step alone, both sides starting from a built half-edge
+        // mesh (the finest one for `decompose`, the one below it for the forward step),
+        // the pair the Doo-Sabin bench times. Unlike `forward_mesh`, which builds the
+        // small bunny's connectivity and refines by index arithmetic from there, the
+        // forward step here reads the connectivity of a mesh a quarter the fine size.
+        let one_level = DecomposeOptions { levels: Levels::Count(1), ..options };
+        let below = HalfedgeMesh::from_soup(&smooth.reconstruct(level - 1).expect("refined bunny")).expect("valid");
+        group.bench_function("decompose_one_level", |b| {
+            b.iter(|| decompose(black_box(&fine), &one_level).expect("Loop mesh"))
+        });
+        group.bench_function("forward_one_level", |b| {
+            b.iter(|| subdivide(black_box(&below), 1, &rules).expect("valid"))
         });
         group.finish();
     }

@@ -459,6 +459,43 @@ impl CornerTable {
         }
     }
 
+    /// True if the faces at every vertex form a single fan, closed or open: what
+    /// `mesh_topo` asks of a manifold vertex, and the one property of a valid mesh that a
+    /// table made from bare faces (twins paired by edges, consistently oriented, at most
+    /// two per edge) can still lack, at a vertex where two fans touch. The walk from
+    /// each vertex's circulation start stays at that vertex and covers its fan, and the
+    /// walks of different vertices share no corner, so every fan is single exactly when
+    /// the walks cover all corners together. Linear; by chunks of vertices in parallel
+    /// when large.
+    pub(crate) fn fans_are_single(&self) -> bool {
+        let starts = self.vertex_corners();
+        let fan_corners = |v: usize| {
+            let start = starts[v];
+            if start == NONE {
+                return 0;
+            }
+            // The walk ends: twins pair corners one to one, so it comes back to the
+            // start of a closed fan and cannot cycle elsewhere, and it cannot come back
+            // to an open fan's start (whose own half-edge has no twin).
+            let (mut c, mut count) = (start, 0usize);
+            loop {
+                count += 1;
+                let t = self.twin[prev(c) as usize];
+                if t == NONE || t == start {
+                    return count;
+                }
+                c = t;
+            }
+        };
+        let vertices = self.vertex_count;
+        let covered: usize = if splits(vertices, FACE_CHUNK) {
+            (0..vertices).into_par_iter().with_min_len(FACE_CHUNK).map(fan_corners).sum()
+        } else {
+            (0..vertices).map(fan_corners).sum()
+        };
+        covered == self.corner_count()
+    }
+
     /// Loop's 1-to-4 refinement in the canonical order: vertex `v` stays `v`, the edge
     /// point of edge `e` is vertex `V + e`; coarse face `f = (a, b, c)` becomes faces
     /// `4f..4f+4` = `(a, ab, ca)`, `(b, bc, ab)`, `(c, ca, bc)`, `(ab, bc, ca)`.

@@ -51,7 +51,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use glam::DVec3;
-use mesh_topo::HalfedgeMesh;
+use mesh_topo::{HalfedgeMesh, PolygonSoup};
 
 use crate::LoopError;
 use crate::corner_table::{Corner, CornerTable, NONE, VertexStar, next, prev};
@@ -352,6 +352,36 @@ pub(crate) fn reverse_canonical_mesh(
     rules: &LoopOptions,
 ) -> Option<CanonicalLevel> {
     reverse_canonical(fine.face_count(), fine.vertex_count(), seed_vertex, mesh_face_corners(fine), positions, rules)
+}
+
+/// [`reverse_canonical`](crate::reverse::reverse_canonical) on the face list of a polygon
+/// soup that no one has validated: a face that is not a triangle, or an index out of
+/// range, reads as a mismatch (`None`), so nothing here can index out of bounds.
+/// The canonical checks then prove that the soup is the Loop refinement of a coarse mesh
+/// whose edges are manifold and consistently oriented, and whose faces are valid; they
+/// do not see a coarse vertex whose faces form two fans, which the caller checks
+/// ([`CornerTable::fans_are_single`]) before trusting the result.
+pub(crate) fn reverse_canonical_soup(
+    soup: &PolygonSoup,
+    seed_vertex: Option<u32>,
+    rules: &LoopOptions,
+) -> Option<CanonicalLevel> {
+    let (offsets, indices, vertices) = (&soup.offsets[..], &soup.indices[..], soup.positions.len());
+    let faces = offsets.len().saturating_sub(1);
+    // Only triangles (face `f` at `3f..3f + 3`, checked in one pass that vectorises), so
+    // that each face is read without its offsets.
+    let triangles = indices.len() == 3 * faces && offsets.iter().enumerate().all(|(f, &o)| o as usize == 3 * f);
+    if !triangles || vertices >= NONE as usize || indices.len() >= NONE as usize {
+        return None;
+    }
+    // Called four times per group in the canonical pass: inlined there.
+    #[inline(always)]
+    fn corners(indices: &[u32], vertices: usize, f: usize) -> Option<[u32; 3]> {
+        let face: [u32; 3] = indices.get(3 * f..3 * f + 3)?.try_into().ok()?;
+        face.iter().all(|&v| (v as usize) < vertices).then_some(face)
+    }
+    let face = |f: usize| corners(indices, vertices, f);
+    reverse_canonical(faces, vertices, seed_vertex, face, &soup.positions, rules)
 }
 
 /// [`reverse_canonical`](crate::reverse::reverse_canonical) on a corner table.

@@ -26,8 +26,6 @@
 //! compressed pyramid reconstructs a smooth approximation of the input.
 //! [`LoopPyramid::rate_distortion`] measures the resulting error.
 
-use std::borrow::Cow;
-
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -36,9 +34,11 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
 
 use crate::LoopError;
 use crate::corner_table::CornerTable;
-use crate::detect::FineOrder;
+use crate::detect::{FineOrder, reverse_canonical_soup};
 use crate::forward::LoopOptions;
-use crate::reverse::{FineLevel, LevelParts, check_level, non_finite_bits, reconstruct_levels, reverse_level};
+use crate::reverse::{
+    CanonicalLevel, FineLevel, LevelParts, check_level, non_finite_bits, reconstruct_levels, reverse_level,
+};
 
 /// Magic number of a Loop pyramid file.
 pub const PYRAMID_MAGIC: [u8; 8] = *b"MRSLOOP\0";
@@ -141,44 +141,92 @@ pub struct RateDistortion {
 /// when a requested level (or, with [`Levels::Max`], the first level) has no Loop
 /// connectivity.
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
-    // `None` until the first reversal: the input is read as it is (see `detect_mesh`).
-    let mut table: Option<CornerTable> = None;
-    // The input positions are read in place; each reversal makes the next ones.
-    let mut positions = Cow::Borrowed(mesh.positions());
-    let mut levels = Vec::new();
-    let wanted = match options.levels {
-        Levels::Count(n) => n,
-        Levels::Max => usize::MAX,
-    };
-    if wanted == 0 {
+    if wanted_levels(options) == 0 {
         // No reversal reads the input: check it here.
         check_input_positions(mesh.positions())?;
+        let base = CornerTable::from_mesh(mesh)?.to_soup(mesh.positions().to_vec());
+        return Ok(LoopPyramid { rules: options.rules, base, levels: Vec::new() });
     }
+    // The input is read as it is (see `detect_mesh`), its positions in place.
+    let first = reverse_level(FineLevel::Mesh(mesh), mesh.positions(), options.seed_vertex, &options.rules)?;
+    decompose_below(first, options)
+}
+
+/// [`decompose`] of a polygon soup, such as a mesh file holds, without building its
+/// half-edge mesh when the soup is in the canonical order (the output of Loop
+/// subdivision and of reconstruction, as the `multires` command line writes them): the
+/// first level is then read straight from the face list, which takes a fraction of the
+/// time that building the half-edge mesh of a large soup takes. Any other soup, and
+/// every soup with something wrong, goes through [`HalfedgeMesh::from_soup`] and
+/// [`decompose`]. Either way the result is the pyramid, or the error, of
+/// `decompose(&HalfedgeMesh::from_soup(soup)?, options)`, bit for bit (tests compare
+/// the two).
+///
+/// A soup passes the face-list reading only if it is exactly the canonical refinement
+/// of a coarse mesh: faces in groups of four around each coarse triangle, coarse edges
+/// shared by at most two faces in opposite directions, every coarse face valid, no two
+/// coarse edges joining the same two vertices, the faces at every coarse vertex forming
+/// a single fan, and every position finite. Such a soup is a valid manifold mesh, so
+/// `HalfedgeMesh::from_soup` would accept it and read the same faces in the same order.
+///
+/// ```
+/// use mesh_topo::shapes;
+/// use subdiv_loop::forward::LoopOptions;
+/// use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, decompose_soup};
+///
+/// // An octahedron refined three times, as a soup (say, read from a file).
+/// let smooth = LoopPyramid::smooth(shapes::octahedron(), LoopOptions::default(), 3)?;
+/// let fine = smooth.reconstruct(3)?;
+/// let pyramid = decompose_soup(&fine, &DecomposeOptions { levels: Levels::Max, ..Default::default() })?;
+/// assert_eq!(pyramid.level_count(), 3);
+/// assert_eq!(pyramid.base.indices, shapes::octahedron().indices);
+/// assert!(pyramid.levels.iter().all(|level| level.details.iter().all(|d| d.length() < 1e-12)));
+/// # Ok::<(), subdiv_loop::LoopError>(())
+/// ```
+///
+/// # Errors
+/// Those of [`HalfedgeMesh::from_soup`] (as [`LoopError::Mesh`]) and of [`decompose`].
+pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
+    if wanted_levels(options) > 0
+        && let Some(level) = reverse_canonical_soup(soup, options.seed_vertex, &options.rules)
+        && level.finite
+        && level.coarse.fans_are_single()
+    {
+        let CanonicalLevel { coarse, positions, details, .. } = level;
+        return decompose_below(LevelParts { coarse, order: None, positions, details }, options);
+    }
+    decompose(&HalfedgeMesh::from_soup(soup)?, options)
+}
+
+/// The number of levels `options` asks for (`usize::MAX` for as many as there are).
+fn wanted_levels(options: &DecomposeOptions) -> usize {
+    match options.levels {
+        Levels::Count(n) => n,
+        Levels::Max => usize::MAX,
+    }
+}
+
+/// The rest of a decomposition once its first (finest) level is reversed: the coarser
+/// levels, each reversing the coarse mesh of the one before.
+fn decompose_below(first: LevelParts, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
+    let wanted = wanted_levels(options);
+    let LevelParts { coarse: mut table, order, mut positions, details } = first;
+    let mut levels = vec![DetailLevel { details, order }];
     // Every reversal divides the face count by 4 (a mesh without faces is an error), so
     // `Levels::Max` ends after at most log4(faces) + 1 rounds.
     while levels.len() < wanted {
-        let (fine, seed) = match &table {
-            None => (FineLevel::Mesh(mesh), options.seed_vertex),
-            Some(table) => (FineLevel::Table(table), None),
-        };
         let LevelParts { coarse, order, positions: coarse_positions, details } =
-            match reverse_level(fine, &positions, seed, &options.rules) {
+            match reverse_level(FineLevel::Table(&table), &positions, None, &options.rules) {
                 Ok(level) => level,
-                Err(LoopError::NotLoopConnectivity { .. }) if options.levels == Levels::Max && !levels.is_empty() => {
-                    break;
-                }
+                Err(LoopError::NotLoopConnectivity { .. }) if options.levels == Levels::Max => break,
                 Err(error) => return Err(error),
             };
         levels.push(DetailLevel { details, order });
-        table = Some(coarse);
-        positions = Cow::Owned(coarse_positions);
+        table = coarse;
+        positions = coarse_positions;
     }
     levels.reverse();
-    let table = match table {
-        Some(table) => table,
-        None => CornerTable::from_mesh(mesh)?,
-    };
-    Ok(LoopPyramid { rules: options.rules, base: table.to_soup(positions.into_owned()), levels })
+    Ok(LoopPyramid { rules: options.rules, base: table.to_soup(positions), levels })
 }
 
 /// The number of details that [`LoopPyramid::compressed`] keeps of `total` for
@@ -776,6 +824,143 @@ mod tests {
         let mut wrong_version = bytes.clone();
         wrong_version[8] = 9;
         assert!(matches!(LoopPyramid::from_bytes(&wrong_version), Err(LoopError::Binary(_))));
+    }
+
+    /// `decompose_soup` gives what `decompose` of the soup's half-edge mesh gives, result
+    /// or error, to the bit (their `Debug` texts).
+    fn assert_soup_path_agrees(soup: &PolygonSoup, options: &DecomposeOptions) {
+        let through_mesh = HalfedgeMesh::from_soup(soup).map_err(LoopError::from).and_then(|m| decompose(&m, options));
+        assert_eq!(format!("{:?}", decompose_soup(soup, options)), format!("{through_mesh:?}"), "{options:?}");
+    }
+
+    fn every_level_option(rules: LoopOptions, vertex_count: usize) -> Vec<DecomposeOptions> {
+        let levels = [Levels::Count(0), Levels::Count(1), Levels::Count(2), Levels::Count(3), Levels::Max];
+        let seeds = [None, Some(0), Some(vertex_count as u32 - 1)];
+        levels
+            .into_iter()
+            .flat_map(|levels| {
+                seeds.into_iter().map(move |seed_vertex| DecomposeOptions { rules, levels, seed_vertex })
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_soup_decomposes_as_its_halfedge_mesh() {
+        let all_rules = [false, true].into_iter().flat_map(|keep_corners| {
+            [VertexWeights::Loop, VertexWeights::Warren].map(|weights| LoopOptions { weights, keep_corners })
+        });
+        let shapes = [
+            ("icosahedron", shapes::icosahedron()),
+            ("tetrahedron", shapes::tetrahedron()),
+            ("cylinder", cylinder(6, 3)),
+            ("open fan", open_fan(5)),
+            ("torus", shapes::torus(6, 4, CellKind::Triangles).unwrap()),
+        ];
+        let mut canonical = 0;
+        for rules in all_rules {
+            for (name, coarse) in &shapes {
+                let refined = LoopPyramid::smooth(coarse.clone(), rules, 2).unwrap().reconstruct(2).unwrap();
+                let fine = perturb(&refined, 0.05, 3);
+                // The canonical soup (read from its faces), the same soup in another order
+                // (through the half-edge mesh), and the coarse soup refined once.
+                for soup in [fine.clone(), scramble(&fine, 5), refined.clone()] {
+                    for options in every_level_option(rules, soup.vertex_count()) {
+                        assert_soup_path_agrees(&soup, &options);
+                    }
+                }
+                let read = reverse_canonical_soup(&fine, None, &rules).expect(name);
+                assert!(read.finite && read.coarse.fans_are_single(), "{name}");
+                canonical += 1;
+            }
+        }
+        assert_eq!(canonical, 20);
+    }
+
+    #[test]
+    fn soups_that_are_not_valid_meshes_get_the_mesh_errors() {
+        let options = DecomposeOptions { levels: Levels::Max, ..Default::default() };
+        let decompose_error = |soup: &PolygonSoup| {
+            assert_soup_path_agrees(soup, &options);
+            decompose_soup(soup, &options).unwrap_err()
+        };
+        // Two tetrahedra sharing one vertex: refined in the canonical pattern, the soup
+        // passes every check of the face-list reading but the single-fan one.
+        let mut two = shapes::tetrahedron();
+        let second: Vec<Vec<u32>> =
+            two.faces().map(|f| f.iter().map(|&v| if v == 0 { 0 } else { v + 3 }).collect()).collect();
+        let positions: Vec<DVec3> = two.positions.iter().chain(&two.positions[1..]).copied().collect();
+        let faces: Vec<Vec<u32>> = two.faces().map(<[u32]>::to_vec).chain(second).collect();
+        two = PolygonSoup::from_faces(positions, faces);
+        let bowtie = crate::reference::canonical_faces(&two, 1);
+        let read = reverse_canonical_soup(&bowtie, None, &LoopOptions::default()).expect("canonical faces");
+        assert!(!read.coarse.fans_are_single());
+        let error = decompose_error(&bowtie);
+        assert!(matches!(error, LoopError::Mesh(mesh_topo::MeshError::NonManifoldVertex { .. })), "{error}");
+
+        let ico = crate::reference::canonical_faces(&shapes::icosahedron(), 2);
+        assert!(reverse_canonical_soup(&ico, None, &LoopOptions::default()).is_some());
+        let mut broken = Vec::new();
+        let mut nan = ico.clone();
+        nan.positions[40].y = f64::NAN;
+        broken.push(nan);
+        let mut out_of_range = ico.clone();
+        out_of_range.indices[7] = ico.vertex_count() as u32;
+        broken.push(out_of_range);
+        let mut short_offsets = ico.clone();
+        short_offsets.offsets.pop();
+        broken.push(short_offsets);
+        let mut unsorted = ico.clone();
+        unsorted.offsets.swap(3, 4);
+        broken.push(unsorted);
+        let mut quad = ico.clone();
+        quad.offsets.remove(1);
+        broken.push(quad);
+        let mut flipped = ico.clone();
+        flipped.indices.swap(0, 1);
+        broken.push(flipped);
+        let mut coarse = shapes::icosahedron();
+        coarse.indices.swap(3, 4);
+        broken.push(crate::reference::canonical_faces(&coarse, 4));
+        broken.push(PolygonSoup::from_faces(Vec::new(), Vec::<Vec<u32>>::new()));
+        for soup in &broken {
+            decompose_error(soup);
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        /// Valid meshes damaged at random (a face flipped, repeated or dropped, two
+        /// vertices merged), refined in the canonical pattern: the soup path agrees with
+        /// the half-edge path, whichever of them reads the soup.
+        #[test]
+        fn damaged_canonical_soups_decompose_as_their_meshes(
+            soup in mesh_topo::testing::arb_triangle_mesh(),
+            damage in 0usize..5,
+            pick in any::<u64>(),
+        ) {
+            let mut coarse = soup;
+            let faces = coarse.face_count();
+            let f = (pick % faces as u64) as usize;
+            let mut list: Vec<Vec<u32>> = coarse.faces().map(<[u32]>::to_vec).collect();
+            match damage {
+                0 => list[f].swap(0, 1),
+                1 => list.push(list[f].clone()),
+                2 if faces > 1 => { list.remove(f); }
+                3 => {
+                    let (a, b) = (list[f][0], list[(f + 1) % faces][1]);
+                    for v in list.iter_mut().flatten() {
+                        if *v == b { *v = a; }
+                    }
+                }
+                _ => {}
+            }
+            coarse = PolygonSoup::from_faces(coarse.positions.clone(), list);
+            let fine = crate::reference::canonical_faces(&coarse, pick);
+            for levels in [Levels::Count(1), Levels::Max] {
+                assert_soup_path_agrees(&fine, &DecomposeOptions { levels, ..Default::default() });
+            }
+        }
     }
 
     proptest! {

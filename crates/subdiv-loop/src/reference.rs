@@ -280,3 +280,27 @@ pub(crate) fn swap_vertices(soup: &PolygonSoup, a: u32, b: u32) -> PolygonSoup {
     }
     out
 }
+
+/// The faces of one Loop step in the canonical order (see [`loop_step`]) of any triangle
+/// soup, valid mesh or not: edge `{a, b}` is numbered by the first corner whose side
+/// joins `a` and `b`, in either direction, and its edge point is vertex `V + e`. On a
+/// valid mesh these are the faces of `loop_step`; on a broken one (a bowtie vertex, a
+/// flipped or repeated face) they are the soup that a canonical reading must not
+/// mistake for a valid refinement. Positions are random (from `seed`).
+pub(crate) fn canonical_faces(coarse: &PolygonSoup, seed: u64) -> PolygonSoup {
+    let nv = coarse.vertex_count() as u32;
+    let mut edges = std::collections::HashMap::new();
+    let mut edge_point = |a: u32, b: u32| {
+        let next = nv + edges.len() as u32;
+        *edges.entry((a.min(b), a.max(b))).or_insert(next)
+    };
+    let mut faces = Vec::new();
+    for face in coarse.faces() {
+        let [a, b, c] = [face[0], face[1], face[2]];
+        let (ab, bc, ca) = (edge_point(a, b), edge_point(b, c), edge_point(c, a));
+        faces.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+    }
+    let mut rng = Rng::new(seed);
+    let positions = (0..nv as usize + edges.len()).map(|_| rng.vector()).collect();
+    PolygonSoup::from_faces(positions, faces)
+}

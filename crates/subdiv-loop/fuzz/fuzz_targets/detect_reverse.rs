@@ -3,8 +3,11 @@
 //! Inputs are built structurally from the fuzz bytes: a procedural base shape or a raw
 //! index soup, optionally refined one or two Loop steps with arbitrary details (so that
 //! many inputs do have Loop connectivity), then renumbered, and optionally broken by an
-//! edge flip or a removed face. Whatever comes out, `reverse` and `decompose` must not
-//! panic; when they succeed, reconstruction must give the input back.
+//! edge flip or a removed face; or a raw soup, valid or not, is given the faces of one
+//! Loop step in the canonical pattern (a bowtie vertex, a flipped face...). Whatever
+//! comes out, `reverse` and `decompose` must not panic; when they succeed,
+//! reconstruction must give the input back; and `decompose_soup` must give exactly
+//! what `decompose` of the soup's half-edge mesh gives, result or error.
 
 #![no_main]
 
@@ -15,7 +18,8 @@ use mesh_topo::shapes::{self, CellKind};
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use subdiv_loop::detect::{DetectOptions, detect};
 use subdiv_loop::forward::{LoopOptions, VertexWeights};
-use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, bounding_box_diagonal, decompose};
+use subdiv_loop::LoopError;
+use subdiv_loop::pyramid::{DecomposeOptions, Levels, LoopPyramid, bounding_box_diagonal, decompose, decompose_soup};
 use subdiv_loop::reverse::{ReverseOptions, reconstruct, reverse};
 
 fn coordinate(u: &mut Unstructured<'_>) -> arbitrary::Result<f64> {
@@ -65,7 +69,37 @@ fn break_mesh(soup: &PolygonSoup, u: &mut Unstructured<'_>) -> arbitrary::Result
     Ok(PolygonSoup::from_faces(soup.positions.clone(), faces))
 }
 
+/// The faces of one Loop step of any triangle soup in the canonical pattern (edge points
+/// numbered by first appearance), valid mesh or not; edge points at the edge midpoints.
+fn canonical_faces(coarse: &PolygonSoup) -> PolygonSoup {
+    let nv = coarse.vertex_count() as u32;
+    let mut edges: Vec<[u32; 2]> = Vec::new();
+    let mut edge_point = |a: u32, b: u32| {
+        let key = [a.min(b), a.max(b)];
+        let e = edges.iter().position(|&k| k == key).unwrap_or_else(|| {
+            edges.push(key);
+            edges.len() - 1
+        });
+        nv + e as u32
+    };
+    let mut faces = Vec::new();
+    for face in coarse.faces().filter(|f| f.len() == 3) {
+        let [a, b, c] = [face[0], face[1], face[2]];
+        let (ab, bc, ca) = (edge_point(a, b), edge_point(b, c), edge_point(c, a));
+        faces.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+    }
+    let mut positions = coarse.positions.clone();
+    positions.extend(edges.iter().map(|&[a, b]| 0.5 * (coarse.positions[a as usize] + coarse.positions[b as usize])));
+    PolygonSoup::from_faces(positions, faces)
+}
+
 fn check(fine: &PolygonSoup, rules: LoopOptions, must_succeed: bool) {
+    for levels in [Levels::Count(1), Levels::Max] {
+        let options = DecomposeOptions { rules, levels, seed_vertex: None };
+        let through_mesh =
+            HalfedgeMesh::from_soup(fine).map_err(LoopError::from).and_then(|mesh| decompose(&mesh, &options));
+        assert_eq!(format!("{:?}", decompose_soup(fine, &options)), format!("{through_mesh:?}"));
+    }
     let Ok(mesh) = HalfedgeMesh::from_soup(fine) else { return };
     let _ = detect(&mesh, &DetectOptions::default());
     let level = match reverse(&mesh, &ReverseOptions { rules, seed_vertex: None }) {
@@ -102,7 +136,9 @@ fuzz_target!(|data: &[u8]| {
         let refinements = u.int_in_range(0..=2)?;
         let mut soup = base;
         let mut loop_mesh = false;
-        if refinements > 0 {
+        if refinements == 0 && bool::arbitrary(u)? {
+            soup = canonical_faces(&soup);
+        } else if refinements > 0 {
             let Ok(mut pyramid) = LoopPyramid::smooth(soup.clone(), rules, refinements) else { return Ok(()) };
             for level in &mut pyramid.levels {
                 for d in &mut level.details {
