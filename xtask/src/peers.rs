@@ -190,9 +190,14 @@ pub fn comparison(rows: &BTreeMap<String, Measurement>, mesh_file: impl Fn(&str)
             missing.join(", ")
         ));
     }
+    if let Some(ceiling) = two_thread_ceiling(rows) {
+        text.push_str(&ceiling);
+    }
     let mut peer_runs = PeerRuns::default();
-    text.push_str("| mesh | scheme | level | faces | ours 1 thread | ours 2 threads | peers | ratio 1t | ratio 2t |\n");
-    text.push_str("|---|---|---:|---:|---:|---:|---|---:|---:|\n");
+    text.push_str(
+        "| mesh | scheme | level | faces | ours 1 thread | ours 2 threads | 2t / 1t | peers | ratio 1t | ratio 2t |\n",
+    );
+    text.push_str("|---|---|---:|---:|---:|---:|---:|---|---:|---:|\n");
     for ((mesh, scheme, level), measured) in &ours {
         let one = measured.seconds_by_threads.get(&1).copied();
         let two = measured.seconds_by_threads.get(&2).copied();
@@ -235,15 +240,55 @@ pub fn comparison(rows: &BTreeMap<String, Measurement>, mesh_file: impl Fn(&str)
             peer_times.iter().map(|(name, t)| format!("{name} {}", format_seconds(*t))).collect::<Vec<_>>().join(", ")
         };
         text.push_str(&format!(
-            "| {mesh} | {scheme} | {level} | {} | {} | {} | {peers} | {} | {} |\n",
+            "| {mesh} | {scheme} | {level} | {} | {} | {} | {} | {peers} | {} | {} |\n",
             measured.faces.map_or("–".into(), |f| format!("{f:.0}")),
             rate(one),
             rate(two),
+            speed_up(one, two),
             ratio(one),
             ratio(two),
         ));
     }
     text
+}
+
+/// The two-thread speed-up, fastest sample against fastest sample (means in
+/// parentheses).
+fn speed_up(one: Option<OurTimes>, two: Option<OurTimes>) -> String {
+    match (one, two) {
+        (Some(one), Some(two)) => format!("{:.2} ({:.2})", one.best / two.best, one.mean / two.mean),
+        _ => "–".into(),
+    }
+}
+
+/// The paragraph on the `machine/stream-<n>t/<MiB>` rows (`benches/machine.rs`): what
+/// two threads gain on a plain parallel stream over the same bytes, per working set, the
+/// ceiling of the `2t / 1t` column for outputs of that size. `None` without those rows.
+fn two_thread_ceiling(rows: &BTreeMap<String, Measurement>) -> Option<String> {
+    let mut by_size: BTreeMap<u64, [Option<f64>; 2]> = BTreeMap::new();
+    for (id, measurement) in rows {
+        let Some(rest) = id.strip_prefix("machine/stream-") else { continue };
+        let Some((threads, mib)) = rest.split_once("t/") else { continue };
+        let (Ok(threads), Ok(mib)) = (threads.parse::<usize>(), mib.parse::<u64>()) else { continue };
+        if let Some(slot) = by_size.entry(mib).or_default().get_mut(threads.wrapping_sub(1)) {
+            *slot = Some(measurement.best_ns.unwrap_or(measurement.mean_ns));
+        }
+    }
+    let speed_ups: Vec<String> = by_size
+        .iter()
+        .filter_map(|(mib, times)| match times {
+            [Some(one), Some(two)] => Some(format!("{mib} MiB {:.2}x", one / two)),
+            _ => None,
+        })
+        .collect();
+    (!speed_ups.is_empty()).then(|| {
+        format!(
+            "Two threads on this machine, a plain parallel stream over the same bytes (`machine/stream`, \
+             fastest samples, same run): {}. Subdivision of a large mesh moves about as many bytes \
+             per operation, so this is the ceiling of its `2t / 1t` column at outputs of that size.\n\n",
+            speed_ups.join(", ")
+        )
+    })
 }
 
 /// `subdivide-<mesh>/<scheme>-<threads>t/<level>` → its parts.
@@ -323,6 +368,30 @@ mod tests {
         );
         assert_eq!(parse_id("build/bunny"), None);
         assert_eq!(parse_id("subdivide-bunny/loop/4"), None);
+    }
+
+    #[test]
+    fn the_stream_rows_give_the_two_thread_ceiling_per_size() {
+        let row = |ns: f64| Measurement { mean_ns: 2.0 * ns, best_ns: Some(ns), elements: None };
+        let rows: BTreeMap<String, Measurement> = [
+            ("machine/stream-1t/2", row(100.0)),
+            ("machine/stream-2t/2", row(50.0)),
+            ("machine/stream-1t/512", row(300.0)),
+            ("machine/stream-2t/512", row(200.0)),
+            // A size without its two-thread row is left out.
+            ("machine/stream-1t/32", row(10.0)),
+            ("subdivide-bunny/loop-1t/1", row(1.0)),
+        ]
+        .into_iter()
+        .map(|(id, m)| (id.to_string(), m))
+        .collect();
+        let text = two_thread_ceiling(&rows).unwrap();
+        assert!(text.contains("2 MiB 2.00x, 512 MiB 1.50x."), "{text}");
+        assert!(!text.contains("32 MiB"));
+        assert_eq!(two_thread_ceiling(&BTreeMap::new()), None);
+        let times = |best: f64, mean: f64| Some(OurTimes { best, mean });
+        assert_eq!(speed_up(times(4.0, 6.0), times(2.0, 4.0)), "2.00 (1.50)");
+        assert_eq!(speed_up(times(4.0, 6.0), None), "–");
     }
 
     #[test]

@@ -1,0 +1,53 @@
+//! What two threads can gain on this machine at all: a plain parallel stream over the
+//! same bytes, on one thread and on two, at working sets from cache-sized to far
+//! larger than every cache.
+//!
+//! Each call updates every `f64` of a buffer once (`x = x / 2 + 1`: one read and one
+//! write per element, no dependency between elements), on one thread or split in two
+//! halves on a pool of two. Nothing is simpler to run in parallel, so the two-thread
+//! speed-up it gets, `stream-1t` over `stream-2t` at the same size, is the ceiling for
+//! code that moves as many bytes per operation: subdivision of a large mesh is such code
+//! (an output vertex is a few multiply-adds of positions read from memory). On a machine
+//! whose memory bandwidth is shared between its cores the ceiling falls well below two
+//! once the buffer outgrows the caches; `cargo xtask bench` prints it beside the
+//! subdivision speed-ups of the same run.
+//!
+//! Benchmark ids are `machine/stream-<threads>t/<MiB>`, throughput in elements (`f64`s).
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use rayon::prelude::*;
+
+/// Working sets in MiB: within the per-core cache, a few times larger, and far larger
+/// than every cache (the size of a level-4 Loop output of `bunny00.off`).
+const SIZES_MIB: [usize; 3] = [2, 32, 512];
+
+/// One pass over `values`: every element read and written once.
+fn update(values: &mut [f64]) {
+    for x in values {
+        *x = 0.5 * *x + 1.0;
+    }
+}
+
+fn stream(c: &mut Criterion) {
+    let mut group = c.benchmark_group("machine");
+    group.sample_size(10).warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(2));
+    for mib in SIZES_MIB {
+        let len = (mib << 20) / size_of::<f64>();
+        let mut values = vec![1.0f64; len];
+        group.throughput(Throughput::Elements(len as u64));
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
+            let half = len.div_ceil(threads);
+            group.bench_function(BenchmarkId::new(format!("stream-{threads}t"), mib), |b| {
+                pool.install(|| b.iter(|| black_box(&mut values[..]).par_chunks_mut(half).for_each(update)))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, stream);
+criterion_main!(benches);
