@@ -3,9 +3,9 @@
 //! This facade re-exports the member crates of the workspace, one module each, and adds
 //! the few types that span them: [`SurfaceScheme`] (every surface scheme behind one name,
 //! so a comparison over schemes is a loop), [`Boundaries`] (the boundary rules of open
-//! meshes: Loop's fixed corners, Doo-Sabin's Chaikin ring), [`Pyramid`], [`decompose`]
-//! and [`decompose_with`] (multiresolution by reverse Loop or reverse Doo-Sabin, one file
-//! format), and one [`Error`]. It defines no algorithm of its own. Depend on a member crate alone when you
+//! meshes: Loop's fixed corners, Doo-Sabin's Chaikin ring), [`Pyramid`], [`decompose`],
+//! [`decompose_with`] and [`decompose_soup`] (multiresolution by reverse Loop or reverse
+//! Doo-Sabin, one file format), and one [`Error`]. It defines no algorithm of its own. Depend on a member crate alone when you
 //! need only one job; none of them pulls in the command-line dependencies.
 //!
 //! | module | crate | what |
@@ -112,7 +112,7 @@ mod pyramid;
 mod scheme;
 
 pub use error::Error;
-pub use pyramid::{Depth, Pyramid, RateDistortion, decompose, decompose_with};
+pub use pyramid::{Depth, Pyramid, RateDistortion, decompose, decompose_soup, decompose_with};
 pub use scheme::{Boundaries, SurfaceScheme};
 
 pub use ifs_nonlinear as ifs;
@@ -125,5 +125,7 @@ pub use tri_spline as spline;
 /// The names most programs need: `use multires::prelude::*;`.
 pub mod prelude {
     pub use crate::mesh::{HalfedgeMesh, MeshError, PolygonSoup, shapes};
-    pub use crate::{Boundaries, Depth, Error, Pyramid, RateDistortion, SurfaceScheme, decompose, decompose_with};
+    pub use crate::{
+        Boundaries, Depth, Error, Pyramid, RateDistortion, SurfaceScheme, decompose, decompose_soup, decompose_with,
+    };
 }

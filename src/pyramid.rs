@@ -93,12 +93,7 @@ pub fn decompose_with(
     boundaries: &Boundaries,
 ) -> Result<Pyramid, Error> {
     boundaries.check(scheme)?;
-    if let Some(rules) = scheme.loop_options_with(boundaries) {
-        let levels = match depth {
-            Depth::Levels(n) => subdiv_loop::pyramid::Levels::Count(n as usize),
-            Depth::Max => subdiv_loop::pyramid::Levels::Max,
-        };
-        let options = subdiv_loop::pyramid::DecomposeOptions { rules, levels, seed_vertex: None };
+    if let Some(options) = loop_options(scheme, depth, boundaries) {
         return Ok(Pyramid::Loop(subdiv_loop::pyramid::decompose(mesh, &options)?));
     }
     if let Some(rule) = scheme.doo_rule() {
@@ -110,6 +105,61 @@ pub fn decompose_with(
         return Ok(Pyramid::Doo(subdiv_doo::decompose(mesh, &options)?.pyramid));
     }
     Err(Error::NotReversible { scheme })
+}
+
+/// [`decompose_with`] of a polygon soup, as a mesh file holds it. A Loop-family soup in
+/// the canonical order (what Loop subdivision and reconstruction write) is reversed
+/// straight from its face list, without building its half-edge mesh
+/// (`subdiv_loop::pyramid::decompose_soup`); any other soup is built into a half-edge
+/// mesh first. The result, or the error, is that of
+/// `decompose_with(&HalfedgeMesh::from_soup(soup)?, ...)`.
+///
+/// ```
+/// use multires::prelude::*;
+///
+/// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+/// let fine = SurfaceScheme::Loop.subdivide(&octahedron, 3)?; // a soup
+/// let pyramid = decompose_soup(&fine, SurfaceScheme::Loop, Depth::Max, &Boundaries::default())?;
+/// assert_eq!((pyramid.level_count(), pyramid.base().face_count()), (3, 8));
+/// # Ok::<(), multires::Error>(())
+/// ```
+///
+/// # Errors
+/// As [`decompose_with`], and the soup's own errors as a mesh ([`Error::Mesh`]).
+pub fn decompose_soup(
+    soup: &PolygonSoup,
+    scheme: SurfaceScheme,
+    depth: Depth,
+    boundaries: &Boundaries,
+) -> Result<Pyramid, Error> {
+    // A boundary option of another family goes the mesh's way too, so that the soup's
+    // errors come first, as they do there.
+    if boundaries.check(scheme).is_ok()
+        && let Some(options) = loop_options(scheme, depth, boundaries)
+    {
+        return match subdiv_loop::pyramid::decompose_soup(soup, &options) {
+            Ok(pyramid) => Ok(Pyramid::Loop(pyramid)),
+            // From a soup, only building its mesh fails this way (a mesh built from a soup
+            // has finite positions): reported as the `?` below reports it.
+            Err(subdiv_loop::LoopError::Mesh(error)) => Err(Error::Mesh(error)),
+            Err(error) => Err(error.into()),
+        };
+    }
+    decompose_with(&HalfedgeMesh::from_soup(soup)?, scheme, depth, boundaries)
+}
+
+/// The Loop decomposition options of a reversible Loop-family scheme, `None` otherwise.
+fn loop_options(
+    scheme: SurfaceScheme,
+    depth: Depth,
+    boundaries: &Boundaries,
+) -> Option<subdiv_loop::pyramid::DecomposeOptions> {
+    let rules = scheme.loop_options_with(boundaries)?;
+    let levels = match depth {
+        Depth::Levels(n) => subdiv_loop::pyramid::Levels::Count(n as usize),
+        Depth::Max => subdiv_loop::pyramid::Levels::Max,
+    };
+    Some(subdiv_loop::pyramid::DecomposeOptions { rules, levels, seed_vertex: None })
 }
 
 impl Pyramid {
@@ -275,6 +325,37 @@ mod tests {
             assert!(worst < 1e-12, "{scheme}: {worst}");
             let table = pyramid.rate_distortion(&[0.0, 1.0]).unwrap();
             assert!(table[1].max_error < 1e-12 && table[0].max_error > 0.0, "{scheme}: {table:?}");
+        }
+    }
+
+    #[test]
+    fn a_soup_decomposes_as_its_mesh() {
+        let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron()).unwrap();
+        let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
+        let grid = HalfedgeMesh::from_soup(&shapes::grid(3, 2, shapes::CellKind::Quads).unwrap()).unwrap();
+        let mut soups = Vec::new();
+        for scheme in SurfaceScheme::ALL.into_iter().filter(|s| s.is_reversible()) {
+            let coarse = if scheme.accepts_polygons() { &cube } else { &octahedron };
+            let fine = perturbed(&scheme.subdivide(coarse, 2).unwrap()).to_soup();
+            let mut not_finite = fine.clone();
+            not_finite.positions[3].x = f64::NAN;
+            let mut out_of_range = fine.clone();
+            out_of_range.indices[2] = fine.vertex_count() as u32;
+            soups.extend([fine, not_finite, out_of_range]);
+        }
+        soups.push(SurfaceScheme::DooSabin.subdivide_with(&grid, 1, &Boundaries::chaikin()).unwrap());
+        for soup in &soups {
+            for scheme in SurfaceScheme::ALL {
+                for boundaries in [Boundaries::default(), Boundaries::keep_corners(), Boundaries::chaikin()] {
+                    for depth in [Depth::Levels(1), Depth::Max] {
+                        let through_mesh = HalfedgeMesh::from_soup(soup)
+                            .map_err(Error::from)
+                            .and_then(|mesh| decompose_with(&mesh, scheme, depth, &boundaries));
+                        let direct = decompose_soup(soup, scheme, depth, &boundaries);
+                        assert_eq!(format!("{direct:?}"), format!("{through_mesh:?}"), "{scheme} {depth:?}");
+                    }
+                }
+            }
         }
     }
 

@@ -8,7 +8,8 @@
 //! - [`detect`]: recognising Loop (1-to-4) connectivity in a plain triangle mesh.
 //! - [`reverse`]: reverse Loop with detail vectors and exact reconstruction, one level.
 //! - [`pyramid`]: multiresolution pyramids (base mesh + details of every level),
-//!   compression, and the `.mres` file format.
+//!   compression, and the `.mres` file format; [`pyramid::decompose_soup`] reads a mesh
+//!   in the canonical order straight from its face list.
 //! - [`mband`]: exact box-spline masks for any arity, ternary (1-to-9) and quaternary
 //!   (1-to-16) Loop.
 //! - [`analysis`]: local subdivision matrices, spectra and Reif's C1 check.
