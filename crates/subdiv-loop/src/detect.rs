@@ -374,13 +374,10 @@ pub(crate) fn reverse_canonical_soup(
     if !triangles || vertices >= NONE as usize || indices.len() >= NONE as usize {
         return None;
     }
-    // Called four times per group in the canonical pass: inlined there.
-    #[inline(always)]
-    fn corners(indices: &[u32], vertices: usize, f: usize) -> Option<[u32; 3]> {
+    let face = |f: usize| -> Option<[u32; 3]> {
         let face: [u32; 3] = indices.get(3 * f..3 * f + 3)?.try_into().ok()?;
         face.iter().all(|&v| (v as usize) < vertices).then_some(face)
-    }
-    let face = |f: usize| corners(indices, vertices, f);
+    };
     reverse_canonical(faces, vertices, seed_vertex, face, &soup.positions, rules)
 }
 
