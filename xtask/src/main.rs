@@ -16,7 +16,7 @@ use std::env;
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
-use std::time::Instant;
+use std::time::{Duration, Instant, SystemTime};
 
 mod peers;
 
@@ -176,8 +176,12 @@ fn layering() -> Result<(), String> {
 }
 
 /// Runs the criterion benches (`passed` starts with `--` and goes to criterion, e.g. a
-/// filter) and summarises every result under `target/criterion`, including earlier runs'.
+/// filter) and summarises every result under `target/criterion`, including earlier runs';
+/// the comparison with the peers takes only this run's results, so that every ratio
+/// compares times of the same minutes.
 fn bench(krate: Option<&str>, passed: &[String]) -> Result<(), String> {
+    // Criterion's files have whole-second times on some file systems.
+    let started = SystemTime::now() - Duration::from_secs(1);
     let mut command = cargo();
     command.arg("bench");
     match krate {
@@ -188,7 +192,8 @@ fn bench(krate: Option<&str>, passed: &[String]) -> Result<(), String> {
     run("bench", &mut command)?;
     let criterion_dir = target_dir().join("criterion");
     let mut rows = BTreeMap::new();
-    collect_estimates(&criterion_dir, &criterion_dir, &mut rows);
+    let mut written = BTreeMap::new();
+    collect_estimates(&criterion_dir, &criterion_dir, &mut rows, &mut written);
     let mut table = String::from("| benchmark | mean | fastest sample | throughput (mean) |\n|---|---:|---:|---:|\n");
     for (name, measurement) in &rows {
         let throughput = measurement.elements.map(|n| format_throughput(n, measurement.mean_ns)).unwrap_or_default();
@@ -204,7 +209,12 @@ fn bench(krate: Option<&str>, passed: &[String]) -> Result<(), String> {
             .flat_map(|folder| ["obj", "off", "ply"].map(|ext| folder.join(format!("{mesh}.{ext}"))))
             .find(|p| p.is_file())
     };
-    let comparison = peers::comparison(&rows, mesh_file);
+    let this_run: BTreeMap<String, peers::Measurement> = rows
+        .iter()
+        .filter(|(id, _)| written.get(*id).is_some_and(|&time| time >= started))
+        .map(|(id, measurement)| (id.clone(), measurement.clone()))
+        .collect();
+    let comparison = peers::comparison(&this_run, mesh_file);
     println!("{comparison}");
     let summary = target_dir().join("bench-summary.md");
     fs::write(&summary, format!("# Benchmark summary\n\n{table}\n{comparison}"))
@@ -214,8 +224,14 @@ fn bench(krate: Option<&str>, passed: &[String]) -> Result<(), String> {
 }
 
 /// Finds `<id>/new/estimates.json` under the criterion directory: mean time and, when
-/// the benchmark declared one, its throughput in elements.
-fn collect_estimates(root: &Path, dir: &Path, rows: &mut BTreeMap<String, peers::Measurement>) {
+/// the benchmark declared one, its throughput in elements; and in `written`, when the
+/// estimates were written.
+fn collect_estimates(
+    root: &Path,
+    dir: &Path,
+    rows: &mut BTreeMap<String, peers::Measurement>,
+    written: &mut BTreeMap<String, SystemTime>,
+) {
     let Ok(entries) = fs::read_dir(dir) else { return };
     for entry in entries.flatten() {
         let path = entry.path();
@@ -234,9 +250,12 @@ fn collect_estimates(root: &Path, dir: &Path, rows: &mut BTreeMap<String, peers:
             let elements = read_json("benchmark.json").and_then(|v| v["throughput"]["Elements"].as_f64());
             let best_ns = read_json("sample.json").and_then(|v| fastest_sample_ns(&v));
             let id = dir.strip_prefix(root).unwrap_or(dir).display().to_string();
+            if let Ok(time) = fs::metadata(path.join("estimates.json")).and_then(|m| m.modified()) {
+                written.insert(id.clone(), time);
+            }
             rows.insert(id, peers::Measurement { mean_ns, best_ns, elements });
         } else if path.file_name().is_some_and(|n| n != "report") {
-            collect_estimates(root, &path, rows);
+            collect_estimates(root, &path, rows, written);
         }
     }
 }

@@ -100,6 +100,7 @@ const DRIVERS: &[Driver] = &[
 
 /// One of our measurements: mean time, the time of the fastest sample (if criterion
 /// wrote its samples) and output faces.
+#[derive(Clone)]
 pub struct Measurement {
     pub mean_ns: f64,
     pub best_ns: Option<f64>,
