@@ -177,19 +177,29 @@ pub(crate) fn par_fill<T: Send>(len: usize, value: impl Fn(usize) -> T + Sync) -
 #[cfg(target_os = "linux")]
 fn advise_huge_pages(start: *const u8, bytes: usize) {
     let huge = huge_page_size();
-    if bytes < huge {
-        // No whole huge page fits: leave the buffer to the allocator's defaults.
-        return;
+    // Below one huge page none fits: the buffer keeps the allocator's defaults.
+    if bytes >= huge {
+        advise_whole_pages(start, bytes, huge, libc::MADV_HUGEPAGE);
     }
-    let begin = (start as usize).next_multiple_of(huge);
-    let end = (start as usize + bytes) / huge * huge;
+}
+
+/// `madvise(advice)` on the whole pages of `page` bytes (a power of two, a multiple of
+/// the base page) inside the buffer of `bytes` bytes at `start`. Only for the two
+/// advices below, which never change what memory holds; errors are ignored.
+#[cfg(target_os = "linux")]
+fn advise_whole_pages(start: *const u8, bytes: usize, page: usize, advice: libc::c_int) {
+    debug_assert!(advice == libc::MADV_HUGEPAGE || advice == libc::MADV_POPULATE_WRITE);
+    let begin = (start as usize).next_multiple_of(page);
+    let end = (start as usize + bytes) / page * page;
     if end > begin {
-        // SAFETY: `[begin, end)` lies inside one live allocation that we own and that is
-        // page-aligned at both ends (huge pages are multiples of the base page). The
-        // advice MADV_HUGEPAGE only sets how the kernel backs these pages (the VMA flag
-        // for huge pages): it never changes or frees memory, so no Rust object, ours or
-        // another, can observe it.
-        unsafe { libc::madvise(begin as *mut libc::c_void, end - begin, libc::MADV_HUGEPAGE) };
+        // SAFETY: `[begin, end)` lies inside one live allocation that we own and is
+        // page-aligned at both ends. MADV_HUGEPAGE only sets how the kernel backs these
+        // pages (the VMA flag for huge pages). MADV_POPULATE_WRITE faults the pages in as
+        // a write would, without writing: a page already mapped keeps its contents, a new
+        // one is a zero-filled anonymous page of memory that holds no value yet (the slots
+        // of a fresh `Output` are uninitialised). Neither moves, frees or reads memory, so
+        // no Rust object, ours or another, can observe them.
+        unsafe { libc::madvise(begin as *mut libc::c_void, end - begin, advice) };
     }
 }
 
@@ -213,19 +223,8 @@ const MAP_PAGES_MIN_BYTES: usize = 1 << 18;
 /// the writes then fault the pages in as before.
 #[cfg(target_os = "linux")]
 fn map_pages(start: *const u8, bytes: usize) {
-    if bytes < MAP_PAGES_MIN_BYTES {
-        return;
-    }
-    let page = base_page_size();
-    let begin = (start as usize).next_multiple_of(page);
-    let end = (start as usize + bytes) / page * page;
-    if end > begin {
-        // SAFETY: `[begin, end)` lies inside one live allocation that we own and is
-        // page-aligned at both ends. MADV_POPULATE_WRITE faults the pages in as a write
-        // would, without writing: a page already mapped keeps its contents, a new one is
-        // a zero-filled anonymous page of memory that holds no value yet (the slots of a
-        // fresh `Output` are uninitialised). Nothing is moved, freed or read.
-        unsafe { libc::madvise(begin as *mut libc::c_void, end - begin, libc::MADV_POPULATE_WRITE) };
+    if bytes >= MAP_PAGES_MIN_BYTES {
+        advise_whole_pages(start, bytes, base_page_size(), libc::MADV_POPULATE_WRITE);
     }
 }
 
