@@ -109,6 +109,19 @@ pub(crate) fn parse_i64(token: &[u8]) -> Option<i64> {
     if digits.is_empty() {
         return None;
     }
+    if digits.len() <= 18 {
+        // Below 10^18 no sum can overflow: the plain loop (indices and counts take this
+        // path; the checked one below is for the longest tokens).
+        let mut value = 0i64;
+        for &b in digits {
+            let digit = b.wrapping_sub(b'0');
+            if digit > 9 {
+                return None;
+            }
+            value = value * 10 + digit as i64;
+        }
+        return Some(if negative { -value } else { value });
+    }
     let mut value: i64 = 0;
     for &b in digits {
         let digit = b.wrapping_sub(b'0');
@@ -180,6 +193,16 @@ mod tests {
         assert_eq!(parse_i64(b"+12"), Some(12));
         for bad in [&b""[..], b"-", b"1.0", b"1e3", b"x", b"--1"] {
             assert_eq!(parse_i64(bad), None, "{bad:?}");
+        }
+    }
+
+    proptest::proptest! {
+        /// The grammar and the range of `i64::from_str`, digit counts on both sides of
+        /// the fast path's limit included.
+        #[test]
+        fn integers_parse_as_the_standard_library_does(token in "[-+]?[0-9]{0,21}|[-+0-9a ]{0,6}") {
+            let expected = token.parse::<i64>().ok();
+            proptest::prop_assert_eq!(parse_i64(token.as_bytes()), expected);
         }
     }
 
