@@ -109,6 +109,14 @@ impl Counter {
         self.count += 1;
     }
 
+    /// Adds the hits of `later`, a counter of lines after all of this one's.
+    pub(crate) fn merge(&mut self, later: Counter) {
+        if self.count == 0 {
+            self.first = later.first;
+        }
+        self.count += later.count;
+    }
+
     pub(crate) fn flush(self, log: &mut DroppedLog, what: &str) {
         log.add(what, self.count, Location::Line(self.first));
     }

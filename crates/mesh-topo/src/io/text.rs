@@ -15,6 +15,11 @@ impl<'a> Lines<'a> {
         Self { bytes, pos: 0, line: 0 }
     }
 
+    /// The lines of `bytes`, numbered from `lines_before + 1`.
+    pub(crate) fn starting_after(bytes: &'a [u8], lines_before: usize) -> Self {
+        Self { bytes, pos: 0, line: lines_before }
+    }
+
     /// Number of the last line returned (0 before the first), i.e. the line count so far.
     pub(crate) fn line(&self) -> usize {
         self.line
