@@ -2,7 +2,7 @@
 
 use super::report::{Counter, DroppedLog};
 use super::text::{
-    Lines, Tokens, check_finite, coordinate, invalid_number, is_space, parse_i64, show_token, strip_comment, tokens,
+    Lines, Tokens, check_finite, coordinate, invalid_number, parse_i64, show_token, strip_comment, tokens,
 };
 use super::{Format, IoError, Location, ReadReport};
 use crate::ids::MAX_ELEMENTS;
@@ -377,16 +377,9 @@ fn read_body_in_pieces(body: &[u8], lines_before: usize, counts: BodyCounts) -> 
         let sizes: Vec<(usize, usize)> = pieces
             .par_iter()
             .map(|piece| {
-                let (mut lines, mut content) = (0, 0);
-                for (_, raw) in Lines::new(piece) {
-                    lines += 1;
-                    // Most lines start with a number: content, whatever follows.
-                    content += match raw.first() {
-                        Some(&b) if !is_space(b) && b != b'#' => 1,
-                        _ => usize::from(tokens(strip_comment(raw)).next().is_some()),
-                    };
-                }
-                (lines, content)
+                let mut lines = Lines::new(piece);
+                let content = std::iter::from_fn(|| next_content(&mut lines)).count();
+                (lines.line(), content)
             })
             .collect();
         read_pieces(&sizes).into_iter().map(Result::ok).collect::<Option<_>>()?
