@@ -96,12 +96,7 @@ pub fn decompose_with(
     if let Some(options) = loop_options(scheme, depth, boundaries) {
         return Ok(Pyramid::Loop(subdiv_loop::pyramid::decompose(mesh, &options)?));
     }
-    if let Some(rule) = scheme.doo_rule() {
-        let options = match depth {
-            Depth::Levels(n) => subdiv_doo::DecomposeOptions::levels(rule, n),
-            Depth::Max => subdiv_doo::DecomposeOptions::max(rule),
-        }
-        .with_boundary(boundaries.doo);
+    if let Some(options) = doo_options(scheme, depth, boundaries) {
         return Ok(Pyramid::Doo(subdiv_doo::decompose(mesh, &options)?.pyramid));
     }
     Err(Error::NotReversible { scheme })
@@ -110,8 +105,9 @@ pub fn decompose_with(
 /// [`decompose_with`] of a polygon soup, as a mesh file holds it. A Loop-family soup in
 /// the canonical order (what Loop subdivision and reconstruction write) is reversed
 /// straight from its face list, without building its half-edge mesh
-/// (`subdiv_loop::pyramid::decompose_soup`); any other soup is built into a half-edge
-/// mesh first. The result, or the error, is that of
+/// (`subdiv_loop::pyramid::decompose_soup`), and so is the first level of a closed
+/// Doo-Sabin soup in its canonical order (`subdiv_doo::decompose_soup`); any other soup
+/// is built into a half-edge mesh first. The result, or the error, is that of
 /// `decompose_with(&HalfedgeMesh::from_soup(soup)?, ...)`.
 ///
 /// ```
@@ -145,7 +141,26 @@ pub fn decompose_soup(
             Err(error) => Err(error.into()),
         };
     }
+    if boundaries.check(scheme).is_ok()
+        && let Some(options) = doo_options(scheme, depth, boundaries)
+    {
+        return match subdiv_doo::decompose_soup(soup, &options) {
+            Ok(decomposition) => Ok(Pyramid::Doo(decomposition.pyramid)),
+            Err(subdiv_doo::DooError::Mesh(error)) => Err(Error::Mesh(error)),
+            Err(error) => Err(error.into()),
+        };
+    }
     decompose_with(&HalfedgeMesh::from_soup(soup)?, scheme, depth, boundaries)
+}
+
+/// The Doo-Sabin decomposition options of a Doo-Sabin scheme, `None` otherwise.
+fn doo_options(scheme: SurfaceScheme, depth: Depth, boundaries: &Boundaries) -> Option<subdiv_doo::DecomposeOptions> {
+    let rule = scheme.doo_rule()?;
+    let options = match depth {
+        Depth::Levels(n) => subdiv_doo::DecomposeOptions::levels(rule, n),
+        Depth::Max => subdiv_doo::DecomposeOptions::max(rule),
+    };
+    Some(options.with_boundary(boundaries.doo))
 }
 
 /// The Loop decomposition options of a reversible Loop-family scheme, `None` otherwise.
@@ -335,13 +350,16 @@ mod tests {
         let grid = HalfedgeMesh::from_soup(&shapes::grid(3, 2, shapes::CellKind::Quads).unwrap()).unwrap();
         let mut soups = Vec::new();
         for scheme in SurfaceScheme::ALL.into_iter().filter(|s| s.is_reversible()) {
-            let coarse = if scheme.accepts_polygons() { &cube } else { &octahedron };
-            let fine = perturbed(&scheme.subdivide(coarse, 2).unwrap()).to_soup();
-            let mut not_finite = fine.clone();
-            not_finite.positions[3].x = f64::NAN;
-            let mut out_of_range = fine.clone();
-            out_of_range.indices[2] = fine.vertex_count() as u32;
-            soups.extend([fine, not_finite, out_of_range]);
+            // (Doo-Sabin: a refined octahedron is in the canonical order the soup path takes.)
+            let coarse_meshes = if scheme.accepts_polygons() { vec![&cube, &octahedron] } else { vec![&octahedron] };
+            for coarse in coarse_meshes {
+                let fine = perturbed(&scheme.subdivide(coarse, 2).unwrap()).to_soup();
+                let mut not_finite = fine.clone();
+                not_finite.positions[3].x = f64::NAN;
+                let mut out_of_range = fine.clone();
+                out_of_range.indices[2] = fine.vertex_count() as u32;
+                soups.extend([fine, not_finite, out_of_range]);
+            }
         }
         soups.push(SurfaceScheme::DooSabin.subdivide_with(&grid, 1, &Boundaries::chaikin()).unwrap());
         for soup in &soups {

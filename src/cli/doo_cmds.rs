@@ -9,12 +9,13 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use mesh_topo::PolygonSoup;
 use mesh_topo::io::WriteOptions;
 use subdiv_doo::analysis::{ReifReport, reif_check};
-use subdiv_doo::pyramid::{DecomposeOptions, Depth, DooPyramid, decompose as decompose_mesh};
+use subdiv_doo::pyramid::{DecomposeOptions, Decomposition, Depth, DooPyramid, decompose_soup};
 use subdiv_doo::{BoundaryRule, DooError, DooOptions, FaceRule, SeedChoice, subdivide_soup};
 
-use super::common::{note_dropped, read_mesh, read_soup, write_soup};
+use super::common::{invalid_mesh, note_dropped, read_soup, write_soup};
 use super::{
     AnalyzeArgs, AnalyzeScheme, BoundaryArg, CliError, CliResult, DecomposeArgs, ReconstructArgs, ReverseArgs,
     ReverseScheme, SubdivideArgs, SurfaceScheme, input_error,
@@ -102,6 +103,20 @@ fn choice_lines(level: usize, choices: &[SeedChoice]) -> String {
     out
 }
 
+/// Reads a mesh file and decomposes it from its face list (`pyramid::decompose_soup`: a
+/// closed file written by Doo-Sabin subdivision is reversed without building its
+/// half-edge mesh); the soup read and the decomposition. A file that is not a valid mesh
+/// is reported as the other commands report it.
+fn decompose_file(path: &Path, options: &DecomposeOptions) -> CliResult<(PolygonSoup, Decomposition)> {
+    let (soup, report) = read_soup(path)?;
+    note_dropped(path, &report);
+    match decompose_soup(&soup, options) {
+        Ok(decomposition) => Ok((soup, decomposition)),
+        Err(DooError::Mesh(error)) => Err(invalid_mesh(path, error)),
+        Err(error) => Err(doo_error(path, error)),
+    }
+}
+
 /// `reverse --scheme doo`: the coarse mesh after `--levels` reverse Doo-Sabin steps (the
 /// details are dropped; `decompose` keeps them). Prints the seed and candidate class
 /// chosen for every component of every level, with the detail norm `sqrt(Σ|d_i|²)`.
@@ -110,14 +125,13 @@ pub fn reverse(args: &ReverseArgs) -> CliResult {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
     let rule = reverse_rule(args.scheme, args.keep_corners)?;
-    let mesh = read_mesh(&args.mesh)?;
     let options = DecomposeOptions {
         rule,
         depth: Depth::Levels(args.levels),
         seeds: args.seed_face.map(|f| vec![f as usize]).unwrap_or_default(),
         boundary: boundary_rule(args.boundary),
     };
-    let decomposition = decompose_mesh(&mesh, &options).map_err(|e| doo_error(&args.mesh, e))?;
+    let (mesh, decomposition) = decompose_file(&args.mesh, &options)?;
     let pyramid = &decomposition.pyramid;
     write_soup(&args.out, &pyramid.base, &WriteOptions::default())?;
     let mut text = format!(
@@ -141,10 +155,9 @@ pub fn decompose(args: &DecomposeArgs) -> CliResult {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
     let rule = reverse_rule(args.scheme, args.keep_corners)?;
-    let mesh = read_mesh(&args.mesh)?;
     let depth = if args.max { Depth::Max } else { Depth::Levels(args.levels) };
     let options = DecomposeOptions { rule, depth, seeds: Vec::new(), boundary: boundary_rule(args.boundary) };
-    let decomposition = decompose_mesh(&mesh, &options).map_err(|e| doo_error(&args.mesh, e))?;
+    let (mesh, decomposition) = decompose_file(&args.mesh, &options)?;
     let pyramid = &decomposition.pyramid;
     let report = if args.report {
         Some(pyramid.rate_distortion(&REPORT_FRACTIONS).map_err(|e| doo_error(&args.mesh, e))?)

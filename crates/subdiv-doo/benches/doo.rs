@@ -23,8 +23,10 @@
 //! pyramid with its base connectivity built (`DooPyramid::prepare`), so its counterpart
 //! is `forward`. Compare in the same run and with the same number of threads:
 //! `decompose*_1thread` with `forward_1thread`, `reconstruct_1thread` with
-//! `forward_soup_1thread`, `reconstruct_prepared_1thread` with `forward_1thread`, and
-//! `decompose_renumbered_1thread` with `forward_renumbered_1thread`.
+//! `forward_soup_1thread`, `reconstruct_prepared_1thread` with `forward_1thread`,
+//! `decompose_renumbered_1thread` with `forward_renumbered_1thread`, and
+//! `decompose_soup_1thread` (`decompose_soup`: the fine mesh as a polygon soup, as read
+//! from a file, its half-edges computed from its face list) with `forward_soup_1thread`.
 //!
 //! Run with `cargo bench -p subdiv-doo --bench doo`. The inputs are built before timing;
 //! the timed call is `subdivide` on an already built half-edge mesh (the counterpart of
@@ -40,7 +42,7 @@ use mesh_topo::testing::scramble;
 use mesh_topo::{DVec3, HalfedgeMesh, PolygonSoup};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use subdiv_doo::pyramid::{DecomposeOptions, decompose};
+use subdiv_doo::pyramid::{DecomposeOptions, decompose, decompose_soup};
 use subdiv_doo::{BoundaryRule, DooOptions, FaceRule, subdivide, subdivide_soup};
 
 /// The bunny of `tests/data` (a minimal OBJ reader: positions and faces only).
@@ -157,6 +159,12 @@ fn multires(c: &mut Criterion) {
         let coarse_soup = coarse.to_soup();
         group.bench_with_input(BenchmarkId::new("forward_soup_1thread", fine_vertices), &coarse_soup, |b, soup| {
             b.iter(|| one.install(|| subdivide_soup(black_box(soup), &forward_options).unwrap()))
+        });
+        // From the fine soup, as read from a file (its half-edges computed from the face
+        // list, no half-edge mesh built): against `forward_soup`, both starting from a soup.
+        let fine_soup = fine.to_soup();
+        group.bench_with_input(BenchmarkId::new("decompose_soup_1thread", fine_vertices), &fine_soup, |b, soup| {
+            b.iter(|| one.install(|| decompose_soup(black_box(soup), &options).unwrap()))
         });
         group.bench_with_input(BenchmarkId::new("reconstruct_1thread", fine_vertices), &pyramid, |b, pyramid| {
             b.iter(|| one.install(|| black_box(pyramid).reconstruct(1, None).unwrap()))

@@ -19,7 +19,7 @@
 //! the general path gives, bit for bit. Any mismatch (a mesh in another order, a broken
 //! mesh) makes this path give up, and the general path runs and names the face at fault.
 
-use mesh_topo::HalfedgeMesh;
+use mesh_topo::{HalfedgeMesh, PolygonSoup};
 
 use glam::DVec3;
 
@@ -553,6 +553,147 @@ impl CornerHalfedges {
                     }
                 };
                 next[(halfedge_of[c] ^ 1) as usize] = halfedge_of[last] ^ 1;
+            }
+        }
+        Some(Self { to, next, face_of, face_halfedge })
+    }
+
+    /// The half-edges `HalfedgeMesh::from_soup` would build from `soup`, computed from
+    /// the soup's face list alone when it is a closed mesh in the canonical order of
+    /// [`crate::subdivide`] (see [`reverse_canonical`]); `None` for any other soup (one
+    /// with a boundary, another order, anything `from_soup` rejects), which then takes
+    /// the way through `from_soup`.
+    ///
+    /// Read in that order, a closed Doo-Sabin soup of `V` vertices names every half-edge
+    /// by arithmetic (the numbering of [`stream_ff_faces`]): the F_F faces are the first
+    /// faces, on the vertices `0, 1, 2, ..` in order, and fine vertex `c` starts the F_F
+    /// side `2c`, whose twin `2c + 1` lies on an F_E quad; quad `j` is `(c, next(t), t,
+    /// next(c))`, `c < t` the twin corners, claimed in increasing order of `c`, with the
+    /// sides `2V + 4j` (from `c`) and `2V + 4j + 2` (from `t`); every other face is an F_V
+    /// face, whose side `x -> y` is the twin of the quad side from `y` (so `x` must be
+    /// `next(twin(y))`), and every vertex lies on exactly one of them.
+    ///
+    /// What is checked makes the soup one `from_soup` accepts, with these half-edges:
+    /// indices in range and positions finite; faces of 3 or more corners, no vertex twice
+    /// in a face (the F_F faces by their numbering, the F_V faces by marking each vertex
+    /// once; a quad `(c, next(t), t, next(c))` with `c = next(t)` would put `c` after
+    /// itself on its F_V face, and likewise `t = next(c)`); the four half-edges leaving each vertex
+    /// (along its F_F side, back along the one before it, along its quad side and back
+    /// along the quad side ending at it) have four different targets, so that no directed
+    /// edge is used twice; every edge then has two sides (closed), and the faces around
+    /// each vertex (F_F, quad, F_V, quad) form one fan. Linear, without hashing or
+    /// sorting: one pass over the faces, one over the vertices.
+    pub(crate) fn of_closed_canonical_soup(soup: &PolygonSoup) -> Option<Self> {
+        let (vertices, offsets, indices) = (soup.positions.len(), &soup.offsets[..], &soup.indices[..]);
+        let faces = offsets.len().checked_sub(1)?;
+        // 4V half-edges (2V edges), all numbered below `NONE`.
+        if vertices == 0 || vertices % 2 != 0 || vertices >= (NONE as usize) / 4 || faces >= NONE as usize {
+            return None;
+        }
+        if offsets[0] != 0
+            || offsets[faces] as usize != indices.len()
+            || offsets.windows(2).any(|w| u64::from(w[1]) < u64::from(w[0]) + 3)
+        {
+            return None;
+        }
+        if !soup.positions.iter().all(|p| p.is_finite()) {
+            return None;
+        }
+        let v = vertices as u32;
+        let halfedges = 4 * vertices;
+        let (mut to, mut next, mut face_of) = (vec![0u32; halfedges], vec![0u32; halfedges], vec![0u32; halfedges]);
+        let mut face_halfedge = Vec::with_capacity(faces);
+        // F_F faces: vertex `c` is corner `c`; the next corner of each.
+        let (mut corner_next, mut corner_prev) = (Vec::with_capacity(vertices), Vec::with_capacity(vertices));
+        let mut f = 0;
+        let mut start = 0u32;
+        while start < v {
+            let (b, e) = (offsets[f] as usize, offsets.get(f + 1).copied()? as usize);
+            let size = (e - b) as u32;
+            if start.checked_add(size)? > v || !indices[b..e].iter().zip(start..).all(|(&x, c)| x == c) {
+                return None;
+            }
+            face_halfedge.push(2 * start);
+            for c in start..start + size {
+                let n = if c + 1 == start + size { start } else { c + 1 };
+                corner_next.push(n);
+                corner_prev.push(if c == start { start + size - 1 } else { c - 1 });
+                let h = 2 * c as usize;
+                (to[h], next[h], face_of[h]) = (n, 2 * n, f as u32);
+                to[h + 1] = c;
+            }
+            start += size;
+            f += 1;
+        }
+        // F_E quads: the twins, and the quad side leaving each vertex.
+        let ff = f;
+        let quads = vertices / 2;
+        if ff + quads >= faces {
+            return None;
+        }
+        let mut twin = vec![NONE; vertices];
+        let mut side = vec![0u32; vertices];
+        let mut last_claim = None;
+        for j in 0..quads {
+            let f = ff + j;
+            let [c, a, t, b] = *<&[u32; 4]>::try_from(&indices[offsets[f] as usize..offsets[f + 1] as usize]).ok()?;
+            if t >= v || last_claim.is_some_and(|last| c <= last) || c >= t {
+                return None;
+            }
+            last_claim = Some(c);
+            let (ci, ti) = (c as usize, t as usize);
+            if a != corner_next[ti] || b != corner_next[ci] || twin[ci] != NONE || twin[ti] != NONE {
+                return None;
+            }
+            (twin[ci], twin[ti]) = (t, c);
+            let (q, f) = (2 * v + 4 * j as u32, f as u32);
+            (side[ci], side[ti]) = (q, q + 2);
+            face_halfedge.push(q);
+            let (q, back_c, back_t) = (q as usize, 2 * ci + 1, 2 * ti + 1);
+            // The 4-cycle q -> back of t's F_F side -> q + 2 -> back of c's F_F side.
+            (to[q], next[q], face_of[q]) = (a, back_t as u32, f);
+            (next[back_t], face_of[back_t]) = ((q + 2) as u32, f);
+            (to[q + 2], next[q + 2], face_of[q + 2]) = (b, back_c as u32, f);
+            (next[back_c], face_of[back_c]) = (q as u32, f);
+            (to[q + 1], to[q + 3]) = (c, t);
+        }
+        // Every vertex is now on one quad (`vertices / 2` quads, each claiming two new corners).
+        // F_V faces: side `x -> y` is the twin of the quad side from `y`, which ends at
+        // `next(twin(y))`.
+        let back_of_side = |y: u32| side[y as usize] + 1;
+        let mut on_fv = vec![false; vertices];
+        for f in ff + quads..faces {
+            let corners = &indices[offsets[f] as usize..offsets[f + 1] as usize];
+            // (Every vertex has its twin now; a vertex out of range is no `next`.)
+            let mut x = corners[corners.len() - 1];
+            for &y in corners {
+                if y >= v || std::mem::replace(&mut on_fv[y as usize], true) {
+                    return None;
+                }
+                if corner_next[twin[y as usize] as usize] != x {
+                    return None;
+                }
+                x = y;
+            }
+            face_halfedge.push(back_of_side(corners[1]));
+            for (i, &y) in corners.iter().enumerate() {
+                let h = back_of_side(y) as usize;
+                next[h] = back_of_side(corners[(i + 1) % corners.len()]);
+                face_of[h] = f as u32;
+            }
+        }
+        if !on_fv.iter().all(|&on| on) {
+            return None;
+        }
+        // The four half-edges leaving each vertex have four different targets (and none
+        // ends where it starts): along its F_F side, back along the F_F side ending at it,
+        // along its quad side, and back along the quad side ending at it (the one from
+        // `twin(prev(x))`, as `next(twin(twin(prev(x)))) = x`).
+        for x in 0..v {
+            let (n, p) = (corner_next[x as usize], corner_prev[x as usize]);
+            let (s, r) = (corner_next[twin[x as usize] as usize], twin[p as usize]);
+            if [n, p, s, r].contains(&x) || n == p || n == s || n == r || p == s || p == r || s == r {
+                return None;
             }
         }
         Some(Self { to, next, face_of, face_halfedge })

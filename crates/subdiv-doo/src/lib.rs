@@ -46,7 +46,8 @@ pub use corner::{FaceKind, FaceOrigin};
 pub use error::DooError;
 pub use forward::{DooMesh, DooOptions, subdivide, subdivide_soup};
 pub use pyramid::{
-    DecomposeOptions, Decomposition, Depth, DooPyramid, PreparedDooPyramid, RateDistortion, decompose, is_doo_pyramid,
+    DecomposeOptions, Decomposition, Depth, DooPyramid, PreparedDooPyramid, RateDistortion, decompose, decompose_soup,
+    is_doo_pyramid,
 };
 pub use reverse::{DooReversal, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial, reverse};
 pub use rule::FaceRule;

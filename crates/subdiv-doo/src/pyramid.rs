@@ -205,6 +205,65 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
     if first.is_none() {
         check_finite(mesh.positions())?;
     }
+    let decomposition = decompose_from(first, Some(mesh), mesh.face_count(), options)?;
+    Ok(decomposition.expect("internal: with the mesh at hand every path can run"))
+}
+
+/// [`decompose`] of a polygon soup, as a mesh file holds it: the result, or the error,
+/// of `decompose(&HalfedgeMesh::from_soup(soup)?, options)`.
+///
+/// A closed mesh written by [`crate::subdivide`] (or rebuilt by a pyramid), the shrinking
+/// boundary rule and at least one level: the first level is reversed from half-edge
+/// arrays computed from the face list by arithmetic (the numbering `from_soup` would
+/// give, with every check that makes `from_soup` accept the soup), without building
+/// the half-edge mesh, and the coarser levels as [`decompose`] reverses them. Any other
+/// soup, or one whose first level the canonical path does not take to the end, goes
+/// through `from_soup` and [`decompose`].
+///
+/// ```
+/// use subdiv_doo::pyramid::{DecomposeOptions, decompose, decompose_soup};
+/// use subdiv_doo::{DooOptions, FaceRule, subdivide};
+/// use mesh_topo::{HalfedgeMesh, shapes};
+///
+/// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+/// let mut fine = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 2))?.to_soup();
+/// fine.positions[7].x += 0.1;
+/// let options = DecomposeOptions::levels(FaceRule::DooSabin, 2);
+/// let from_soup = decompose_soup(&fine, &options)?.pyramid;
+/// let from_mesh = decompose(&HalfedgeMesh::from_soup(&fine)?, &options)?.pyramid;
+/// assert_eq!(from_soup, from_mesh);
+/// # Ok::<(), subdiv_doo::DooError>(())
+/// ```
+///
+/// # Errors
+/// Those of [`HalfedgeMesh::from_soup`] (as [`DooError::Mesh`]) and of [`decompose`].
+pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
+    if options.depth != Depth::Levels(0)
+        && options.boundary == BoundaryRule::Shrink
+        && canonical_enabled()
+        && let Some(halfedges) = CornerHalfedges::of_closed_canonical_soup(soup)
+        && let Some(first) = reverse_canonical_arrays(&halfedges.view(&soup.positions), &reverse_options(options, 0))
+    {
+        drop(halfedges);
+        if let Some(decomposition) = decompose_from(Some(Step::from_reversal(first)), None, soup.face_count(), options)?
+        {
+            return Ok(decomposition);
+        }
+    }
+    decompose(&HalfedgeMesh::from_soup(soup)?, options)
+}
+
+/// The levels of [`decompose`] once its first level has been tried by the canonical path
+/// (`first`, `None` if that did not apply). `mesh` is the input mesh, which the general
+/// path of the first level needs; without it (`None`, a soup read by the canonical path)
+/// the result is `Ok(None)` where that path would have to run. `faces`: the input's face
+/// count.
+fn decompose_from(
+    first: Option<Step>,
+    mesh: Option<&HalfedgeMesh>,
+    faces: usize,
+    options: &DecomposeOptions,
+) -> Result<Option<Decomposition>, DooError> {
     let mut steps = Vec::new();
     let mut stopped = None;
     match options.depth {
@@ -222,6 +281,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
                 // The general search over this level's readings (the first of which is
                 // the canonical one, if any, which could not go on).
                 (first, _) => {
+                    let Some(mesh) = mesh else { return Ok(None) };
                     let fine = CornerMesh::from_halfedge(mesh);
                     descend_from(&fine, mesh.positions(), options, 0, n, false, first.is_none())?
                 }
@@ -233,7 +293,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
             // once the canonical path has been tried on it, what it gave.
             let mut tried = Some(first);
             // Faces of the mesh that the last step reversed.
-            let mut reversed_faces = mesh.face_count();
+            let mut reversed_faces = faces;
             for level in 0..MAX_LEVELS {
                 // No F_E and no F_V face: as many coarse faces as fine ones (see `Depth::Max`).
                 if let Some(last) = steps.last()
@@ -271,6 +331,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
                         let (fine, positions) = match steps.last() {
                             Some(last) => (&last.coarse, last.coarse_positions.as_slice()),
                             None => {
+                                let Some(mesh) = mesh else { return Ok(None) };
                                 input = CornerMesh::from_halfedge(mesh);
                                 (&input, mesh.positions())
                             }
@@ -285,7 +346,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
                         }
                     }
                 };
-                reversed_faces = steps.last().map_or(mesh.face_count(), |last| last.coarse.face_count());
+                reversed_faces = steps.last().map_or(faces, |last| last.coarse.face_count());
                 steps.push(step);
             }
             if stopped.is_none() {
@@ -308,7 +369,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
     }
     choices.reverse();
     let pyramid = DooPyramid { rule: options.rule, base, levels, boundary: options.boundary };
-    Ok(Decomposition { pyramid, choices, stopped })
+    Ok(Some(Decomposition { pyramid, choices, stopped }))
 }
 
 /// One reversal of a decomposition.
@@ -908,6 +969,136 @@ mod tests {
             let view = arrays.view(mesh.positions());
             let expected = crate::canonical::HalfedgeArrays::of(&mesh);
             assert_eq!(format!("{view:?}"), format!("{expected:?}"));
+        }
+    }
+
+    #[test]
+    fn halfedges_of_a_closed_canonical_soup_are_those_of_from_soup() {
+        let cases = [
+            (shapes::cube(), FaceRule::DooSabin, 1),
+            (shapes::cube(), FaceRule::Simple, 3),
+            (shapes::tetrahedron(), FaceRule::DooSabin, 2),
+            (shapes::icosahedron(), FaceRule::Centroid { a: 0.5 }, 2),
+            (shapes::torus(6, 4, shapes::CellKind::Triangles).unwrap(), FaceRule::DooSabin, 2),
+            (shapes::torus(5, 3, shapes::CellKind::Mixed).unwrap(), FaceRule::DooSabin, 1),
+        ];
+        for (coarse, rule, levels) in cases {
+            let soup = refined_and_moved(&coarse, rule, levels).to_soup();
+            let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+            let arrays = CornerHalfedges::of_closed_canonical_soup(&soup).expect("a closed canonical soup");
+            let view = arrays.view(&soup.positions);
+            let expected = crate::canonical::HalfedgeArrays::of(&mesh);
+            assert_eq!(format!("{view:?}"), format!("{expected:?}"), "{rule:?} x{levels}");
+        }
+        // Not taken: an open mesh, a mesh in another order, a soup that is not a refinement.
+        let open = refined_and_moved(&shapes::grid(4, 3, shapes::CellKind::Quads).unwrap(), FaceRule::DooSabin, 1);
+        let scrambled =
+            mesh_topo::testing::scramble(refined_and_moved(&shapes::cube(), FaceRule::DooSabin, 1).to_soup(), 3, 0.0);
+        for soup in [open.to_soup(), scrambled, shapes::cube(), shapes::torus(4, 4, shapes::CellKind::Quads).unwrap()] {
+            assert!(CornerHalfedges::of_closed_canonical_soup(&soup).is_none());
+        }
+    }
+
+    #[test]
+    fn a_soup_whose_twins_meet_in_one_face_is_left_to_from_soup() {
+        // One F_F face whose opposite sides are twinned: every F_E quad and F_V face is
+        // well formed, but the F_V face is the F_F face again, each side used twice.
+        let positions = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+        let soup = PolygonSoup::from_faces(positions, [[0, 1, 2, 3], [0, 3, 2, 1], [1, 0, 3, 2], [0, 1, 2, 3]]);
+        assert!(CornerHalfedges::of_closed_canonical_soup(&soup).is_none());
+        let options = DecomposeOptions::levels(FaceRule::DooSabin, 1);
+        assert!(matches!(decompose_soup(&soup, &options), Err(DooError::Mesh(_))));
+    }
+
+    /// A soup made by one of a few kinds of damage to `soup` (`kind` picks it, `pick`
+    /// where), or `soup` itself; the damaged soup may or may not be a valid mesh.
+    fn damaged(mut soup: PolygonSoup, kind: usize, pick: u64) -> PolygonSoup {
+        let faces = soup.face_count();
+        let face = (pick % faces as u64) as usize;
+        let (b, e) = (soup.offsets[face] as usize, soup.offsets[face + 1] as usize);
+        let corner = b + (pick / 7) as usize % (e - b);
+        let vertex = ((pick / 13) % soup.positions.len() as u64) as u32;
+        match kind {
+            // A face rotated by one, or reversed.
+            1 => soup.indices[b..e].rotate_left(1),
+            2 => soup.indices[b..e].reverse(),
+            // One corner moved to another vertex.
+            3 => soup.indices[corner] = vertex,
+            // One face removed, or listed twice.
+            4 | 5 => {
+                let mut kept: Vec<Vec<u32>> = (0..faces).map(|f| soup.face(f).to_vec()).collect();
+                if kind == 4 {
+                    kept.remove(face);
+                } else {
+                    kept.push(kept[face].clone());
+                }
+                soup = PolygonSoup::from_faces(soup.positions, kept);
+            }
+            // Two faces swapped.
+            6 => {
+                let mut all: Vec<Vec<u32>> = (0..faces).map(|f| soup.face(f).to_vec()).collect();
+                all.swap(face, (face + 1 + (pick / 3) as usize % (faces - 1)) % faces);
+                soup = PolygonSoup::from_faces(soup.positions, all);
+            }
+            // A position not finite, or the last vertex dropped (an index out of range).
+            7 => soup.positions[vertex as usize].y = f64::NAN,
+            8 => {
+                soup.positions.pop();
+            }
+            // Every face reversed: a valid mesh, not in the canonical order.
+            9 => {
+                let all: Vec<Vec<u32>> = (0..faces).map(|f| soup.face(f).iter().rev().copied().collect()).collect();
+                soup = PolygonSoup::from_faces(soup.positions, all);
+            }
+            // One vertex moved far: still canonical, large details.
+            10 => soup.positions[vertex as usize] += DVec3::new(0.5, -0.25, 1.0),
+            _ => {}
+        }
+        soup
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+        /// `decompose_soup` gives what building the mesh and decomposing it gives: the
+        /// same decomposition (reports included) or the same error, for refined meshes,
+        /// damaged or not, to every depth, automatic and seeded.
+        #[test]
+        fn soups_decompose_as_their_meshes(
+            shape in 0usize..6,
+            rule in 0usize..3,
+            levels in 1u32..4,
+            damage in 0usize..16,
+            pick in proptest::prelude::any::<u64>(),
+            depth in 0usize..5,
+        ) {
+            let coarse = match shape {
+                0 => shapes::cube(),
+                1 => shapes::tetrahedron(),
+                2 => shapes::torus(5, 3, shapes::CellKind::Triangles).unwrap(),
+                3 => shapes::torus(4, 3, shapes::CellKind::Mixed).unwrap(),
+                4 => shapes::grid(3, 2, shapes::CellKind::Quads).unwrap(),
+                _ => shapes::icosahedron(),
+            };
+            let rule = [FaceRule::DooSabin, FaceRule::Simple, FaceRule::Centroid { a: 0.5 }][rule];
+            let levels = if shape == 4 { 1 } else { levels.min(if shape == 2 || shape == 3 { 2 } else { 3 }) };
+            let soup = damaged(refined_and_moved(&coarse, rule, levels).to_soup(), damage, pick);
+            let options = match depth {
+                0 => DecomposeOptions::levels(rule, levels),
+                1 => DecomposeOptions::levels(rule, 1),
+                2 => DecomposeOptions::max(rule),
+                3 => DecomposeOptions::levels(rule, levels + 1),
+                _ => DecomposeOptions { seeds: vec![(pick % 5) as usize], ..DecomposeOptions::levels(rule, levels) },
+            };
+            // The arrays alone: a soup they accept is one `from_soup` accepts, numbered alike.
+            if let Some(arrays) = CornerHalfedges::of_closed_canonical_soup(&soup) {
+                let mesh = HalfedgeMesh::from_soup(&soup);
+                proptest::prop_assert!(mesh.is_ok(), "accepted, but {mesh:?}");
+                let expected = crate::canonical::HalfedgeArrays::of(mesh.as_ref().unwrap());
+                proptest::prop_assert_eq!(format!("{:?}", arrays.view(&soup.positions)), format!("{expected:?}"));
+            }
+            let direct = decompose_soup(&soup, &options);
+            let built = HalfedgeMesh::from_soup(&soup).map_err(DooError::from).and_then(|mesh| decompose(&mesh, &options));
+            proptest::prop_assert_eq!(format!("{direct:?}"), format!("{built:?}"));
         }
     }
 
