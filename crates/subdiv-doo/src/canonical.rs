@@ -577,12 +577,11 @@ impl CornerHalfedges {
     /// indices in range and positions finite; faces of 3 or more corners, no vertex twice
     /// in a face (the F_F faces by their numbering, the F_V faces by marking each vertex
     /// once; a quad `(c, next(t), t, next(c))` with `c = next(t)` would put `c` after
-    /// itself on its F_V face, and likewise `t = next(c)`); the four half-edges leaving each vertex
-    /// (along its F_F side, back along the one before it, along its quad side and back
-    /// along the quad side ending at it) have four different targets, so that no directed
-    /// edge is used twice; every edge then has two sides (closed), and the faces around
-    /// each vertex (F_F, quad, F_V, quad) form one fan. Linear, without hashing or
-    /// sorting: one pass over the faces, one over the vertices.
+    /// itself on its F_V face, and likewise `t = next(c)`); no F_V side along an F_F side,
+    /// so that the four half-edges leaving each vertex have four different targets and no
+    /// directed edge is used twice; every edge then has two sides (closed), and the faces
+    /// around each vertex (F_F, quad, F_V, quad) form one fan. Linear, without hashing or
+    /// sorting: one pass over the faces.
     pub(crate) fn of_closed_canonical_soup(soup: &PolygonSoup) -> Option<Self> {
         let (vertices, offsets, indices) = (soup.positions.len(), &soup.offsets[..], &soup.indices[..]);
         let faces = offsets.len().checked_sub(1)?;
@@ -604,7 +603,7 @@ impl CornerHalfedges {
         let (mut to, mut next, mut face_of) = (vec![0u32; halfedges], vec![0u32; halfedges], vec![0u32; halfedges]);
         let mut face_halfedge = Vec::with_capacity(faces);
         // F_F faces: vertex `c` is corner `c`; the next corner of each.
-        let (mut corner_next, mut corner_prev) = (Vec::with_capacity(vertices), Vec::with_capacity(vertices));
+        let mut corner_next = Vec::with_capacity(vertices);
         let mut f = 0;
         let mut start = 0u32;
         while start < v {
@@ -617,7 +616,6 @@ impl CornerHalfedges {
             for c in start..start + size {
                 let n = if c + 1 == start + size { start } else { c + 1 };
                 corner_next.push(n);
-                corner_prev.push(if c == start { start + size - 1 } else { c - 1 });
                 let h = 2 * c as usize;
                 (to[h], next[h], face_of[h]) = (n, 2 * n, f as u32);
                 to[h + 1] = c;
@@ -659,7 +657,13 @@ impl CornerHalfedges {
         }
         // Every vertex is now on one quad (`vertices / 2` quads, each claiming two new corners).
         // F_V faces: side `x -> y` is the twin of the quad side from `y`, which ends at
-        // `next(twin(y))`.
+        // `next(twin(y))`, and it runs along no F_F side: `next(x) != y` (`next(y) = x`
+        // would make `y` its own twin).
+        // With that, the four half-edges leaving each vertex `x` have four different
+        // targets: along its F_F side `next(x)`, back along the F_F side ending at it
+        // `prev(x)`, and, as its F_V face's sides, along its quad side to its predecessor
+        // `next(twin(x))` and back along the quad side ending at it to its successor; so
+        // no directed edge is used twice.
         let back_of_side = |y: u32| side[y as usize] + 1;
         let mut on_fv = vec![false; vertices];
         for f in ff + quads..faces {
@@ -670,7 +674,8 @@ impl CornerHalfedges {
                 if y >= v || std::mem::replace(&mut on_fv[y as usize], true) {
                     return None;
                 }
-                if corner_next[twin[y as usize] as usize] != x {
+                let next_of = |x: u32| corner_next.get(x as usize).copied();
+                if next_of(twin[y as usize]) != Some(x) || next_of(x) == Some(y) {
                     return None;
                 }
                 x = y;
@@ -684,17 +689,6 @@ impl CornerHalfedges {
         }
         if !on_fv.iter().all(|&on| on) {
             return None;
-        }
-        // The four half-edges leaving each vertex have four different targets (and none
-        // ends where it starts): along its F_F side, back along the F_F side ending at it,
-        // along its quad side, and back along the quad side ending at it (the one from
-        // `twin(prev(x))`, as `next(twin(twin(prev(x)))) = x`).
-        for x in 0..v {
-            let (n, p) = (corner_next[x as usize], corner_prev[x as usize]);
-            let (s, r) = (corner_next[twin[x as usize] as usize], twin[p as usize]);
-            if [n, p, s, r].contains(&x) || n == p || n == s || n == r || p == s || p == r || s == r {
-                return None;
-            }
         }
         Some(Self { to, next, face_of, face_halfedge })
     }

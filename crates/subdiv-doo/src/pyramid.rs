@@ -196,7 +196,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
     let first = match options.boundary {
         _ if !canonical_enabled() => None,
         BoundaryRule::Shrink => {
-            crate::canonical::reverse_canonical(mesh, &reverse_options(options, 0)).map(Step::from_reversal)
+            crate::canonical::reverse_canonical(mesh, &reverse_options(options, 0)).map(Step::from_canonical)
         }
         BoundaryRule::Chaikin => {
             crate::boundary::reverse_chaikin_canonical(mesh, &reverse_options(options, 0)).map(Step::from_reversal)
@@ -245,7 +245,8 @@ pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<
         && let Some(first) = reverse_canonical_arrays(&halfedges.view(&soup.positions), &reverse_options(options, 0))
     {
         drop(halfedges);
-        if let Some(decomposition) = decompose_from(Some(Step::from_reversal(first)), None, soup.face_count(), options)?
+        if let Some(decomposition) =
+            decompose_from(Some(Step::from_canonical(first)), None, soup.face_count(), options)?
         {
             return Ok(decomposition);
         }
@@ -390,6 +391,13 @@ impl Step {
         let (coarse, coarse_positions, details, order, choices) = reversal.into_parts();
         Self { coarse, coarse_positions, details, order, choices, connected: false }
     }
+
+    /// A step of the canonical path under the shrinking boundary rule, whose coarse mesh
+    /// is one connected component (the path checks it, or knows it from a connected fine
+    /// mesh), so that the next level skips that check.
+    fn from_canonical(reversal: crate::DooReversal) -> Self {
+        Self { connected: true, ..Self::from_reversal(reversal) }
+    }
 }
 
 fn reverse_options(options: &DecomposeOptions, level: u32) -> ReverseOptions {
@@ -513,7 +521,7 @@ fn canonical_step(
     match options.boundary {
         BoundaryRule::Shrink => {
             let reversal = reverse_canonical_arrays(&arrays.known_connected(connected), &options)?;
-            Some(Step { connected: true, ..Step::from_reversal(reversal) })
+            Some(Step::from_canonical(reversal))
         }
         // (Its coarse mesh is not claimed connected: the claim is made for the Shrink
         // rule, whose fine faces all lie on coarse faces, edges or interior vertices.)
