@@ -668,24 +668,24 @@ impl CornerHalfedges {
         let mut on_fv = vec![false; vertices];
         for f in ff + quads..faces {
             let corners = &indices[offsets[f] as usize..offsets[f + 1] as usize];
-            // (Every vertex has its twin now; a vertex out of range is no `next`.)
+            // (Every vertex has its twin now.) Side `x -> y` is followed by `y -> z`.
             let mut x = corners[corners.len() - 1];
+            if x >= v {
+                return None;
+            }
+            let mut side_to_x = back_of_side(x);
             for &y in corners {
                 if y >= v || std::mem::replace(&mut on_fv[y as usize], true) {
                     return None;
                 }
-                let next_of = |x: u32| corner_next.get(x as usize).copied();
-                if next_of(twin[y as usize]) != Some(x) || next_of(x) == Some(y) {
+                if corner_next[twin[y as usize] as usize] != x || corner_next[x as usize] == y {
                     return None;
                 }
-                x = y;
+                let side_to_y = back_of_side(y);
+                (next[side_to_x as usize], face_of[side_to_y as usize]) = (side_to_y, f as u32);
+                (x, side_to_x) = (y, side_to_y);
             }
             face_halfedge.push(back_of_side(corners[1]));
-            for (i, &y) in corners.iter().enumerate() {
-                let h = back_of_side(y) as usize;
-                next[h] = back_of_side(corners[(i + 1) % corners.len()]);
-                face_of[h] = f as u32;
-            }
         }
         if !on_fv.iter().all(|&on| on) {
             return None;
