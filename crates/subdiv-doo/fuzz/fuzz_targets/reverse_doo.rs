@@ -9,7 +9,9 @@
 //! of a face sent to another vertex). Whatever comes out, `reverse` and `decompose` must
 //! not panic, with or without a seed face (in range or not); a refined, undamaged mesh
 //! must reverse; whenever reversal succeeds, coarse vertices plus details are exactly as
-//! many as the fine vertices and reconstruction gives the input back.
+//! many as the fine vertices and reconstruction gives the input back. For every input,
+//! `decompose_soup` (which reads a closed canonical soup without building its mesh) must
+//! give exactly what building the mesh and decomposing it gives, result or error.
 
 #![no_main]
 
@@ -18,8 +20,8 @@ use glam::DVec3;
 use libfuzzer_sys::fuzz_target;
 use mesh_topo::shapes::{self, CellKind};
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
-use subdiv_doo::pyramid::{DecomposeOptions, Depth, DooPyramid, decompose};
-use subdiv_doo::{BoundaryRule, DooOptions, FaceRule, ReverseOptions, reverse, subdivide_soup};
+use subdiv_doo::pyramid::{DecomposeOptions, Depth, DooPyramid, decompose, decompose_soup};
+use subdiv_doo::{BoundaryRule, DooError, DooOptions, FaceRule, ReverseOptions, reverse, subdivide_soup};
 
 fn coordinate(u: &mut Unstructured<'_>) -> arbitrary::Result<f64> {
     Ok(i16::arbitrary(u)? as f64 / 256.0)
@@ -89,7 +91,19 @@ fn distance_to(fine: &PolygonSoup, rebuilt: &PolygonSoup) -> f64 {
     rebuilt.positions.iter().zip(&fine.positions).map(|(p, q)| p.distance(*q)).fold(0.0, f64::max) / scale
 }
 
+/// `decompose_soup` against building the mesh and decomposing it (Debug text, so that
+/// errors and NaN positions compare too), to one level and to the maximum depth.
+fn check_soup_path(fine: &PolygonSoup, rule: FaceRule, boundary: BoundaryRule, seed: Option<usize>) {
+    for depth in [Depth::Levels(1), Depth::Max] {
+        let options = DecomposeOptions { rule, depth, seeds: seed.into_iter().collect(), boundary };
+        let direct = decompose_soup(fine, &options);
+        let built = HalfedgeMesh::from_soup(fine).map_err(DooError::from).and_then(|mesh| decompose(&mesh, &options));
+        assert_eq!(format!("{direct:?}"), format!("{built:?}"), "decompose_soup differs");
+    }
+}
+
 fn check(fine: &PolygonSoup, rule: FaceRule, boundary: BoundaryRule, seed: Option<usize>, must_succeed: bool) {
+    check_soup_path(fine, rule, boundary, seed);
     let Ok(mesh) = HalfedgeMesh::from_soup(fine) else { return };
     let options = ReverseOptions { rule, seeds: seed.into_iter().collect(), boundary };
     let reversal = match reverse(&mesh, &options) {
