@@ -104,7 +104,7 @@ fn choice_lines(level: usize, choices: &[SeedChoice]) -> String {
 }
 
 /// Reads a mesh file and decomposes it from its face list (`pyramid::decompose_soup`: a
-/// closed file written by Doo-Sabin subdivision is reversed without building its
+/// file written by Doo-Sabin subdivision (shrinking boundary) is reversed without building its
 /// half-edge mesh); the soup read and the decomposition. A file that is not a valid mesh
 /// is reported as the other commands report it.
 fn decompose_file(path: &Path, options: &DecomposeOptions) -> CliResult<(PolygonSoup, Decomposition)> {

@@ -559,34 +559,40 @@ impl CornerHalfedges {
     }
 
     /// The half-edges `HalfedgeMesh::from_soup` would build from `soup`, computed from
-    /// the soup's face list alone when it is a closed mesh in the canonical order of
-    /// [`crate::subdivide`] (see [`reverse_canonical`]); `None` for any other soup (one
-    /// with a boundary, another order, anything `from_soup` rejects), which then takes
-    /// the way through `from_soup`.
+    /// the soup's face list alone when it is a mesh in the canonical order of
+    /// [`crate::subdivide`] under the shrinking boundary rule (see [`reverse_canonical`]),
+    /// closed or not; `None` for any other soup (another order, the Chaikin ring, anything
+    /// `from_soup` rejects), which then takes the way through `from_soup`.
     ///
-    /// Read in that order, a closed Doo-Sabin soup of `V` vertices names every half-edge
-    /// by arithmetic (the numbering of [`stream_ff_faces`]): the F_F faces are the first
+    /// Read in that order, a Doo-Sabin soup of `V` vertices names every half-edge by
+    /// arithmetic (the numbering of [`stream_ff_faces`]): the F_F faces are the first
     /// faces, on the vertices `0, 1, 2, ..` in order, and fine vertex `c` starts the F_F
-    /// side `2c`, whose twin `2c + 1` lies on an F_E quad; quad `j` is `(c, next(t), t,
-    /// next(c))`, `c < t` the twin corners, claimed in increasing order of `c`, with the
-    /// sides `2V + 4j` (from `c`) and `2V + 4j + 2` (from `t`); every other face is an F_V
-    /// face, whose side `x -> y` is the twin of the quad side from `y` (so `x` must be
-    /// `next(twin(y))`), and every vertex lies on exactly one of them.
+    /// side `2c`, whose twin `2c + 1` lies on an F_E quad or on the boundary; quad `j` is
+    /// `(c, next(t), t, next(c))`, `c < t` the twin corners, claimed in increasing order
+    /// of `c` (the quads are the faces of that form after the F_F faces), with the sides
+    /// `2V + 4j` (from `c`) and `2V + 4j + 2` (from `t`); every other face is an F_V face,
+    /// whose side `x -> y` is the twin of the quad side from `y` (so `x` must be
+    /// `next(twin(y))`), each vertex on one at most. Every other half-edge is on the
+    /// boundary: it is followed by the one boundary half-edge that leaves its end.
     ///
     /// What is checked makes the soup one `from_soup` accepts, with these half-edges:
     /// indices in range and positions finite; faces of 3 or more corners, no vertex twice
     /// in a face (the F_F faces by their numbering, the F_V faces by marking each vertex
     /// once; a quad `(c, next(t), t, next(c))` with `c = next(t)` would put `c` after
-    /// itself on its F_V face, and likewise `t = next(c)`); no F_V side along an F_F side,
-    /// so that the four half-edges leaving each vertex have four different targets and no
-    /// directed edge is used twice; every edge then has two sides (closed), and the faces
-    /// around each vertex (F_F, quad, F_V, quad) form one fan. Linear, without hashing or
-    /// sorting: one pass over the faces.
-    pub(crate) fn of_closed_canonical_soup(soup: &PolygonSoup) -> Option<Self> {
+    /// itself on its F_V face, and likewise `t = next(c)`); the half-edges leaving each
+    /// vertex `x` (along its F_F side to `next(x)`, back along the F_F side ending at it
+    /// to `prev(x)`, along its quad side to `next(twin(x))` and back along the quad side
+    /// ending at it to `twin(prev(x))`, those that exist) have different targets, none
+    /// `x`, so that no two sides of faces join the same two vertices. The faces around
+    /// each vertex (F_F, its quad, its F_V face, the quad of the corner before it, those
+    /// that exist) then form one fan: an F_V face needs both quads, so what is missing is
+    /// one run of the cycle. Linear, without hashing or sorting: one pass over the faces
+    /// and one over the vertices.
+    pub(crate) fn of_canonical_soup(soup: &PolygonSoup) -> Option<Self> {
         let (vertices, offsets, indices) = (soup.positions.len(), &soup.offsets[..], &soup.indices[..]);
         let faces = offsets.len().checked_sub(1)?;
-        // 4V half-edges (2V edges), all numbered below `NONE`.
-        if vertices == 0 || vertices % 2 != 0 || vertices >= (NONE as usize) / 4 || faces >= NONE as usize {
+        // At most 4V half-edges (2V edges), all numbered below `NONE`.
+        if vertices == 0 || vertices >= (NONE as usize) / 4 || faces >= NONE as usize {
             return None;
         }
         if offsets[0] != 0
@@ -599,11 +605,12 @@ impl CornerHalfedges {
             return None;
         }
         let v = vertices as u32;
-        let halfedges = 4 * vertices;
-        let (mut to, mut next, mut face_of) = (vec![0u32; halfedges], vec![0u32; halfedges], vec![0u32; halfedges]);
+        // Room for the closed case; cut to `2V + 4 * quads` below.
+        let room = 4 * vertices;
+        let (mut to, mut next, mut face_of) = (vec![0u32; room], vec![NONE; room], vec![NONE; room]);
         let mut face_halfedge = Vec::with_capacity(faces);
-        // F_F faces: vertex `c` is corner `c`; the next corner of each.
-        let mut corner_next = Vec::with_capacity(vertices);
+        // F_F faces: vertex `c` is corner `c`; the next and previous corner of each.
+        let (mut corner_next, mut corner_prev) = (Vec::with_capacity(vertices), Vec::with_capacity(vertices));
         let mut f = 0;
         let mut start = 0u32;
         while start < v {
@@ -616,6 +623,7 @@ impl CornerHalfedges {
             for c in start..start + size {
                 let n = if c + 1 == start + size { start } else { c + 1 };
                 corner_next.push(n);
+                corner_prev.push(if c == start { start + size - 1 } else { c - 1 });
                 let h = 2 * c as usize;
                 (to[h], next[h], face_of[h]) = (n, 2 * n, f as u32);
                 to[h + 1] = c;
@@ -623,54 +631,51 @@ impl CornerHalfedges {
             start += size;
             f += 1;
         }
-        // F_E quads: the twins, and the quad side leaving each vertex.
+        // F_E quads, for as long as the faces are quads of that form: the twins, and the
+        // quad side leaving each twinned vertex.
         let ff = f;
-        let quads = vertices / 2;
-        if ff + quads >= faces {
-            return None;
-        }
         let mut twin = vec![NONE; vertices];
-        let mut side = vec![0u32; vertices];
+        let mut side = vec![NONE; vertices];
         let mut last_claim = None;
-        for j in 0..quads {
-            let f = ff + j;
-            let [c, a, t, b] = *<&[u32; 4]>::try_from(&indices[offsets[f] as usize..offsets[f + 1] as usize]).ok()?;
-            if t >= v || last_claim.is_some_and(|last| c <= last) || c >= t {
-                return None;
+        while f < faces {
+            let Ok(&[c, a, t, b]) = <&[u32; 4]>::try_from(&indices[offsets[f] as usize..offsets[f + 1] as usize])
+            else {
+                break;
+            };
+            let (ci, ti) = (c as usize, t as usize);
+            if t >= v
+                || c >= t
+                || last_claim.is_some_and(|last| c <= last)
+                || a != corner_next[ti]
+                || b != corner_next[ci]
+                || twin[ci] != NONE
+                || twin[ti] != NONE
+            {
+                break;
             }
             last_claim = Some(c);
-            let (ci, ti) = (c as usize, t as usize);
-            if a != corner_next[ti] || b != corner_next[ci] || twin[ci] != NONE || twin[ti] != NONE {
-                return None;
-            }
             (twin[ci], twin[ti]) = (t, c);
-            let (q, f) = (2 * v + 4 * j as u32, f as u32);
-            (side[ci], side[ti]) = (q, q + 2);
-            face_halfedge.push(q);
-            let (q, back_c, back_t) = (q as usize, 2 * ci + 1, 2 * ti + 1);
+            let q = 2 * vertices + 4 * (f - ff);
+            (side[ci], side[ti]) = (q as u32, q as u32 + 2);
+            face_halfedge.push(q as u32);
+            let (back_c, back_t, face) = (2 * ci + 1, 2 * ti + 1, f as u32);
             // The 4-cycle q -> back of t's F_F side -> q + 2 -> back of c's F_F side.
-            (to[q], next[q], face_of[q]) = (a, back_t as u32, f);
-            (next[back_t], face_of[back_t]) = ((q + 2) as u32, f);
-            (to[q + 2], next[q + 2], face_of[q + 2]) = (b, back_c as u32, f);
-            (next[back_c], face_of[back_c]) = (q as u32, f);
+            (to[q], next[q], face_of[q]) = (a, back_t as u32, face);
+            (next[back_t], face_of[back_t]) = (q as u32 + 2, face);
+            (to[q + 2], next[q + 2], face_of[q + 2]) = (b, back_c as u32, face);
+            (next[back_c], face_of[back_c]) = (q as u32, face);
             (to[q + 1], to[q + 3]) = (c, t);
+            f += 1;
         }
-        // Every vertex is now on one quad (`vertices / 2` quads, each claiming two new corners).
+        let halfedges = 2 * vertices + 4 * (f - ff);
         // F_V faces: side `x -> y` is the twin of the quad side from `y`, which ends at
-        // `next(twin(y))`, and it runs along no F_F side: `next(x) != y` (`next(y) = x`
-        // would make `y` its own twin).
-        // With that, the four half-edges leaving each vertex `x` have four different
-        // targets: along its F_F side `next(x)`, back along the F_F side ending at it
-        // `prev(x)`, and, as its F_V face's sides, along its quad side to its predecessor
-        // `next(twin(x))` and back along the quad side ending at it to its successor; so
-        // no directed edge is used twice.
+        // `next(twin(y))`; followed by `y -> z`.
         let back_of_side = |y: u32| side[y as usize] + 1;
         let mut on_fv = vec![false; vertices];
-        for f in ff + quads..faces {
+        for f in f..faces {
             let corners = &indices[offsets[f] as usize..offsets[f + 1] as usize];
-            // (Every vertex has its twin now.) Side `x -> y` is followed by `y -> z`.
             let mut x = corners[corners.len() - 1];
-            if x >= v {
+            if x >= v || twin[x as usize] == NONE {
                 return None;
             }
             let mut side_to_x = back_of_side(x);
@@ -678,7 +683,8 @@ impl CornerHalfedges {
                 if y >= v || std::mem::replace(&mut on_fv[y as usize], true) {
                     return None;
                 }
-                if corner_next[twin[y as usize] as usize] != x || corner_next[x as usize] == y {
+                let t = twin[y as usize];
+                if t == NONE || corner_next[t as usize] != x {
                     return None;
                 }
                 let side_to_y = back_of_side(y);
@@ -687,8 +693,46 @@ impl CornerHalfedges {
             }
             face_halfedge.push(back_of_side(corners[1]));
         }
-        if !on_fv.iter().all(|&on| on) {
-            return None;
+        // Different targets out of each vertex, and its boundary half-edge, if any:
+        // back along the F_F side ending at it (if that side has no quad), or back along
+        // the quad side ending at it (if it has no F_V face).
+        let mut boundary_out = vec![NONE; vertices];
+        for x in 0..vertices {
+            let (n, p) = (corner_next[x], corner_prev[x]);
+            let s = match twin[x] {
+                NONE => NONE,
+                t => corner_next[t as usize],
+            };
+            let r = twin[p as usize];
+            let x = x as u32;
+            // ([`NONE`] for a half-edge that does not exist; some pairs cannot meet, and
+            // `s = p` at `x` is `n = r` at `p`, but all are compared.)
+            let targets = [n, p, s, r];
+            if targets.iter().enumerate().any(|(i, &y)| y == x || (y != NONE && targets[..i].contains(&y))) {
+                return None;
+            }
+            if r == NONE {
+                boundary_out[x as usize] = 2 * p + 1;
+            } else if !on_fv[x as usize] {
+                boundary_out[x as usize] = back_of_side(r);
+            }
+        }
+        // The boundary half-edges: the back of an F_F side without a quad (ending at its
+        // corner) and the back of a quad side without an F_V face (ending at its start).
+        for y in 0..vertices {
+            for (h, on_boundary) in
+                [(2 * y + 1, twin[y] == NONE), (side[y].wrapping_add(1) as usize, twin[y] != NONE && !on_fv[y])]
+            {
+                if on_boundary {
+                    next[h] = boundary_out[y];
+                    if next[h] == NONE {
+                        return None;
+                    }
+                }
+            }
+        }
+        for array in [&mut to, &mut next, &mut face_of] {
+            array.truncate(halfedges);
         }
         Some(Self { to, next, face_of, face_halfedge })
     }

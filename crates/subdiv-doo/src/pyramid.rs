@@ -212,8 +212,8 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
 /// [`decompose`] of a polygon soup, as a mesh file holds it: the result, or the error,
 /// of `decompose(&HalfedgeMesh::from_soup(soup)?, options)`.
 ///
-/// A closed mesh written by [`crate::subdivide`] (or rebuilt by a pyramid), the shrinking
-/// boundary rule and at least one level: the first level is reversed from half-edge
+/// A mesh written by [`crate::subdivide`] (or rebuilt by a pyramid) under the shrinking
+/// boundary rule, closed or not, and at least one level: the first level is reversed from half-edge
 /// arrays computed from the face list by arithmetic (the numbering `from_soup` would
 /// give, with every check that makes `from_soup` accept the soup), without building
 /// the half-edge mesh, and the coarser levels as [`decompose`] reverses them. Any other
@@ -241,7 +241,7 @@ pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<
     if options.depth != Depth::Levels(0)
         && options.boundary == BoundaryRule::Shrink
         && canonical_enabled()
-        && let Some(halfedges) = CornerHalfedges::of_closed_canonical_soup(soup)
+        && let Some(halfedges) = CornerHalfedges::of_canonical_soup(soup)
         && let Some(first) = reverse_canonical_arrays(&halfedges.view(&soup.positions), &reverse_options(options, 0))
     {
         drop(halfedges);
@@ -981,7 +981,8 @@ mod tests {
     }
 
     #[test]
-    fn halfedges_of_a_closed_canonical_soup_are_those_of_from_soup() {
+    fn halfedges_of_a_canonical_soup_are_those_of_from_soup() {
+        let holed = without(&shapes::torus(8, 6, shapes::CellKind::Triangles).unwrap(), &[3, 50]);
         let cases = [
             (shapes::cube(), FaceRule::DooSabin, 1),
             (shapes::cube(), FaceRule::Simple, 3),
@@ -989,33 +990,48 @@ mod tests {
             (shapes::icosahedron(), FaceRule::Centroid { a: 0.5 }, 2),
             (shapes::torus(6, 4, shapes::CellKind::Triangles).unwrap(), FaceRule::DooSabin, 2),
             (shapes::torus(5, 3, shapes::CellKind::Mixed).unwrap(), FaceRule::DooSabin, 1),
+            // With a boundary.
+            (shapes::grid(4, 3, shapes::CellKind::Quads).unwrap(), FaceRule::DooSabin, 1),
+            (shapes::grid(5, 4, shapes::CellKind::Mixed).unwrap(), FaceRule::Simple, 2),
+            (holed, FaceRule::DooSabin, 2),
         ];
         for (coarse, rule, levels) in cases {
             let soup = refined_and_moved(&coarse, rule, levels).to_soup();
             let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
-            let arrays = CornerHalfedges::of_closed_canonical_soup(&soup).expect("a closed canonical soup");
+            let arrays = CornerHalfedges::of_canonical_soup(&soup).expect("a canonical soup");
             let view = arrays.view(&soup.positions);
             let expected = crate::canonical::HalfedgeArrays::of(&mesh);
             assert_eq!(format!("{view:?}"), format!("{expected:?}"), "{rule:?} x{levels}");
         }
-        // Not taken: an open mesh, a mesh in another order, a soup that is not a refinement.
-        let open = refined_and_moved(&shapes::grid(4, 3, shapes::CellKind::Quads).unwrap(), FaceRule::DooSabin, 1);
+        // Not taken: the Chaikin ring, a mesh in another order, soups that are not refinements.
+        let grid = shapes::grid(4, 3, shapes::CellKind::Quads).unwrap();
+        let ringed = refined_and_moved_with(&grid, FaceRule::DooSabin, 1, BoundaryRule::Chaikin);
         let scrambled =
             mesh_topo::testing::scramble(refined_and_moved(&shapes::cube(), FaceRule::DooSabin, 1).to_soup(), 3, 0.0);
-        for soup in [open.to_soup(), scrambled, shapes::cube(), shapes::torus(4, 4, shapes::CellKind::Quads).unwrap()] {
-            assert!(CornerHalfedges::of_closed_canonical_soup(&soup).is_none());
+        for soup in [ringed.to_soup(), scrambled, shapes::cube(), shapes::torus(4, 4, shapes::CellKind::Quads).unwrap()]
+        {
+            assert!(CornerHalfedges::of_canonical_soup(&soup).is_none());
         }
     }
 
     #[test]
-    fn a_soup_whose_twins_meet_in_one_face_is_left_to_from_soup() {
+    fn soups_whose_sides_meet_are_left_to_from_soup() {
         // One F_F face whose opposite sides are twinned: every F_E quad and F_V face is
         // well formed, but the F_V face is the F_F face again, each side used twice.
         let positions = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
         let soup = PolygonSoup::from_faces(positions, [[0, 1, 2, 3], [0, 3, 2, 1], [1, 0, 3, 2], [0, 1, 2, 3]]);
-        assert!(CornerHalfedges::of_closed_canonical_soup(&soup).is_none());
+        assert!(CornerHalfedges::of_canonical_soup(&soup).is_none());
         let options = DecomposeOptions::levels(FaceRule::DooSabin, 1);
         assert!(matches!(decompose_soup(&soup, &options), Err(DooError::Mesh(_))));
+        // Two triangles and two quads of that form, whose quad sides `4 -> 1` and `1 -> 4`
+        // are one edge to `from_soup` (a valid strip) but two in the canonical numbering.
+        let positions = (0..6).map(|i| DVec3::new(i as f64, (i * i) as f64, 0.0)).collect();
+        let strip =
+            PolygonSoup::from_faces(positions, [vec![0, 1, 2], vec![3, 4, 5], vec![0, 5, 4, 1], vec![1, 4, 3, 2]]);
+        assert!(HalfedgeMesh::from_soup(&strip).is_ok());
+        assert!(CornerHalfedges::of_canonical_soup(&strip).is_none());
+        let built = decompose(&HalfedgeMesh::from_soup(&strip).unwrap(), &options);
+        assert_eq!(format!("{:?}", decompose_soup(&strip, &options)), format!("{built:?}"));
     }
 
     /// A soup made by one of a few kinds of damage to `soup` (`kind` picks it, `pick`
@@ -1072,7 +1088,7 @@ mod tests {
         /// damaged or not, to every depth, automatic and seeded.
         #[test]
         fn soups_decompose_as_their_meshes(
-            shape in 0usize..6,
+            shape in 0usize..7,
             rule in 0usize..3,
             levels in 1u32..4,
             damage in 0usize..16,
@@ -1085,10 +1101,11 @@ mod tests {
                 2 => shapes::torus(5, 3, shapes::CellKind::Triangles).unwrap(),
                 3 => shapes::torus(4, 3, shapes::CellKind::Mixed).unwrap(),
                 4 => shapes::grid(3, 2, shapes::CellKind::Quads).unwrap(),
+                5 => without(&shapes::torus(6, 4, shapes::CellKind::Triangles).unwrap(), &[2, 30]),
                 _ => shapes::icosahedron(),
             };
             let rule = [FaceRule::DooSabin, FaceRule::Simple, FaceRule::Centroid { a: 0.5 }][rule];
-            let levels = if shape == 4 { 1 } else { levels.min(if shape == 2 || shape == 3 { 2 } else { 3 }) };
+            let levels = if shape == 4 { 1 } else { levels.min(if (2..=5).contains(&shape) { 2 } else { 3 }) };
             let soup = damaged(refined_and_moved(&coarse, rule, levels).to_soup(), damage, pick);
             let options = match depth {
                 0 => DecomposeOptions::levels(rule, levels),
@@ -1098,7 +1115,7 @@ mod tests {
                 _ => DecomposeOptions { seeds: vec![(pick % 5) as usize], ..DecomposeOptions::levels(rule, levels) },
             };
             // The arrays alone: a soup they accept is one `from_soup` accepts, numbered alike.
-            if let Some(arrays) = CornerHalfedges::of_closed_canonical_soup(&soup) {
+            if let Some(arrays) = CornerHalfedges::of_canonical_soup(&soup) {
                 let mesh = HalfedgeMesh::from_soup(&soup);
                 proptest::prop_assert!(mesh.is_ok(), "accepted, but {mesh:?}");
                 let expected = crate::canonical::HalfedgeArrays::of(mesh.as_ref().unwrap());
