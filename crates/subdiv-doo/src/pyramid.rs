@@ -1034,6 +1034,31 @@ mod tests {
         assert_eq!(format!("{:?}", decompose_soup(&strip, &options)), format!("{built:?}"));
     }
 
+    #[test]
+    fn malformed_soups_are_left_to_from_soup() {
+        let fine = refined_and_moved(&shapes::tetrahedron(), FaceRule::DooSabin, 1).to_soup();
+        let mut soups = vec![PolygonSoup::default(), PolygonSoup { offsets: vec![0], ..PolygonSoup::default() }];
+        let mut edit = |change: &dyn Fn(&mut PolygonSoup)| {
+            let mut soup = fine.clone();
+            change(&mut soup);
+            soups.push(soup);
+        };
+        edit(&|s| s.offsets[0] = 1);
+        edit(&|s| s.offsets[2] = s.offsets[1] - 1);
+        edit(&|s| *s.offsets.last_mut().unwrap() += 4);
+        edit(&|s| s.offsets.truncate(1));
+        edit(&|s| s.offsets.clear());
+        edit(&|s| s.indices.truncate(5));
+        edit(&|s| s.positions.clear());
+        edit(&|s| s.positions.push(DVec3::ZERO));
+        let options = DecomposeOptions::max(FaceRule::DooSabin);
+        for soup in &soups {
+            let built =
+                HalfedgeMesh::from_soup(soup).map_err(DooError::from).and_then(|mesh| decompose(&mesh, &options));
+            assert_eq!(format!("{:?}", decompose_soup(soup, &options)), format!("{built:?}"));
+        }
+    }
+
     /// A soup made by one of a few kinds of damage to `soup` (`kind` picks it, `pick`
     /// where), or `soup` itself; the damaged soup may or may not be a valid mesh.
     fn damaged(mut soup: PolygonSoup, kind: usize, pick: u64) -> PolygonSoup {
