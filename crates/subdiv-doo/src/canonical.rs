@@ -672,8 +672,10 @@ impl CornerHalfedges {
         // `next(twin(y))`; followed by `y -> z`.
         let back_of_side = |y: u32| side[y as usize] + 1;
         let mut on_fv = vec![false; vertices];
+        let mut fv_corners = 0;
         for f in f..faces {
             let corners = &indices[offsets[f] as usize..offsets[f + 1] as usize];
+            fv_corners += corners.len();
             let mut x = corners[corners.len() - 1];
             if x >= v || twin[x as usize] == NONE {
                 return None;
@@ -695,8 +697,10 @@ impl CornerHalfedges {
         }
         // Different targets out of each vertex, and its boundary half-edge, if any:
         // back along the F_F side ending at it (if that side has no quad), or back along
-        // the quad side ending at it (if it has no F_V face).
-        let mut boundary_out = vec![NONE; vertices];
+        // the quad side ending at it (if it has no F_V face). A closed mesh (every vertex
+        // on a quad and an F_V face) has none.
+        let closed = halfedges == room && fv_corners == vertices;
+        let mut boundary_out = if closed { Vec::new() } else { vec![NONE; vertices] };
         for x in 0..vertices {
             let (n, p) = (corner_next[x], corner_prev[x]);
             let s = match twin[x] {
@@ -711,6 +715,9 @@ impl CornerHalfedges {
             if targets.iter().enumerate().any(|(i, &y)| y == x || (y != NONE && targets[..i].contains(&y))) {
                 return None;
             }
+            if closed {
+                continue;
+            }
             if r == NONE {
                 boundary_out[x as usize] = 2 * p + 1;
             } else if !on_fv[x as usize] {
@@ -719,15 +726,17 @@ impl CornerHalfedges {
         }
         // The boundary half-edges: the back of an F_F side without a quad (ending at its
         // corner) and the back of a quad side without an F_V face (ending at its start).
-        for y in 0..vertices {
-            for (h, on_boundary) in
-                [(2 * y + 1, twin[y] == NONE), (side[y].wrapping_add(1) as usize, twin[y] != NONE && !on_fv[y])]
-            {
-                if on_boundary {
-                    next[h] = boundary_out[y];
-                    if next[h] == NONE {
-                        return None;
-                    }
+        if !closed {
+            for y in 0..vertices {
+                let h = match twin[y] {
+                    NONE => 2 * y + 1,
+                    _ if !on_fv[y] => back_of_side(y as u32) as usize,
+                    _ => continue,
+                };
+                // (A vertex with a boundary half-edge ending at it has one leaving it.)
+                next[h] = boundary_out[y];
+                if next[h] == NONE {
+                    return None;
                 }
             }
         }
