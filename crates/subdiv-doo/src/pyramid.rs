@@ -213,12 +213,12 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
 /// of `decompose(&HalfedgeMesh::from_soup(soup)?, options)`.
 ///
 /// A mesh written by [`crate::subdivide`] (or rebuilt by a pyramid) under the shrinking
-/// boundary rule, closed or not, and at least one level: the first level is reversed from half-edge
-/// arrays computed from the face list by arithmetic (the numbering `from_soup` would
-/// give, with every check that makes `from_soup` accept the soup), without building
-/// the half-edge mesh, and the coarser levels as [`decompose`] reverses them. Any other
-/// soup, or one whose first level the canonical path does not take to the end, goes
-/// through `from_soup` and [`decompose`].
+/// boundary rule, closed or not, and at least one level: the first level is reversed
+/// from half-edge arrays computed from the face list by arithmetic (the numbering
+/// `from_soup` would give, with every check that makes `from_soup` accept the soup),
+/// without building the half-edge mesh, and the coarser levels as [`decompose`]
+/// reverses them. Any other soup, or one whose first level the canonical path does not
+/// take to the end, goes through `from_soup` and [`decompose`].
 ///
 /// ```
 /// use subdiv_doo::pyramid::{DecomposeOptions, decompose, decompose_soup};
@@ -244,6 +244,7 @@ pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<
         && let Some(halfedges) = CornerHalfedges::of_canonical_soup(soup)
         && let Some(first) = reverse_canonical_arrays(&halfedges.view(&soup.positions), &reverse_options(options, 0))
     {
+        // (Freed before the coarser levels are reversed: the fine mesh's arrays.)
         drop(halfedges);
         if let Some(decomposition) =
             decompose_from(Some(Step::from_canonical(first)), None, soup.face_count(), options)?
