@@ -7,7 +7,7 @@
 //! - [`reverse`](mod@reverse): reverse Doo-Sabin of any mesh with the connectivity of one step
 //!   (positions free): coarse mesh plus local details, exact reconstruction.
 //! - [`pyramid`]: several levels, compression by keeping the largest details, `.mres`
-//!   files.
+//!   files; [`pyramid::decompose_soup`] starts from a polygon soup as a file holds it.
 //! - [`analysis`]: the local subdivision matrix, its spectrum and Reif's C1 check.
 //!
 //! ```
