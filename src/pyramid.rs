@@ -105,10 +105,10 @@ pub fn decompose_with(
 /// [`decompose_with`] of a polygon soup, as a mesh file holds it. A Loop-family soup in
 /// the canonical order (what Loop subdivision and reconstruction write) is reversed
 /// straight from its face list, without building its half-edge mesh
-/// (`subdiv_loop::pyramid::decompose_soup`), and so is the first level of a
-/// Doo-Sabin soup in its canonical order (shrinking boundary) (`subdiv_doo::decompose_soup`); any other soup
-/// is built into a half-edge mesh first. The result, or the error, is that of
-/// `decompose_with(&HalfedgeMesh::from_soup(soup)?, ...)`.
+/// (`subdiv_loop::pyramid::decompose_soup`), and so is the first level of a Doo-Sabin
+/// soup in its canonical order under the shrinking boundary rule
+/// (`subdiv_doo::decompose_soup`); any other soup is built into a half-edge mesh first.
+/// The result, or the error, is that of `decompose_with(&HalfedgeMesh::from_soup(soup)?, ...)`.
 ///
 /// ```
 /// use multires::prelude::*;

@@ -103,10 +103,11 @@ fn choice_lines(level: usize, choices: &[SeedChoice]) -> String {
     out
 }
 
-/// Reads a mesh file and decomposes it from its face list (`pyramid::decompose_soup`: a
-/// file written by Doo-Sabin subdivision (shrinking boundary) is reversed without building its
-/// half-edge mesh); the soup read and the decomposition. A file that is not a valid mesh
-/// is reported as the other commands report it.
+/// Reads a mesh file and decomposes it from its face list (`pyramid::decompose_soup`: the
+/// first level of a file written by Doo-Sabin subdivision under the shrinking boundary
+/// rule is reversed without building its half-edge mesh); the soup read and the
+/// decomposition. A file that is not a valid mesh is reported as the other commands
+/// report it.
 fn decompose_file(path: &Path, options: &DecomposeOptions) -> CliResult<(PolygonSoup, Decomposition)> {
     let (soup, report) = read_soup(path)?;
     note_dropped(path, &report);
