@@ -30,6 +30,25 @@ pub fn note_dropped(path: &Path, report: &ReadReport) {
     }
 }
 
+/// Reads a mesh file as a polygon soup and decomposes it with `decompose`, which starts
+/// from the face list (a file in a scheme's canonical order is reversed without building
+/// its half-edge mesh); the soup read and the result. `mesh_error` picks out the error
+/// of a soup that is not a valid mesh, reported as the other commands report it; any
+/// other error names the file.
+pub fn decompose_file<T, E: std::fmt::Display>(
+    path: &Path,
+    decompose: impl FnOnce(&PolygonSoup) -> Result<T, E>,
+    mesh_error: impl FnOnce(E) -> Result<MeshError, E>,
+) -> CliResult<(PolygonSoup, T)> {
+    let (soup, report) = read_soup(path)?;
+    note_dropped(path, &report);
+    match decompose(&soup).map_err(mesh_error) {
+        Ok(result) => Ok((soup, result)),
+        Err(Ok(error)) => Err(invalid_mesh(path, error)),
+        Err(Err(error)) => Err(super::input_error(path.display(), error)),
+    }
+}
+
 /// Builds the half-edge mesh of a soup read from `path`.
 pub fn build_mesh(path: &Path, soup: &PolygonSoup) -> CliResult<HalfedgeMesh> {
     HalfedgeMesh::from_soup(soup).map_err(|e| invalid_mesh(path, e))

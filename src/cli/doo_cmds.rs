@@ -15,7 +15,7 @@ use subdiv_doo::analysis::{ReifReport, reif_check};
 use subdiv_doo::pyramid::{DecomposeOptions, Decomposition, Depth, DooPyramid, decompose_soup};
 use subdiv_doo::{BoundaryRule, DooError, DooOptions, FaceRule, SeedChoice, subdivide_soup};
 
-use super::common::{invalid_mesh, note_dropped, read_soup, write_soup};
+use super::common::{self, note_dropped, read_soup, write_soup};
 use super::{
     AnalyzeArgs, AnalyzeScheme, BoundaryArg, CliError, CliResult, DecomposeArgs, ReconstructArgs, ReverseArgs,
     ReverseScheme, SubdivideArgs, SurfaceScheme, input_error,
@@ -103,19 +103,15 @@ fn choice_lines(level: usize, choices: &[SeedChoice]) -> String {
     out
 }
 
-/// Reads a mesh file and decomposes it from its face list (`pyramid::decompose_soup`: the
-/// first level of a file written by Doo-Sabin subdivision under the shrinking boundary
-/// rule is reversed without building its half-edge mesh); the soup read and the
-/// decomposition. A file that is not a valid mesh is reported as the other commands
-/// report it.
+/// [`common::decompose_file`] by `pyramid::decompose_soup` (the first level of a file
+/// written by Doo-Sabin subdivision under the shrinking boundary rule is reversed without
+/// building its half-edge mesh).
 fn decompose_file(path: &Path, options: &DecomposeOptions) -> CliResult<(PolygonSoup, Decomposition)> {
-    let (soup, report) = read_soup(path)?;
-    note_dropped(path, &report);
-    match decompose_soup(&soup, options) {
-        Ok(decomposition) => Ok((soup, decomposition)),
-        Err(DooError::Mesh(error)) => Err(invalid_mesh(path, error)),
-        Err(error) => Err(doo_error(path, error)),
-    }
+    let mesh_error = |error| match error {
+        DooError::Mesh(error) => Ok(error),
+        other => Err(other),
+    };
+    common::decompose_file(path, |soup| decompose_soup(soup, options), mesh_error)
 }
 
 /// `reverse --scheme doo`: the coarse mesh after `--levels` reverse Doo-Sabin steps (the

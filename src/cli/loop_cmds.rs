@@ -8,7 +8,7 @@ use subdiv_loop::LoopError;
 use subdiv_loop::forward::{LoopOptions, VertexWeights};
 use subdiv_loop::pyramid::{self, DecomposeOptions, Levels, LoopPyramid};
 
-use super::common::{invalid_mesh, note_dropped, read_soup, write_soup};
+use super::common::{self, note_dropped, read_soup, write_soup};
 use super::{
     AnalyzeArgs, CliError, CliResult, DecomposeArgs, ReconstructArgs, ReverseArgs, ReverseScheme, SubdivideArgs,
     input_error,
@@ -70,18 +70,14 @@ fn no_seed_face(args_seed_face: Option<u32>) -> CliResult {
     }
 }
 
-/// Reads a mesh file and decomposes it from its face list (`pyramid::decompose_soup`:
-/// a file written by Loop subdivision is reversed without building its half-edge mesh);
-/// the soup read and the pyramid. A file that is not a valid mesh is reported as the
-/// other commands report it.
+/// [`common::decompose_file`] by `pyramid::decompose_soup` (a file written by Loop
+/// subdivision is reversed without building its half-edge mesh).
 fn decompose_file(path: &Path, options: &DecomposeOptions) -> CliResult<(PolygonSoup, LoopPyramid)> {
-    let (soup, report) = read_soup(path)?;
-    note_dropped(path, &report);
-    match pyramid::decompose_soup(&soup, options) {
-        Ok(pyramid) => Ok((soup, pyramid)),
-        Err(LoopError::Mesh(error)) => Err(invalid_mesh(path, error)),
-        Err(error) => Err(loop_error(path, error)),
-    }
+    let mesh_error = |error| match error {
+        LoopError::Mesh(error) => Ok(error),
+        other => Err(other),
+    };
+    common::decompose_file(path, |soup| pyramid::decompose_soup(soup, options), mesh_error)
 }
 
 /// `reverse --scheme loop`: the coarse mesh after `--levels` reverse Loop steps (the
