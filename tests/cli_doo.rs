@@ -104,6 +104,56 @@ fn reverse_finds_the_coarse_mesh_and_reports_the_seed() {
     assert_eq!((one.vertex_count(), one.face_count()), (24, 26));
 }
 
+/// Two copies of `soup` side by side (the second moved by `shift`), as one file's mesh of
+/// two connected components; the second copy's faces follow the first's.
+fn two_copies(soup: &PolygonSoup, shift: DVec3) -> PolygonSoup {
+    let n = soup.vertex_count() as u32;
+    let positions = soup.positions.iter().copied().chain(soup.positions.iter().map(|&p| p + shift)).collect();
+    let faces: Vec<Vec<u32>> =
+        soup.faces().map(<[u32]>::to_vec).chain(soup.faces().map(|f| f.iter().map(|&v| v + n).collect())).collect();
+    PolygonSoup::from_faces(positions, faces)
+}
+
+#[test]
+fn seed_faces_are_given_one_per_component_to_reverse_and_decompose() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(&d.join("cube.off"), &shapes::cube());
+    ok(&["subdivide", "cube.off", "fine.off", "--scheme", "doo-sabin"], d);
+    let fine = read(&d.join("fine.off"));
+    // 24 vertices, 26 faces: 6 F_F faces, 12 F_E quads, then the 8 F_V triangles 18..26.
+    assert_eq!((fine.vertex_count(), fine.face_count()), (24, 26));
+    write(&d.join("two.off"), &two_copies(&fine, DVec3::new(5.0, 0.0, 0.0)));
+
+    // One seed per component, separated by a comma or repeated: each is kept, as given.
+    for seeds in [&["--seed-face", "0,26"][..], &["--seed-face", "0", "--seed-face", "26"]] {
+        let printed = ok(&[&["reverse", "two.off", "coarse.off", "--scheme", "doo"][..], seeds].concat(), d);
+        assert!(printed.contains("48 vertices, 52 faces -> 16 vertices, 12 faces"), "{printed}");
+        assert!(printed.contains("component 0: seed face 0 as F_F (given"), "{printed}");
+        assert!(printed.contains("component 1: seed face 26 as F_F (given"), "{printed}");
+    }
+    // A seed on an F_V triangle of the second cube: that component is read the other way
+    // round (its coarse mesh is the octahedron: 6 vertices, 8 faces), the first as before.
+    let printed = ok(&["reverse", "two.off", "coarse.off", "--scheme", "doo", "--seed-face", "44"], d);
+    assert!(printed.contains("48 vertices, 52 faces -> 14 vertices, 14 faces"), "{printed}");
+    assert!(printed.contains("component 0: seed face 0 as F_F (automatic"), "{printed}");
+    assert!(printed.contains("component 1: seed face 44 as F_F (given"), "{printed}");
+    // Two seeds in one component: an error naming them, nothing written.
+    let line = fails(&["reverse", "two.off", "out.off", "--scheme", "doo", "--seed-face", "0,1"], d, "out.off");
+    assert!(line.contains("seed"), "{line}");
+
+    // `decompose` takes the same seeds; the octahedron reading is exact too.
+    let printed =
+        ok(&["decompose", "two.off", "two.mres", "--scheme", "doo", "--seed-face", "0", "--seed-face", "44"], d);
+    assert!(printed.contains("base 14 vertices, 14 faces"), "{printed}");
+    assert!(printed.contains("component 1: seed face 44 as F_F (given"), "{printed}");
+    ok(&["reconstruct", "two.mres", "rebuilt.off"], d);
+    assert!(relative_error(&read(&d.join("rebuilt.off")), &read(&d.join("two.off"))) < 1e-12);
+    // The Loop schemes take no seed face.
+    let line = fails(&["decompose", "two.off", "out.mres", "--scheme", "loop", "--seed-face", "0"], d, "out.mres");
+    assert!(line.contains("--seed-face applies to --scheme doo"), "{line}");
+}
+
 /// A closed prism over a pentagon (two pentagons, five quads). The pentagon is not an
 /// affine image of a regular one: on those, every rule here gives `(v + centroid) / 2`.
 fn pentagonal_prism() -> PolygonSoup {

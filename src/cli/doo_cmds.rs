@@ -114,6 +114,12 @@ fn decompose_file(path: &Path, options: &DecomposeOptions) -> CliResult<(Polygon
     common::decompose_file(path, |soup| decompose_soup(soup, options), mesh_error)
 }
 
+/// The seed faces of `--seed-face`, in the order given (the library names a seed out of
+/// range, or two seeds in one component).
+fn seeds(seed_faces: &[u32]) -> Vec<usize> {
+    seed_faces.iter().map(|&f| f as usize).collect()
+}
+
 /// `reverse --scheme doo`: the coarse mesh after `--levels` reverse Doo-Sabin steps (the
 /// details are dropped; `decompose` keeps them). Prints the seed and candidate class
 /// chosen for every component of every level, with the detail norm `sqrt(Σ|d_i|²)`.
@@ -125,7 +131,7 @@ pub fn reverse(args: &ReverseArgs) -> CliResult {
     let options = DecomposeOptions {
         rule,
         depth: Depth::Levels(args.levels),
-        seeds: args.seed_face.map(|f| vec![f as usize]).unwrap_or_default(),
+        seeds: seeds(&args.seed_face),
         boundary: boundary_rule(args.boundary),
     };
     let (mesh, decomposition) = decompose_file(&args.mesh, &options)?;
@@ -153,7 +159,8 @@ pub fn decompose(args: &DecomposeArgs) -> CliResult {
     }
     let rule = reverse_rule(args.scheme, args.keep_corners)?;
     let depth = if args.max { Depth::Max } else { Depth::Levels(args.levels) };
-    let options = DecomposeOptions { rule, depth, seeds: Vec::new(), boundary: boundary_rule(args.boundary) };
+    let options =
+        DecomposeOptions { rule, depth, seeds: seeds(&args.seed_face), boundary: boundary_rule(args.boundary) };
     let (mesh, decomposition) = decompose_file(&args.mesh, &options)?;
     let pyramid = &decomposition.pyramid;
     let report = if args.report {

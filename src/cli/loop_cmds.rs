@@ -61,13 +61,13 @@ fn loop_error(path: &Path, error: LoopError) -> CliError {
     input_error(path.display(), error)
 }
 
-fn no_seed_face(args_seed_face: Option<u32>) -> CliResult {
-    match args_seed_face {
-        Some(_) => Err(CliError::Input(
-            "--seed-face applies to --scheme doo; Loop connectivity is detected from the mesh alone".into(),
-        )),
-        None => Ok(()),
+fn no_seed_face(seed_faces: &[u32]) -> CliResult {
+    if seed_faces.is_empty() {
+        return Ok(());
     }
+    Err(CliError::Input(
+        "--seed-face applies to --scheme doo; Loop connectivity is detected from the mesh alone".into(),
+    ))
 }
 
 /// [`common::decompose_file`] by `pyramid::decompose_soup` (a file written by Loop
@@ -83,7 +83,7 @@ fn decompose_file(path: &Path, options: &DecomposeOptions) -> CliResult<(Polygon
 /// `reverse --scheme loop`: the coarse mesh after `--levels` reverse Loop steps (the
 /// details are dropped; `decompose` keeps them).
 pub fn reverse(args: &ReverseArgs) -> CliResult {
-    no_seed_face(args.seed_face)?;
+    no_seed_face(&args.seed_face)?;
     if args.levels == 0 {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
@@ -110,6 +110,7 @@ const REPORT_FRACTIONS: [f64; 9] = [1.0, 0.5, 0.25, 0.1, 0.05, 0.02, 0.01, 0.005
 
 /// `decompose --scheme loop`: base mesh plus the details of every level, as a `.mres` file.
 pub fn decompose(args: &DecomposeArgs) -> CliResult {
+    no_seed_face(&args.seed_face)?;
     if !args.max && args.levels == 0 {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }

@@ -211,9 +211,11 @@ pub struct ReverseArgs {
     /// Number of levels to reverse.
     #[arg(long, default_value_t = 1)]
     pub levels: u32,
-    /// A face known to come from a coarse face (Doo-Sabin); found automatically if absent.
-    #[arg(long)]
-    pub seed_face: Option<u32>,
+    /// Faces known to come from coarse faces (Doo-Sabin): at most one per connected
+    /// component, repeated or separated by commas; the seeds of the other components are
+    /// found automatically. They seed the first (finest) level only.
+    #[arg(long, value_delimiter = ',')]
+    pub seed_face: Vec<u32>,
     /// The mesh was subdivided with boundary corners (valence-2 boundary vertices) kept
     /// fixed (Loop schemes).
     #[arg(long)]
@@ -245,6 +247,10 @@ pub struct DecomposeArgs {
     /// Print a rate-distortion table (fraction of details kept vs error).
     #[arg(long)]
     pub report: bool,
+    /// Faces known to come from coarse faces (Doo-Sabin), as for `reverse`: at most one
+    /// per connected component of the input, for its first level.
+    #[arg(long, value_delimiter = ',')]
+    pub seed_face: Vec<u32>,
     /// The mesh was subdivided with boundary corners (valence-2 boundary vertices) kept
     /// fixed (Loop schemes).
     #[arg(long)]
