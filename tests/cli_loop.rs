@@ -22,9 +22,11 @@ fn subdivide_writes_every_loop_scheme() {
         ("quaternary-loop", "1", (v + 3 * e + 3 * f, 16 * f)),
     ] {
         let out = dir.path().join(format!("{scheme}.off"));
-        ok(&["subdivide", path(&input), path(&out), "--scheme", scheme, "--levels", levels]);
+        let printed = ok(&["subdivide", path(&input), path(&out), "--scheme", scheme, "--levels", levels]);
         let (soup, _) = read_soup(&out).unwrap();
         assert_eq!((soup.vertex_count(), soup.face_count()), counts, "{scheme}");
+        let line = format!("{scheme} x{levels}: {} vertices, {} faces", counts.0, counts.1);
+        assert_eq!(printed.trim(), line);
     }
     // The file holds exactly the library's output (OFF keeps shortest round-trip decimals).
     let (soup, _) = read_soup(dir.path().join("loop.off")).unwrap();
@@ -42,7 +44,8 @@ fn keep_corners_changes_only_the_corners() {
     write_soup(&input, &grid, &WriteOptions::default()).unwrap();
     let (plain, kept) = (dir.path().join("plain.obj"), dir.path().join("kept.obj"));
     ok(&["subdivide", path(&input), path(&plain), "--scheme", "loop"]);
-    ok(&["subdivide", path(&input), path(&kept), "--scheme", "loop", "--keep-corners"]);
+    let printed = ok(&["subdivide", path(&input), path(&kept), "--scheme", "loop", "--keep-corners"]);
+    assert!(printed.starts_with("loop x1, corners kept: "), "{printed}");
     let (a, b) = (read_soup(&plain).unwrap().0, read_soup(&kept).unwrap().0);
     let mesh = HalfedgeMesh::from_soup(&grid).unwrap();
     let corners: Vec<usize> = mesh.vertices().filter(|&v| mesh.valence(v) == 2).map(|v| v.index()).collect();

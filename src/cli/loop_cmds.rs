@@ -47,7 +47,11 @@ pub fn subdivide(args: &SubdivideArgs) -> CliResult {
     }
     .map_err(|e| super::input_error(args.mesh.display(), e))?;
     drop(mesh);
-    super::common::write_soup(&args.out, &fine.into_soup(), &mesh_topo::io::WriteOptions::default())
+    let (vertices, faces) = (fine.vertex_count(), fine.face_count());
+    super::common::write_soup(&args.out, &fine.into_soup(), &mesh_topo::io::WriteOptions::default())?;
+    let corners = if args.keep_corners && args.scheme != SurfaceScheme::TernaryLoop { ", corners kept" } else { "" };
+    println!("{} x{}{corners}: {vertices} vertices, {faces} faces", args.scheme.word(), args.levels);
+    Ok(())
 }
 
 /// The rules that `reverse` and `decompose` invert: those of `subdivide` with the same

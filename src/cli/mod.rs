@@ -138,6 +138,11 @@ impl SurfaceScheme {
     pub fn is_doo(self) -> bool {
         matches!(self, Self::DooSabin | Self::DooSimple | Self::DooCentroid)
     }
+
+    /// The `--scheme` word of this scheme.
+    pub fn word(self) -> String {
+        self.to_possible_value().map_or_else(|| format!("{self:?}"), |value| value.get_name().to_owned())
+    }
 }
 
 /// Options of `subdivide`.
