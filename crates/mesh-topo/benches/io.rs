@@ -1,5 +1,6 @@
 //! Reading and writing OBJ, OFF and binary PLY from and to memory, in faces per second
-//! (so the file system is not measured).
+//! (so the file system is not measured); the text writers also on one thread, beside the
+//! default pool.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use mesh_topo::io::{self, Format, PlyEncoding, WriteOptions};
@@ -16,6 +17,7 @@ const FORMATS: [(&str, Format, PlyEncoding); 3] = [
 
 fn read_and_write(c: &mut Criterion) {
     let soups = fixtures::soups();
+    let one_thread = rayon::ThreadPoolBuilder::new().num_threads(1).build().expect("a thread pool");
     for (operation, writing) in [("read", false), ("write", true)] {
         let mut group = c.benchmark_group(operation);
         group.sample_size(10).measurement_time(Duration::from_secs(8));
@@ -35,13 +37,19 @@ fn read_and_write(c: &mut Criterion) {
                     continue;
                 }
                 if writing {
-                    group.bench_function(id, |b| {
-                        b.iter(|| {
-                            let mut out = Vec::with_capacity(bytes.len());
-                            let written = io::write_to(&mut out, black_box(soup), format, &options);
-                            (written, out)
-                        })
-                    });
+                    let write = || {
+                        let mut out = Vec::with_capacity(bytes.len());
+                        let written = io::write_to(&mut out, black_box(soup), format, &options);
+                        (written, out)
+                    };
+                    group.bench_function(&id, |b| b.iter(write));
+                    // The text formats are formatted on the pool's threads: one thread
+                    // alone, for the ratio.
+                    if ply_encoding == PlyEncoding::Ascii {
+                        group.bench_function(format!("{format_name}-1thread/{name}"), |b| {
+                            b.iter(|| one_thread.install(write))
+                        });
+                    }
                 } else {
                     group.bench_function(id, |b| b.iter(|| io::read_bytes(black_box(&bytes), format)));
                 }

@@ -1,6 +1,12 @@
 //! Writers: OBJ, OFF, PLY (ascii and binary), numbers in shortest round-trip form.
+//!
+//! The text formats of large meshes are formatted on the threads of the current `rayon`
+//! pool while the writer (which need not be `Send`) takes the text in order on the
+//! calling thread: the bytes do not depend on the number of threads.
 
 use std::io::{BufWriter, Write};
+
+use rayon::prelude::*;
 
 use super::{IoError, PlyEncoding};
 use crate::soup::PolygonSoup;
@@ -76,12 +82,11 @@ pub(crate) fn push_u32(out: &mut Vec<u8>, mut n: u32) {
 struct LineWriter<W: Write> {
     out: BufWriter<W>,
     line: Vec<u8>,
-    ryu: ryu::Buffer,
 }
 
 impl<W: Write> LineWriter<W> {
     fn new(out: W) -> Self {
-        Self { out: BufWriter::with_capacity(BUFFER, out), line: Vec::with_capacity(256), ryu: ryu::Buffer::new() }
+        Self { out: BufWriter::with_capacity(BUFFER, out), line: Vec::with_capacity(256) }
     }
 
     #[inline]
@@ -97,18 +102,98 @@ impl<W: Write> LineWriter<W> {
         self.line.extend_from_slice(text.as_bytes());
     }
 
-    #[inline]
-    fn point(&mut self, p: [f64; 3]) {
-        for (axis, x) in p.into_iter().enumerate() {
-            if axis > 0 {
-                self.line.push(b' ');
+    /// Writes one line per item `0..count`, each appended to a buffer by
+    /// `line(item, buffer, ryu)` and ended here with a newline, in item order.
+    ///
+    /// Formatting numbers is most of the cost of a large text file, so when the current
+    /// `rayon` pool has several threads, pieces of [`PIECE_LINES`] items are formatted
+    /// side by side, a batch at a time, while the batch before is written: the bytes
+    /// are those of formatting the items one after the other.
+    fn lines(
+        &mut self,
+        count: usize,
+        line: impl Fn(usize, &mut Vec<u8>, &mut ryu::Buffer) + Sync,
+    ) -> Result<(), IoError> {
+        let format = |items: std::ops::Range<usize>, text: &mut Vec<u8>| {
+            let mut ryu = ryu::Buffer::new();
+            for item in items {
+                line(item, text, &mut ryu);
+                text.push(b'\n');
             }
-            push_f64(&mut self.line, &mut self.ryu, x);
+        };
+        let threads = rayon::current_num_threads();
+        if threads == 1 || count < 2 * PIECE_LINES {
+            let mut text = Vec::with_capacity(BUFFER);
+            let mut start = 0;
+            while start < count {
+                let end = count.min(start + PIECE_LINES);
+                format(start..end, &mut text);
+                self.out.write_all(&text).map_err(IoError::Stream)?;
+                text.clear();
+                start = end;
+            }
+            return Ok(());
         }
+        // Batches of one piece per thread; each batch's pieces are formatted while the
+        // batch before is written.
+        let batch_lines = threads * PIECE_LINES;
+        let format_batch = |start: usize| -> Vec<Vec<u8>> {
+            let end = count.min(start + batch_lines);
+            (start..end)
+                .step_by(PIECE_LINES)
+                .collect::<Vec<_>>()
+                .into_par_iter()
+                .map(|piece| {
+                    let mut text = Vec::new();
+                    format(piece..end.min(piece + PIECE_LINES), &mut text);
+                    text
+                })
+                .collect()
+        };
+        let out = &mut self.out;
+        let write_batch = |pieces: Vec<Vec<u8>>, out: &mut BufWriter<W>| -> Result<(), IoError> {
+            pieces.iter().try_for_each(|text| out.write_all(text).map_err(IoError::Stream))
+        };
+        let mut batch = format_batch(0);
+        let mut start = batch_lines;
+        while start < count {
+            // The writer stays on this thread (it need not be `Send`); the next batch is
+            // formatted by the pool meanwhile.
+            let mut next = Vec::new();
+            rayon::in_place_scope(|scope| {
+                scope.spawn(|_| next = format_batch(start));
+                write_batch(batch, out)
+            })?;
+            batch = next;
+            start += batch_lines;
+        }
+        write_batch(batch, out)
     }
 
     fn finish(mut self) -> Result<(), IoError> {
         self.out.flush().map_err(IoError::Stream)
+    }
+}
+
+/// Lines formatted by one task of [`LineWriter::lines`].
+const PIECE_LINES: usize = 1 << 14;
+
+/// Appends the three coordinates of `p`, separated by spaces.
+#[inline]
+fn push_point(text: &mut Vec<u8>, ryu: &mut ryu::Buffer, p: glam::DVec3) {
+    push_f64(text, ryu, p.x);
+    text.push(b' ');
+    push_f64(text, ryu, p.y);
+    text.push(b' ');
+    push_f64(text, ryu, p.z);
+}
+
+/// Appends the corners of `face`, each after a space, adding `base` (1 for OBJ).
+#[inline]
+fn push_corners(text: &mut Vec<u8>, face: &[u32], base: u32) {
+    for &v in face {
+        text.push(b' ');
+        push_u32(text, v + base);
     }
 }
 
@@ -125,19 +210,14 @@ pub fn write_obj(out: impl Write, soup: &PolygonSoup) -> Result<(), IoError> {
     let mut w = LineWriter::new(out);
     w.text(&format!("# {} vertices, {} faces", soup.vertex_count(), soup.face_count()));
     w.emit()?;
-    for p in &soup.positions {
-        w.text("v ");
-        w.point(p.to_array());
-        w.emit()?;
-    }
-    for face in soup.faces() {
-        w.line.push(b'f');
-        for &v in face {
-            w.line.push(b' ');
-            push_u32(&mut w.line, v + 1);
-        }
-        w.emit()?;
-    }
+    w.lines(soup.vertex_count(), |v, text, ryu| {
+        text.extend_from_slice(b"v ");
+        push_point(text, ryu, soup.positions[v]);
+    })?;
+    w.lines(soup.face_count(), |f, text, _| {
+        text.push(b'f');
+        push_corners(text, soup.face(f), 1);
+    })?;
     w.finish()
 }
 
@@ -157,19 +237,12 @@ pub fn write_off(out: impl Write, soup: &PolygonSoup) -> Result<(), IoError> {
 /// The body shared by OFF and ASCII PLY: one `x y z` line per vertex, then one line per
 /// face, its corner count first.
 fn write_counted_body<W: Write>(w: &mut LineWriter<W>, soup: &PolygonSoup) -> Result<(), IoError> {
-    for p in &soup.positions {
-        w.point(p.to_array());
-        w.emit()?;
-    }
-    for face in soup.faces() {
-        push_u32(&mut w.line, face.len() as u32);
-        for &v in face {
-            w.line.push(b' ');
-            push_u32(&mut w.line, v);
-        }
-        w.emit()?;
-    }
-    Ok(())
+    w.lines(soup.vertex_count(), |v, text, ryu| push_point(text, ryu, soup.positions[v]))?;
+    w.lines(soup.face_count(), |f, text, _| {
+        let face = soup.face(f);
+        push_u32(text, face.len() as u32);
+        push_corners(text, face, 0);
+    })
 }
 
 /// Writes a soup as PLY: `double` coordinates, faces as `vertex_indices` lists of
@@ -245,6 +318,72 @@ mod tests {
             out.clear();
             push_u32(&mut out, n);
             assert_eq!(String::from_utf8(out.clone()).unwrap(), n.to_string());
+        }
+    }
+
+    /// The OFF text of `soup` line after line, as the writer's sequential form reads.
+    fn off_text(soup: &PolygonSoup) -> Vec<u8> {
+        let mut text = format!("OFF\n{} {} 0\n", soup.vertex_count(), soup.face_count()).into_bytes();
+        for p in &soup.positions {
+            let coordinates: Vec<String> = p.to_array().iter().map(|&x| shortest(x)).collect();
+            text.extend_from_slice(coordinates.join(" ").as_bytes());
+            text.push(b'\n');
+        }
+        for face in soup.faces() {
+            let corners: Vec<String> = face.iter().map(u32::to_string).collect();
+            text.extend_from_slice(format!("{} {}\n", face.len(), corners.join(" ")).as_bytes());
+        }
+        text
+    }
+
+    /// A writer that fails once `room` bytes have been written.
+    struct Full {
+        room: usize,
+    }
+
+    impl Write for Full {
+        fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+            if bytes.len() > self.room {
+                return Err(std::io::Error::other("disk full"));
+            }
+            self.room -= bytes.len();
+            Ok(bytes.len())
+        }
+
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn pieces_formatted_on_several_threads_make_the_same_bytes() {
+        // Enough lines for several batches of pieces, and counts that are not multiples
+        // of a piece: the last piece and the last batch are short.
+        let mut soup = crate::shapes::torus(211, 197, crate::shapes::CellKind::Mixed).unwrap();
+        for (i, p) in soup.positions.iter_mut().enumerate() {
+            *p += DVec3::splat(1.0 / (i as f64 + 3.0));
+        }
+        assert!(soup.vertex_count() > 2 * PIECE_LINES && !soup.face_count().is_multiple_of(PIECE_LINES));
+        let write_all = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let (mut off, mut obj, mut ply) = (Vec::new(), Vec::new(), Vec::new());
+                write_off(&mut off, &soup).unwrap();
+                write_obj(&mut obj, &soup).unwrap();
+                write_ply(&mut ply, &soup, PlyEncoding::Ascii).unwrap();
+                (off, obj, ply)
+            })
+        };
+        let one = write_all(1);
+        assert!(one.0 == off_text(&soup), "the OFF text is the line-by-line one");
+        for threads in [2, 3] {
+            assert!(write_all(threads) == one, "{threads} threads");
+        }
+        // A stream that fails part way: the error, on every thread count.
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let result = pool.install(|| write_obj(Full { room: one.1.len() / 2 }, &soup));
+            assert!(matches!(result, Err(IoError::Stream(_))), "{threads} threads");
         }
     }
 
