@@ -155,3 +155,41 @@ fn bad_input_gives_one_error_line_and_no_output() {
     std::fs::write(d.join("nan.obj"), "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n").unwrap();
     fails(&["reverse", "nan.obj", "out.obj", "--scheme", "loop"], d, "out.obj");
 }
+
+/// A torus whose vertices all have valence 6, refined once: every coset of the fine
+/// vertices reads as a coarse mesh. The automatic search finds the one the refinement
+/// made (zero details); `--seed-vertex` on an edge point picks another, which rebuilds
+/// the file just as exactly.
+#[test]
+fn a_seed_vertex_picks_the_reading_of_an_all_regular_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let torus = shapes::torus(8, 6, shapes::CellKind::Triangles).unwrap();
+    io::write_soup(d.join("torus.off"), &torus, &WriteOptions::default()).unwrap();
+    let printed = ok(&["subdivide", "torus.off", "fine.off", "--scheme", "loop"], d);
+    assert_eq!(printed.trim(), "loop x1: 192 vertices, 384 faces");
+    let fine = read(&d.join("fine.off"));
+
+    // Automatic, and seeded on vertex 0 (a vertex of the torus): the torus, no details.
+    for seed in [&[][..], &["--seed-vertex", "0"]] {
+        ok(&[&["reverse", "fine.off", "coarse.off", "--scheme", "loop"][..], seed].concat(), d);
+        let coarse = read(&d.join("coarse.off"));
+        assert!(relative_error(&coarse, &torus) < 1e-12, "{seed:?}");
+    }
+    // Seeded on an edge point (vertex 48 on: one per edge of the torus): another coarse
+    // mesh of the same size, with details, rebuilt exactly.
+    let printed = ok(&["decompose", "fine.off", "other.mres", "--scheme", "loop", "--seed-vertex", "60"], d);
+    assert!(printed.contains("base 48 vertices, 96 faces"), "{printed}");
+    ok(&["reverse", "fine.off", "other.off", "--scheme", "loop", "--seed-vertex", "60"], d);
+    let other = read(&d.join("other.off"));
+    let moved = other.positions.iter().zip(&torus.positions).map(|(p, q)| p.distance(*q)).fold(0.0, f64::max);
+    assert!(moved > 1e-3, "another reading: {moved}");
+    ok(&["reconstruct", "other.mres", "rebuilt.off"], d);
+    assert!(relative_error(&read(&d.join("rebuilt.off")), &fine) < 1e-12);
+
+    // A seed that does not exist, and a seed vertex for Doo-Sabin: an error, nothing written.
+    let line = fails(&["reverse", "fine.off", "out.off", "--scheme", "loop", "--seed-vertex", "999"], d, "out.off");
+    assert!(line.contains("seed vertex 999 does not exist"), "{line}");
+    let line = fails(&["decompose", "fine.off", "out.mres", "--scheme", "doo", "--seed-vertex", "1"], d, "out.mres");
+    assert!(line.contains("--seed-vertex applies to the Loop schemes"), "{line}");
+}

@@ -94,7 +94,7 @@ pub fn reverse(args: &ReverseArgs) -> CliResult {
     let options = DecomposeOptions {
         rules: reverse_rules(args.scheme, args.keep_corners),
         levels: Levels::Count(args.levels as usize),
-        seed_vertex: None,
+        seed_vertex: args.seed_vertex,
     };
     let (fine, pyramid) = decompose_file(&args.mesh, &options)?;
     write_soup(&args.out, &pyramid.base, &WriteOptions::default())?;
@@ -119,7 +119,8 @@ pub fn decompose(args: &DecomposeArgs) -> CliResult {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
     let levels = if args.max { Levels::Max } else { Levels::Count(args.levels as usize) };
-    let options = DecomposeOptions { rules: reverse_rules(args.scheme, args.keep_corners), levels, seed_vertex: None };
+    let rules = reverse_rules(args.scheme, args.keep_corners);
+    let options = DecomposeOptions { rules, levels, seed_vertex: args.seed_vertex };
     let (_, pyramid) = decompose_file(&args.mesh, &options)?;
     let report = if args.report {
         Some(pyramid.rate_distortion(&REPORT_FRACTIONS).map_err(|e| loop_error(&args.mesh, e))?)

@@ -221,6 +221,11 @@ pub struct ReverseArgs {
     /// found automatically. They seed the first (finest) level only.
     #[arg(long, value_delimiter = ',')]
     pub seed_face: Vec<u32>,
+    /// A vertex known to come from a coarse vertex (Loop schemes): the labelling of its
+    /// connected component starts from it, for the first level. Needed only to pick one
+    /// of the readings of a mesh whose valences are all regular; found otherwise.
+    #[arg(long)]
+    pub seed_vertex: Option<u32>,
     /// The mesh was subdivided with boundary corners (valence-2 boundary vertices) kept
     /// fixed (Loop schemes).
     #[arg(long)]
@@ -256,6 +261,11 @@ pub struct DecomposeArgs {
     /// per connected component of the input, for its first level.
     #[arg(long, value_delimiter = ',')]
     pub seed_face: Vec<u32>,
+    /// A vertex known to come from a coarse vertex (Loop schemes): the labelling of its
+    /// connected component starts from it, for the first level. Needed only to pick one
+    /// of the readings of a mesh whose valences are all regular; found otherwise.
+    #[arg(long)]
+    pub seed_vertex: Option<u32>,
     /// The mesh was subdivided with boundary corners (valence-2 boundary vertices) kept
     /// fixed (Loop schemes).
     #[arg(long)]
