@@ -156,10 +156,11 @@ fn bad_input_gives_one_error_line_and_no_output() {
     fails(&["reverse", "nan.obj", "out.obj", "--scheme", "loop"], d, "out.obj");
 }
 
-/// A torus whose vertices all have valence 6, refined once: every coset of the fine
-/// vertices reads as a coarse mesh. The automatic search finds the one the refinement
-/// made (zero details); `--seed-vertex` on an edge point picks another, which rebuilds
-/// the file just as exactly.
+/// A torus whose vertices all have valence 6, refined once: several sets of the fine
+/// vertices read as vertex points. The automatic search starts at vertex 0, which here
+/// gives the reading the refinement made (zero details); `--seed-vertex` on an edge
+/// point picks another, which rebuilds the file just as exactly; on the file renumbered
+/// so that vertex 0 is an edge point, `--seed-vertex` gets the refinement's reading back.
 #[test]
 fn a_seed_vertex_picks_the_reading_of_an_all_regular_mesh() {
     let dir = tempfile::tempdir().unwrap();
@@ -186,6 +187,27 @@ fn a_seed_vertex_picks_the_reading_of_an_all_regular_mesh() {
     assert!(moved > 1e-3, "another reading: {moved}");
     ok(&["reconstruct", "other.mres", "rebuilt.off"], d);
     assert!(relative_error(&read(&d.join("rebuilt.off")), &fine) < 1e-12);
+
+    // The same file with vertices 0 and 60 swapped: the automatic reading starts at the
+    // edge point now numbered 0 (valid, exact, but with details, so that dropping them
+    // all moves the mesh); seeded at the vertex point now numbered 60, every detail is
+    // zero and dropping them all changes nothing.
+    let mut swapped = fine.clone();
+    swapped.positions.swap(0, 60);
+    for v in &mut swapped.indices {
+        *v = match *v {
+            0 => 60,
+            60 => 0,
+            other => other,
+        };
+    }
+    io::write_soup(d.join("swapped.off"), &swapped, &WriteOptions::default()).unwrap();
+    for (seed, exact) in [(&[][..], false), (&["--seed-vertex", "60"][..], true)] {
+        ok(&[&["decompose", "swapped.off", "swapped.mres", "--scheme", "loop"][..], seed].concat(), d);
+        ok(&["reconstruct", "swapped.mres", "smooth.off", "--keep", "0"], d);
+        let error = relative_error(&read(&d.join("smooth.off")), &swapped);
+        assert_eq!(error < 1e-12, exact, "{seed:?}: {error}");
+    }
 
     // A seed that does not exist, and a seed vertex for Doo-Sabin: an error, nothing written.
     let line = fails(&["reverse", "fine.off", "out.off", "--scheme", "loop", "--seed-vertex", "999"], d, "out.off");
