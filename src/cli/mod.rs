@@ -223,9 +223,9 @@ pub struct ReverseArgs {
     pub seed_face: Vec<u32>,
     /// A vertex known to come from a coarse vertex (Loop schemes): the labelling of its
     /// connected component starts from it, for the first level. Needed only to pick one
-    /// of the readings of a component whose valences are all regular: without it, such a
-    /// component is read from its lowest-numbered vertex, or the first of that vertex's
-    /// neighbours that gives a valid reading (not the reading with the smallest details).
+    /// of the readings of a mesh whose valences are all regular: without it, a connected
+    /// such mesh gets the reading with the smallest details (of several components, each
+    /// is read from its lowest-numbered vertex, or the first valid neighbour of it).
     #[arg(long)]
     pub seed_vertex: Option<u32>,
     /// The mesh was subdivided with boundary corners (valence-2 boundary vertices) kept
@@ -265,9 +265,9 @@ pub struct DecomposeArgs {
     pub seed_face: Vec<u32>,
     /// A vertex known to come from a coarse vertex (Loop schemes): the labelling of its
     /// connected component starts from it, for the first level. Needed only to pick one
-    /// of the readings of a component whose valences are all regular: without it, such a
-    /// component is read from its lowest-numbered vertex, or the first of that vertex's
-    /// neighbours that gives a valid reading (not the reading with the smallest details).
+    /// of the readings of a mesh whose valences are all regular: without it, a connected
+    /// such mesh gets the reading with the smallest details (of several components, each
+    /// is read from its lowest-numbered vertex, or the first valid neighbour of it).
     #[arg(long)]
     pub seed_vertex: Option<u32>,
     /// The mesh was subdivided with boundary corners (valence-2 boundary vertices) kept

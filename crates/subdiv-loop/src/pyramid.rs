@@ -37,7 +37,8 @@ use crate::corner_table::CornerTable;
 use crate::detect::{FineOrder, reverse_canonical_soup};
 use crate::forward::LoopOptions;
 use crate::reverse::{
-    CanonicalLevel, FineLevel, LevelParts, check_level, non_finite_bits, reconstruct_levels, reverse_level,
+    CanonicalLevel, FineLevel, LevelParts, check_level, non_finite_bits, reconstruct_levels, regular_readings,
+    reverse_level,
 };
 
 /// Magic number of a Loop pyramid file.
@@ -83,6 +84,9 @@ pub struct DecomposeOptions {
     pub levels: Levels,
     /// A vertex point of the input mesh, for the first level only (see
     /// [`DetectOptions::seed_vertex`](crate::detect::DetectOptions::seed_vertex)).
+    /// Without it, a level that reads several ways (a connected mesh of regular
+    /// valences only) gets the reading with the smallest details (see
+    /// [`reverse`](crate::reverse::reverse)).
     pub seed_vertex: Option<u32>,
 }
 
@@ -191,6 +195,10 @@ pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<
         && let Some(level) = reverse_canonical_soup(soup, options.seed_vertex, &options.rules)
         && level.finite
         && level.coarse.fans_are_single()
+        // A connected mesh of regular valences only (so is the fine mesh, then: edge
+        // points are regular, vertex points keep their valence) reads several ways, which
+        // `decompose` compares (see `reverse_level`); given a seed, the reading is fixed.
+        && (options.seed_vertex.is_some() || regular_readings(FineLevel::Table(&level.coarse)).is_none())
     {
         let CanonicalLevel { coarse, positions, details, .. } = level;
         return decompose_below(LevelParts { coarse, order: None, positions, details }, options);

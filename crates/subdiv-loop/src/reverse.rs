@@ -116,6 +116,12 @@ pub struct ReverseOptions {
 /// computes the coarse positions by the exact inverse (see the [module docs](self)) and
 /// the detail of every edge point.
 ///
+/// Without a seed vertex, a connected mesh whose valences are all regular (6 inside, 4
+/// on the boundary), which reads several ways, gets the reading with the smallest sum of
+/// squared details among those detection would try; so a refined torus gives its coarse
+/// torus back in any numbering. That choice is invariant under similarities, not under
+/// every affine map; a seed fixes the reading.
+///
 /// ```
 /// use glam::DVec3;
 /// use mesh_topo::{HalfedgeMesh, shapes};
@@ -393,6 +399,7 @@ pub(crate) fn reverse_positions(
 
 /// The fine mesh of one reversal: the user's mesh, or a coarse level of an earlier
 /// reversal (whose positions were computed here, so they need no input check).
+#[derive(Clone, Copy)]
 pub(crate) enum FineLevel<'a> {
     Mesh(&'a HalfedgeMesh),
     Table(&'a CornerTable),
@@ -407,11 +414,95 @@ pub(crate) struct LevelParts {
     pub(crate) details: Vec<DVec3>,
 }
 
+/// One level reversed ([`reverse_level_from`]); without a seed, a mesh that reads
+/// several ways gets the reading with the smallest details.
+///
+/// Detection labels each component from a vertex of irregular valence, which fixes the
+/// reading. A connected mesh whose valences are all regular (6 inside, 4 on the
+/// boundary: a refined torus, a refined regular grid) has several readings, and
+/// detection takes the first valid one from its lowest vertex, which depends on the
+/// numbering. Here every seed detection would try on such a mesh (vertex 0 and its
+/// neighbours) is reversed too, and a reading is kept over the first only if its sum of
+/// squared details is strictly smaller, so a mesh made by Loop subdivision gets its own
+/// reading back (zero details) in any numbering. It costs up to seven more reversals,
+/// on such meshes only. Meshes of several components keep the first reading of each
+/// (`DetectOptions::seed_vertex` picks one component's).
+pub(crate) fn reverse_level(
+    fine: FineLevel<'_>,
+    positions: &[DVec3],
+    seed_vertex: Option<u32>,
+    rules: &LoopOptions,
+) -> Result<LevelParts, LoopError> {
+    let first = reverse_level_from(fine, positions, seed_vertex, rules)?;
+    if seed_vertex.is_some() {
+        return Ok(first);
+    }
+    let Some(seeds) = regular_readings(fine) else { return Ok(first) };
+    let energy = |level: &LevelParts| level.details.iter().map(|d| d.length_squared()).sum::<f64>();
+    let mut best_energy = energy(&first);
+    let mut best = first;
+    for seed in seeds {
+        // A seed that gives no valid reading is passed over, as detection passes it.
+        if let Ok(level) = reverse_level_from(fine, positions, Some(seed), rules) {
+            let level_energy = energy(&level);
+            if level_energy < best_energy {
+                (best_energy, best) = (level_energy, level);
+            }
+        }
+    }
+    Ok(best)
+}
+
+/// The seeds whose readings [`reverse_level`] compares: vertex 0 and its neighbours, in
+/// the order detection tries them, if `fine` is one connected component whose vertices
+/// all have regular valence; else `None`.
+pub(crate) fn regular_readings(fine: FineLevel<'_>) -> Option<Vec<u32>> {
+    let built;
+    let table = match fine {
+        FineLevel::Table(table) => table,
+        FineLevel::Mesh(mesh) => {
+            // Most meshes have an irregular vertex among their first few: no table built.
+            let regular = mesh.vertices().all(|v| mesh.valence(v) == if mesh.is_boundary_vertex(v) { 4 } else { 6 });
+            if !regular || mesh.vertex_count() == 0 {
+                return None;
+            }
+            built = CornerTable::from_mesh(mesh).ok()?;
+            &built
+        }
+    };
+    let vertices = table.vertex_count();
+    let regular = (0..vertices as u32).all(|v| match table.visit_star(v, |_, _| {}) {
+        VertexStar::Interior { valence } => valence == 6,
+        VertexStar::Boundary { valence, .. } => valence == 4,
+        VertexStar::Isolated => false,
+    });
+    if !regular || vertices == 0 {
+        return None;
+    }
+    // One component: every vertex reached from vertex 0 across edges.
+    let mut seen = vec![false; vertices];
+    let mut stack = vec![0u32];
+    seen[0] = true;
+    let mut reached = 1;
+    while let Some(v) = stack.pop() {
+        table.visit_star(v, |_, u| {
+            if !std::mem::replace(&mut seen[u as usize], true) {
+                reached += 1;
+                stack.push(u);
+            }
+        });
+    }
+    if reached != vertices {
+        return None;
+    }
+    Some(std::iter::once(0).chain(table.outgoing(0).map(|c| table.vertex(next(c)))).collect())
+}
+
 /// One level reversed, by the fused path when the fine mesh is canonical, else through
 /// its canonical renumbering ([`reverse_renumbered`]) when that is found and valid, else
 /// by detection and [`reverse_positions`] (which also names every error). A user's mesh
 /// with a non-finite position is an error before any connectivity error, on every path.
-pub(crate) fn reverse_level(
+fn reverse_level_from(
     fine: FineLevel<'_>,
     positions: &[DVec3],
     seed_vertex: Option<u32>,
@@ -996,6 +1087,55 @@ mod tests {
         }
     }
 
+    /// A refined torus (valence 6 everywhere) reads four ways. Renumbered in any way, the
+    /// automatic reversal gets the refinement's own reading back (zero details); with the
+    /// vertices moved, it keeps the reading of smallest details among the seeds
+    /// detection would try, and a given seed still fixes the reading.
+    #[test]
+    fn a_mesh_of_regular_valences_gets_the_reading_with_the_smallest_details() {
+        let rules = LoopOptions::default();
+        let torus = shapes::torus(6, 4, CellKind::Triangles).unwrap();
+        let fine = loop_step(&mesh(&torus), &rules);
+        let energy = |level: &ReversedLevel| level.details.iter().map(|d| d.length_squared()).sum::<f64>();
+        for scramble_seed in 0..6 {
+            let renumbered = scramble(&fine, scramble_seed);
+            let level = reverse(&mesh(&renumbered), &ReverseOptions::default()).unwrap();
+            assert!(energy(&level) < 1e-24, "seed {scramble_seed}: {}", energy(&level));
+            // Every coarse vertex is a vertex of the torus (numbered as the reading found).
+            let nearest = |p: DVec3| torus.positions.iter().map(|q| p.distance(*q)).fold(f64::INFINITY, f64::min);
+            let far = level.coarse.positions().iter().map(|&p| nearest(p)).fold(0.0, f64::max);
+            assert!(far < 1e-12, "seed {scramble_seed}: the torus's vertices back ({far})");
+        }
+        for moved_seed in 0..4 {
+            let moved = mesh(&scramble(&perturb(&fine, 0.1, moved_seed), 100 + moved_seed));
+            let chosen = energy(&reverse(&moved, &ReverseOptions::default()).unwrap());
+            let table = CornerTable::from_mesh(&moved).unwrap();
+            let seeds = regular_readings(FineLevel::Table(&table)).expect("a connected regular mesh");
+            assert_eq!(seeds.len(), 7, "vertex 0 and its six neighbours");
+            let seeded: Vec<f64> = seeds
+                .iter()
+                .filter_map(|&seed| reverse(&moved, &ReverseOptions { rules, seed_vertex: Some(seed) }).ok())
+                .map(|level| energy(&level))
+                .collect();
+            assert!(seeded.len() >= 2, "several readings");
+            let smallest = seeded.iter().copied().fold(f64::INFINITY, f64::min);
+            assert_eq!(chosen, smallest, "moved {moved_seed}: {seeded:?}");
+            assert!(seeded.iter().any(|&e| e > smallest), "the readings differ");
+        }
+        // Not regular (an octahedron refined: valence 4 at its vertices), or in two
+        // components: no alternatives.
+        let octahedron = loop_step(&mesh(&shapes::octahedron()), &rules);
+        assert!(regular_readings(FineLevel::Mesh(&mesh(&octahedron))).is_none());
+        let mut two = fine.clone();
+        let n = two.positions.len() as u32;
+        two.positions.extend(fine.positions.iter().map(|&p| p + DVec3::X * 10.0));
+        let faces: Vec<Vec<u32>> =
+            fine.faces().map(<[u32]>::to_vec).chain(fine.faces().map(|f| f.iter().map(|&v| v + n).collect())).collect();
+        two = PolygonSoup::from_faces(two.positions, faces);
+        assert!(regular_readings(FineLevel::Mesh(&mesh(&two))).is_none());
+        assert!(regular_readings(FineLevel::Mesh(&mesh(&fine))).is_some());
+    }
+
     /// The fast forward subdivision (`forward::subdivide`) numbers its output canonically:
     /// reversing it gives the coarse mesh back, numbering included, with zero details,
     /// and reconstruction with zero details equals it.
@@ -1321,7 +1461,9 @@ mod tests {
         }
 
         /// Affine invariance: reversing A·M + t gives A·reverse(M) + t and the same
-        /// details mapped by A.
+        /// details mapped by A, in the same reading (the moved mesh is seeded at a vertex
+        /// point of the first's: on a mesh of regular valences only, the reading with the
+        /// smallest details may change under a map that is not a similarity).
         #[test]
         fn reverse_commutes_with_affine_maps(soup in mesh_topo::testing::arb_triangle_mesh(), seed in any::<u64>()) {
             let rules = LoopOptions::default();
@@ -1333,7 +1475,10 @@ mod tests {
                 *p = map * *p + shift;
             }
             let a = reverse(&mesh(&fine), &ReverseOptions::default()).unwrap();
-            let b = reverse(&mesh(&moved), &ReverseOptions::default()).unwrap();
+            // Coarse vertex 0 is fine vertex 0 in the canonical order, else the order says.
+            let vertex_point = a.order.as_ref().map_or(0, |order| order.vertex_of_canonical[0]);
+            let seeded = ReverseOptions { rules, seed_vertex: Some(vertex_point) };
+            let b = reverse(&mesh(&moved), &seeded).unwrap();
             let mut expected = a.coarse.to_soup();
             for p in &mut expected.positions {
                 *p = map * *p + shift;
