@@ -419,7 +419,7 @@ pub(crate) struct LevelParts {
 ///
 /// Detection labels each component from a vertex of irregular valence, which fixes the
 /// reading. A connected mesh whose valences are all regular (6 inside, 4 on the
-/// boundary: a refined torus, a refined regular grid) has several readings, and
+/// boundary: a refined torus, a refined open cylinder) has several readings, and
 /// detection takes the first valid one from its lowest vertex, which depends on the
 /// numbering. Here every seed detection would try on such a mesh (vertex 0 and its
 /// neighbours) is reversed too, and a reading is kept over the first only if its sum of
