@@ -457,13 +457,21 @@ pub(crate) fn reverse_level(
 /// the order detection tries them, if `fine` is one connected component whose vertices
 /// all have regular valence; else `None`.
 pub(crate) fn regular_readings(fine: FineLevel<'_>) -> Option<Vec<u32>> {
+    // Each check stops at the first irregular vertex, which most meshes have among their
+    // first few; a mesh's corner table is built only when every vertex passed.
     let built;
     let table = match fine {
-        FineLevel::Table(table) => table,
+        FineLevel::Table(table) => {
+            let regular = |v| match table.visit_star(v, |_, _| {}) {
+                VertexStar::Interior { valence } => valence == 6,
+                VertexStar::Boundary { valence, .. } => valence == 4,
+                VertexStar::Isolated => false,
+            };
+            (0..table.vertex_count() as u32).all(regular).then_some(table)?
+        }
         FineLevel::Mesh(mesh) => {
-            // Most meshes have an irregular vertex among their first few: no table built.
-            let regular = mesh.vertices().all(|v| mesh.valence(v) == if mesh.is_boundary_vertex(v) { 4 } else { 6 });
-            if !regular || mesh.vertex_count() == 0 {
+            let regular = |v| mesh.valence(v) == if mesh.is_boundary_vertex(v) { 4 } else { 6 };
+            if !mesh.vertices().all(regular) {
                 return None;
             }
             built = CornerTable::from_mesh(mesh).ok()?;
@@ -471,12 +479,7 @@ pub(crate) fn regular_readings(fine: FineLevel<'_>) -> Option<Vec<u32>> {
         }
     };
     let vertices = table.vertex_count();
-    let regular = (0..vertices as u32).all(|v| match table.visit_star(v, |_, _| {}) {
-        VertexStar::Interior { valence } => valence == 6,
-        VertexStar::Boundary { valence, .. } => valence == 4,
-        VertexStar::Isolated => false,
-    });
-    if !regular || vertices == 0 {
+    if vertices == 0 {
         return None;
     }
     // One component: every vertex reached from vertex 0 across edges.

@@ -140,9 +140,8 @@ impl<W: Write> LineWriter<W> {
         let format_batch = |start: usize| -> Vec<Vec<u8>> {
             let end = count.min(start + batch_lines);
             (start..end)
-                .step_by(PIECE_LINES)
-                .collect::<Vec<_>>()
                 .into_par_iter()
+                .step_by(PIECE_LINES)
                 .map(|piece| {
                     let mut text = Vec::new();
                     format(piece..end.min(piece + PIECE_LINES), &mut text);
