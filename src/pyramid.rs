@@ -174,7 +174,7 @@ fn loop_options(
         Depth::Levels(n) => subdiv_loop::pyramid::Levels::Count(n as usize),
         Depth::Max => subdiv_loop::pyramid::Levels::Max,
     };
-    Some(subdiv_loop::pyramid::DecomposeOptions { rules, levels, seed_vertex: None })
+    Some(subdiv_loop::pyramid::DecomposeOptions { rules, levels, seed_vertices: Vec::new() })
 }
 
 impl Pyramid {

@@ -216,3 +216,59 @@ fn a_seed_vertex_picks_the_reading_of_an_all_regular_mesh() {
     let line = fails(&["decompose", "fine.off", "out.mres", "--scheme", "doo", "--seed-vertex", "1"], d, "out.mres");
     assert!(line.contains("--seed-vertex applies to the Loop schemes"), "{line}");
 }
+
+/// Two refined tori in one file, each numbered so that its lowest vertex is an edge
+/// point: the automatic choice reads each component by itself (the refinement's reading,
+/// zero details); `--seed-vertex` takes one vertex per component, repeated or separated
+/// by commas; two seeds of one component that cannot both be vertex points are an error.
+#[test]
+fn seed_vertices_are_given_one_per_component() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let torus = shapes::torus(8, 6, shapes::CellKind::Triangles).unwrap();
+    io::write_soup(d.join("torus.off"), &torus, &WriteOptions::default()).unwrap();
+    ok(&["subdivide", "torus.off", "fine.off", "--scheme", "loop"], d);
+    let fine = read(&d.join("fine.off"));
+    // Vertices 0 and 60 swapped (vertex 0 is now an edge point), twice side by side.
+    let swap = |v: u32| match v {
+        0 => 60,
+        60 => 0,
+        other => other,
+    };
+    let n = fine.positions.len() as u32;
+    let mut positions = fine.positions.clone();
+    positions.swap(0, 60);
+    let second: Vec<_> = positions.iter().map(|&p| p + DVec3::X * 10.0).collect();
+    positions.extend(second);
+    let faces: Vec<Vec<u32>> = fine
+        .faces()
+        .map(|f| f.iter().map(|&v| swap(v)).collect())
+        .chain(fine.faces().map(|f| f.iter().map(|&v| swap(v) + n).collect()))
+        .collect();
+    let two = PolygonSoup::from_faces(positions, faces);
+    io::write_soup(d.join("two.off"), &two, &WriteOptions::default()).unwrap();
+
+    // Automatic, one seed (the other component automatic), both seeds in either form:
+    // the refinement's readings, so dropping every detail changes nothing.
+    let n = n.to_string();
+    let both = format!("60,{}", 60 + 192);
+    let cases: [&[&str]; 4] =
+        [&[], &["--seed-vertex", "60"], &["--seed-vertex", &both], &["--seed-vertex", "60", "--seed-vertex", "252"]];
+    for seeds in cases {
+        let printed = ok(&[&["decompose", "two.off", "two.mres", "--scheme", "loop"][..], seeds].concat(), d);
+        assert!(printed.contains("base 96 vertices, 192 faces"), "{seeds:?}: {printed}");
+        ok(&["reconstruct", "two.mres", "smooth.off", "--keep", "0"], d);
+        let error = relative_error(&read(&d.join("smooth.off")), &two);
+        assert!(error < 1e-12, "{seeds:?}: {error}");
+    }
+    // A seed on the second component's edge point: that component is read another way.
+    ok(&["decompose", "two.off", "two.mres", "--scheme", "loop", "--seed-vertex", &n], d);
+    ok(&["reconstruct", "two.mres", "smooth.off", "--keep", "0"], d);
+    assert!(relative_error(&read(&d.join("smooth.off")), &two) > 1e-6);
+    // Vertex 60 and a neighbour of it cannot both be vertex points: an error, nothing written.
+    let face = two.faces().find(|f| f.contains(&60)).unwrap();
+    let neighbour = face.iter().find(|&&v| v != 60).unwrap().to_string();
+    let seeds = format!("60,{neighbour}");
+    let line = fails(&["reverse", "two.off", "out.off", "--scheme", "loop", "--seed-vertex", &seeds], d, "out.off");
+    assert!(line.contains(&format!("seed vertex {neighbour} would be an edge point")), "{line}");
+}

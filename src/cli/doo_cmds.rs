@@ -23,11 +23,11 @@ use super::{
 
 /// The per-face rule that `reverse` and `decompose` invert: that of `subdivide` with the
 /// same `--scheme` (`doo` is `doo-sabin`).
-fn reverse_rule(scheme: ReverseScheme, keep_corners: bool, seed_vertex: Option<u32>) -> Result<FaceRule, CliError> {
+fn reverse_rule(scheme: ReverseScheme, keep_corners: bool, seed_vertices: &[u32]) -> Result<FaceRule, CliError> {
     if keep_corners {
         return Err(CliError::Input("--keep-corners applies to the Loop schemes only".into()));
     }
-    if seed_vertex.is_some() {
+    if !seed_vertices.is_empty() {
         return Err(CliError::Input(
             "--seed-vertex applies to the Loop schemes; Doo-Sabin reversal takes --seed-face".into(),
         ));
@@ -132,7 +132,7 @@ pub fn reverse(args: &ReverseArgs) -> CliResult {
     if args.levels == 0 {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
-    let rule = reverse_rule(args.scheme, args.keep_corners, args.seed_vertex)?;
+    let rule = reverse_rule(args.scheme, args.keep_corners, &args.seed_vertex)?;
     let options = DecomposeOptions {
         rule,
         depth: Depth::Levels(args.levels),
@@ -162,7 +162,7 @@ pub fn decompose(args: &DecomposeArgs) -> CliResult {
     if !args.max && args.levels == 0 {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
-    let rule = reverse_rule(args.scheme, args.keep_corners, args.seed_vertex)?;
+    let rule = reverse_rule(args.scheme, args.keep_corners, &args.seed_vertex)?;
     let depth = if args.max { Depth::Max } else { Depth::Levels(args.levels) };
     let options =
         DecomposeOptions { rule, depth, seeds: seeds(&args.seed_face), boundary: boundary_rule(args.boundary) };

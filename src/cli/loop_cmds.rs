@@ -94,7 +94,7 @@ pub fn reverse(args: &ReverseArgs) -> CliResult {
     let options = DecomposeOptions {
         rules: reverse_rules(args.scheme, args.keep_corners),
         levels: Levels::Count(args.levels as usize),
-        seed_vertex: args.seed_vertex,
+        seed_vertices: args.seed_vertex.clone(),
     };
     let (fine, pyramid) = decompose_file(&args.mesh, &options)?;
     write_soup(&args.out, &pyramid.base, &WriteOptions::default())?;
@@ -120,7 +120,7 @@ pub fn decompose(args: &DecomposeArgs) -> CliResult {
     }
     let levels = if args.max { Levels::Max } else { Levels::Count(args.levels as usize) };
     let rules = reverse_rules(args.scheme, args.keep_corners);
-    let options = DecomposeOptions { rules, levels, seed_vertex: args.seed_vertex };
+    let options = DecomposeOptions { rules, levels, seed_vertices: args.seed_vertex.clone() };
     let (_, pyramid) = decompose_file(&args.mesh, &options)?;
     let report = if args.report {
         Some(pyramid.rate_distortion(&REPORT_FRACTIONS).map_err(|e| loop_error(&args.mesh, e))?)

@@ -221,13 +221,13 @@ pub struct ReverseArgs {
     /// found automatically. They seed the first (finest) level only.
     #[arg(long, value_delimiter = ',')]
     pub seed_face: Vec<u32>,
-    /// A vertex known to come from a coarse vertex (Loop schemes): the labelling of its
-    /// connected component starts from it, for the first level. Needed only to pick one
-    /// of the readings of a mesh whose valences are all regular: without it, a connected
-    /// such mesh gets the reading with the smallest details (of several components, each
-    /// is read from its lowest-numbered vertex, or the first valid neighbour of it).
-    #[arg(long)]
-    pub seed_vertex: Option<u32>,
+    /// Vertices known to come from coarse vertices (Loop schemes): one per connected
+    /// component at most, repeated or separated by commas; the labeling of each one's
+    /// component starts from it, for the first level. Needed only to pick one of the
+    /// readings of a component whose valences are all regular: without a seed, each such
+    /// component gets the reading with the smallest details.
+    #[arg(long, value_delimiter = ',')]
+    pub seed_vertex: Vec<u32>,
     /// The mesh was subdivided with boundary corners (valence-2 boundary vertices) kept
     /// fixed (Loop schemes).
     #[arg(long)]
@@ -263,13 +263,13 @@ pub struct DecomposeArgs {
     /// per connected component of the input, for its first level.
     #[arg(long, value_delimiter = ',')]
     pub seed_face: Vec<u32>,
-    /// A vertex known to come from a coarse vertex (Loop schemes): the labelling of its
-    /// connected component starts from it, for the first level. Needed only to pick one
-    /// of the readings of a mesh whose valences are all regular: without it, a connected
-    /// such mesh gets the reading with the smallest details (of several components, each
-    /// is read from its lowest-numbered vertex, or the first valid neighbour of it).
-    #[arg(long)]
-    pub seed_vertex: Option<u32>,
+    /// Vertices known to come from coarse vertices (Loop schemes): one per connected
+    /// component at most, repeated or separated by commas; the labeling of each one's
+    /// component starts from it, for the first level. Needed only to pick one of the
+    /// readings of a component whose valences are all regular: without a seed, each such
+    /// component gets the reading with the smallest details.
+    #[arg(long, value_delimiter = ',')]
+    pub seed_vertex: Vec<u32>,
     /// The mesh was subdivided with boundary corners (valence-2 boundary vertices) kept
     /// fixed (Loop schemes).
     #[arg(long)]

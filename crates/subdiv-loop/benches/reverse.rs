@@ -113,7 +113,7 @@ fn benches(c: &mut Criterion) {
     // the same load.
     for level in 1..=4 {
         let fine = smooth.reconstruct_mesh(level).expect("refined bunny");
-        let options = DecomposeOptions { rules, levels: Levels::Count(level), seed_vertex: None };
+        let options = DecomposeOptions { rules, levels: Levels::Count(level), seed_vertices: Vec::new() };
         let pyramid = decompose(&fine, &options).expect("Loop mesh");
         let mut group = c.benchmark_group(format!("level{level}"));
         group.throughput(Throughput::Elements(fine.vertex_count() as u64));

@@ -34,7 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         *p += amplitude * DVec3::new(next(), next(), next());
     }
     let mesh = HalfedgeMesh::from_soup(&fine)?;
-    let pyramid = decompose(&mesh, &DecomposeOptions { rules, levels: Levels::Max, seed_vertex: None })?;
+    let pyramid = decompose(&mesh, &DecomposeOptions { rules, levels: Levels::Max, seed_vertices: Vec::new() })?;
     println!(
         "{path}: {} vertices, {} faces; {} levels; base {} vertices; {} details",
         mesh.vertex_count(),

@@ -12,8 +12,8 @@
 //!    of each connected component is the seed. A component where every valence is
 //!    regular (a torus, say) admits several labelings; then the lowest-numbered vertex
 //!    and, failing that, each of its neighbours is tried in turn (one of them is a vertex
-//!    point of any valid labeling, so this finds one if any exists). A seed given by the
-//!    caller ([`DetectOptions::seed_vertex`]) replaces the search in its component.
+//!    point of any valid labeling, so this finds one if any exists). Seeds given by the
+//!    caller ([`DetectOptions::seed_vertices`]) replace the search in their components.
 //! 2. **Propagation** (breadth-first). The neighbours of a vertex point are edge points;
 //!    from vertex point `v` through edge point `m`, the next vertex point is the
 //!    neighbour of `m` straight across from `v` (opposite in `m`'s 6-ring inside, the
@@ -80,12 +80,14 @@ impl fmt::Display for FineElement {
 }
 
 /// Options of [`detect`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct DetectOptions {
-    /// A vertex known to be a vertex point (even). Its component is labelled from it,
-    /// without search; the other components are searched as usual. Needed only to pick
-    /// one of several valid labelings of a mesh whose valences are all regular.
-    pub seed_vertex: Option<u32>,
+    /// Vertices known to be vertex points (even), typically one per connected component.
+    /// The component of each is labelled from it, without search; the other components
+    /// are searched as usual. Needed only to pick one of the several valid labelings of a
+    /// component whose valences are all regular. Seeds that share a component must be
+    /// vertex points of one labeling ([`LoopError::SeedConflict`] otherwise).
+    pub seed_vertices: Vec<u32>,
 }
 
 /// How a fine mesh is numbered relative to the canonical refinement of its coarse mesh
@@ -279,14 +281,14 @@ impl LoopConnectivity {
 /// [`LoopError::NotLoopConnectivity`] naming the fine vertex or face where the Loop
 /// structure breaks.
 pub fn detect(fine: &HalfedgeMesh, options: &DetectOptions) -> Result<LoopConnectivity, LoopError> {
-    let seed_vertex = options.seed_vertex;
+    let seeds = &options.seed_vertices[..];
     // A mesh in another order (a file of another tool) is renumbered into the canonical
     // order by a search over coarse faces, as the reversal does; whatever that does not
     // settle (a component whose valences are all regular, every error) goes through the
     // general detection.
-    let coarsening = match detect_canonical_mesh(fine, seed_vertex).or_else(|| detect_renumbered(fine, seed_vertex)) {
+    let coarsening = match detect_canonical_mesh(fine, seeds).or_else(|| detect_renumbered(fine, seeds)) {
         Some(coarsening) => coarsening,
-        None => detect_table(&CornerTable::from_mesh(fine)?, seed_vertex)?,
+        None => detect_table(&CornerTable::from_mesh(fine)?, seeds)?,
     };
     Ok(LoopConnectivity { coarsening })
 }
@@ -295,17 +297,17 @@ pub fn detect(fine: &HalfedgeMesh, options: &DetectOptions) -> Result<LoopConnec
 /// output of Loop subdivision and of reconstruction) is recognised from its face
 /// corners alone, without building the fine corner table; anything else goes through
 /// the corner table and the general detection, which also reports every error.
-pub(crate) fn detect_mesh(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
-    match detect_canonical_mesh(fine, seed_vertex) {
+pub(crate) fn detect_mesh(fine: &HalfedgeMesh, seeds: &[u32]) -> Result<Coarsening, LoopError> {
+    match detect_canonical_mesh(fine, seeds) {
         Some(coarsening) => Ok(coarsening),
-        None => detect_table(&CornerTable::from_mesh(fine)?, seed_vertex),
+        None => detect_table(&CornerTable::from_mesh(fine)?, seeds),
     }
 }
 
 /// The coarsening of a mesh in the canonical order, from its face corners alone; `None`
 /// for any other mesh.
-fn detect_canonical_mesh(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Option<Coarsening> {
-    detect_canonical_faces(fine.face_count(), fine.vertex_count(), seed_vertex, mesh_face_corners(fine))
+fn detect_canonical_mesh(fine: &HalfedgeMesh, seeds: &[u32]) -> Option<Coarsening> {
+    detect_canonical_faces(fine.face_count(), fine.vertex_count(), seeds, mesh_face_corners(fine))
         .filter(|coarsening| coarse_mesh_is_valid(&coarsening.coarse))
 }
 
@@ -313,11 +315,10 @@ fn detect_canonical_mesh(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Optio
 /// the canonical path checks (the coarse twins paired from the renumbered faces, then
 /// [`coarse_mesh_is_valid`]): the very coarsening [`detect_general`] finds. `None` when
 /// the renumbering is not found or does not check out.
-fn detect_renumbered(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Option<Coarsening> {
+fn detect_renumbered(fine: &HalfedgeMesh, seeds: &[u32]) -> Option<Coarsening> {
     let corners = CornerTable::mesh_corners(fine)?;
     let corner_at = |v| corners.corner_at(fine, v);
-    let Renumbering { order, groups } =
-        renumber_to_canonical(fine.vertex_count(), &corners.corners, corner_at, seed_vertex)?;
+    let Renumbering { order, groups } = renumber_to_canonical(fine.vertex_count(), &corners.corners, corner_at, seeds)?;
     let (coarse, _, ()) = groups.into_table(fine.vertex_count(), (), |_, _, _| (), |_, _| ())?;
     if !coarse_mesh_is_valid(&coarse) {
         return None;
@@ -347,11 +348,11 @@ fn mesh_face_corners(fine: &HalfedgeMesh) -> impl Fn(usize) -> Option<[u32; 3]> 
 /// [`reverse_canonical`](crate::reverse::reverse_canonical) on a half-edge mesh.
 pub(crate) fn reverse_canonical_mesh(
     fine: &HalfedgeMesh,
-    seed_vertex: Option<u32>,
+    seeds: &[u32],
     positions: &[DVec3],
     rules: &LoopOptions,
 ) -> Option<CanonicalLevel> {
-    reverse_canonical(fine.face_count(), fine.vertex_count(), seed_vertex, mesh_face_corners(fine), positions, rules)
+    reverse_canonical(fine.face_count(), fine.vertex_count(), seeds, mesh_face_corners(fine), positions, rules)
 }
 
 /// [`reverse_canonical`](crate::reverse::reverse_canonical) on the face list of a polygon
@@ -361,11 +362,7 @@ pub(crate) fn reverse_canonical_mesh(
 /// whose edges are manifold and consistently oriented, and whose faces are valid; they
 /// do not see a coarse vertex whose faces form two fans, which the caller checks
 /// ([`CornerTable::fans_are_single`]) before trusting the result.
-pub(crate) fn reverse_canonical_soup(
-    soup: &PolygonSoup,
-    seed_vertex: Option<u32>,
-    rules: &LoopOptions,
-) -> Option<CanonicalLevel> {
+pub(crate) fn reverse_canonical_soup(soup: &PolygonSoup, seeds: &[u32], rules: &LoopOptions) -> Option<CanonicalLevel> {
     let (offsets, indices, vertices) = (&soup.offsets[..], &soup.indices[..], soup.positions.len());
     let faces = offsets.len().saturating_sub(1);
     // Only triangles (face `f` at `3f..3f + 3`, checked in one pass that vectorises), so
@@ -378,19 +375,19 @@ pub(crate) fn reverse_canonical_soup(
         let face: [u32; 3] = indices.get(3 * f..3 * f + 3)?.try_into().ok()?;
         face.iter().all(|&v| (v as usize) < vertices).then_some(face)
     };
-    reverse_canonical(faces, vertices, seed_vertex, face, &soup.positions, rules)
+    reverse_canonical(faces, vertices, seeds, face, &soup.positions, rules)
 }
 
 /// [`reverse_canonical`](crate::reverse::reverse_canonical) on a corner table.
 pub(crate) fn reverse_canonical_table(
     fine: &CornerTable,
-    seed_vertex: Option<u32>,
+    seeds: &[u32],
     positions: &[DVec3],
     rules: &LoopOptions,
 ) -> Option<CanonicalLevel> {
     let corners = fine.corner_vertices();
     let face = |f: usize| Some([corners[3 * f], corners[3 * f + 1], corners[3 * f + 2]]);
-    reverse_canonical(fine.face_count(), fine.vertex_count(), seed_vertex, face, positions, rules)
+    reverse_canonical(fine.face_count(), fine.vertex_count(), seeds, face, positions, rules)
 }
 
 const UNKNOWN: u8 = 0;
@@ -407,20 +404,18 @@ fn broken(at: FineElement, reason: String) -> LoopError {
 /// propagation from their lowest irregular vertex and their faces validated in one pass
 /// in face order; only components whose valences are all regular go through the
 /// candidate search, each attempt validating the component's own faces.
-pub(crate) fn detect_table(fine: &CornerTable, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
+pub(crate) fn detect_table(fine: &CornerTable, seeds: &[u32]) -> Result<Coarsening, LoopError> {
     let nv = fine.vertex_count();
-    if let Some(seed) = seed_vertex
-        && seed as usize >= nv
-    {
+    if let Some(&seed) = seeds.iter().find(|&&seed| seed as usize >= nv) {
         return Err(LoopError::SeedOutOfRange { vertex: seed, vertex_count: nv });
     }
     if fine.face_count() == 0 {
         // Only isolated vertices: "reversing" would change nothing, forever.
         return Err(LoopError::NoFaces);
     }
-    let coarsening = match detect_canonical(fine, seed_vertex) {
+    let coarsening = match detect_canonical(fine, seeds) {
         Some(coarsening) => coarsening,
-        None => detect_general(fine, seed_vertex)?,
+        None => detect_general(fine, seeds)?,
     };
     check_coarse_mesh(&coarsening)?;
     Ok(coarsening)
@@ -562,9 +557,9 @@ fn edges_are_simple(
 /// canonical refinement of the coarse mesh, which is what [`detect_general`] finds on
 /// such a mesh (each component's lowest vertex is a vertex point, so no other labeling
 /// is preferred). Returns `None` as soon as anything differs.
-fn detect_canonical(fine: &CornerTable, seed_vertex: Option<u32>) -> Option<Coarsening> {
+fn detect_canonical(fine: &CornerTable, seeds: &[u32]) -> Option<Coarsening> {
     let corners = fine.corner_vertices();
-    detect_canonical_faces(fine.face_count(), fine.vertex_count(), seed_vertex, |f| {
+    detect_canonical_faces(fine.face_count(), fine.vertex_count(), seeds, |f| {
         Some([corners[3 * f], corners[3 * f + 1], corners[3 * f + 2]])
     })
 }
@@ -580,10 +575,10 @@ fn detect_canonical(fine: &CornerTable, seed_vertex: Option<u32>) -> Option<Coar
 fn detect_canonical_faces(
     faces: usize,
     vertex_count: usize,
-    seed_vertex: Option<u32>,
+    seeds: &[u32],
     face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
 ) -> Option<Coarsening> {
-    let groups = canonical_groups(faces, seed_vertex, face)?;
+    let groups = canonical_groups(faces, seeds, face)?;
     let (coarse, _, ()) = groups.into_table(vertex_count, (), |_, _, _| (), |_, _| ())?;
     Some(Coarsening::canonical(coarse))
 }
@@ -604,7 +599,7 @@ pub(crate) struct CanonicalGroups {
 /// (if any) a vertex point.
 pub(crate) fn canonical_groups(
     faces: usize,
-    seed_vertex: Option<u32>,
+    seeds: &[u32],
     face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
 ) -> Option<CanonicalGroups> {
     if faces == 0 || !faces.is_multiple_of(4) {
@@ -654,7 +649,7 @@ pub(crate) fn canonical_groups(
     };
     let (coarse_vertex, edge_point) =
         (coarse_vertex.into_vec().into_flattened(), edge_point.into_vec().into_flattened());
-    if largest_x >= first_odd || seed_vertex.is_some_and(|s| s >= first_odd) {
+    if largest_x >= first_odd || seeds.iter().any(|&s| s >= first_odd) {
         return None;
     }
     Some(CanonicalGroups { coarse_vertex, edge_point, first_odd })
@@ -831,7 +826,7 @@ fn pair_twins<S>(
 const GROUP_CHUNK: usize = 4096;
 
 /// The general detection: propagation from seeds and validation (see the module docs).
-fn detect_general(fine: &CornerTable, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
+fn detect_general(fine: &CornerTable, seeds: &[u32]) -> Result<Coarsening, LoopError> {
     let nv = fine.vertex_count();
     let mut labeler = Labeler::new(fine);
     // Valence class of every vertex, in one pass over the corners.
@@ -845,10 +840,14 @@ fn detect_general(fine: &CornerTable, seed_vertex: Option<u32>) -> Result<Coarse
     // Outgoing corners: the valence inside, one fewer on the boundary.
     let irregular = |v: usize| outgoing[v] != if boundary[v] { 3 } else { 6 };
 
-    if let Some(seed) = seed_vertex
-        && !fine.is_isolated(seed)
-    {
-        labeler.propagate(seed)?;
+    for &seed in seeds {
+        match labeler.label[seed as usize] {
+            // Already a vertex point of the labeling of another seed of its component.
+            EVEN => {}
+            ODD => return Err(LoopError::SeedConflict { vertex: seed }),
+            _ if fine.is_isolated(seed) => {}
+            _ => labeler.propagate(seed)?,
+        }
     }
     for v in 0..nv as u32 {
         if fine.is_isolated(v) {
@@ -931,10 +930,10 @@ pub(crate) fn renumber_to_canonical(
     vertex_count: usize,
     corners: &[Corner],
     corner_at: impl Fn(u32) -> u32,
-    seed_vertex: Option<u32>,
+    seeds: &[u32],
 ) -> Option<Renumbering> {
     let (nv, faces) = (vertex_count, corners.len() / 3);
-    if faces == 0 || !faces.is_multiple_of(4) || seed_vertex.is_some_and(|s| s as usize >= nv) {
+    if faces == 0 || !faces.is_multiple_of(4) || seeds.iter().any(|&s| s as usize >= nv) {
         return None;
     }
     let mut search = GroupSearch {
@@ -944,10 +943,13 @@ pub(crate) fn renumber_to_canonical(
         groups: Vec::with_capacity(faces / 4),
         queue: std::collections::VecDeque::new(),
     };
-    if let Some(seed) = seed_vertex
-        && corner_at(seed) != NONE
-    {
-        search.search(corner_at(seed))?;
+    for &seed in seeds {
+        match search.label[seed as usize] {
+            UNKNOWN if corner_at(seed) != NONE => search.search(corner_at(seed))?,
+            // An edge point of another seed's labeling (the general path names it).
+            ODD => return None,
+            _ => {}
+        }
     }
     // Vertices reached are skipped, so the valence is counted (by circulation) only at
     // the few vertices before each component's first irregular one.
@@ -1705,7 +1707,7 @@ mod tests {
     }
 
     fn detect_soup(soup: &PolygonSoup, seed_vertex: Option<u32>) -> Result<LoopConnectivity, LoopError> {
-        detect(&mesh(soup), &DetectOptions { seed_vertex })
+        detect(&mesh(soup), &DetectOptions { seed_vertices: seed_vertex.into_iter().collect() })
     }
 
     #[test]
@@ -1761,7 +1763,7 @@ mod tests {
 
     /// The general detection alone, on the corner table (the reference).
     fn detect_in_general(fine: &HalfedgeMesh, seed_vertex: Option<u32>) -> Result<Coarsening, LoopError> {
-        detect_table(&CornerTable::from_mesh(fine)?, seed_vertex)
+        detect_table(&CornerTable::from_mesh(fine)?, seed_vertex.as_slice())
     }
 
     /// `detect` on meshes in another order takes the renumbering path and finds exactly
@@ -1786,14 +1788,14 @@ mod tests {
                 let scrambled = mesh(&scramble(&fine, seed));
                 let general = detect_in_general(&scrambled, None).unwrap();
                 assert!(!general.is_canonical(), "{name}");
-                let renumbered = detect_renumbered(&scrambled, None);
+                let renumbered = detect_renumbered(&scrambled, &[]);
                 let regular = name == "torus" || name == "cylinder";
                 assert_eq!(renumbered.is_some(), !regular, "{name}");
                 let found = detect(&scrambled, &DetectOptions::default()).unwrap();
                 assert_eq!(found.coarsening, general, "{name}");
                 let vertex_point = general.vertex_point[general.vertex_point.len() / 2];
-                assert!(detect_renumbered(&scrambled, Some(vertex_point)).is_some(), "{name}");
-                let seeded = detect(&scrambled, &DetectOptions { seed_vertex: Some(vertex_point) }).unwrap();
+                assert!(detect_renumbered(&scrambled, &[vertex_point]).is_some(), "{name}");
+                let seeded = detect(&scrambled, &DetectOptions { seed_vertices: vec![vertex_point] }).unwrap();
                 assert_eq!(seeded.coarsening, detect_in_general(&scrambled, Some(vertex_point)).unwrap(), "{name}");
             }
         }
@@ -1837,15 +1839,15 @@ mod tests {
             with_isolated,
         ] {
             let fine = CornerTable::from_soup(&refined(&soup)).unwrap();
-            let fast = detect_canonical(&fine, None).expect("canonical");
-            assert_eq!(fast, detect_general(&fine, None).unwrap());
+            let fast = detect_canonical(&fine, &[]).expect("canonical");
+            assert_eq!(fast, detect_general(&fine, &[]).unwrap());
             let scrambled = CornerTable::from_soup(&scramble(&refined(&soup), 8)).unwrap();
-            assert!(detect_canonical(&scrambled, None).is_none());
+            assert!(detect_canonical(&scrambled, &[]).is_none());
             // A refinement of a refinement in canonical order, seen one level up.
             let twice = CornerTable::from_soup(&refined(&refined(&soup))).unwrap();
-            assert_eq!(detect_canonical(&twice, None), Some(detect_general(&twice, None).unwrap()));
+            assert_eq!(detect_canonical(&twice, &[]), Some(detect_general(&twice, &[]).unwrap()));
         }
-        assert!(detect_canonical(&CornerTable::from_soup(&shapes::icosahedron()).unwrap(), None).is_none());
+        assert!(detect_canonical(&CornerTable::from_soup(&shapes::icosahedron()).unwrap(), &[]).is_none());
     }
 
     #[test]

@@ -39,6 +39,17 @@ pub enum LoopError {
         /// Number of vertices of the mesh.
         vertex_count: usize,
     },
+    /// A user-given seed vertex is an edge point of the labeling that another seed of its
+    /// connected component fixes: seeds that share a component must be vertex points of
+    /// one labeling.
+    #[error(
+        "seed vertex {vertex} would be an edge point of the labeling fixed by another seed of its connected \
+         component (seeds of one component must be vertex points of one labeling; give one seed per component)"
+    )]
+    SeedConflict {
+        /// The seed that does not fit.
+        vertex: u32,
+    },
     /// Details or orders do not fit the mesh they are applied to (or a pyramid is
     /// corrupted): `level` counts refinement steps from the coarse mesh (1 = the first).
     #[error("level {level}: {reason}")]

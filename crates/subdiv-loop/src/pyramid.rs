@@ -37,7 +37,7 @@ use crate::corner_table::CornerTable;
 use crate::detect::{FineOrder, reverse_canonical_soup};
 use crate::forward::LoopOptions;
 use crate::reverse::{
-    CanonicalLevel, FineLevel, LevelParts, check_level, non_finite_bits, reconstruct_levels, regular_readings,
+    CanonicalLevel, FineLevel, LevelParts, all_valences_regular, check_level, non_finite_bits, reconstruct_levels,
     reverse_level,
 };
 
@@ -76,24 +76,25 @@ pub enum Levels {
 }
 
 /// Options of [`decompose`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct DecomposeOptions {
     /// The subdivision rules.
     pub rules: LoopOptions,
     /// How many levels.
     pub levels: Levels,
-    /// A vertex point of the input mesh, for the first level only (see
-    /// [`DetectOptions::seed_vertex`](crate::detect::DetectOptions::seed_vertex)).
-    /// Without it, a level that reads several ways (a connected mesh of regular
-    /// valences only) gets the reading with the smallest details (see
+    /// Vertex points of the input mesh, typically one per component, for the first level
+    /// only (see
+    /// [`DetectOptions::seed_vertices`](crate::detect::DetectOptions::seed_vertices)).
+    /// A component without one that reads several ways (its valences are all regular)
+    /// gets the reading with the smallest details, on every level (see
     /// [`reverse`](crate::reverse::reverse)).
-    pub seed_vertex: Option<u32>,
+    pub seed_vertices: Vec<u32>,
 }
 
 impl Default for DecomposeOptions {
     /// Loop's rules, one level, automatic seed.
     fn default() -> Self {
-        Self { rules: LoopOptions::default(), levels: Levels::Count(1), seed_vertex: None }
+        Self { rules: LoopOptions::default(), levels: Levels::Count(1), seed_vertices: Vec::new() }
     }
 }
 
@@ -152,7 +153,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Loop
         return Ok(LoopPyramid { rules: options.rules, base, levels: Vec::new() });
     }
     // The input is read as it is (see `detect_mesh`), its positions in place.
-    let first = reverse_level(FineLevel::Mesh(mesh), mesh.positions(), options.seed_vertex, &options.rules)?;
+    let first = reverse_level(FineLevel::Mesh(mesh), mesh.positions(), &options.seed_vertices, &options.rules)?;
     decompose_below(first, options)
 }
 
@@ -192,16 +193,19 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Loop
 /// Those of [`HalfedgeMesh::from_soup`] (as [`LoopError::Mesh`]) and of [`decompose`].
 pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
     if wanted_levels(options) > 0
-        && let Some(level) = reverse_canonical_soup(soup, options.seed_vertex, &options.rules)
+        && let Some(level) = reverse_canonical_soup(soup, &options.seed_vertices, &options.rules)
         && level.finite
         && level.coarse.fans_are_single()
-        // A connected mesh of regular valences only (so is the fine mesh, then: edge
-        // points are regular, vertex points keep their valence) reads several ways, which
-        // `decompose` compares (see `reverse_level`); given a seed, the reading is fixed.
-        && (options.seed_vertex.is_some() || regular_readings(FineLevel::Table(&level.coarse)).is_none())
+        // A mesh of regular valences only (so is the fine mesh, then: edge points are
+        // regular, vertex points keep their valence) reads several ways, which
+        // `decompose` compares (see `reverse_level`).
+        && !all_valences_regular(&level.coarse)
     {
         let CanonicalLevel { coarse, positions, details, .. } = level;
-        return decompose_below(LevelParts { coarse, order: None, positions, details }, options);
+        return decompose_below(
+            LevelParts { coarse, order: None, positions, details, several_readings: false },
+            options,
+        );
     }
     decompose(&HalfedgeMesh::from_soup(soup)?, options)
 }
@@ -218,13 +222,13 @@ fn wanted_levels(options: &DecomposeOptions) -> usize {
 /// levels, each reversing the coarse mesh of the one before.
 fn decompose_below(first: LevelParts, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
     let wanted = wanted_levels(options);
-    let LevelParts { coarse: mut table, order, mut positions, details } = first;
+    let LevelParts { coarse: mut table, order, mut positions, details, .. } = first;
     let mut levels = vec![DetailLevel { details, order }];
     // Every reversal divides the face count by 4 (a mesh without faces is an error), so
     // `Levels::Max` ends after at most log4(faces) + 1 rounds.
     while levels.len() < wanted {
-        let LevelParts { coarse, order, positions: coarse_positions, details } =
-            match reverse_level(FineLevel::Table(&table), &positions, None, &options.rules) {
+        let LevelParts { coarse, order, positions: coarse_positions, details, .. } =
+            match reverse_level(FineLevel::Table(&table), &positions, &[], &options.rules) {
                 Ok(level) => level,
                 Err(LoopError::NotLoopConnectivity { .. }) if options.levels == Levels::Max => break,
                 Err(error) => return Err(error),
@@ -574,7 +578,7 @@ mod tests {
     }
 
     fn max_levels(rules: LoopOptions) -> DecomposeOptions {
-        DecomposeOptions { rules, levels: Levels::Max, seed_vertex: None }
+        DecomposeOptions { rules, levels: Levels::Max, seed_vertices: Vec::new() }
     }
 
     #[test]
@@ -603,7 +607,7 @@ mod tests {
             // Level k equals reversing the input 3 - k times.
             let mut reversed = fine.clone();
             for k in (0..3).rev() {
-                let level = reverse(&mesh(&reversed), &ReverseOptions { rules, seed_vertex: None }).unwrap();
+                let level = reverse(&mesh(&reversed), &ReverseOptions { rules, seed_vertices: Vec::new() }).unwrap();
                 reversed = level.coarse.to_soup();
                 let error = relative_distance(&pyramid.reconstruct(k).unwrap(), &reversed);
                 assert!(error < 1e-12, "{name} level {k}: {error}");
@@ -847,7 +851,11 @@ mod tests {
         levels
             .into_iter()
             .flat_map(|levels| {
-                seeds.into_iter().map(move |seed_vertex| DecomposeOptions { rules, levels, seed_vertex })
+                seeds.into_iter().map(move |seed| DecomposeOptions {
+                    rules,
+                    levels,
+                    seed_vertices: seed.into_iter().collect(),
+                })
             })
             .collect()
     }
@@ -876,7 +884,7 @@ mod tests {
                         assert_soup_path_agrees(&soup, &options);
                     }
                 }
-                let read = reverse_canonical_soup(&fine, None, &rules).expect(name);
+                let read = reverse_canonical_soup(&fine, &[], &rules).expect(name);
                 assert!(read.finite && read.coarse.fans_are_single(), "{name}");
                 canonical += 1;
             }
@@ -900,13 +908,13 @@ mod tests {
         let faces: Vec<Vec<u32>> = two.faces().map(<[u32]>::to_vec).chain(second).collect();
         two = PolygonSoup::from_faces(positions, faces);
         let bowtie = crate::reference::canonical_faces(&two, 1);
-        let read = reverse_canonical_soup(&bowtie, None, &LoopOptions::default()).expect("canonical faces");
+        let read = reverse_canonical_soup(&bowtie, &[], &LoopOptions::default()).expect("canonical faces");
         assert!(!read.coarse.fans_are_single());
         let error = decompose_error(&bowtie);
         assert!(matches!(error, LoopError::Mesh(mesh_topo::MeshError::NonManifoldVertex { .. })), "{error}");
 
         let ico = crate::reference::canonical_faces(&shapes::icosahedron(), 2);
-        assert!(reverse_canonical_soup(&ico, None, &LoopOptions::default()).is_some());
+        assert!(reverse_canonical_soup(&ico, &[], &LoopOptions::default()).is_some());
         let mut broken = Vec::new();
         let mut nan = ico.clone();
         nan.positions[40].y = f64::NAN;

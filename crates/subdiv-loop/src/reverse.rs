@@ -103,24 +103,26 @@ pub struct ReversedLevel {
 }
 
 /// Options of [`reverse`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct ReverseOptions {
     /// The rules of the forward subdivision.
     pub rules: LoopOptions,
-    /// A vertex known to be a vertex point (see
-    /// [`DetectOptions::seed_vertex`](crate::detect::DetectOptions::seed_vertex)).
-    pub seed_vertex: Option<u32>,
+    /// Vertices known to be vertex points, typically one per component (see
+    /// [`DetectOptions::seed_vertices`](crate::detect::DetectOptions::seed_vertices)).
+    pub seed_vertices: Vec<u32>,
 }
 
 /// Reverses one level of Loop subdivision: detects the Loop connectivity of `fine`,
 /// computes the coarse positions by the exact inverse (see the [module docs](self)) and
 /// the detail of every edge point.
 ///
-/// Without a seed vertex, a connected mesh whose valences are all regular (6 inside, 4
-/// on the boundary), which reads several ways, gets the reading with the smallest sum of
-/// squared details among those detection would try; so a refined torus gives its coarse
-/// torus back in any numbering. That choice is invariant under similarities, not under
-/// every affine map; a seed fixes the reading.
+/// A component without a seed vertex whose valences are all regular (6 inside, 4 on the
+/// boundary), which reads several ways, gets the reading with the smallest sum of squared
+/// details among those detection would try, each component its own; so a refined torus
+/// gives its coarse torus back in any numbering. (A mesh in the canonical order, as Loop
+/// subdivision writes it, keeps the reading of that order unless every valence in it is
+/// regular.) That choice is invariant under similarities, not under every affine map; a
+/// seed fixes the reading.
 ///
 /// ```
 /// use glam::DVec3;
@@ -148,8 +150,8 @@ pub struct ReverseOptions {
 /// [`LoopError::Mesh`] for a non-finite position, and [`LoopError::NotTriangle`],
 /// [`LoopError::SeedOutOfRange`] and [`LoopError::NotLoopConnectivity`] from detection.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<ReversedLevel, LoopError> {
-    let LevelParts { coarse, order, positions, details } =
-        reverse_level(FineLevel::Mesh(fine), fine.positions(), options.seed_vertex, &options.rules)?;
+    let LevelParts { coarse, order, positions, details, .. } =
+        reverse_level(FineLevel::Mesh(fine), fine.positions(), &options.seed_vertices, &options.rules)?;
     let coarse =
         HalfedgeMesh::from_soup(&coarse.to_soup(positions)).expect("internal: a detected coarse mesh is a valid mesh");
     Ok(ReversedLevel { coarse, details, order })
@@ -412,93 +414,191 @@ pub(crate) struct LevelParts {
     pub(crate) order: Option<FineOrder>,
     pub(crate) positions: Vec<DVec3>,
     pub(crate) details: Vec<DVec3>,
+    /// The fine mesh may have a component without a seed that reads several ways (see
+    /// [`reverse_level`]); false when it is known to have none.
+    pub(crate) several_readings: bool,
 }
 
-/// One level reversed ([`reverse_level_from`]); without a seed, a mesh that reads
-/// several ways gets the reading with the smallest details.
+/// One level reversed ([`reverse_level_from`]); a component that reads several ways and
+/// has no seed gets the reading with the smallest details.
 ///
-/// Detection labels each component from a vertex of irregular valence, which fixes the
-/// reading. A connected mesh whose valences are all regular (6 inside, 4 on the
+/// Detection labels each component from a vertex of irregular valence (or a seed), which
+/// fixes the reading. A component whose valences are all regular (6 inside, 4 on the
 /// boundary: a refined torus, a refined open cylinder) has several readings, and
 /// detection takes the first valid one from its lowest vertex, which depends on the
-/// numbering. Here every seed detection would try on such a mesh (vertex 0 and its
-/// neighbours) is reversed too, and a reading is kept over the first only if its sum of
-/// squared details is strictly smaller, so a mesh made by Loop subdivision gets its own
-/// reading back (zero details) in any numbering. It costs up to seven more reversals,
-/// on such meshes only. Meshes of several components keep the first reading of each
-/// (`DetectOptions::seed_vertex` picks one component's).
+/// numbering. Here every seed detection would try in such a component (its lowest vertex
+/// and that vertex's neighbours) is reversed too, and a reading is kept over the first
+/// only if the component's sum of squared details is strictly smaller, so a mesh made by
+/// Loop subdivision gets its own reading back (zero details) in any numbering. The
+/// components are independent (a component's details depend on its own reading only):
+/// the k-th candidate of every such component is tried in one reversal, so the choice
+/// costs up to seven more reversals and one final one, on such meshes only.
+///
+/// Which meshes those are costs nothing on the fast paths: the search of a mesh in
+/// another order (`renumber_to_canonical`) starts from seeds and irregular vertices only,
+/// so it fails on a component without either and the general detection, which meets
+/// such components, runs; a mesh in the canonical order (written by Loop subdivision or a
+/// reconstruction, its reading given by its numbering) is compared only when all its
+/// valences are regular, the check stopping at the first irregular vertex. So a
+/// canonical mesh of a torus beside a mesh with irregular vertices keeps the torus's
+/// canonical reading, the one it was made with.
 pub(crate) fn reverse_level(
     fine: FineLevel<'_>,
     positions: &[DVec3],
-    seed_vertex: Option<u32>,
+    seeds: &[u32],
     rules: &LoopOptions,
 ) -> Result<LevelParts, LoopError> {
-    let first = reverse_level_from(fine, positions, seed_vertex, rules)?;
-    if seed_vertex.is_some() {
+    let first = reverse_level_from(fine, positions, seeds, rules)?;
+    if !first.several_readings {
         return Ok(first);
     }
-    let Some(seeds) = regular_readings(fine) else { return Ok(first) };
-    let energy = |level: &LevelParts| level.details.iter().map(|d| d.length_squared()).sum::<f64>();
-    let mut best_energy = energy(&first);
-    let mut best = first;
-    for seed in seeds {
-        // A seed that gives no valid reading is passed over, as detection passes it.
-        if let Ok(level) = reverse_level_from(fine, positions, Some(seed), rules) {
-            let level_energy = energy(&level);
-            if level_energy < best_energy {
-                (best_energy, best) = (level_energy, level);
-            }
-        }
-    }
-    Ok(best)
-}
-
-/// The seeds whose readings [`reverse_level`] compares: vertex 0 and its neighbours, in
-/// the order detection tries them, if `fine` is one connected component whose vertices
-/// all have regular valence; else `None`.
-pub(crate) fn regular_readings(fine: FineLevel<'_>) -> Option<Vec<u32>> {
-    // Each check stops at the first irregular vertex, which most meshes have among their
-    // first few; a mesh's corner table is built only when every vertex passed.
     let built;
     let table = match fine {
-        FineLevel::Table(table) => {
-            let regular = |v| match table.visit_star(v, |_, _| {}) {
-                VertexStar::Interior { valence } => valence == 6,
-                VertexStar::Boundary { valence, .. } => valence == 4,
-                VertexStar::Isolated => false,
-            };
-            (0..table.vertex_count() as u32).all(regular).then_some(table)?
-        }
+        FineLevel::Table(table) => table,
         FineLevel::Mesh(mesh) => {
-            let regular = |v| mesh.valence(v) == if mesh.is_boundary_vertex(v) { 4 } else { 6 };
-            if !mesh.vertices().all(regular) {
-                return None;
-            }
-            built = CornerTable::from_mesh(mesh).ok()?;
+            built = CornerTable::from_mesh(mesh)?;
             &built
         }
     };
-    let vertices = table.vertex_count();
-    if vertices == 0 {
-        return None;
+    let readings = RegularReadings::of(table, seeds);
+    if readings.candidates.is_empty() {
+        return Ok(first);
     }
-    // One component: every vertex reached from vertex 0 across edges.
-    let mut seen = vec![false; vertices];
-    let mut stack = vec![0u32];
-    seen[0] = true;
-    let mut reached = 1;
-    while let Some(v) = stack.pop() {
-        table.visit_star(v, |_, u| {
-            if !std::mem::replace(&mut seen[u as usize], true) {
-                reached += 1;
-                stack.push(u);
+    let components = readings.component.iter().max().map_or(0, |&c| c as usize + 1);
+    // Per component: the best energy so far, its candidate, and the first valid candidate
+    // (the one detection takes).
+    let mut best: Vec<Option<(f64, u32)>> = vec![None; components];
+    let mut first_valid: Vec<Option<u32>> = vec![None; components];
+    let mut take = |component: usize, seed: u32, energy: f64| {
+        first_valid[component].get_or_insert(seed);
+        if best[component].is_none_or(|(best_energy, _)| energy < best_energy) {
+            best[component] = Some((energy, seed));
+        }
+    };
+    let rounds = readings.candidates.iter().map(|(_, seeds)| seeds.len()).max().unwrap_or(0);
+    for round in 0..rounds {
+        let tried: Vec<(usize, u32)> =
+            readings.candidates.iter().filter_map(|(c, seeds)| seeds.get(round).map(|&s| (*c, s))).collect();
+        let with_seeds = |extra: &[(usize, u32)]| {
+            let mut all = seeds.to_vec();
+            all.extend(extra.iter().map(|&(_, s)| s));
+            reverse_level_from(fine, positions, &all, rules)
+        };
+        match with_seeds(&tried) {
+            Ok(level) => {
+                let energies = readings.energies(&level);
+                for &(c, seed) in &tried {
+                    take(c, seed, energies[c]);
+                }
             }
-        });
+            // A seed without a valid reading of its component (detection passes it over):
+            // each component of this round on its own.
+            Err(_) => {
+                for &(c, seed) in &tried {
+                    if let Ok(level) = with_seeds(&[(c, seed)]) {
+                        take(c, seed, readings.energies(&level)[c]);
+                    }
+                }
+            }
+        }
     }
-    if reached != vertices {
-        return None;
+    // The components whose best reading is not the first one.
+    let better: Vec<u32> = readings
+        .candidates
+        .iter()
+        .filter_map(|&(c, _)| best[c].map(|(_, seed)| seed).filter(|&seed| Some(seed) != first_valid[c]))
+        .collect();
+    if better.is_empty() {
+        return Ok(first);
     }
-    Some(std::iter::once(0).chain(table.outgoing(0).map(|c| table.vertex(next(c)))).collect())
+    let mut all = seeds.to_vec();
+    all.extend(better);
+    reverse_level_from(fine, positions, &all, rules)
+}
+
+/// Whether every vertex of `table` with a face has regular valence (6 inside, 4 on the
+/// boundary), and some face exists. Stops at the first irregular vertex, which most
+/// meshes have among their first few.
+pub(crate) fn all_valences_regular(table: &CornerTable) -> bool {
+    table.face_count() > 0
+        && (0..table.vertex_count() as u32).all(|v| match table.visit_star(v, |_, _| {}) {
+            VertexStar::Interior { valence } => valence == 6,
+            VertexStar::Boundary { valence, .. } => valence == 4,
+            VertexStar::Isolated => true,
+        })
+}
+
+/// The components of a fine mesh whose readings [`reverse_level`] compares, and how to
+/// tell each component's details apart.
+struct RegularReadings {
+    /// The component of every fine vertex.
+    component: Vec<u32>,
+    /// Each component whose valences are all regular and that holds no seed, with the
+    /// seeds detection would try there in turn: its lowest vertex, then that vertex's
+    /// neighbours.
+    candidates: Vec<(usize, Vec<u32>)>,
+}
+
+impl RegularReadings {
+    fn of(table: &CornerTable, seeds: &[u32]) -> Self {
+        let vertices = table.vertex_count();
+        let mut component = vec![NONE; vertices];
+        let mut regular = Vec::new();
+        let mut lowest = Vec::new();
+        let mut stack = Vec::new();
+        let is_regular = |v: u32| match table.visit_star(v, |_, _| {}) {
+            VertexStar::Interior { valence } => valence == 6,
+            VertexStar::Boundary { valence, .. } => valence == 4,
+            VertexStar::Isolated => false,
+        };
+        for v in 0..vertices as u32 {
+            if component[v as usize] != NONE {
+                continue;
+            }
+            let label = regular.len() as u32;
+            component[v as usize] = label;
+            lowest.push(v);
+            let mut all_regular = true;
+            stack.push(v);
+            while let Some(u) = stack.pop() {
+                all_regular &= is_regular(u);
+                table.visit_star(u, |_, w| {
+                    if component[w as usize] == NONE {
+                        component[w as usize] = label;
+                        stack.push(w);
+                    }
+                });
+            }
+            regular.push(all_regular);
+        }
+        for &seed in seeds {
+            if let Some(&c) = component.get(seed as usize) {
+                regular[c as usize] = false;
+            }
+        }
+        let candidates = (0..regular.len())
+            .filter(|&c| regular[c])
+            .map(|c| {
+                let v = lowest[c];
+                (c, std::iter::once(v).chain(table.outgoing(v).map(|corner| table.vertex(next(corner)))).collect())
+            })
+            .collect();
+        Self { component, candidates }
+    }
+
+    /// The sum of squared details of every component in `level` (a reading of the mesh):
+    /// detail `e` is that of canonical fine vertex `V + e`.
+    fn energies(&self, level: &LevelParts) -> Vec<f64> {
+        let components = self.component.iter().max().map_or(0, |&c| c as usize + 1);
+        let mut energies = vec![0.0; components];
+        let first_odd = level.coarse.vertex_count();
+        for (e, detail) in level.details.iter().enumerate() {
+            let canonical = first_odd + e;
+            let v = level.order.as_ref().map_or(canonical as u32, |order| order.vertex_of_canonical[canonical]);
+            energies[self.component[v as usize] as usize] += detail.length_squared();
+        }
+        energies
+    }
 }
 
 /// One level reversed, by the fused path when the fine mesh is canonical, else through
@@ -508,7 +608,7 @@ pub(crate) fn regular_readings(fine: FineLevel<'_>) -> Option<Vec<u32>> {
 fn reverse_level_from(
     fine: FineLevel<'_>,
     positions: &[DVec3],
-    seed_vertex: Option<u32>,
+    seeds: &[u32],
     rules: &LoopOptions,
 ) -> Result<LevelParts, LoopError> {
     let check_input = || match fine {
@@ -516,18 +616,22 @@ fn reverse_level_from(
         FineLevel::Table(_) => Ok(()),
     };
     let fused = match fine {
-        FineLevel::Mesh(mesh) => reverse_canonical_mesh(mesh, seed_vertex, positions, rules),
-        FineLevel::Table(table) => reverse_canonical_table(table, seed_vertex, positions, rules),
+        FineLevel::Mesh(mesh) => reverse_canonical_mesh(mesh, seeds, positions, rules),
+        FineLevel::Table(table) => reverse_canonical_table(table, seeds, positions, rules),
     };
     if let Some(level) = fused {
         if !level.finite {
             check_input()?;
         }
+        // A canonical mesh's reading is that of its numbering, compared with the others
+        // only when all its valences are regular (see `reverse_level`).
+        let several_readings = all_valences_regular(&level.coarse);
         return Ok(LevelParts {
             coarse: level.coarse,
             order: None,
             positions: level.positions,
             details: level.details,
+            several_readings,
         });
     }
     check_input()?;
@@ -537,12 +641,12 @@ fn reverse_level_from(
     let renumbering = match fine {
         FineLevel::Mesh(mesh) => CornerTable::mesh_corners(mesh).and_then(|corners| {
             let corner_at = |v| corners.corner_at(mesh, v);
-            renumber_to_canonical(mesh.vertex_count(), &corners.corners, corner_at, seed_vertex)
+            renumber_to_canonical(mesh.vertex_count(), &corners.corners, corner_at, seeds)
         }),
         FineLevel::Table(table) => {
             let starts = table.vertex_corners();
             let corner_at = |v: u32| starts[v as usize];
-            renumber_to_canonical(table.vertex_count(), &table.corners(), corner_at, seed_vertex)
+            renumber_to_canonical(table.vertex_count(), &table.corners(), corner_at, seeds)
         }
     };
     if let Some(renumbering) = renumbering
@@ -551,12 +655,14 @@ fn reverse_level_from(
         return Ok(level);
     }
     let coarsening = match fine {
-        FineLevel::Mesh(mesh) => detect_mesh(mesh, seed_vertex)?,
-        FineLevel::Table(table) => detect_table(table, seed_vertex)?,
+        FineLevel::Mesh(mesh) => detect_mesh(mesh, seeds)?,
+        FineLevel::Table(table) => detect_table(table, seeds)?,
     };
     let (coarse_positions, details) = reverse_positions(&coarsening, positions, rules);
     let order = coarsening.fine_order();
-    Ok(LevelParts { coarse: coarsening.coarse, order, positions: coarse_positions, details })
+    // (Reached, for a valid mesh, when the search from the seeds and the irregular
+    // vertices missed a component: one whose valences are all regular.)
+    Ok(LevelParts { coarse: coarsening.coarse, order, positions: coarse_positions, details, several_readings: true })
 }
 
 /// A fine mesh in any order reversed through its canonical renumbering
@@ -572,7 +678,14 @@ fn reverse_renumbered(renumbering: Renumbering, positions: &[DVec3], rules: &Loo
     let identity = renumbering.is_identity();
     let level = reverse_canonical_groups(renumbering.groups, positions.len(), &canonical_positions, rules)?;
     let order = (!identity).then_some(renumbering.order);
-    Some(LevelParts { coarse: level.coarse, order, positions: level.positions, details: level.details })
+    // The search reached every component from a seed or an irregular vertex.
+    Some(LevelParts {
+        coarse: level.coarse,
+        order,
+        positions: level.positions,
+        details: level.details,
+        several_readings: false,
+    })
 }
 
 /// `values[i]` for every `i` of `indices`, in order: a gather at random, with the
@@ -632,12 +745,12 @@ pub(crate) struct CanonicalLevel {
 pub(crate) fn reverse_canonical(
     faces: usize,
     vertex_count: usize,
-    seed_vertex: Option<u32>,
+    seeds: &[u32],
     face: impl Fn(usize) -> Option<[u32; 3]> + Sync,
     fine: &[DVec3],
     rules: &LoopOptions,
 ) -> Option<CanonicalLevel> {
-    reverse_canonical_groups(canonical_groups(faces, seed_vertex, face)?, vertex_count, fine, rules)
+    reverse_canonical_groups(canonical_groups(faces, seeds, face)?, vertex_count, fine, rules)
 }
 
 /// [`reverse_canonical`] from the coarse corners of the fine faces (the groups of four
@@ -1048,7 +1161,7 @@ mod tests {
         for (name, soup) in test_shapes() {
             for rules in all_rules() {
                 let fine = mesh(&loop_step(&mesh(&soup), &rules));
-                let level = reverse(&fine, &ReverseOptions { rules, seed_vertex: None })
+                let level = reverse(&fine, &ReverseOptions { rules, seed_vertices: Vec::new() })
                     .unwrap_or_else(|e| panic!("{name} {rules:?}: {e}"));
                 let error = relative_distance(&level.coarse.to_soup(), &soup);
                 assert!(error < TOLERANCE, "{name} {rules:?}: coarse error {error}");
@@ -1080,7 +1193,7 @@ mod tests {
         for (name, soup) in test_shapes() {
             for (i, rules) in all_rules().into_iter().enumerate() {
                 let fine = scramble(&perturb(&loop_steps(&soup, &rules, 1), 0.2, i as u64), 11 + i as u64);
-                let level = reverse(&mesh(&fine), &ReverseOptions { rules, seed_vertex: None })
+                let level = reverse(&mesh(&fine), &ReverseOptions { rules, seed_vertices: Vec::new() })
                     .unwrap_or_else(|e| panic!("{name}: {e}"));
                 assert!(level.order.is_some(), "{name}: a scrambled mesh is not in canonical order");
                 let rebuilt = reconstruct(&level.coarse, &level.details, level.order.as_ref(), &rules).unwrap();
@@ -1113,11 +1226,12 @@ mod tests {
             let moved = mesh(&scramble(&perturb(&fine, 0.1, moved_seed), 100 + moved_seed));
             let chosen = energy(&reverse(&moved, &ReverseOptions::default()).unwrap());
             let table = CornerTable::from_mesh(&moved).unwrap();
-            let seeds = regular_readings(FineLevel::Table(&table)).expect("a connected regular mesh");
+            let readings = RegularReadings::of(&table, &[]);
+            let [(0, seeds)] = &readings.candidates[..] else { panic!("one regular component") };
             assert_eq!(seeds.len(), 7, "vertex 0 and its six neighbours");
             let seeded: Vec<f64> = seeds
                 .iter()
-                .filter_map(|&seed| reverse(&moved, &ReverseOptions { rules, seed_vertex: Some(seed) }).ok())
+                .filter_map(|&seed| reverse(&moved, &ReverseOptions { rules, seed_vertices: vec![seed] }).ok())
                 .map(|level| energy(&level))
                 .collect();
             assert!(seeded.len() >= 2, "several readings");
@@ -1125,18 +1239,96 @@ mod tests {
             assert_eq!(chosen, smallest, "moved {moved_seed}: {seeded:?}");
             assert!(seeded.iter().any(|&e| e > smallest), "the readings differ");
         }
-        // Not regular (an octahedron refined: valence 4 at its vertices), or in two
-        // components: no alternatives.
+        // Not regular (an octahedron refined: valence 4 at its vertices): no alternatives.
         let octahedron = loop_step(&mesh(&shapes::octahedron()), &rules);
-        assert!(regular_readings(FineLevel::Mesh(&mesh(&octahedron))).is_none());
-        let mut two = fine.clone();
-        let n = two.positions.len() as u32;
-        two.positions.extend(fine.positions.iter().map(|&p| p + DVec3::X * 10.0));
-        let faces: Vec<Vec<u32>> =
-            fine.faces().map(<[u32]>::to_vec).chain(fine.faces().map(|f| f.iter().map(|&v| v + n).collect())).collect();
-        two = PolygonSoup::from_faces(two.positions, faces);
-        assert!(regular_readings(FineLevel::Mesh(&mesh(&two))).is_none());
-        assert!(regular_readings(FineLevel::Mesh(&mesh(&fine))).is_some());
+        let regular_components =
+            |soup: &PolygonSoup| RegularReadings::of(&CornerTable::from_soup(soup).unwrap(), &[]).candidates.len();
+        assert_eq!(regular_components(&octahedron), 0);
+        assert_eq!(regular_components(&fine), 1);
+        assert_eq!(regular_components(&side_by_side(&octahedron, &fine)), 1);
+        assert_eq!(regular_components(&side_by_side(&fine, &fine)), 2);
+        assert!(!all_valences_regular(&CornerTable::from_soup(&octahedron).unwrap()));
+        assert!(all_valences_regular(&CornerTable::from_soup(&side_by_side(&fine, &fine)).unwrap()));
+    }
+
+    /// `b` beside `a` in one soup: `b`'s vertices after `a`'s, moved away along x.
+    fn side_by_side(a: &PolygonSoup, b: &PolygonSoup) -> PolygonSoup {
+        let n = a.positions.len() as u32;
+        let positions = a.positions.iter().copied().chain(b.positions.iter().map(|&p| p + DVec3::X * 10.0)).collect();
+        let faces = a.faces().map(<[u32]>::to_vec).chain(b.faces().map(|f| f.iter().map(|&v| v + n).collect()));
+        PolygonSoup::from_faces(positions, faces)
+    }
+
+    /// Each component of regular valences gets its own best reading: refined tori beside
+    /// each other (and beside a mesh with irregular vertices), each renumbered, give
+    /// their tori back with zero details, whatever the numbering; moved, each keeps the
+    /// reading of its smallest details, which a seed in the other component does not
+    /// change; seeds of one component must agree.
+    #[test]
+    fn each_component_of_regular_valences_gets_its_best_reading() {
+        let rules = LoopOptions::default();
+        let torus = shapes::torus(6, 4, CellKind::Triangles).unwrap();
+        let fine = loop_step(&mesh(&torus), &rules);
+        let octahedron = loop_step(&mesh(&shapes::octahedron()), &rules);
+        let energy = |level: &ReversedLevel| level.details.iter().map(|d| d.length_squared()).sum::<f64>();
+        for seed in 0..6 {
+            let (a, b) = (scramble(&fine, seed), scramble(&fine, 50 + seed));
+            for (name, soup) in [
+                ("two tori", side_by_side(&a, &b)),
+                ("octahedron and torus", side_by_side(&octahedron, &a)),
+                ("torus and octahedron", side_by_side(&b, &octahedron)),
+            ] {
+                let level = reverse(&mesh(&soup), &ReverseOptions::default()).unwrap();
+                assert!(energy(&level) < 1e-24, "{name}, seed {seed}: {}", energy(&level));
+                let rebuilt = reconstruct(&level.coarse, &level.details, level.order.as_ref(), &rules).unwrap();
+                assert!(relative_distance(&rebuilt.to_soup(), &soup) < TOLERANCE, "{name}, seed {seed}");
+            }
+        }
+        // Moved: the energy chosen is the sum over the components of the smallest
+        // energy among their seeded readings (each component's read alone).
+        for moved_seed in 0..3 {
+            let a = scramble(&perturb(&fine, 0.1, moved_seed), 100 + moved_seed);
+            let b = scramble(&perturb(&fine, 0.1, 10 + moved_seed), 200 + moved_seed);
+            let both = mesh(&side_by_side(&a, &b));
+            let chosen = energy(&reverse(&both, &ReverseOptions::default()).unwrap());
+            let best_alone = |part: &PolygonSoup| {
+                let part = mesh(part);
+                let [(_, seeds)] = &RegularReadings::of(&CornerTable::from_mesh(&part).unwrap(), &[]).candidates[..]
+                else {
+                    panic!("one regular component")
+                };
+                seeds
+                    .iter()
+                    .filter_map(|&seed| reverse(&part, &ReverseOptions { rules, seed_vertices: vec![seed] }).ok())
+                    .map(|level| energy(&level))
+                    .fold(f64::INFINITY, f64::min)
+            };
+            let expected = best_alone(&a) + best_alone(&b);
+            assert!((chosen - expected).abs() <= 1e-12 * expected, "moved {moved_seed}: {chosen} vs {expected}");
+            // A seed in the first torus fixes its reading; the second still gets its best.
+            let n = a.positions.len() as u32;
+            let seeded = reverse(&both, &ReverseOptions { rules, seed_vertices: vec![0] }).unwrap();
+            let first_alone = energy(&reverse(&mesh(&a), &ReverseOptions { rules, seed_vertices: vec![0] }).unwrap());
+            let expected = first_alone + best_alone(&b);
+            assert!((energy(&seeded) - expected).abs() <= 1e-12 * expected, "moved {moved_seed}");
+            // Seeds in both components: each fixed.
+            let second_seed = n + RegularReadings::of(&CornerTable::from_soup(&b).unwrap(), &[]).candidates[0].1[1];
+            let both_seeded = reverse(&both, &ReverseOptions { rules, seed_vertices: vec![0, second_seed] });
+            assert!(both_seeded.is_ok() || matches!(both_seeded, Err(LoopError::NotLoopConnectivity { .. })));
+        }
+        // Two seeds of one component: vertex 0 and one of its neighbours cannot both be
+        // vertex points.
+        let table = CornerTable::from_soup(&fine).unwrap();
+        let neighbour = table.vertex(next(table.outgoing(0).next().unwrap()));
+        let error = reverse(&mesh(&fine), &ReverseOptions { rules, seed_vertices: vec![0, neighbour] }).unwrap_err();
+        assert!(matches!(error, LoopError::SeedConflict { vertex } if vertex == neighbour), "{error}");
+        // Two that can: the same reading as either alone.
+        let level = reverse(&mesh(&fine), &ReverseOptions { rules, seed_vertices: vec![0] }).unwrap();
+        let coarse_point = level.order.as_ref().map_or(1, |order| order.vertex_of_canonical[1]);
+        let both = reverse(&mesh(&fine), &ReverseOptions { rules, seed_vertices: vec![0, coarse_point] }).unwrap();
+        assert_eq!(both, level);
+        let error = reverse(&mesh(&fine), &ReverseOptions { rules, seed_vertices: vec![0, 10_000] }).unwrap_err();
+        assert!(matches!(error, LoopError::SeedOutOfRange { vertex: 10_000, .. }), "{error}");
     }
 
     /// The fast forward subdivision (`forward::subdivide`) numbers its output canonically:
@@ -1148,7 +1340,7 @@ mod tests {
             for rules in all_rules() {
                 let coarse = mesh(&soup);
                 let fine = crate::forward::subdivide(&coarse, 1, &rules).unwrap().to_soup();
-                let level = reverse(&mesh(&fine), &ReverseOptions { rules, seed_vertex: None })
+                let level = reverse(&mesh(&fine), &ReverseOptions { rules, seed_vertices: Vec::new() })
                     .unwrap_or_else(|e| panic!("{name} {rules:?}: {e}"));
                 assert!(level.order.is_none(), "{name}: the forward order is canonical");
                 assert!(relative_distance(&level.coarse.to_soup(), &soup) < TOLERANCE, "{name} {rules:?}");
@@ -1164,7 +1356,7 @@ mod tests {
         let base = mesh(&bipyramid(7));
         let fine = mesh(&crate::forward::subdivide(&base, 3, &rules).unwrap().to_soup());
         let options =
-            crate::pyramid::DecomposeOptions { rules, levels: crate::pyramid::Levels::Max, seed_vertex: None };
+            crate::pyramid::DecomposeOptions { rules, levels: crate::pyramid::Levels::Max, seed_vertices: Vec::new() };
         let pyramid = crate::pyramid::decompose(&fine, &options).unwrap();
         assert_eq!(pyramid.level_count(), 3);
         assert!(relative_distance(&pyramid.base, &base.to_soup()) < TOLERANCE);
@@ -1350,11 +1542,12 @@ mod tests {
     fn renumbered_agrees_with_general(fine: &HalfedgeMesh, seed_vertex: Option<u32>, rules: &LoopOptions) -> bool {
         let corners = CornerTable::mesh_corners(fine).expect("triangles");
         let corner_at = |v| corners.corner_at(fine, v);
-        let renumbering = renumber_to_canonical(fine.vertex_count(), &corners.corners, corner_at, seed_vertex);
+        let renumbering =
+            renumber_to_canonical(fine.vertex_count(), &corners.corners, corner_at, seed_vertex.as_slice());
         let Some(fast) = renumbering.and_then(|r| reverse_renumbered(r, fine.positions(), rules)) else {
             return false;
         };
-        let coarsening = detect_table(&CornerTable::from_mesh(fine).unwrap(), seed_vertex)
+        let coarsening = detect_table(&CornerTable::from_mesh(fine).unwrap(), seed_vertex.as_slice())
             .expect("the general detection accepts what the renumbering accepts");
         let (positions, details) = reverse_positions(&coarsening, fine.positions(), rules);
         assert_eq!(fast.coarse, coarsening.coarse);
@@ -1382,7 +1575,7 @@ mod tests {
 
     /// A vertex point of a scrambled refinement (from the general detection).
     fn scrambled_vertex_point(fine: &HalfedgeMesh) -> u32 {
-        let coarsening = detect_table(&CornerTable::from_mesh(fine).unwrap(), None).unwrap();
+        let coarsening = detect_table(&CornerTable::from_mesh(fine).unwrap(), &[]).unwrap();
         *coarsening.vertex_point.last().unwrap()
     }
 
@@ -1405,7 +1598,7 @@ mod tests {
             let accepted = renumbered_agrees_with_general(&fine, None, &rules);
             if flips == 0 {
                 // Unless every valence is regular (then the general detection searches).
-                prop_assert!(accepted || detect_table(&CornerTable::from_mesh(&fine).unwrap(), None).is_ok());
+                prop_assert!(accepted || detect_table(&CornerTable::from_mesh(&fine).unwrap(), &[]).is_ok());
             }
         }
     }
@@ -1424,7 +1617,7 @@ mod tests {
         ) {
             let rules = all_rules()[rule];
             let fine = scramble(&perturb(&loop_step(&mesh(&soup), &rules), amount, seed), seed ^ 0x5555);
-            let level = reverse(&mesh(&fine), &ReverseOptions { rules, seed_vertex: None }).unwrap();
+            let level = reverse(&mesh(&fine), &ReverseOptions { rules, seed_vertices: Vec::new() }).unwrap();
             prop_assert_eq!(level.coarse.vertex_count() + level.details.len(), fine.vertex_count());
             let rebuilt = reconstruct(&level.coarse, &level.details, level.order.as_ref(), &rules).unwrap();
             let error = relative_distance(&rebuilt.to_soup(), &fine);
@@ -1436,7 +1629,7 @@ mod tests {
         fn reverse_inverts_subdivision(soup in mesh_topo::testing::arb_triangle_mesh(), rule in 0usize..4) {
             let rules = all_rules()[rule];
             let fine = loop_step(&mesh(&soup), &rules);
-            let level = reverse(&mesh(&fine), &ReverseOptions { rules, seed_vertex: None }).unwrap();
+            let level = reverse(&mesh(&fine), &ReverseOptions { rules, seed_vertices: Vec::new() }).unwrap();
             prop_assert!(relative_distance(&level.coarse.to_soup(), &soup) < TOLERANCE);
             let diagonal = crate::pyramid::bounding_box_diagonal(&soup.positions);
             for d in &level.details {
@@ -1453,7 +1646,7 @@ mod tests {
             let options = crate::pyramid::DecomposeOptions {
                 rules,
                 levels: crate::pyramid::Levels::Count(2),
-                seed_vertex: None,
+                seed_vertices: Vec::new(),
             };
             let pyramid = crate::pyramid::decompose(&mesh(&fine), &options).unwrap();
             prop_assert!(relative_distance(&pyramid.base, &soup) < TOLERANCE);
@@ -1480,7 +1673,7 @@ mod tests {
             let a = reverse(&mesh(&fine), &ReverseOptions::default()).unwrap();
             // Coarse vertex 0 is fine vertex 0 in the canonical order, else the order says.
             let vertex_point = a.order.as_ref().map_or(0, |order| order.vertex_of_canonical[0]);
-            let seeded = ReverseOptions { rules, seed_vertex: Some(vertex_point) };
+            let seeded = ReverseOptions { rules, seed_vertices: vec![vertex_point] };
             let b = reverse(&mesh(&moved), &seeded).unwrap();
             let mut expected = a.coarse.to_soup();
             for p in &mut expected.positions {

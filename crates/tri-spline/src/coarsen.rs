@@ -142,7 +142,7 @@ pub fn reverse_loop(mesh: &HalfedgeMesh, levels: u32, options: &CoarsenOptions) 
     let mut operator = SparseMatrix::identity(mesh.vertex_count());
     let mut seed = options.seed_vertex;
     for level in 0..levels {
-        let reverse_options = ReverseOptions { rules: options.rules, seed_vertex: seed };
+        let reverse_options = ReverseOptions { rules: options.rules, seed_vertices: seed.into_iter().collect() };
         let (step, coarse, vertex_point) = match level_operator(&current, &reverse_options) {
             Ok(result) => result,
             Err(SplineError::Loop(error)) => {
@@ -177,7 +177,7 @@ pub fn possible_levels(mesh: &HalfedgeMesh, max: u32, options: &CoarsenOptions) 
     let mut current = mesh.clone();
     let mut seed = options.seed_vertex;
     for level in 0..max {
-        match reverse(&current, &ReverseOptions { rules: options.rules, seed_vertex: seed }) {
+        match reverse(&current, &ReverseOptions { rules: options.rules, seed_vertices: seed.into_iter().collect() }) {
             Ok(reversed) => {
                 let count = reversed.coarse.vertex_count();
                 let vertex_point: Vec<usize> = match &reversed.order {

@@ -95,14 +95,14 @@ fn canonical_faces(coarse: &PolygonSoup) -> PolygonSoup {
 
 fn check(fine: &PolygonSoup, rules: LoopOptions, must_succeed: bool) {
     for levels in [Levels::Count(1), Levels::Max] {
-        let options = DecomposeOptions { rules, levels, seed_vertex: None };
+        let options = DecomposeOptions { rules, levels, seed_vertices: Vec::new() };
         let through_mesh =
             HalfedgeMesh::from_soup(fine).map_err(LoopError::from).and_then(|mesh| decompose(&mesh, &options));
         assert_eq!(format!("{:?}", decompose_soup(fine, &options)), format!("{through_mesh:?}"));
     }
     let Ok(mesh) = HalfedgeMesh::from_soup(fine) else { return };
     let _ = detect(&mesh, &DetectOptions::default());
-    let level = match reverse(&mesh, &ReverseOptions { rules, seed_vertex: None }) {
+    let level = match reverse(&mesh, &ReverseOptions { rules, seed_vertices: Vec::new() }) {
         Ok(level) => level,
         Err(error) => {
             assert!(!must_succeed, "reverse failed on a renumbered Loop mesh: {error}");
@@ -117,7 +117,7 @@ fn check(fine: &PolygonSoup, rules: LoopOptions, must_succeed: bool) {
     for (p, q) in rebuilt.positions.iter().zip(&fine.positions) {
         assert!(p.distance(*q) <= 1e-9 * scale, "reconstruction error {}", p.distance(*q) / scale);
     }
-    let pyramid = decompose(&mesh, &DecomposeOptions { rules, levels: Levels::Max, seed_vertex: None })
+    let pyramid = decompose(&mesh, &DecomposeOptions { rules, levels: Levels::Max, seed_vertices: Vec::new() })
         .expect("one level exists");
     let rebuilt = pyramid.reconstruct(pyramid.level_count()).expect("valid pyramid");
     assert_eq!(rebuilt.indices, fine.indices);
