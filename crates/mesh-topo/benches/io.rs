@@ -1,6 +1,6 @@
 //! Reading and writing OBJ, OFF and binary PLY from and to memory, in faces per second
-//! (so the file system is not measured); the text writers also on one thread, beside the
-//! default pool.
+//! (so the file system is not measured); the text readers and writers also on one
+//! thread, beside the default pool.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use mesh_topo::io::{self, Format, PlyEncoding, WriteOptions};
@@ -51,7 +51,14 @@ fn read_and_write(c: &mut Criterion) {
                         });
                     }
                 } else {
-                    group.bench_function(id, |b| b.iter(|| io::read_bytes(black_box(&bytes), format)));
+                    let read = || io::read_bytes(black_box(&bytes), format);
+                    group.bench_function(id, |b| b.iter(read));
+                    // Large text files are read in pieces on the pool's threads.
+                    if ply_encoding == PlyEncoding::Ascii {
+                        group.bench_function(format!("{format_name}-1thread/{name}"), |b| {
+                            b.iter(|| one_thread.install(read))
+                        });
+                    }
                 }
             }
         }

@@ -48,7 +48,7 @@ impl Variant {
 /// `n i1 .. in` and optionally a colour. Everything after `x y z` and after the indices
 /// is reported, not kept. `#` starts a comment anywhere.
 ///
-/// Files of several megabytes are read in one piece per thread of the current `rayon`
+/// Files of a megabyte or more are read in one piece per thread of the current `rayon`
 /// pool, cut at line ends; the result, and the error of a bad file, are those of one
 /// pass (on `bunny00.off` refined by Doo-Sabin twice, 905k vertices and 75 MB: 200 ms
 /// on one thread, 115-126 ms on two).
@@ -74,7 +74,7 @@ pub fn read_off(bytes: &[u8]) -> Result<(PolygonSoup, ReadReport), IoError> {
 
 /// Files whose vertex and face lines take fewer bytes than this are read on the calling
 /// thread.
-const PARALLEL_MIN_BYTES: usize = 1 << 22;
+const PARALLEL_MIN_BYTES: usize = 1 << 20;
 
 /// The next content line of `lines` (comments removed, blank lines skipped) and its tokens.
 fn next_content<'a>(lines: &mut Lines<'a>) -> Option<(usize, Tokens<'a>)> {

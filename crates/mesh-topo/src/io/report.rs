@@ -82,6 +82,13 @@ impl DroppedLog {
         }
     }
 
+    /// Adds the entries of `later`, a log of lines after all of this one's.
+    pub(crate) fn merge(&mut self, later: DroppedLog) {
+        for entry in later.entries {
+            self.add(&entry.what, entry.count, entry.first);
+        }
+    }
+
     pub(crate) fn into_report(self, format: Format, ply_encoding: Option<PlyEncoding>) -> ReadReport {
         let mut dropped = self.entries;
         // Entries are already in order of first appearance; sort anyway by location so
