@@ -4,7 +4,9 @@
 //! index soup, optionally refined one or two Loop steps with arbitrary details (so that
 //! many inputs do have Loop connectivity), then renumbered, and optionally broken by an
 //! edge flip or a removed face; or a raw soup, valid or not, is given the faces of one
-//! Loop step in the canonical pattern (a bowtie vertex, a flipped face...). Whatever
+//! Loop step in the canonical pattern (a bowtie vertex, a flipped face...). Some inputs
+//! are two copies side by side (two components), and some get up to two seed vertices
+//! (any index, out of range included). Whatever
 //! comes out, `reverse` and `decompose` must not panic; when they succeed,
 //! reconstruction must give the input back; and `decompose_soup` must give exactly
 //! what `decompose` of the soup's half-edge mesh gives, result or error.
@@ -93,16 +95,29 @@ fn canonical_faces(coarse: &PolygonSoup) -> PolygonSoup {
     PolygonSoup::from_faces(positions, faces)
 }
 
-fn check(fine: &PolygonSoup, rules: LoopOptions, must_succeed: bool) {
+/// `soup` and a copy of it moved along x, as one soup of two components.
+fn two_copies(soup: &PolygonSoup) -> PolygonSoup {
+    let n = soup.vertex_count() as u32;
+    let mut positions = soup.positions.clone();
+    positions.extend(soup.positions.iter().map(|&p| p + DVec3::X * 100.0));
+    let faces: Vec<Vec<u32>> = soup
+        .faces()
+        .map(<[u32]>::to_vec)
+        .chain(soup.faces().map(|f| f.iter().map(|&v| v + n).collect()))
+        .collect();
+    PolygonSoup::from_faces(positions, faces)
+}
+
+fn check(fine: &PolygonSoup, rules: LoopOptions, seeds: &[u32], must_succeed: bool) {
     for levels in [Levels::Count(1), Levels::Max] {
-        let options = DecomposeOptions { rules, levels, seed_vertices: Vec::new() };
+        let options = DecomposeOptions { rules, levels, seed_vertices: seeds.to_vec() };
         let through_mesh =
             HalfedgeMesh::from_soup(fine).map_err(LoopError::from).and_then(|mesh| decompose(&mesh, &options));
         assert_eq!(format!("{:?}", decompose_soup(fine, &options)), format!("{through_mesh:?}"));
     }
     let Ok(mesh) = HalfedgeMesh::from_soup(fine) else { return };
     let _ = detect(&mesh, &DetectOptions::default());
-    let level = match reverse(&mesh, &ReverseOptions { rules, seed_vertices: Vec::new() }) {
+    let level = match reverse(&mesh, &ReverseOptions { rules, seed_vertices: seeds.to_vec() }) {
         Ok(level) => level,
         Err(error) => {
             assert!(!must_succeed, "reverse failed on a renumbered Loop mesh: {error}");
@@ -117,7 +132,7 @@ fn check(fine: &PolygonSoup, rules: LoopOptions, must_succeed: bool) {
     for (p, q) in rebuilt.positions.iter().zip(&fine.positions) {
         assert!(p.distance(*q) <= 1e-9 * scale, "reconstruction error {}", p.distance(*q) / scale);
     }
-    let pyramid = decompose(&mesh, &DecomposeOptions { rules, levels: Levels::Max, seed_vertices: Vec::new() })
+    let pyramid = decompose(&mesh, &DecomposeOptions { rules, levels: Levels::Max, seed_vertices: seeds.to_vec() })
         .expect("one level exists");
     let rebuilt = pyramid.reconstruct(pyramid.level_count()).expect("valid pyramid");
     assert_eq!(rebuilt.indices, fine.indices);
@@ -153,11 +168,18 @@ fuzz_target!(|data: &[u8]| {
         if bool::arbitrary(u)? {
             soup = mesh_topo::testing::shuffle(&soup, |k| u.int_in_range(0..=k).unwrap_or(0));
         }
+        if bool::arbitrary(u)? {
+            soup = two_copies(&soup);
+        }
         let broken = bool::arbitrary(u)?;
         if broken {
             soup = break_mesh(&soup, u)?;
         }
-        check(&soup, rules, loop_mesh && !broken);
+        let vertices = soup.vertex_count() as u32;
+        let seeds = (0..u.int_in_range(0..=2)?)
+            .map(|_| u.int_in_range(0..=vertices))
+            .collect::<arbitrary::Result<Vec<u32>>>()?;
+        check(&soup, rules, &seeds, loop_mesh && !broken && seeds.is_empty());
         Ok(())
     };
     let _ = run(&mut u);
