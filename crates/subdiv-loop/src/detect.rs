@@ -276,8 +276,9 @@ impl LoopConnectivity {
 ///
 /// # Errors
 /// [`LoopError::NotTriangle`] for a face that is not a triangle,
-/// [`LoopError::SeedOutOfRange`] for a seed that does not exist, [`LoopError::NoFaces`]
-/// for a mesh without faces, and
+/// [`LoopError::SeedOutOfRange`] for a seed that does not exist,
+/// [`LoopError::SeedConflict`] for seeds of one component that cannot all be vertex
+/// points, [`LoopError::NoFaces`] for a mesh without faces, and
 /// [`LoopError::NotLoopConnectivity`] naming the fine vertex or face where the Loop
 /// structure breaks.
 pub fn detect(fine: &HalfedgeMesh, options: &DetectOptions) -> Result<LoopConnectivity, LoopError> {

@@ -141,7 +141,7 @@ pub struct RateDistortion {
 /// ```
 ///
 /// # Errors
-/// [`LoopError::NotTriangle`], [`LoopError::SeedOutOfRange`],
+/// [`LoopError::NotTriangle`], [`LoopError::SeedOutOfRange`], [`LoopError::SeedConflict`],
 /// [`LoopError::Mesh`] for non-finite positions, and [`LoopError::NotLoopConnectivity`]
 /// when a requested level (or, with [`Levels::Max`], the first level) has no Loop
 /// connectivity.
