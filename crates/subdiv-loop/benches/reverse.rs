@@ -48,6 +48,11 @@
 //! bunny's connectivity and refines the levels above by index arithmetic), so the
 //! `decompose` / `forward_mesh` ratio is the stricter of the two.
 //!
+//! # Meshes that read several ways
+//! Group `regular_torus` times one level of a refined torus (every valence regular, so
+//! it has several readings and the automatic choice compares them) with and without a
+//! seed vertex, in the canonical order and renumbered, beside the forward step to it.
+//!
 //! Ratios are only meaningful within one run (the machine is shared): group `levelL`
 //! times the operations of size `L` back to back; compare `levelL/decompose` with
 //! `levelL/forward_mesh`, `levelL/decompose_renumbered` with
@@ -59,6 +64,7 @@ use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
+use mesh_topo::shapes::{self, CellKind};
 use mesh_topo::testing::scramble;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use subdiv_loop::forward::{LoopOptions, subdivide, subdivide_soup};
@@ -162,9 +168,43 @@ fn benches(c: &mut Criterion) {
     }
 }
 
+/// A mesh whose valences are all regular reads several ways: a torus of 128 x 64 x 2
+/// triangles refined twice (131 072 vertices), perturbed, one level decomposed with the
+/// automatic choice among its readings and with a seed vertex, in the canonical order
+/// and renumbered, next to the forward step to it. The automatic rows pay the choice.
+fn regular(c: &mut Criterion) {
+    let rules = LoopOptions::default();
+    let torus = shapes::torus(128, 64, CellKind::Triangles).expect("torus");
+    let mut smooth = LoopPyramid::smooth(torus, rules, 2).expect("a triangle mesh");
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    for detail in smooth.levels.iter_mut().flat_map(|level| level.details.iter_mut()) {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        *detail = DVec3::splat((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 1e-3;
+    }
+    let fine = HalfedgeMesh::from_soup(&smooth.reconstruct(2).expect("refined torus")).expect("valid");
+    let below = HalfedgeMesh::from_soup(&smooth.reconstruct(1).expect("refined torus")).expect("valid");
+    let renumbered = HalfedgeMesh::from_soup(&scramble(fine.to_soup(), 7, 0.0)).expect("valid");
+    let automatic = DecomposeOptions { rules, levels: Levels::Count(1), seed_vertices: Vec::new() };
+    let seeded = DecomposeOptions { seed_vertices: vec![0], ..automatic.clone() };
+    let mut group = c.benchmark_group("regular_torus");
+    group.throughput(Throughput::Elements(fine.vertex_count() as u64));
+    group.bench_function("forward_one_level", |b| b.iter(|| subdivide(black_box(&below), 1, &rules).expect("valid")));
+    for (name, mesh) in [("canonical", &fine), ("renumbered", &renumbered)] {
+        group.bench_function(format!("decompose_{name}"), |b| {
+            b.iter(|| decompose(black_box(mesh), &automatic).expect("Loop mesh"))
+        });
+        group.bench_function(format!("decompose_{name}_seeded"), |b| {
+            b.iter(|| decompose(black_box(mesh), &seeded).expect("Loop mesh"))
+        });
+    }
+    group.finish();
+}
+
 criterion_group! {
     name = reverse;
     config = Criterion::default().sample_size(10).measurement_time(std::time::Duration::from_secs(3));
-    targets = benches
+    targets = benches, regular
 }
 criterion_main!(reverse);

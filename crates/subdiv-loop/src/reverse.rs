@@ -575,6 +575,29 @@ pub(crate) fn all_valences_regular(table: &CornerTable) -> bool {
         })
 }
 
+/// Whether every connected component of `table` with a face holds one of `vertices`
+/// (all in range): a search from them across edges reaches every vertex with a face.
+fn every_component_has_one(table: &CornerTable, vertices: &[u32]) -> bool {
+    if vertices.is_empty() {
+        return false;
+    }
+    let mut reached = vec![false; table.vertex_count()];
+    let mut stack = Vec::new();
+    for &v in vertices {
+        if !std::mem::replace(&mut reached[v as usize], true) {
+            stack.push(v);
+        }
+    }
+    while let Some(v) = stack.pop() {
+        table.visit_star(v, |_, u| {
+            if !std::mem::replace(&mut reached[u as usize], true) {
+                stack.push(u);
+            }
+        });
+    }
+    (0..table.vertex_count() as u32).all(|v| reached[v as usize] || table.is_isolated(v))
+}
+
 /// The components of a fine mesh whose readings [`reverse_level`] compares, and how to
 /// tell each component's details apart.
 struct RegularReadings {
@@ -702,8 +725,9 @@ fn reverse_level_fast(
             check_input()?;
         }
         // A canonical mesh's reading is that of its numbering, compared with the others
-        // only when all its valences are regular (see `reverse_level`).
-        let several_readings = all_valences_regular(&level.coarse);
+        // only when all its valences are regular (see `reverse_level`) and some component
+        // has no seed (the seeds, vertex points here, are coarse vertices too).
+        let several_readings = all_valences_regular(&level.coarse) && !every_component_has_one(&level.coarse, seeds);
         return Ok(Some(LevelParts {
             coarse: level.coarse,
             order: None,
@@ -1331,6 +1355,12 @@ mod tests {
         assert_eq!(regular_components(&fine), 1);
         assert_eq!(regular_components(&side_by_side(&octahedron, &fine)), 1);
         assert_eq!(regular_components(&side_by_side(&fine, &fine)), 2);
+        let two = CornerTable::from_soup(&side_by_side(&fine, &octahedron)).unwrap();
+        let n = fine.vertex_count() as u32;
+        assert!(!every_component_has_one(&two, &[]));
+        assert!(!every_component_has_one(&two, &[0, 5]));
+        assert!(!every_component_has_one(&two, &[n]));
+        assert!(every_component_has_one(&two, &[n + 1, 3]));
         assert!(!all_valences_regular(&CornerTable::from_soup(&octahedron).unwrap()));
         assert!(all_valences_regular(&CornerTable::from_soup(&side_by_side(&fine, &fine)).unwrap()));
     }
