@@ -344,6 +344,19 @@ pub enum FaceKind {
 
 impl FaceOrigin {
     /// The kind of face.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, FaceKind, FaceOrigin, subdivide};
+    ///
+    /// assert_eq!(FaceOrigin::Edge(7).kind(), FaceKind::Edge);
+    /// // A tetrahedron: one F_F face per face, one F_E quad per edge, one F_V face per vertex.
+    /// let tetrahedron = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+    /// let fine = subdivide(&tetrahedron, &DooOptions::default())?;
+    /// let count = |k| (0..fine.face_count()).filter(|&f| fine.face_origin(f).kind() == k).count();
+    /// assert_eq!([count(FaceKind::Face), count(FaceKind::Edge), count(FaceKind::Vertex)], [4, 6, 4]);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn kind(self) -> FaceKind {
         match self {
             FaceOrigin::Face(_) => FaceKind::Face,

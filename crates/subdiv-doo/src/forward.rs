@@ -71,6 +71,20 @@ impl Default for DooOptions {
 
 impl DooOptions {
     /// `levels` steps of `rule`, boundaries shrinking.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{BoundaryRule, DooOptions, FaceRule, subdivide};
+    ///
+    /// let options = DooOptions::new(FaceRule::Simple, 2);
+    /// assert_eq!((options.rule, options.levels), (FaceRule::Simple, 2));
+    /// assert_eq!(options.boundary, BoundaryRule::Shrink);
+    /// assert_eq!(DooOptions::new(FaceRule::DooSabin, 1), DooOptions::default());
+    /// // Two steps on a cube: 24 vertices after the first, each on 4 faces: 24 * 4 corners.
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// assert_eq!(subdivide(&cube, &options)?.vertex_count(), 24 * 4);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn new(rule: FaceRule, levels: u32) -> Self {
         Self { rule, levels, boundary: BoundaryRule::Shrink }
     }
@@ -107,22 +121,86 @@ pub struct DooMesh {
 }
 
 impl DooMesh {
-    /// Number of vertices.
+    /// Number of vertices. After a step under the Shrink rule, one per corner of the coarse
+    /// mesh (`|NV| = Σ|f|`).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, subdivide};
+    ///
+    /// let soup = shapes::tetrahedron();
+    /// let fine = subdivide(&HalfedgeMesh::from_soup(&soup)?, &DooOptions::default())?;
+    /// // 4 triangles, 12 corners, 12 fine vertices.
+    /// assert_eq!(fine.vertex_count(), soup.indices.len());
+    /// assert_eq!(fine.vertex_count(), 12);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn vertex_count(&self) -> usize {
         self.positions.len()
     }
 
-    /// Number of faces.
+    /// Number of faces. After a step under the Shrink rule, `|F| + |E_int| + |V_int|` (one
+    /// F_F face per coarse face, one F_E quad per interior edge, one F_V face per interior
+    /// vertex).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, subdivide};
+    ///
+    /// let coarse = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+    /// let fine = subdivide(&coarse, &DooOptions::default())?;
+    /// // Closed: every edge and vertex is interior, 4 + 6 + 4 faces.
+    /// let (f, e, v) = (coarse.face_count(), coarse.edge_count(), coarse.vertex_count());
+    /// assert_eq!(fine.face_count(), f + e + v);
+    /// assert_eq!(fine.face_count(), 14);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn face_count(&self) -> usize {
         self.topology.offsets.len().saturating_sub(1)
     }
 
     /// Vertex positions.
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, subdivide};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::default())?;
+    /// assert_eq!(fine.positions().len(), fine.vertex_count());
+    /// // Fine vertex `c` is coarse corner `c` moved by its face's rule. Corner 0 of the unit
+    /// // square (0,0,0), (0,1,0), (1,1,0), (1,0,0): weights (9, 3, 1, 3)/16 put it a quarter of
+    /// // the way to the opposite corner.
+    /// assert!(fine.positions()[0].distance(DVec3::new(0.25, 0.25, 0.0)) < 1e-15);
+    /// // The F_F face keeps the centroid of its coarse face.
+    /// let centroid = fine.face(0).iter().map(|&c| fine.positions()[c as usize]).sum::<DVec3>() / 4.0;
+    /// assert!(centroid.distance(DVec3::new(0.5, 0.5, 0.0)) < 1e-15);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn positions(&self) -> &[DVec3] {
         &self.positions
     }
 
     /// The corners of face `f`.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, subdivide};
+    ///
+    /// let soup = shapes::cube();
+    /// let fine = subdivide(&HalfedgeMesh::from_soup(&soup)?, &DooOptions::default())?;
+    /// // Fine vertex `c` is coarse corner `c`: `soup.indices[c]` is its coarse vertex.
+    /// let coarse_vertices =
+    ///     |f: usize| fine.face(f).iter().map(|&c| soup.indices[c as usize]).collect::<Vec<_>>();
+    /// // F_F face 0: the corners of coarse face 0, in order.
+    /// assert_eq!(fine.face(0), [0, 1, 2, 3]);
+    /// // F_E quad 6, across coarse edge 0 (vertex 0 -> 2): two corners at each end.
+    /// assert_eq!(coarse_vertices(6), [0, 0, 2, 2]);
+    /// // F_V face 18: the three corners of coarse vertex 0, in faces 0, 2 and 4.
+    /// assert_eq!(fine.face(18), [0, 8, 16]);
+    /// assert_eq!(coarse_vertices(18), [0, 0, 0]);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     ///
     /// # Panics
     /// If `f >= self.face_count()`.
@@ -132,11 +210,50 @@ impl DooMesh {
     }
 
     /// All faces in order.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, subdivide};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::default())?;
+    /// assert_eq!(fine.faces().len(), fine.face_count());
+    /// assert!(fine.faces().enumerate().all(|(f, face)| face == fine.face(f)));
+    /// // 6 F_F and 12 F_E quads, then 8 F_V triangles (the cube's vertices have valence 3).
+    /// assert!(fine.faces().take(18).all(|face| face.len() == 4));
+    /// assert!(fine.faces().skip(18).all(|face| face.len() == 3));
+    /// // Closed mesh: every fine vertex lies on 4 faces.
+    /// assert_eq!(fine.faces().map(<[u32]>::len).sum::<usize>(), 4 * fine.vertex_count());
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn faces(&self) -> impl ExactSizeIterator<Item = &[u32]> + '_ {
         self.topology.offsets.windows(2).map(|w| &self.topology.indices[w[0] as usize..w[1] as usize])
     }
 
     /// Kind and parent element of face `f`.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes::{self, CellKind}};
+    /// use subdiv_doo::{DooOptions, FaceOrigin, subdivide};
+    ///
+    /// // A tetrahedron: its 4 faces, then its 6 edges, then its 4 vertices, in order.
+    /// let tetrahedron = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+    /// let fine = subdivide(&tetrahedron, &DooOptions::default())?;
+    /// let origins: Vec<_> = (0..fine.face_count()).map(|f| fine.face_origin(f)).collect();
+    /// let expected: Vec<_> = (0..4)
+    ///     .map(FaceOrigin::Face)
+    ///     .chain((0..6).map(FaceOrigin::Edge))
+    ///     .chain((0..4).map(FaceOrigin::Vertex))
+    ///     .collect();
+    /// assert_eq!(origins, expected);
+    /// // Two quads side by side: only their shared edge, edge 1, gets an F_E quad.
+    /// let pair = HalfedgeMesh::from_soup(&shapes::grid(2, 1, CellKind::Quads)?)?;
+    /// let fine = subdivide(&pair, &DooOptions::default())?;
+    /// assert_eq!(fine.face_count(), 3);
+    /// assert_eq!(fine.face_origin(2), FaceOrigin::Edge(1));
+    /// assert!(!pair.is_boundary_edge(pair.edges().nth(1).unwrap()));
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     ///
     /// # Panics
     /// If `f >= self.face_count()`.
@@ -147,6 +264,21 @@ impl DooMesh {
 
     /// Kind of face `f` (F_F, F_E or F_V).
     ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, FaceKind, subdivide};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::default())?;
+    /// for f in 0..fine.face_count() {
+    ///     assert_eq!(fine.face_kind(f), fine.face_origin(f).kind());
+    ///     // Only the F_V faces of the cube's valence-3 vertices are triangles.
+    ///     assert_eq!(fine.face_kind(f) == FaceKind::Vertex, fine.face(f).len() == 3);
+    /// }
+    /// assert_eq!(fine.face_kind(6), FaceKind::Edge);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
+    ///
     /// # Panics
     /// If `f >= self.face_count()`.
     pub fn face_kind(&self, f: usize) -> FaceKind {
@@ -156,12 +288,41 @@ impl DooMesh {
     /// Numbers of F_F, F_E and F_V faces. Under the Shrink rule they are three consecutive
     /// blocks of faces; under the Chaikin rule the boundary quads (counted as F_E) and the
     /// boundary vertex faces (counted as F_V) follow as two more blocks.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes::{self, CellKind}};
+    /// use subdiv_doo::{DooOptions, subdivide};
+    ///
+    /// // A 3 x 2 grid of quads (Shrink rule): boundary edges and vertices get no faces.
+    /// let grid = HalfedgeMesh::from_soup(&shapes::grid(3, 2, CellKind::Quads)?)?;
+    /// let fine = subdivide(&grid, &DooOptions::default())?;
+    /// let interior_edges = grid.edges().filter(|&e| !grid.is_boundary_edge(e)).count();
+    /// let interior_vertices = grid.vertices().filter(|&v| !grid.is_boundary_vertex(v)).count();
+    /// assert_eq!(fine.kind_counts(), [grid.face_count(), interior_edges, interior_vertices]);
+    /// assert_eq!(fine.kind_counts(), [6, 7, 2]);
+    /// assert_eq!(fine.kind_counts().iter().sum::<usize>(), fine.face_count());
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn kind_counts(&self) -> [usize; 3] {
         let t = &self.topology;
         [t.ff_count, t.fe_count + t.ring_edge_parent.len(), t.fv_count + t.ring_vertex_parent.len()]
     }
 
     /// The mesh as a polygon soup (copies).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, FaceRule, subdivide, subdivide_soup};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let once = subdivide(&cube, &DooOptions::default())?;
+    /// let soup = once.to_soup();
+    /// assert_eq!((soup.vertex_count(), soup.face_count()), (once.vertex_count(), once.face_count()));
+    /// // Subdividing the soup again is the same as two steps at once, bit for bit.
+    /// let twice = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 2))?;
+    /// assert_eq!(subdivide_soup(&soup, &DooOptions::default())?, twice);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn to_soup(&self) -> PolygonSoup {
         PolygonSoup {
             positions: self.positions.clone(),
@@ -171,6 +332,19 @@ impl DooMesh {
     }
 
     /// The mesh as a polygon soup (no copy).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, subdivide};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::default())?;
+    /// let copy = fine.to_soup();
+    /// let soup = fine.into_soup(); // takes over the arrays of `fine`
+    /// assert_eq!(soup, copy);
+    /// assert_eq!((soup.vertex_count(), soup.face_count()), (24, 26));
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn into_soup(self) -> PolygonSoup {
         PolygonSoup { positions: self.positions, offsets: self.topology.offsets, indices: self.topology.indices }
     }
@@ -180,6 +354,20 @@ impl DooMesh {
     /// # Errors
     /// None in practice (a Doo-Sabin step of a valid mesh is a valid mesh); the
     /// [`DooError::Mesh`] of `mesh-topo` is passed on if it ever were not.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, subdivide};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::default())?;
+    /// let mesh = fine.to_mesh()?;
+    /// assert_eq!((mesh.vertex_count(), mesh.face_count()), (fine.vertex_count(), fine.face_count()));
+    /// // Still a sphere (24 - 48 + 26 = 2), and every fine vertex has valence 4.
+    /// assert_eq!((mesh.edge_count(), mesh.topology_stats().genus), (48, 0));
+    /// assert!(mesh.vertices().all(|v| mesh.valence(v) == 4));
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn to_mesh(&self) -> Result<HalfedgeMesh, DooError> {
         Ok(HalfedgeMesh::from_soup(&self.to_soup())?)
     }

@@ -55,6 +55,16 @@ pub const PYRAMID_MAGIC: [u8; 8] = *b"MRSDOO\0\0";
 pub const PYRAMID_VERSION: u32 = 2;
 
 /// True if `bytes` starts like a Doo-Sabin pyramid file.
+///
+/// Only the first 8 bytes, the magic number [`PYRAMID_MAGIC`], are looked at; decoding
+/// ([`DooPyramid::from_bytes`]) checks the rest.
+///
+/// ```
+/// use subdiv_doo::pyramid::{PYRAMID_MAGIC, is_doo_pyramid};
+/// assert!(is_doo_pyramid(&[PYRAMID_MAGIC.as_slice(), b"any payload"].concat()));
+/// assert!(!is_doo_pyramid(b"ply\nformat ascii 1.0\n"));
+/// assert!(!is_doo_pyramid(&PYRAMID_MAGIC[..7])); // too short
+/// ```
 pub fn is_doo_pyramid(bytes: &[u8]) -> bool {
     bytes.len() >= 8 && bytes[..8] == PYRAMID_MAGIC
 }
@@ -89,16 +99,68 @@ pub struct DecomposeOptions {
 
 impl DecomposeOptions {
     /// `levels` levels with automatic seeds.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::pyramid::{DecomposeOptions, Depth, decompose};
+    /// use subdiv_doo::{BoundaryRule, DooOptions, FaceRule, subdivide};
+    ///
+    /// let options = DecomposeOptions::levels(FaceRule::DooSabin, 2);
+    /// assert_eq!((options.depth, options.boundary), (Depth::Levels(2), BoundaryRule::Shrink));
+    /// // Two of three levels: the base is the cube refined once (6 + 12 + 8 faces).
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 3))?.to_mesh()?;
+    /// let pyramid = decompose(&fine, &options)?.pyramid;
+    /// assert_eq!((pyramid.level_count(), pyramid.base.face_count()), (2, 26));
+    /// // More levels than the mesh has are an error.
+    /// assert!(decompose(&fine, &DecomposeOptions::levels(FaceRule::DooSabin, 4)).is_err());
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn levels(rule: FaceRule, levels: u32) -> Self {
         Self { rule, depth: Depth::Levels(levels), seeds: Vec::new(), boundary: BoundaryRule::Shrink }
     }
 
     /// As many levels as possible, automatic seeds.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::pyramid::{DecomposeOptions, Depth, decompose};
+    /// use subdiv_doo::{DooOptions, FaceRule, subdivide};
+    ///
+    /// let options = DecomposeOptions::max(FaceRule::DooSabin);
+    /// assert_eq!(options.depth, Depth::Max);
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 2))?.to_mesh()?;
+    /// let decomposition = decompose(&fine, &options)?;
+    /// // Down to the cube, which is not a Doo-Sabin refinement: the reason is reported.
+    /// assert_eq!(decomposition.pyramid.level_count(), 2);
+    /// assert_eq!(decomposition.pyramid.base.face_count(), 6);
+    /// assert!(decomposition.stopped.is_some());
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn max(rule: FaceRule) -> Self {
         Self { rule, depth: Depth::Max, seeds: Vec::new(), boundary: BoundaryRule::Shrink }
     }
 
     /// The same options for a mesh made with the boundary rule `boundary`.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes::{self, CellKind}};
+    /// use subdiv_doo::pyramid::{DecomposeOptions, decompose};
+    /// use subdiv_doo::{BoundaryRule, DooOptions, FaceRule, subdivide};
+    ///
+    /// let grid = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads)?)?;
+    /// let refine = DooOptions::new(FaceRule::DooSabin, 2).with_boundary(BoundaryRule::Chaikin);
+    /// let fine = subdivide(&grid, &refine)?.to_mesh()?;
+    /// let shrink = DecomposeOptions::levels(FaceRule::DooSabin, 2);
+    /// let chaikin = shrink.clone().with_boundary(BoundaryRule::Chaikin);
+    /// let pyramid = decompose(&fine, &chaikin)?.pyramid;
+    /// assert_eq!((pyramid.boundary, pyramid.base.face_count()), (BoundaryRule::Chaikin, 4));
+    /// assert_eq!(pyramid.base.vertex_count() + pyramid.detail_count(), fine.vertex_count());
+    /// // Read with the shrinking rule, the mesh has no two levels.
+    /// assert!(decompose(&fine, &shrink).is_err());
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn with_boundary(self, boundary: BoundaryRule) -> Self {
         Self { boundary, ..self }
     }

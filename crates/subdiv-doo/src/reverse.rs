@@ -151,17 +151,68 @@ pub struct ReverseOptions {
 
 impl ReverseOptions {
     /// Automatic seeds for every component.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, FaceRule, ReverseOptions, reverse, subdivide};
+    ///
+    /// assert_eq!(ReverseOptions::auto(FaceRule::DooSabin), ReverseOptions::default());
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::new(FaceRule::CENTROID_HALF, 1))?.to_mesh()?;
+    /// let reversal = reverse(&fine, &ReverseOptions::auto(FaceRule::CENTROID_HALF))?;
+    /// // The seed was found, not given: face 0 as an F_F face, all details zero.
+    /// let choice = &reversal.choices()[0];
+    /// assert_eq!((choice.seed_face, choice.given), (0, false));
+    /// assert!(reversal.details().iter().all(|d| d.length() < 1e-14));
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn auto(rule: FaceRule) -> Self {
         Self { rule, seeds: Vec::new(), boundary: BoundaryRule::Shrink }
     }
 
     /// One given seed face (for a mesh with one component; other components are
     /// resolved automatically).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, FaceRule, ReverseOptions, reverse, subdivide};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::default())?.to_mesh()?;
+    /// // Face 18 is the F_V face of cube vertex 0. Read as an F_F face it gives the dual
+    /// // reading: an octahedron (8 triangles, 6 vertices), with details that are not zero.
+    /// let reversal = reverse(&fine, &ReverseOptions::with_seed(FaceRule::DooSabin, 18))?;
+    /// assert_eq!((reversal.coarse().face_count(), reversal.coarse().vertex_count()), (8, 6));
+    /// assert!(reversal.choices()[0].given);
+    /// assert!(reversal.details().iter().any(|d| d.length() > 0.1));
+    /// // It still rebuilds the input.
+    /// let rebuilt = reversal.reconstruct();
+    /// assert!(rebuilt.positions.iter().zip(fine.positions()).all(|(a, b)| a.distance(*b) < 1e-14));
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn with_seed(rule: FaceRule, seed: usize) -> Self {
         Self { rule, seeds: vec![seed], boundary: BoundaryRule::Shrink }
     }
 
     /// The same options for a fine mesh made with the boundary rule `boundary`.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes::{self, CellKind}};
+    /// use subdiv_doo::{BoundaryRule, DooOptions, FaceRule, ReverseOptions, reverse, subdivide};
+    ///
+    /// let grid = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads)?)?;
+    /// let refine = DooOptions::default().with_boundary(BoundaryRule::Chaikin);
+    /// let fine = subdivide(&grid, &refine)?.to_mesh()?;
+    /// let options = ReverseOptions::auto(FaceRule::DooSabin).with_boundary(BoundaryRule::Chaikin);
+    /// let reversal = reverse(&fine, &options)?;
+    /// // The 2 x 2 grid again, with zero details.
+    /// assert_eq!((reversal.coarse().face_count(), reversal.coarse().vertex_count()), (4, 9));
+    /// assert!(reversal.details().iter().all(|d| d.length() < 1e-14));
+    /// // The shrinking rule reads the boundary ring as ordinary faces: no zero-detail reading.
+    /// let shrink = reverse(&fine, &ReverseOptions::auto(FaceRule::DooSabin))?;
+    /// assert!(shrink.details().iter().any(|d| d.length() > 1e-3));
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn with_boundary(self, boundary: BoundaryRule) -> Self {
         Self { boundary, ..self }
     }
@@ -183,6 +234,25 @@ pub struct FineOrder {
 
 impl FineOrder {
     /// True if the input order is the canonical one.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, PolygonSoup, shapes};
+    /// use subdiv_doo::{DooOptions, FineOrder, ReverseOptions, reverse, subdivide};
+    ///
+    /// assert!(FineOrder::default().is_identity());
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::default())?.to_soup();
+    /// // `subdivide` writes the canonical order...
+    /// let reversal = reverse(&HalfedgeMesh::from_soup(&fine)?, &ReverseOptions::default())?;
+    /// assert!(reversal.fine_order().is_identity());
+    /// // ... which the same faces listed backwards are not.
+    /// let faces = (0..26).rev().map(|f| fine.face(f));
+    /// let backwards = PolygonSoup::from_faces(fine.positions.clone(), faces);
+    /// let reversal = reverse(&HalfedgeMesh::from_soup(&backwards)?, &ReverseOptions::default())?;
+    /// assert!(!reversal.fine_order().is_identity());
+    /// assert_eq!(reversal.reconstruct().indices, backwards.indices);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn is_identity(&self) -> bool {
         self.vertices.is_empty() && self.faces.is_empty() && self.rotations.is_empty()
     }
@@ -327,6 +397,22 @@ impl DooReversal {
 
     /// The coarse mesh: vertices at the means of their candidates, faces in the order of
     /// their F_F faces in the input, each starting at its F_F face's first corner.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, PolygonSoup, shapes};
+    /// use subdiv_doo::{DooOptions, ReverseOptions, reverse, subdivide};
+    ///
+    /// let cube = shapes::cube();
+    /// let fine = subdivide(&HalfedgeMesh::from_soup(&cube)?, &DooOptions::default())?.to_mesh()?;
+    /// let reversal = reverse(&fine, &ReverseOptions::default())?;
+    /// // reverse(subdivide(C)) is C: the same faces, corner by corner, and zero details.
+    /// let coarse = reversal.coarse();
+    /// assert_eq!(coarse.offsets, cube.offsets);
+    /// let corner = |soup: &PolygonSoup, c: usize| soup.positions[soup.indices[c] as usize];
+    /// assert!((0..cube.indices.len()).all(|c| corner(&coarse, c).distance(corner(&cube, c)) < 1e-14));
+    /// assert!(reversal.details().iter().all(|d| d.length() < 1e-14));
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn coarse(&self) -> PolygonSoup {
         PolygonSoup {
             positions: self.coarse_positions.clone(),
@@ -336,17 +422,63 @@ impl DooReversal {
     }
 
     /// Coarse vertex positions.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, ReverseOptions, reverse, subdivide};
+    ///
+    /// let tetrahedron = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+    /// let fine = subdivide(&tetrahedron, &DooOptions::default())?.to_mesh()?;
+    /// let reversal = reverse(&fine, &ReverseOptions::default())?;
+    /// assert_eq!(reversal.coarse_positions(), reversal.coarse().positions);
+    /// // Coarse vertices plus details: as many 3-vectors as fine vertices (4 + 8 = 12).
+    /// assert_eq!(reversal.coarse_positions().len(), 4);
+    /// assert_eq!(reversal.coarse_positions().len() + reversal.details().len(), fine.vertex_count());
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn coarse_positions(&self) -> &[DVec3] {
         &self.coarse_positions
     }
 
     /// The detail vectors: for every coarse vertex in order, the `r - 1` prefix sums of
     /// its candidates' offsets from the mean (module docs).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, ReverseOptions, reverse, subdivide};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let mut fine = subdivide(&cube, &DooOptions::default())?.to_mesh()?;
+    /// // 8 coarse vertices with 3 candidates each (their corners): 8 * (3 - 1) details.
+    /// let exact = reverse(&fine, &ReverseOptions::default())?;
+    /// assert_eq!(exact.details().len(), 16);
+    /// assert!(exact.details().iter().all(|d| d.length() < 1e-14));
+    /// // Moving a fine vertex makes the candidates of its coarse vertex disagree.
+    /// fine.positions_mut()[5].x += 0.25;
+    /// let moved = reverse(&fine, &ReverseOptions::default())?;
+    /// assert!(moved.details().iter().any(|d| d.length() > 0.1));
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn details(&self) -> &[DVec3] {
         &self.details
     }
 
     /// The rule assumed.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, FaceRule, ReverseOptions, reverse, subdivide};
+    ///
+    /// // On triangles the simple variant is not Doo-Sabin: only its inverse gives zero details.
+    /// let tetrahedron = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+    /// let fine = subdivide(&tetrahedron, &DooOptions::new(FaceRule::Simple, 1))?.to_mesh()?;
+    /// let simple = reverse(&fine, &ReverseOptions::auto(FaceRule::Simple))?;
+    /// let doo = reverse(&fine, &ReverseOptions::auto(FaceRule::DooSabin))?;
+    /// assert_eq!((simple.rule(), doo.rule()), (FaceRule::Simple, FaceRule::DooSabin));
+    /// assert!(simple.details().iter().all(|d| d.length() < 1e-14));
+    /// assert!(doo.details().iter().any(|d| d.length() > 0.1));
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn rule(&self) -> FaceRule {
         self.rule
     }
@@ -354,21 +486,86 @@ impl DooReversal {
     /// The boundary rule assumed. Under [`BoundaryRule::Chaikin`] the details end with
     /// two per coarse boundary edge (the offsets of its Chaikin points, see
     /// [`crate::boundary`]).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes::{self, CellKind}};
+    /// use subdiv_doo::{BoundaryRule, DooOptions, FaceRule, ReverseOptions, reverse, subdivide};
+    ///
+    /// let grid = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads)?)?;
+    /// let refine = DooOptions::default().with_boundary(BoundaryRule::Chaikin);
+    /// let fine = subdivide(&grid, &refine)?.to_mesh()?;
+    /// let options = ReverseOptions::auto(FaceRule::DooSabin).with_boundary(BoundaryRule::Chaikin);
+    /// let reversal = reverse(&fine, &options)?;
+    /// assert_eq!(reversal.boundary(), BoundaryRule::Chaikin);
+    /// // 16 corners on 9 vertices, then 2 Chaikin offsets for each of the 8 boundary edges.
+    /// assert_eq!(reversal.details().len(), (16 - 9) + 2 * 8);
+    /// assert_eq!(reversal.coarse_positions().len() + reversal.details().len(), fine.vertex_count());
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn boundary(&self) -> BoundaryRule {
         self.boundary
     }
 
     /// The numbering of the input relative to the canonical Doo-Sabin order.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, PolygonSoup, shapes};
+    /// use subdiv_doo::{DooOptions, ReverseOptions, reverse, subdivide};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::default())?.to_soup();
+    /// // The 26 faces listed backwards: the 6 F_F faces are now faces 20..26, and the coarse
+    /// // faces follow their order, so canonical face k (F_F face of coarse face k) is 20 + k.
+    /// let faces = (0..26).rev().map(|f| fine.face(f));
+    /// let backwards = PolygonSoup::from_faces(fine.positions.clone(), faces);
+    /// let reversal = reverse(&HalfedgeMesh::from_soup(&backwards)?, &ReverseOptions::default())?;
+    /// let order = reversal.fine_order();
+    /// assert_eq!(order.faces[..6], [20, 21, 22, 23, 24, 25]);
+    /// let mut faces = order.faces.clone();
+    /// faces.sort_unstable();
+    /// assert!(faces.into_iter().eq(0..26));
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn fine_order(&self) -> &FineOrder {
         &self.order
     }
 
     /// The seed chosen for each component, with the reasons.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, ReverseOptions, reverse, subdivide};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let mut fine = subdivide(&cube, &DooOptions::default())?.to_mesh()?;
+    /// fine.positions_mut()[5].x += 0.25; // details are no longer zero: readings are compared
+    /// let reversal = reverse(&fine, &ReverseOptions::default())?;
+    /// let [choice] = reversal.choices() else { panic!("one component") };
+    /// assert_eq!((choice.component, choice.seed_face, choice.given), (0, 0, false));
+    /// // Face 0 as F_F (the true reading) beats the dual reading from F_V face 18.
+    /// assert!(choice.trials.iter().any(|t| (t.seed_face, t.class.as_str()) == (18, "F_V")));
+    /// assert!(choice.trials.iter().all(|t| t.outcome.iter().all(|&e| e >= choice.detail_energy)));
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn choices(&self) -> &[SeedChoice] {
         &self.choices
     }
 
     /// Traversal counters.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooOptions, ReverseOptions, reverse, subdivide};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::default())?.to_mesh()?;
+    /// let stats = reverse(&fine, &ReverseOptions::default())?.stats();
+    /// // One reading (zero details: accepted at once) visiting the 6 F_F faces and crossing
+    /// // their 24 edges; two candidate-graph edges per F_E quad.
+    /// assert_eq!((stats.interpretations, stats.visited_faces, stats.edges_crossed), (1, 6, 24));
+    /// assert_eq!(stats.candidate_edges, 2 * 12);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     pub fn stats(&self) -> ReverseStats {
         self.stats
     }
@@ -409,8 +606,8 @@ impl DooReversal {
 /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
 /// let fine = subdivide(&cube, &DooOptions::default())?.to_mesh()?;
 /// let reversal = reverse(&fine, &ReverseOptions::auto(FaceRule::DooSabin))?;
-/// // The cube comes back (same faces, vertices renumbered in order of appearance),
-/// // with all details zero.
+/// // The cube comes back (same faces; its vertices numbered as their F_V faces are
+/// // listed, which `subdivide` writes in the cube's vertex order), with all details zero.
 /// assert_eq!(reversal.coarse().face_count(), 6);
 /// assert!(reversal.details().iter().all(|d| d.length() < 1e-14));
 /// assert_eq!(reversal.coarse_positions().len() + reversal.details().len(), fine.vertex_count());

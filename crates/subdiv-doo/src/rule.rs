@@ -84,6 +84,15 @@ impl FaceRule {
     pub const CENTROID_HALF: FaceRule = FaceRule::Centroid { a: 0.5 };
 
     /// Short name: `doo-sabin`, `doo-simple` or `doo-centroid`.
+    ///
+    /// ```
+    /// use subdiv_doo::FaceRule;
+    /// assert_eq!(FaceRule::DooSabin.name(), "doo-sabin");
+    /// assert_eq!(FaceRule::Simple.name(), "doo-simple");
+    /// // The centroid parameter is not part of the name.
+    /// assert_eq!(FaceRule::Centroid { a: 0.3 }.name(), "doo-centroid");
+    /// assert_eq!(FaceRule::CENTROID_HALF.name(), "doo-centroid");
+    /// ```
     pub fn name(&self) -> &'static str {
         match self {
             FaceRule::DooSabin => "doo-sabin",
@@ -93,6 +102,21 @@ impl FaceRule {
     }
 
     /// Checks the rule's parameter.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::{DooError, DooOptions, FaceRule, subdivide};
+    ///
+    /// assert!(FaceRule::DooSabin.validate().is_ok());
+    /// assert!(FaceRule::CENTROID_HALF.validate().is_ok());
+    /// let error = FaceRule::Centroid { a: 1.0 }.validate().unwrap_err();
+    /// assert!(matches!(error, DooError::InvalidParameter { name: "a", .. }));
+    /// // `subdivide` checks the rule first and reports the same error.
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let options = DooOptions::new(FaceRule::Centroid { a: 1.0 }, 1);
+    /// assert_eq!(subdivide(&cube, &options).unwrap_err(), error);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     ///
     /// # Errors
     /// [`DooError::InvalidParameter`] if the centroid parameter is not in `(0, 1)`.
