@@ -126,6 +126,19 @@ impl Default for AnalysisOptions {
 
 impl AnalysisOptions {
     /// Eigenvalues and eigenvalue conditions only.
+    ///
+    /// ```
+    /// use subdiv_loop::analysis::{AnalysisOptions, Scheme, analyze};
+    ///
+    /// let options = AnalysisOptions::spectrum_only();
+    /// assert!(!options.characteristic_map);
+    /// let a = analyze(Scheme::Loop, 5, &options)?;
+    /// // Loop's subdominant eigenvalue 3/8 + cos(2 pi / 5) / 4, but no C1 claim without the map.
+    /// let lambda = 0.375 + 0.25 * (std::f64::consts::TAU / 5.0).cos();
+    /// assert!((a.subdominant - lambda).abs() < 1e-12);
+    /// assert!(a.conditions.all() && a.characteristic_map.is_none() && !a.c1);
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn spectrum_only() -> Self {
         Self { characteristic_map: false, ..Self::default() }
     }
@@ -173,6 +186,18 @@ pub struct EigenConditions {
 
 impl EigenConditions {
     /// All conditions hold.
+    ///
+    /// ```
+    /// use subdiv_loop::analysis::{AnalysisOptions, Scheme, analyze};
+    ///
+    /// // Ternary Loop's 1-ring spectrum is 1, lambda, lambda, lambda^2, ... (lambda = 1/3).
+    /// let a = analyze(Scheme::TernaryLoop, 3, &AnalysisOptions::spectrum_only())?;
+    /// assert!((a.subdominant - 1.0 / 3.0).abs() < 1e-12 && a.next_modulus < a.subdominant);
+    /// let c = a.conditions;
+    /// assert!(c.dominant_simple && c.subdominant_real_double && c.no_jordan_block && c.gap);
+    /// assert!(c.all());
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn all(&self) -> bool {
         self.dominant_simple && self.subdominant_real_double && self.no_jordan_block && self.gap
     }
@@ -199,6 +224,20 @@ pub struct CharacteristicMap {
 
 impl CharacteristicMap {
     /// Every triangle has the same orientation (the map is regular).
+    ///
+    /// ```
+    /// use subdiv_loop::analysis::{AnalysisOptions, Scheme, analyze};
+    ///
+    /// let a = analyze(Scheme::Loop, 5, &AnalysisOptions::default())?;
+    /// let map = a.characteristic_map.expect("checked when the eigenvalue conditions hold");
+    /// assert!(map.regular() && map.positive == map.triangles);
+    /// // Ternary Loop with lambda = 1/2 passes the eigenvalue tests, but its map folds over.
+    /// let options = AnalysisOptions { lambda: 0.5, ..AnalysisOptions::default() };
+    /// let a = analyze(Scheme::TernaryLoop, 5, &options)?;
+    /// let map = a.characteristic_map.expect("checked when the eigenvalue conditions hold");
+    /// assert!(a.conditions.all() && map.negative > 0 && !map.regular() && !a.c1);
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn regular(&self) -> bool {
         self.triangles > 0
             && (self.positive == self.triangles || self.negative == self.triangles)
@@ -206,6 +245,22 @@ impl CharacteristicMap {
     }
 
     /// Both boundary curves wind once (with the regularity, the map is injective).
+    ///
+    /// ```
+    /// use subdiv_loop::analysis::{AnalysisOptions, Scheme, analyze};
+    ///
+    /// let a = analyze(Scheme::Loop, 3, &AnalysisOptions::default())?;
+    /// let map = a.characteristic_map.expect("checked when the eigenvalue conditions hold");
+    /// assert!((map.inner_turns.abs() - 1.0).abs() < 1e-6);
+    /// assert!((map.outer_turns.abs() - 1.0).abs() < 1e-6);
+    /// assert!(map.injective() && map.regular() && a.c1);
+    /// // Winding once is not enough: this map winds once but folds (see `regular`).
+    /// let options = AnalysisOptions { lambda: 0.5, ..AnalysisOptions::default() };
+    /// let folded = analyze(Scheme::TernaryLoop, 5, &options)?;
+    /// let folded = folded.characteristic_map.expect("the eigenvalue conditions hold");
+    /// assert!(folded.injective() && !folded.regular());
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn injective(&self) -> bool {
         (self.inner_turns.abs() - 1.0).abs() < 1e-6 && (self.outer_turns.abs() - 1.0).abs() < 1e-6
     }

@@ -109,6 +109,20 @@ impl FineOrder {
     /// Checks that this is an order for a fine mesh with `vertices` vertices and `faces`
     /// faces: two permutations, rotations below 3.
     ///
+    /// ```
+    /// use subdiv_loop::detect::FineOrder;
+    ///
+    /// // One triangle split 1-to-4 (6 vertices, 4 faces), the inner face rotated by one corner.
+    /// let mut order = FineOrder {
+    ///     vertex_of_canonical: (0..6).collect(),
+    ///     face_of_canonical: vec![0, 3, 6, 10],
+    /// };
+    /// assert_eq!(order.check(6, 4), Ok(()));
+    /// assert!(order.check(7, 4).is_err()); // one vertex too many
+    /// order.face_of_canonical[3] = 6; // face 2 twice, face 3 never
+    /// assert!(order.check(6, 4).unwrap_err().contains("repeated"));
+    /// ```
+    ///
     /// # Errors
     /// A sentence saying what is wrong.
     pub fn check(&self, vertices: usize, faces: usize) -> Result<(), String> {
@@ -198,6 +212,19 @@ impl Coarsening {
 
 impl LoopConnectivity {
     /// Number of coarse vertices (= vertex points).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::detect::{DetectOptions, detect};
+    /// use subdiv_loop::forward::{LoopOptions, subdivide};
+    ///
+    /// let icosahedron = HalfedgeMesh::from_soup(&shapes::icosahedron())?;
+    /// let fine = subdivide(&icosahedron, 1, &LoopOptions::default())?.to_halfedge_mesh()?;
+    /// let structure = detect(&fine, &DetectOptions::default())?;
+    /// assert_eq!(structure.coarse_vertex_count(), 12);
+    /// assert_eq!((structure.coarse_edge_count(), structure.coarse_face_count()), (30, 20));
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn coarse_vertex_count(&self) -> usize {
         self.coarsening.coarse.vertex_count()
     }
@@ -208,22 +235,88 @@ impl LoopConnectivity {
     }
 
     /// Number of coarse faces (a quarter of the fine faces).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::detect::{DetectOptions, detect};
+    /// use subdiv_loop::forward::{LoopOptions, subdivide};
+    ///
+    /// // Two steps on a tetrahedron: detection undoes the second one.
+    /// let tetrahedron = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+    /// let fine = subdivide(&tetrahedron, 2, &LoopOptions::default())?.to_halfedge_mesh()?;
+    /// let structure = detect(&fine, &DetectOptions::default())?;
+    /// assert_eq!((fine.face_count(), structure.coarse_face_count()), (64, 16));
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn coarse_face_count(&self) -> usize {
         self.coarsening.coarse.face_count()
     }
 
     /// The fine vertex (vertex point) of each coarse vertex, in increasing order.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::detect::{DetectOptions, detect};
+    /// use subdiv_loop::forward::{LoopOptions, subdivide};
+    ///
+    /// // A subdivided icosahedron (42 vertices) with its vertex numbering reversed: the 12
+    /// // vertex points, first in the canonical order, are now the last ones.
+    /// let icosahedron = HalfedgeMesh::from_soup(&shapes::icosahedron())?;
+    /// let fine = subdivide(&icosahedron, 1, &LoopOptions::default())?;
+    /// let positions = fine.positions.iter().rev().copied().collect();
+    /// let faces = fine.triangles.iter().map(|t| t.map(|v| 41 - v));
+    /// let reversed = HalfedgeMesh::from_faces(positions, faces)?;
+    /// let structure = detect(&reversed, &DetectOptions::default())?;
+    /// assert_eq!(structure.vertex_points(), (30..42).collect::<Vec<u32>>());
+    /// let mut edge_points = structure.edge_points().to_vec();
+    /// edge_points.sort();
+    /// assert_eq!(edge_points, (0..30).collect::<Vec<u32>>());
+    /// assert!(structure.fine_order().is_some()); // not the canonical order
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn vertex_points(&self) -> &[u32] {
         &self.coarsening.vertex_point
     }
 
     /// The fine vertex (edge point) of each coarse edge, coarse edges numbered as
     /// `mesh_topo` numbers the edges of the coarse mesh.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::detect::{DetectOptions, detect};
+    /// use subdiv_loop::forward::{LoopOptions, subdivide};
+    ///
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let fine = subdivide(&octahedron, 1, &LoopOptions::default())?.to_halfedge_mesh()?;
+    /// let structure = detect(&fine, &DetectOptions::default())?;
+    /// // In the canonical order the edge point of coarse edge `e` is fine vertex 6 + e ...
+    /// assert_eq!(structure.edge_points(), (6..18).collect::<Vec<u32>>());
+    /// // ... and it is a fine neighbour of the vertex points of both ends of its edge.
+    /// let fine_vertex = |v: u32| fine.vertex(v as usize).expect("a fine vertex");
+    /// let ring: Vec<_> = fine.vertex_neighbors(fine_vertex(structure.edge_points()[0])).collect();
+    /// let [a, b] = structure.coarse_edge(0).expect("edge 0 exists");
+    /// let [pa, pb] = [a, b].map(|c| fine_vertex(structure.vertex_points()[c as usize]));
+    /// assert!(ring.contains(&pa) && ring.contains(&pb));
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn edge_points(&self) -> &[u32] {
         &self.coarsening.edge_point
     }
 
     /// The coarse faces as coarse vertex indices, counter-clockwise like the fine faces.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::detect::{DetectOptions, detect};
+    /// use subdiv_loop::forward::{LoopOptions, subdivide};
+    ///
+    /// let soup = shapes::icosahedron();
+    /// let fine = subdivide(&HalfedgeMesh::from_soup(&soup)?, 1, &LoopOptions::default())?;
+    /// let structure = detect(&fine.to_halfedge_mesh()?, &DetectOptions::default())?;
+    /// // A mesh made by Loop subdivision gives back the faces it was made from.
+    /// assert_eq!(structure.coarse_faces().as_flattened(), soup.indices);
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn coarse_faces(&self) -> Vec<[u32; 3]> {
         let t = &self.coarsening.coarse;
         (0..t.face_count() as u32).map(|f| [t.vertex(3 * f), t.vertex(3 * f + 1), t.vertex(3 * f + 2)]).collect()

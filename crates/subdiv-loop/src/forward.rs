@@ -122,11 +122,37 @@ pub struct LoopOptions {
 
 impl LoopOptions {
     /// Loop's original weights, boundary corners smoothed like other boundary vertices.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, subdivision_matrix};
+    ///
+    /// assert_eq!(LoopOptions::loop_weights(), LoopOptions::default());
+    /// // At valence 4 (octahedron) beta_4 = (5/8 - (3/8)^2) / 4 = 31/256, alpha_4 = 33/64.
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let s = subdivision_matrix(&octahedron, 1, &LoopOptions::loop_weights())?;
+    /// assert!((s.get(0, 0) - 33.0 / 64.0).abs() < 1e-15);
+    /// assert!((s.get(0, 2) - 31.0 / 256.0).abs() < 1e-15);
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn loop_weights() -> Self {
         Self::default()
     }
 
     /// Warren's weights (libigl's variant).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, VertexWeights, subdivision_matrix};
+    ///
+    /// assert_eq!(LoopOptions::warren_weights().weights, VertexWeights::Warren);
+    /// // At valence 4 (octahedron) beta_4 = 3 / (8 * 4) = 3/32, alpha_4 = 1 - 4 beta_4 = 5/8.
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let s = subdivision_matrix(&octahedron, 1, &LoopOptions::warren_weights())?;
+    /// assert!((s.get(0, 0) - 5.0 / 8.0).abs() < 1e-15);
+    /// assert!((s.get(0, 2) - 3.0 / 32.0).abs() < 1e-15);
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn warren_weights() -> Self {
         Self { weights: VertexWeights::Warren, ..Self::default() }
     }
@@ -144,17 +170,54 @@ pub struct LoopMesh {
 }
 
 impl LoopMesh {
-    /// Number of vertices.
+    /// Number of vertices: `V + E` of the coarse mesh after one step.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, subdivide};
+    ///
+    /// let icosahedron = HalfedgeMesh::from_soup(&shapes::icosahedron())?;
+    /// let fine = subdivide(&icosahedron, 1, &LoopOptions::default())?;
+    /// // One vertex point per vertex, one edge point per edge: 12 + 30.
+    /// assert_eq!(fine.vertex_count(), icosahedron.vertex_count() + icosahedron.edge_count());
+    /// assert_eq!(fine.vertex_count(), 42);
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn vertex_count(&self) -> usize {
         self.positions.len()
     }
 
-    /// Number of triangles.
+    /// Number of triangles: `4^levels` times the coarse face count.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, subdivide};
+    ///
+    /// let icosahedron = HalfedgeMesh::from_soup(&shapes::icosahedron())?;
+    /// let fine = subdivide(&icosahedron, 3, &LoopOptions::default())?;
+    /// assert_eq!(fine.face_count(), 20 * 4 * 4 * 4);
+    /// assert_eq!(fine.face_count(), fine.triangles.len());
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn face_count(&self) -> usize {
         self.triangles.len()
     }
 
     /// The mesh as a polygon soup (copies the arrays).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, subdivide};
+    ///
+    /// let tetrahedron = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+    /// let fine = subdivide(&tetrahedron, 1, &LoopOptions::default())?;
+    /// let soup = fine.to_soup();
+    /// assert_eq!((soup.vertex_count(), soup.face_count()), (10, 16));
+    /// assert!(soup.is_triangle_soup());
+    /// assert_eq!(soup.face(5), fine.triangles[5]);
+    /// assert_eq!(soup.positions, fine.positions);
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn to_soup(&self) -> PolygonSoup {
         PolygonSoup {
             positions: self.positions.clone(),
@@ -165,6 +228,20 @@ impl LoopMesh {
 
     /// The mesh as a polygon soup, moving the positions and reusing the triangles'
     /// memory for the indices (only the face offsets are new).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, subdivide};
+    ///
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let fine = subdivide(&octahedron, 2, &LoopOptions::default())?;
+    /// let copy = fine.to_soup();
+    /// let soup = fine.into_soup();
+    /// assert_eq!(soup, copy);
+    /// assert_eq!(soup.offsets[..4], [0, 3, 6, 9]);
+    /// assert_eq!(soup.offsets.len(), 8 * 16 + 1);
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn into_soup(self) -> PolygonSoup {
         PolygonSoup {
             offsets: triangle_offsets(self.triangles.len()),
@@ -175,6 +252,24 @@ impl LoopMesh {
 
     /// Builds the half-edge mesh (validating it; linear time plus a sort per vertex).
     /// Its edge numbering is the one the next step uses.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, subdivide};
+    ///
+    /// let options = LoopOptions::default();
+    /// let tetrahedron = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+    /// let once = subdivide(&tetrahedron, 1, &options)?.to_halfedge_mesh()?;
+    /// // E' = 2E + 3F: every edge is split in two, every face adds three inner edges.
+    /// assert_eq!(once.edge_count(), 2 * 6 + 3 * 4);
+    /// // Two steps are one step on the mesh of the first: same faces, same positions.
+    /// let twice = subdivide(&tetrahedron, 2, &options)?;
+    /// let stepwise = subdivide(&once, 1, &options)?;
+    /// assert_eq!(twice.triangles, stepwise.triangles);
+    /// let pairs = twice.positions.iter().zip(&stepwise.positions);
+    /// assert!(pairs.map(|(p, q)| p.distance(*q)).all(|d| d < 1e-15));
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     ///
     /// # Errors
     /// [`LoopError::Mesh`] if the arrays were edited into an invalid mesh.

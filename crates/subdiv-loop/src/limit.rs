@@ -101,6 +101,24 @@ pub fn limit_normals(mesh: &HalfedgeMesh, options: &LoopOptions) -> Result<Vec<D
 /// boundary vertices `[along, across]`, for interior ones `[t1, t2]` as in the
 /// [module docs](self). Zero tangents for isolated vertices.
 ///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes};
+/// use subdiv_loop::forward::LoopOptions;
+/// use subdiv_loop::limit::{limit_normals, limit_positions, limit_tangents};
+///
+/// let mesh = HalfedgeMesh::from_soup(&shapes::icosahedron())?;
+/// let options = LoopOptions::default();
+/// let frames = limit_tangents(&mesh, &options)?;
+/// let (positions, normals) = (limit_positions(&mesh, &options)?, limit_normals(&mesh, &options)?);
+/// for (((p, [t1, t2]), q), n) in frames.iter().zip(&positions).zip(&normals) {
+///     assert_eq!(p, q);
+///     assert_eq!(t1.cross(*t2).normalize(), *n);
+///     // By symmetry both tangents are orthogonal to the vertex direction.
+///     assert!(t1.dot(*p).abs() < 1e-12 && t2.dot(*p).abs() < 1e-12);
+/// }
+/// # Ok::<(), subdiv_loop::LoopError>(())
+/// ```
+///
 /// # Errors
 /// As [`limit_positions`].
 pub fn limit_tangents(mesh: &HalfedgeMesh, options: &LoopOptions) -> Result<Vec<(DVec3, [DVec3; 2])>, LoopError> {

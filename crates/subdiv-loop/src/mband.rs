@@ -106,6 +106,16 @@ pub struct BoxSplineMasks {
 
 impl BoxSplineMasks {
     /// The arity `M`.
+    ///
+    /// ```
+    /// use subdiv_loop::mband::box_spline_masks;
+    ///
+    /// let masks = box_spline_masks(4)?;
+    /// assert_eq!(masks.arity(), 4);
+    /// // M^2 fine points per coarse cell, weights over M^4, symbol of side 4 (M - 1) + 1.
+    /// assert_eq!((masks.denominator(), masks.symbol_size()), (256, 13));
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn arity(&self) -> u32 {
         self.arity
     }
@@ -140,6 +150,23 @@ impl BoxSplineMasks {
 
 /// The exact `M`-adic masks of the three-direction box spline N(2,2,2), for
 /// `2 <= M <= 64`.
+///
+/// ```
+/// use subdiv_loop::mband::box_spline_masks;
+///
+/// // Loop's regular edge rule at (1/2, 0): 3/8 on the ends, 1/8 on the opposite vertices.
+/// let loop_masks = box_spline_masks(2)?;
+/// let edge: Vec<_> = loop_masks.stencil(1, 0).iter().map(|w| (w.point, w.numerator)).collect();
+/// assert_eq!(edge, [((0, -1), 2), ((0, 0), 6), ((1, 0), 6), ((1, 1), 2)]);
+/// // Every stencil of every arity is affine: its numerators sum to M^4.
+/// for m in 2..=5 {
+///     let masks = box_spline_masks(m)?;
+///     let sum = |s, t| masks.stencil(s, t).iter().map(|w| w.numerator).sum::<u64>();
+///     assert!((0..m).all(|s| (0..m).all(|t| sum(s, t) == masks.denominator())));
+/// }
+/// assert!(box_spline_masks(1).is_err());
+/// # Ok::<(), subdiv_loop::LoopError>(())
+/// ```
 ///
 /// # Errors
 /// [`LoopError::InvalidParameter`] for `M` outside `2 ..= 64`.
@@ -318,6 +345,22 @@ pub fn ternary_subdivide(mesh: &HalfedgeMesh, levels: u32, options: &TernaryOpti
 
 /// Refines any per-vertex attribute with the ternary stencils.
 ///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes};
+/// use subdiv_loop::mband::{TernaryOptions, ternary_refine_attribute, ternary_subdivide};
+///
+/// let mesh = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+/// let options = TernaryOptions::default();
+/// // Positions refined as an attribute are the subdivided positions.
+/// let fine = ternary_subdivide(&mesh, 1, &options)?;
+/// assert_eq!(ternary_refine_attribute(&mesh, 1, &options, mesh.positions())?, fine.positions);
+/// // Constant data stays constant: V' = V + 2E + F = 6 + 24 + 8 values.
+/// let ones = ternary_refine_attribute(&mesh, 1, &options, &[1.0f64; 6])?;
+/// assert_eq!(ones.len(), 38);
+/// assert!(ones.iter().all(|v| (v - 1.0).abs() < 1e-15));
+/// # Ok::<(), subdiv_loop::LoopError>(())
+/// ```
+///
 /// # Errors
 /// [`LoopError::AttributeCount`] if `values` does not have one entry per vertex; the
 /// errors of [`ternary_subdivide`].
@@ -334,6 +377,22 @@ pub fn ternary_refine_attribute<T: Attribute>(
 }
 
 /// The sparse matrix of `levels` ternary steps (rows: fine vertices).
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes};
+/// use subdiv_loop::mband::{TERNARY_ALPHA, TernaryOptions, ternary_matrix, ternary_subdivide};
+///
+/// let mesh = HalfedgeMesh::from_soup(&shapes::icosahedron())?;
+/// let options = TernaryOptions::default();
+/// let s = ternary_matrix(&mesh, 1, &options)?;
+/// assert_eq!((s.rows(), s.columns()), (12 + 2 * 30 + 20, 12));
+/// assert!(s.row_sums().iter().all(|sum| (sum - 1.0).abs() < 1e-14));
+/// assert!((s.get(0, 0) - TERNARY_ALPHA).abs() < 1e-15); // the vertex weight 5/9
+/// let fine = ternary_subdivide(&mesh, 1, &options)?;
+/// let applied = s.apply(mesh.positions())?;
+/// assert!(applied.iter().zip(&fine.positions).all(|(a, b)| a.distance(*b) < 1e-14));
+/// # Ok::<(), subdiv_loop::LoopError>(())
+/// ```
 ///
 /// # Errors
 /// As [`ternary_subdivide`].

@@ -284,6 +284,21 @@ impl LoopPyramid {
     /// The pyramid of `levels` Loop subdivision steps of `base` (all details zero):
     /// reconstructing it is Loop subdivision in the canonical order.
     ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, subdivide};
+    /// use subdiv_loop::pyramid::LoopPyramid;
+    ///
+    /// let options = LoopOptions::default();
+    /// let pyramid = LoopPyramid::smooth(shapes::octahedron(), options, 2)?;
+    /// // One zero detail per edge of the mesh each level refines: 12, then 2 * 12 + 3 * 8.
+    /// assert_eq!(pyramid.levels[0].details.len(), 12);
+    /// assert_eq!(pyramid.levels[1].details.len(), 48);
+    /// let fine = subdivide(&HalfedgeMesh::from_soup(&shapes::octahedron())?, 2, &options)?;
+    /// assert_eq!(pyramid.reconstruct(2)?, fine.into_soup());
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
+    ///
     /// # Errors
     /// Any [`mesh_topo::MeshError`] of `base`, or [`LoopError::NotTriangle`].
     pub fn smooth(base: PolygonSoup, rules: LoopOptions, levels: usize) -> Result<Self, LoopError> {
@@ -297,11 +312,38 @@ impl LoopPyramid {
     }
 
     /// Number of refinement steps.
+    ///
+    /// ```
+    /// use mesh_topo::shapes;
+    /// use subdiv_loop::forward::LoopOptions;
+    /// use subdiv_loop::pyramid::LoopPyramid;
+    ///
+    /// let pyramid = LoopPyramid::smooth(shapes::tetrahedron(), LoopOptions::default(), 3)?;
+    /// assert_eq!(pyramid.level_count(), 3);
+    /// // Levels 0 (the base) to `level_count()` (the finest mesh) can be rebuilt.
+    /// assert_eq!(pyramid.reconstruct(pyramid.level_count())?.face_count(), 4 * 64);
+    /// assert!(pyramid.reconstruct(pyramid.level_count() + 1).is_err());
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn level_count(&self) -> usize {
         self.levels.len()
     }
 
     /// Total number of detail vectors.
+    ///
+    /// ```
+    /// use mesh_topo::shapes;
+    /// use subdiv_loop::forward::LoopOptions;
+    /// use subdiv_loop::pyramid::LoopPyramid;
+    ///
+    /// let pyramid = LoopPyramid::smooth(shapes::tetrahedron(), LoopOptions::default(), 3)?;
+    /// // One per edge of levels 0, 1 and 2: 6 + 24 + 96.
+    /// assert_eq!(pyramid.detail_count(), 126);
+    /// // Base vertices plus details: exactly as many vectors as the finest mesh has vertices.
+    /// let finest = pyramid.reconstruct(3)?;
+    /// assert_eq!(pyramid.base.vertex_count() + pyramid.detail_count(), finest.vertex_count());
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn detail_count(&self) -> usize {
         self.levels.iter().map(|l| l.details.len()).sum()
     }
@@ -309,6 +351,20 @@ impl LoopPyramid {
     /// Checks that the pyramid is consistent: a valid triangle base mesh and, at every
     /// level, one finite detail per edge and a valid order. Linear in the size of the
     /// finest mesh.
+    ///
+    /// ```
+    /// use mesh_topo::shapes;
+    /// use subdiv_loop::LoopError;
+    /// use subdiv_loop::forward::LoopOptions;
+    /// use subdiv_loop::pyramid::LoopPyramid;
+    ///
+    /// let mut pyramid = LoopPyramid::smooth(shapes::octahedron(), LoopOptions::default(), 2)?;
+    /// pyramid.validate()?;
+    /// // Level 2 refines a mesh of 48 edges: a 49th detail does not fit.
+    /// pyramid.levels[1].details.push(glam::DVec3::X);
+    /// assert!(matches!(pyramid.validate(), Err(LoopError::InvalidDetails { level: 2, .. })));
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     ///
     /// # Errors
     /// [`LoopError::Mesh`] or [`LoopError::NotTriangle`] for a bad base mesh,
@@ -324,6 +380,24 @@ impl LoopPyramid {
 
     /// Rebuilds the mesh of level `level` (0 = the base mesh, [`level_count`] = the
     /// decomposed mesh) in its original numbering.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use mesh_topo::shapes;
+    /// use subdiv_loop::forward::LoopOptions;
+    /// use subdiv_loop::pyramid::LoopPyramid;
+    ///
+    /// let mut pyramid = LoopPyramid::smooth(shapes::octahedron(), LoopOptions::default(), 1)?;
+    /// assert_eq!(pyramid.reconstruct(0)?, pyramid.base);
+    /// let smooth = pyramid.reconstruct(1)?;
+    /// // The detail of coarse edge 3 moves its edge point, fine vertex 6 + 3, by exactly that.
+    /// let d = DVec3::new(0.0, 0.0, 0.25);
+    /// pyramid.levels[0].details[3] = d;
+    /// let bumped = pyramid.reconstruct(1)?;
+    /// assert!(bumped.positions[9].distance(smooth.positions[9] + d) < 1e-15);
+    /// assert_eq!(bumped.indices, smooth.indices);
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     ///
     /// # Errors
     /// [`LoopError::InvalidParameter`] if `level > level_count()`, the errors of
@@ -378,6 +452,24 @@ impl LoopPyramid {
 
     /// A copy keeping only the largest `fraction` of the details (see the
     /// [module docs](self)); [`kept_count`]`(fraction, detail_count())` details are kept.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use mesh_topo::shapes;
+    /// use subdiv_loop::forward::LoopOptions;
+    /// use subdiv_loop::pyramid::LoopPyramid;
+    ///
+    /// let mut pyramid = LoopPyramid::smooth(shapes::octahedron(), LoopOptions::default(), 2)?;
+    /// pyramid.levels[0].details[2] = DVec3::new(0.0, 0.3, 0.0);
+    /// pyramid.levels[1].details[5] = DVec3::new(0.0, 0.0, 0.1);
+    /// // One of the 12 + 48 details is kept: the largest.
+    /// let kept = pyramid.compressed(1.0 / 60.0)?;
+    /// assert_eq!(kept.levels[0].details[2], DVec3::new(0.0, 0.3, 0.0));
+    /// assert_eq!(kept.levels[1].details[5], DVec3::ZERO);
+    /// assert_eq!(pyramid.compressed(1.0)?, pyramid);
+    /// assert!(pyramid.compressed(1.5).is_err());
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     ///
     /// # Errors
     /// [`LoopError::InvalidParameter`] unless `0 <= fraction <= 1`.
@@ -459,7 +551,8 @@ impl LoopPyramid {
             .collect()
     }
 
-    /// Encodes the pyramid as a `.mres` file (see the [module docs](self)).
+    /// Encodes the pyramid as a `.mres` file (see the [module docs](self)); see
+    /// [`from_bytes`](Self::from_bytes) for a round trip.
     ///
     /// # Errors
     /// [`LoopError::Binary`] if encoding fails.
@@ -499,6 +592,19 @@ impl LoopPyramid {
 
     /// The mesh of level `level` as a validated half-edge mesh.
     ///
+    /// ```
+    /// use mesh_topo::shapes;
+    /// use subdiv_loop::forward::LoopOptions;
+    /// use subdiv_loop::pyramid::LoopPyramid;
+    ///
+    /// let pyramid = LoopPyramid::smooth(shapes::icosahedron(), LoopOptions::default(), 1)?;
+    /// let mesh = pyramid.reconstruct_mesh(1)?;
+    /// // V' = V + E, E' = 2E + 3F, F' = 4F.
+    /// assert_eq!((mesh.vertex_count(), mesh.edge_count(), mesh.face_count()), (42, 120, 80));
+    /// assert_eq!(mesh.to_soup(), pyramid.reconstruct(1)?);
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
+    ///
     /// # Errors
     /// As [`reconstruct`](Self::reconstruct).
     pub fn reconstruct_mesh(&self, level: usize) -> Result<HalfedgeMesh, LoopError> {
@@ -517,6 +623,21 @@ pub struct PreparedLoopPyramid<'a> {
 impl PreparedLoopPyramid<'_> {
     /// [`LoopPyramid::reconstruct`] without building the base mesh again: the same
     /// result, bit for bit.
+    ///
+    /// ```
+    /// use mesh_topo::shapes;
+    /// use subdiv_loop::forward::LoopOptions;
+    /// use subdiv_loop::pyramid::LoopPyramid;
+    ///
+    /// let pyramid = LoopPyramid::smooth(shapes::tetrahedron(), LoopOptions::default(), 2)?;
+    /// let prepared = pyramid.prepare()?;
+    /// for (level, faces) in [4, 16, 64].into_iter().enumerate() {
+    ///     assert_eq!(prepared.reconstruct(level)?.face_count(), faces);
+    /// }
+    /// assert_eq!(prepared.reconstruct(2)?, pyramid.reconstruct(2)?);
+    /// assert!(prepared.reconstruct(3).is_err()); // only two levels
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     ///
     /// # Errors
     /// As [`LoopPyramid::reconstruct`], except the base mesh's errors, which
@@ -537,6 +658,17 @@ fn next_table(table: &CornerTable, order: Option<&FineOrder>) -> CornerTable {
 }
 
 /// Length of the diagonal of the axis-aligned bounding box (0 for no points).
+///
+/// ```
+/// use glam::DVec3;
+/// use subdiv_loop::pyramid::bounding_box_diagonal;
+///
+/// let corners = [DVec3::ZERO, DVec3::new(1.0, 2.0, 0.0), DVec3::new(0.5, 0.0, 2.0)];
+/// // The box [0, 1] x [0, 2] x [0, 2]: diagonal sqrt(1 + 4 + 4) = 3.
+/// assert_eq!(bounding_box_diagonal(&corners), 3.0);
+/// assert_eq!(bounding_box_diagonal(&[DVec3::ONE]), 0.0);
+/// assert_eq!(bounding_box_diagonal(&[]), 0.0);
+/// ```
 pub fn bounding_box_diagonal(points: &[DVec3]) -> f64 {
     let Some(first) = points.first() else { return 0.0 };
     let (lo, hi) = points.iter().fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));

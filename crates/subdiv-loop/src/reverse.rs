@@ -162,6 +162,27 @@ pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<Reversed
 /// and the fine numbering (`None`: canonical). With all details zero this is one step of
 /// Loop subdivision in the canonical order.
 ///
+/// ```
+/// use glam::DVec3;
+/// use mesh_topo::{HalfedgeMesh, shapes};
+/// use subdiv_loop::forward::{LoopOptions, subdivide};
+/// use subdiv_loop::reverse::{ReverseOptions, reconstruct, reverse};
+///
+/// let coarse = HalfedgeMesh::from_soup(&shapes::icosahedron())?;
+/// let options = LoopOptions::default();
+/// let smooth = subdivide(&coarse, 1, &options)?;
+/// let mut details = vec![DVec3::ZERO; coarse.edge_count()];
+/// assert_eq!(reconstruct(&coarse, &details, None, &options)?.to_soup(), smooth.to_soup());
+/// // A detail moves the edge point of its edge (fine vertex 12 + e) by exactly that much,
+/// // and reversal gives it back.
+/// details[7] = DVec3::new(0.1, -0.2, 0.3);
+/// let fine = reconstruct(&coarse, &details, None, &options)?;
+/// assert!(fine.positions()[12 + 7].distance(smooth.positions[12 + 7] + details[7]) < 1e-15);
+/// let level = reverse(&fine, &ReverseOptions::default())?;
+/// assert!(level.details.iter().zip(&details).all(|(a, b)| a.distance(*b) < 1e-14));
+/// # Ok::<(), subdiv_loop::LoopError>(())
+/// ```
+///
 /// # Errors
 /// [`LoopError::NotTriangle`] for a non-triangle face, [`LoopError::InvalidDetails`] if
 /// the number of details or the order does not fit the mesh or a detail is not finite,

@@ -92,11 +92,37 @@ impl SubdivisionMatrix {
     }
 
     /// Number of stored entries.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, subdivision_matrix};
+    ///
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let s = subdivision_matrix(&octahedron, 1, &LoopOptions::default())?;
+    /// // 6 vertex rows of 1 + 4 entries (valence 4), 12 edge rows of 4 entries.
+    /// assert_eq!(s.nnz(), 6 * 5 + 12 * 4);
+    /// assert_eq!(s.nnz(), (0..s.rows()).map(|i| s.row(i).0.len()).sum::<usize>());
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn nnz(&self) -> usize {
         self.values.len()
     }
 
     /// The columns and weights of row `i`.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, subdivision_matrix};
+    ///
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let s = subdivision_matrix(&octahedron, 1, &LoopOptions::default())?;
+    /// // Row 6 is the edge point of edge 0, (0, 2) in face (0, 2, 4), with the opposite
+    /// // vertices 4 and 5: 3/8 on each end, 1/8 on each opposite vertex.
+    /// let (columns, weights) = s.row(6);
+    /// assert_eq!(columns, [0, 2, 4, 5]);
+    /// assert_eq!(weights, [0.375, 0.375, 0.125, 0.125]);
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     ///
     /// # Panics
     /// If `i >= self.rows()`.
@@ -106,6 +132,19 @@ impl SubdivisionMatrix {
     }
 
     /// The entry at `(row, column)` (0 if not stored, or out of range).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, subdivision_matrix};
+    ///
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let s = subdivision_matrix(&octahedron, 1, &LoopOptions::default())?;
+    /// // Vertex 0 (+X) has valence 4: alpha_4 = 33/64 on itself, nothing on -X (vertex 1).
+    /// assert!((s.get(0, 0) - 33.0 / 64.0).abs() < 1e-15);
+    /// assert_eq!(s.get(0, 1), 0.0);
+    /// assert_eq!(s.get(s.rows(), 0), 0.0); // out of range
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn get(&self, row: usize, column: usize) -> f64 {
         if row >= self.rows() {
             return 0.0;
@@ -125,6 +164,21 @@ impl SubdivisionMatrix {
     }
 
     /// `S · values`: applies the stencils to per-vertex data.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, refine_attribute, subdivision_matrix};
+    ///
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let options = LoopOptions::default();
+    /// let s = subdivision_matrix(&mesh, 2, &options)?;
+    /// let heat: Vec<f64> = mesh.positions().iter().map(|p| p.x + 2.0 * p.z).collect();
+    /// let fine = s.apply(&heat)?;
+    /// let refined = refine_attribute(&mesh, 2, &options, &heat)?;
+    /// assert!(fine.iter().zip(&refined).all(|(a, b)| (a - b).abs() < 1e-15));
+    /// assert!(s.apply(&heat[1..]).is_err()); // one value per column
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     ///
     /// # Errors
     /// [`LoopError::AttributeCount`] if `values` does not have one entry per column.
@@ -158,6 +212,23 @@ impl SubdivisionMatrix {
 
     /// The product `self · other` (apply `other` first): the matrix of two steps.
     ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, subdivide, subdivision_matrix};
+    ///
+    /// let options = LoopOptions::default();
+    /// let coarse = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+    /// let fine = subdivide(&coarse, 1, &options)?.to_halfedge_mesh()?;
+    /// let first = subdivision_matrix(&coarse, 1, &options)?;
+    /// let second = subdivision_matrix(&fine, 1, &options)?;
+    /// let product = second.compose(&first)?;
+    /// assert_eq!((product.rows(), product.columns()), (34, 4));
+    /// let (a, b) = (product.to_dense(), subdivision_matrix(&coarse, 2, &options)?.to_dense());
+    /// assert!(a.iter().flatten().zip(b.iter().flatten()).all(|(x, y)| (x - y).abs() < 1e-15));
+    /// assert!(first.compose(&second).is_err()); // 4 columns, 34 rows
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
+    ///
     /// # Errors
     /// [`LoopError::InvalidParameter`] if `self.columns() != other.rows()`.
     pub fn compose(&self, other: &SubdivisionMatrix) -> Result<SubdivisionMatrix, LoopError> {
@@ -182,6 +253,19 @@ impl SubdivisionMatrix {
     }
 
     /// The dense matrix, row by row (for small matrices: analysis, tests).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, subdivision_matrix};
+    ///
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let s = subdivision_matrix(&octahedron, 1, &LoopOptions::default())?;
+    /// let dense = s.to_dense();
+    /// assert_eq!((dense.len(), dense[0].len()), (18, 6));
+    /// assert_eq!(dense[6], [0.375, 0.0, 0.375, 0.0, 0.125, 0.125]); // edge (0, 2)
+    /// assert_eq!(dense.iter().flatten().filter(|&&w| w != 0.0).count(), s.nnz());
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn to_dense(&self) -> Vec<Vec<f64>> {
         (0..self.rows())
             .map(|i| {
