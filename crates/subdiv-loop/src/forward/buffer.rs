@@ -18,7 +18,8 @@
 //! the subdivision itself at a few million triangles. [`advise_huge_pages`] asks Linux
 //! to back the buffer with transparent huge pages (2 MiB on x86-64): one fault per huge
 //! page, fewer TLB misses, and a cheaper release; [`map_pages`] then maps all of a large
-//! buffer's pages in one call instead of a fault per page as the writes reach them.
+//! buffer's pages up front (in one call, or in pieces on every thread of the pool)
+//! instead of a fault per page as the writes reach them.
 //! Both only change how the kernel backs the pages, never their contents; on other
 //! systems they do nothing.
 //!
@@ -242,15 +243,15 @@ fn map_pages(start: *const u8, bytes: usize) {
     // the unaligned ends go with the first and the last piece.
     let (begin, end) = (start as usize, start as usize + bytes);
     let pages = bytes / huge;
-    let per_piece = pages.div_ceil(4 * threads).max(1);
-    let cuts: Vec<usize> = (1..pages.div_ceil(per_piece))
-        .map(|k| (begin.next_multiple_of(huge) + k * per_piece * huge).min(end))
-        .collect();
-    let pieces: Vec<(usize, usize)> = std::iter::once(begin)
-        .chain(cuts.iter().copied())
-        .zip(cuts.iter().copied().chain(std::iter::once(end)))
-        .collect();
-    pieces.into_par_iter().for_each(|(from, to)| {
+    let pages_per_piece = pages.div_ceil(4 * threads);
+    let pieces = pages.div_ceil(pages_per_piece);
+    let cut = |k: usize| match k {
+        0 => begin,
+        _ if k == pieces => end,
+        _ => (begin.next_multiple_of(huge) + k * pages_per_piece * huge).min(end),
+    };
+    (0..pieces).into_par_iter().for_each(|k| {
+        let (from, to) = (cut(k), cut(k + 1));
         advise_whole_pages(from as *const u8, to - from, base_page_size(), libc::MADV_POPULATE_WRITE);
     });
 }
