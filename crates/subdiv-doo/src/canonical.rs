@@ -24,7 +24,7 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use glam::DVec3;
 
 use crate::DooError;
-use crate::corner::{CornerMesh, NONE, faces_of_corners, group_by_key, next_of_corners, prev_of_corners};
+use crate::corner::{CornerMesh, NONE, group_by_key, next_of_corners, prev_of_corners};
 use crate::reverse::{
     CornersByVertex, DooReversal, FE, FF, FineOrder, ReverseOptions, ReverseStats, SeedChoice, SeedTrial,
     check_coarse_manifold, corners_by_vertex, details_are_zero, dual_group_energy, ff_faces_share_an_edge,
@@ -104,8 +104,13 @@ pub(crate) fn reverse_canonical_arrays(arrays: &HalfedgeArrays<'_>, options: &Re
     if (!arrays.connected || cfg!(debug_assertions))
         && !unreached.iter().all(|&k| reaches_lower_in_two(&offsets, &twins, &coarse_next, k))
     {
-        let across = if layout { across_of_twins(&offsets, &twins) } else { across };
-        let one_component = connected(&offsets, &across);
+        // Laid out as `from_soup` lays out the canonical order, F_F face `k` is fine face
+        // `k` and holds the F_F side `2c` of its corner `c`.
+        let one_component = if layout {
+            connected(&offsets, &twins, |_, t| arrays.face_of[2 * t as usize])
+        } else {
+            connected(&offsets, &twins, |c, _| across[c])
+        };
         debug_assert!(one_component || !arrays.connected, "internal: a connected mesh has a connected coarse mesh");
         if !one_component {
             return None;
@@ -589,7 +594,15 @@ impl CornerHalfedges {
     /// one run of the cycle. Linear, without hashing or sorting: one pass over the faces
     /// and one over the vertices.
     pub(crate) fn of_canonical_soup(soup: &PolygonSoup) -> Option<Self> {
-        let (vertices, offsets, indices) = (soup.positions.len(), &soup.offsets[..], &soup.indices[..]);
+        Self::of_canonical_faces(&soup.positions, &soup.offsets, &soup.indices)
+    }
+
+    /// [`CornerHalfedges::of_canonical_soup`] of the soup of `positions`, with the faces
+    /// `offsets` and `indices`: also the corner arrays of a coarse mesh of a canonical
+    /// reversal (`offsets` and `corner_vertex`), which is in the canonical order again
+    /// when its fine mesh was refined more than once.
+    pub(crate) fn of_canonical_faces(positions: &[DVec3], offsets: &[u32], indices: &[u32]) -> Option<Self> {
+        let vertices = positions.len();
         let faces = offsets.len().checked_sub(1)?;
         // At most 4V half-edges (2V edges), all numbered below `NONE`.
         if vertices == 0 || vertices >= (NONE as usize) / 4 || faces >= NONE as usize {
@@ -601,7 +614,7 @@ impl CornerHalfedges {
         {
             return None;
         }
-        if !soup.positions.iter().all(|p| p.is_finite()) {
+        if !positions.iter().all(|p| p.is_finite()) {
             return None;
         }
         let v = vertices as u32;
@@ -1021,13 +1034,6 @@ fn reaches_lower_in_two(offsets: &[u32], twins: &[u32], next: &[u32], k: u32) ->
     })
 }
 
-/// The F_F face across each corner's edge ([`NONE`] on the boundary), from the F_F faces
-/// (`offsets`) and the coarse twins.
-fn across_of_twins(offsets: &[u32], twins: &[u32]) -> Vec<u32> {
-    let face_of_corner = faces_of_corners(offsets);
-    twins.iter().map(|&t| if t == NONE { NONE } else { face_of_corner[t as usize] }).collect()
-}
-
 /// Meshes of at least this many fine vertices are read on two threads when the pool has
 /// them (below it, the tasks cost more than they save).
 const PARALLEL_VERTICES: usize = 1 << 14;
@@ -1087,22 +1093,40 @@ fn expand_in_order(offsets: &[u32], maps: &FaceMaps, positions: &[DVec3], diagon
 }
 
 /// Whether the coarse faces (`offsets`) form one component across the coarse edges
-/// (`across[c]`: the face across corner `c`'s edge, or [`NONE`]).
-fn connected(offsets: &[u32], across: &[u32]) -> bool {
+/// (`twins`: each corner's coarse twin, or [`NONE`]; `face_across(c, t)`: the face of
+/// corner `c`'s twin `t`). A union-find over the faces that reads the corners in order,
+/// each edge once (from its smaller corner), with one scattered read per edge (the face
+/// across) into a forest of one entry per face; each joined pair of components is
+/// counted, so that one component remains when `faces - 1` pairs were joined. (Not a
+/// search from one face: its visits jump about the whole mesh.)
+fn connected(offsets: &[u32], twins: &[u32], face_across: impl Fn(usize, u32) -> u32) -> bool {
     let faces = offsets.len() - 1;
-    let mut seen = vec![false; faces];
-    let mut stack = vec![0u32];
-    seen[0] = true;
-    let mut count = 1;
-    while let Some(f) = stack.pop() {
-        for &g in &across[offsets[f as usize] as usize..offsets[f as usize + 1] as usize] {
-            if g != NONE && !std::mem::replace(&mut seen[g as usize], true) {
-                count += 1;
-                stack.push(g);
+    let mut parent: Vec<u32> = (0..faces as u32).collect();
+    // The root of `f`'s tree, halving the path on the way up.
+    let root = |parent: &mut [u32], mut f: u32| {
+        while parent[f as usize] != f {
+            let grandparent = parent[parent[f as usize] as usize];
+            parent[f as usize] = grandparent;
+            f = grandparent;
+        }
+        f
+    };
+    let mut joined = 0;
+    for (f, w) in offsets.windows(2).enumerate() {
+        let (start, end) = (w[0] as usize, w[1] as usize);
+        for (c, &t) in (start..).zip(&twins[start..end]) {
+            if t == NONE || (t as usize) < c {
+                continue;
+            }
+            let (a, b) = (root(&mut parent, f as u32), root(&mut parent, face_across(c, t)));
+            if a != b {
+                // The smaller root stays a root.
+                parent[a.max(b) as usize] = a.min(b);
+                joined += 1;
             }
         }
     }
-    count == faces
+    joined + 1 == faces
 }
 
 /// The F_V faces of a closed mesh with the layout of [`stream_ff_faces`], read in one
@@ -1824,7 +1848,12 @@ pub(crate) mod tests {
             assert_eq!(streamed.quads, walked.quads);
             assert_eq!(streamed.on_boundary, walked.on_boundary);
             assert_eq!(streamed.unreached, walked.unreached);
-            assert_eq!(across_of_twins(&streamed.offsets, &streamed.twins), walked.across);
+            // The face across each corner, as the connectivity check reads it on the
+            // layout: the face of the twin's F_F side.
+            let face_of = HalfedgeArrays::of(&fine).face_of;
+            let across: Vec<u32> =
+                streamed.twins.iter().map(|&t| if t == NONE { NONE } else { face_of[2 * t as usize] }).collect();
+            assert_eq!(across, walked.across);
         }
         // Off the layout: both give up on another order, the walk alone on nothing here.
         let soup = subdivide_soup(&shapes::cube(), &DooOptions::default()).unwrap().into_soup();
@@ -1931,6 +1960,54 @@ pub(crate) mod tests {
             let fast = reverse_canonical(&fine, &options).expect("canonical order");
             assert_eq!(fast, general(&fine, &options));
         }
+    }
+
+    #[test]
+    fn two_components_are_found_on_the_layout_and_by_the_walk() {
+        // Two cubes, the second's faces first in one face list, refined twice: the F_F
+        // faces of the first level are all above the faces they lie across from, so the
+        // union-find decides; the coarse mesh has two components.
+        let cube = shapes::cube();
+        let shift = cube.positions.len() as u32;
+        let mut faces: Vec<Vec<u32>> = cube.faces().map(|f| f.iter().map(|&v| v + shift).collect()).collect();
+        faces.extend(cube.faces().map(<[u32]>::to_vec));
+        let positions = [&cube.positions[..], &cube.positions[..]].concat();
+        let two = PolygonSoup::from_faces(positions, faces);
+        for (soup, components) in [(cube, 1), (two, 2)] {
+            let twice = subdivide_soup(&soup, &DooOptions::new(FaceRule::DooSabin, 2)).unwrap().to_mesh().unwrap();
+            let arrays = HalfedgeArrays::of(&twice);
+            let streamed = stream_ff_faces(&arrays).expect("the layout of a canonical mesh");
+            let walked = walk_ff_faces(&arrays).expect("a canonical mesh");
+            let next = next_of_corners(&streamed.offsets);
+            assert!(!streamed.unreached.iter().all(|&k| reaches_lower_in_two(
+                &streamed.offsets,
+                &streamed.twins,
+                &next,
+                k
+            )));
+            let on_layout = connected(&streamed.offsets, &streamed.twins, |_, t| arrays.face_of[2 * t as usize]);
+            let by_walk = connected(&walked.offsets, &walked.twins, |c, _| walked.across[c]);
+            assert_eq!((on_layout, by_walk), (components == 1, components == 1));
+            // The canonical path takes one component only; the general path reads both.
+            let options = ReverseOptions::with_seed(FaceRule::DooSabin, 0);
+            assert_eq!(reverse_canonical(&twice, &options).is_some(), components == 1);
+            let general = reverse_corner_mesh(
+                &CornerMesh::from_halfedge(&twice),
+                twice.positions(),
+                &ReverseOptions::auto(FaceRule::DooSabin),
+            )
+            .unwrap();
+            assert_eq!(general.choices().len(), components);
+        }
+        // Three triangles: face 2 joined to face 0, face 1 alone; then face 1 joined to
+        // face 0 as well.
+        let offsets = [0, 3, 6, 9];
+        let twins = [NONE, 8, NONE, NONE, NONE, NONE, NONE, NONE, 1];
+        let across = [NONE, 2, NONE, NONE, NONE, NONE, NONE, NONE, 0];
+        assert!(!connected(&offsets, &twins, |c, _| across[c]));
+        let twins = [NONE, 8, 3, 2, NONE, NONE, NONE, NONE, 1];
+        let across = [NONE, 2, 1, 0, NONE, NONE, NONE, NONE, 0];
+        assert!(connected(&offsets, &twins, |c, _| across[c]));
     }
 
     #[test]

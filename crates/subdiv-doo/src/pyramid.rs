@@ -578,7 +578,11 @@ fn canonical_step(
     if !canonical_enabled() || positions.len() != fine.vertex_count {
         return None;
     }
-    let halfedges = CornerHalfedges::of(fine)?;
+    // The coarse mesh of a canonical reversal of a mesh refined more than once is in the
+    // canonical order again: its half-edges by arithmetic, checked as a soup's are
+    // (those `of` finds, in fewer scattered reads); any other mesh as it is.
+    let halfedges = CornerHalfedges::of_canonical_faces(positions, &fine.offsets, &fine.corner_vertex)
+        .or_else(|| CornerHalfedges::of(fine))?;
     let arrays = halfedges.view(positions);
     let options = reverse_options(options, level);
     match options.boundary {
@@ -1074,6 +1078,53 @@ mod tests {
         for soup in [ringed.to_soup(), scrambled, shapes::cube(), shapes::torus(4, 4, shapes::CellKind::Quads).unwrap()]
         {
             assert!(CornerHalfedges::of_canonical_soup(&soup).is_none());
+        }
+    }
+
+    /// The coarse meshes of canonical reversals: by arithmetic when the fine mesh was
+    /// refined more than once (the same arrays as the corner walk), not for one step.
+    #[test]
+    fn halfedges_of_a_canonical_coarse_mesh_are_those_of_the_corner_walk() {
+        let holed = without(&shapes::torus(8, 6, shapes::CellKind::Triangles).unwrap(), &[3, 50]);
+        // (Whether every level of the mesh is closed.)
+        let cases = [
+            (shapes::cube(), FaceRule::DooSabin, true),
+            (shapes::tetrahedron(), FaceRule::Simple, true),
+            (shapes::torus(6, 4, shapes::CellKind::Mixed).unwrap(), FaceRule::DooSabin, true),
+            (shapes::grid(5, 4, shapes::CellKind::Mixed).unwrap(), FaceRule::Centroid { a: 0.5 }, false),
+            (holed, FaceRule::DooSabin, false),
+        ];
+        for (base, rule, closed) in cases {
+            for levels in 1..=3 {
+                let fine = refined_and_moved(&base, rule, levels);
+                let mut level_mesh = CornerMesh::from_halfedge(&fine);
+                let mut positions = fine.positions().to_vec();
+                let mut reversed = 0;
+                for level in 0..levels {
+                    let halfedges = CornerHalfedges::of(&level_mesh).unwrap();
+                    let arithmetic =
+                        CornerHalfedges::of_canonical_faces(&positions, &level_mesh.offsets, &level_mesh.corner_vertex);
+                    match arithmetic {
+                        Some(arithmetic) => assert_eq!(
+                            format!("{:?}", arithmetic.view(&positions)),
+                            format!("{:?}", halfedges.view(&positions)),
+                            "{rule:?} x{levels}, level {level}"
+                        ),
+                        // The base mesh is in no canonical order, nor is an open coarse
+                        // mesh (its boundary vertices are numbered last), whose level the
+                        // general path reverses.
+                        None => assert!(level == levels - 1 || !closed, "{rule:?} x{levels}, level {level}"),
+                    }
+                    let seeded = ReverseOptions::with_seed(rule, 0);
+                    let Some(reversal) = reverse_canonical_arrays(&halfedges.view(&positions), &seeded) else {
+                        break;
+                    };
+                    let (coarse, coarse_positions, ..) = reversal.into_parts();
+                    (level_mesh, positions) = (coarse, coarse_positions);
+                    reversed += 1;
+                }
+                assert!(reversed >= 1 && (!closed || reversed == levels), "{rule:?} x{levels}: {reversed}");
+            }
         }
     }
 
