@@ -65,6 +65,16 @@ pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -
 /// [`reverse_canonical`] on the half-edge arrays of a mesh: a whole mesh, or the part of
 /// one that [`HalfedgeArrays::prefix`] keeps.
 pub(crate) fn reverse_canonical_arrays(arrays: &HalfedgeArrays<'_>, options: &ReverseOptions) -> Option<DooReversal> {
+    reverse_canonical_with(arrays, None, options)
+}
+
+/// [`reverse_canonical_arrays`], with the F_F faces of `arrays` if they are known
+/// (`known_ff_faces`, as [`stream_ff_faces`] reads them).
+fn reverse_canonical_with(
+    arrays: &HalfedgeArrays<'_>,
+    known_ff_faces: Option<FfFaces>,
+    options: &ReverseOptions,
+) -> Option<DooReversal> {
     let seed = match options.seeds[..] {
         [seed] => Some(seed),
         [] => None,
@@ -78,9 +88,18 @@ pub(crate) fn reverse_canonical_arrays(arrays: &HalfedgeArrays<'_>, options: &Re
 
     // F_F faces and coarse twins: from the half-edge layout in streaming passes, or else
     // one walk around each F_F face.
-    let ff_faces = match stream_ff_faces(arrays) {
-        Some(ff_faces) => ff_faces,
-        None => walk_ff_faces(arrays)?,
+    let ff_faces = match known_ff_faces {
+        Some(ff_faces) => {
+            debug_assert!(
+                stream_ff_faces(arrays).as_ref() == Some(&ff_faces),
+                "internal: the F_F faces read with the arrays are those of the layout"
+            );
+            ff_faces
+        }
+        None => match stream_ff_faces(arrays) {
+            Some(ff_faces) => ff_faces,
+            None => walk_ff_faces(arrays)?,
+        },
     };
     let FfFaces { offsets, next: coarse_next, twins, across, quads, on_boundary, unreached, layout } = ff_faces;
     // Without a seed, the choice is made here only on meshes with F_E quads and F_V
@@ -486,6 +505,10 @@ pub(crate) struct CornerHalfedges {
     next: Vec<u32>,
     face_of: Vec<u32>,
     face_halfedge: Vec<u32>,
+    /// The F_F faces, when the arrays were computed from a face list in the canonical
+    /// order ([`CornerHalfedges::of_canonical_faces`] reads them on the way): what
+    /// [`stream_ff_faces`] would read from the arrays again.
+    ff_faces: Option<FfFaces>,
 }
 
 impl CornerHalfedges {
@@ -560,7 +583,7 @@ impl CornerHalfedges {
                 next[(halfedge_of[c] ^ 1) as usize] = halfedge_of[last] ^ 1;
             }
         }
-        Some(Self { to, next, face_of, face_halfedge })
+        Some(Self { to, next, face_of, face_halfedge, ff_faces: None })
     }
 
     /// The half-edges `HalfedgeMesh::from_soup` would build from `soup`, computed from
@@ -756,7 +779,42 @@ impl CornerHalfedges {
         for array in [&mut to, &mut next, &mut face_of] {
             array.truncate(halfedges);
         }
-        Some(Self { to, next, face_of, face_halfedge })
+        // The F_F faces as [`stream_ff_faces`] reads them from these arrays: face `k` is
+        // unreached when no corner of it has a twin on an earlier face (below its first
+        // corner; a boundary corner's `NONE` is not).
+        let quads = (halfedges - 2 * vertices) / 4;
+        let ff_offsets = offsets[..=ff].to_vec();
+        let unreached = (1..ff)
+            .filter(|&k| {
+                let (b, e) = (ff_offsets[k], ff_offsets[k + 1]);
+                twin[b as usize..e as usize].iter().all(|&t| t >= b)
+            })
+            .map(|k| k as u32)
+            .collect();
+        let ff_faces = FfFaces {
+            offsets: ff_offsets,
+            next: corner_next,
+            twins: twin,
+            across: Vec::new(),
+            quads: quads as u32,
+            on_boundary: 2 * quads < vertices,
+            unreached,
+            layout: true,
+        };
+        Some(Self { to, next, face_of, face_halfedge, ff_faces: Some(ff_faces) })
+    }
+
+    /// [`reverse_canonical_arrays`] on these arrays with the vertex `positions`, known to
+    /// be one connected component if `connected` (see [`HalfedgeArrays::known_connected`]),
+    /// with the F_F faces read when the arrays were computed, if they were.
+    pub(crate) fn reverse_canonical(
+        mut self,
+        positions: &[DVec3],
+        connected: bool,
+        options: &ReverseOptions,
+    ) -> Option<DooReversal> {
+        let ff_faces = self.ff_faces.take();
+        reverse_canonical_with(&self.view(positions).known_connected(connected), ff_faces, options)
     }
 
     /// The arrays with the vertex positions (`vertices` of them).
@@ -775,7 +833,8 @@ impl CornerHalfedges {
 }
 
 /// The F_F faces of a canonical mesh and its coarse twins (see [`reverse_canonical`]).
-struct FfFaces {
+#[derive(Debug, PartialEq)]
+pub(crate) struct FfFaces {
     /// The F_F faces' corner ranges: fine vertex `c` is coarse corner `c`.
     offsets: Vec<u32>,
     /// The next corner of each corner in its F_F face.
@@ -1960,6 +2019,35 @@ pub(crate) mod tests {
             let fast = reverse_canonical(&fine, &options).expect("canonical order");
             assert_eq!(fast, general(&fine, &options));
         }
+    }
+
+    #[test]
+    fn the_faces_read_with_a_soup_are_those_of_the_layout() {
+        let holed = without(&shapes::torus(8, 6, CellKind::Triangles).unwrap(), &[3, 50]);
+        let cases = [
+            (shapes::cube(), FaceRule::DooSabin, 1),
+            (shapes::cube(), FaceRule::Simple, 3),
+            (shapes::tetrahedron(), FaceRule::DooSabin, 2),
+            (shapes::torus(6, 4, CellKind::Mixed).unwrap(), FaceRule::DooSabin, 2),
+            (shapes::torus(5, 3, CellKind::Triangles).unwrap(), FaceRule::Centroid { a: 0.5 }, 1),
+            (shapes::grid(4, 3, CellKind::Quads).unwrap(), FaceRule::DooSabin, 1),
+            (shapes::grid(5, 4, CellKind::Mixed).unwrap(), FaceRule::Simple, 2),
+            (holed, FaceRule::DooSabin, 2),
+        ];
+        let mut unreached = 0;
+        for (coarse, rule, levels) in cases {
+            let soup = subdivide_soup(&coarse, &DooOptions::new(rule, levels)).unwrap().into_soup();
+            let mut halfedges = CornerHalfedges::of_canonical_soup(&soup).expect("a canonical soup");
+            let read = halfedges.ff_faces.take().expect("the F_F faces of a canonical soup");
+            let streamed = stream_ff_faces(&halfedges.view(&soup.positions)).expect("the layout of a canonical soup");
+            assert_eq!(read, streamed, "{rule:?} x{levels}");
+            unreached += read.unreached.len();
+        }
+        // (Faces with no twin on an earlier face are met: the comparison covers them.)
+        assert!(unreached > 0);
+        // The corner walk of any mesh reads none.
+        let mesh = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
+        assert!(CornerHalfedges::of(&CornerMesh::from_halfedge(&mesh)).unwrap().ff_faces.is_none());
     }
 
     #[test]

@@ -38,7 +38,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::DooError;
 use crate::boundary::{BoundaryRule, Ring, reverse_chaikin_arrays, reverse_chaikin_corner_mesh};
-use crate::canonical::{CornerHalfedges, reverse_canonical_arrays};
+use crate::canonical::CornerHalfedges;
 use crate::corner::{CornerMesh, NONE, doo_topology};
 use crate::forward::check_finite;
 use crate::reverse::{
@@ -304,15 +304,12 @@ pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<
         && options.boundary == BoundaryRule::Shrink
         && canonical_enabled()
         && let Some(halfedges) = CornerHalfedges::of_canonical_soup(soup)
-        && let Some(first) = reverse_canonical_arrays(&halfedges.view(&soup.positions), &reverse_options(options, 0))
-    {
-        // (Freed before the coarser levels are reversed: the fine mesh's arrays.)
-        drop(halfedges);
-        if let Some(decomposition) =
+        // (The fine mesh's arrays are freed once its level is reversed.)
+        && let Some(first) = halfedges.reverse_canonical(&soup.positions, false, &reverse_options(options, 0))
+        && let Some(decomposition) =
             decompose_from(Some(Step::from_canonical(first)), None, soup.face_count(), options)?
-        {
-            return Ok(decomposition);
-        }
+    {
+        return Ok(decomposition);
     }
     decompose(&HalfedgeMesh::from_soup(soup)?, options)
 }
@@ -583,16 +580,15 @@ fn canonical_step(
     // (those `of` finds, in fewer scattered reads); any other mesh as it is.
     let halfedges = CornerHalfedges::of_canonical_faces(positions, &fine.offsets, &fine.corner_vertex)
         .or_else(|| CornerHalfedges::of(fine))?;
-    let arrays = halfedges.view(positions);
     let options = reverse_options(options, level);
     match options.boundary {
         BoundaryRule::Shrink => {
-            let reversal = reverse_canonical_arrays(&arrays.known_connected(connected), &options)?;
+            let reversal = halfedges.reverse_canonical(positions, connected, &options)?;
             Some(Step::from_canonical(reversal))
         }
         // (Its coarse mesh is not claimed connected: the claim is made for the Shrink
         // rule, whose fine faces all lie on coarse faces, edges or interior vertices.)
-        BoundaryRule::Chaikin => reverse_chaikin_arrays(&arrays, &options).map(Step::from_reversal),
+        BoundaryRule::Chaikin => reverse_chaikin_arrays(&halfedges.view(positions), &options).map(Step::from_reversal),
     }
 }
 
@@ -979,6 +975,7 @@ fn kept_count(fraction: f64, total: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::canonical::reverse_canonical_arrays;
     use crate::canonical::tests::without;
     use crate::{DooOptions, subdivide};
     use mesh_topo::shapes;
