@@ -43,6 +43,10 @@
 //! read into a [`PolygonSoup`] plus a report of everything not kept, and built into a
 //! mesh separately, so a non-manifold file can still be inspected.
 //!
+//! # Large arrays
+//! [`memory`] holds the memory hints the crates of the workspace share for arrays of many
+//! megabytes: transparent huge pages and mapping pages up front (Linux; nothing elsewhere).
+//!
 //! # Errors
 //! Building reports bad input as a [`MeshError`] naming the face, vertex or edge at fault;
 //! [`HalfedgeMesh::validate`] reports broken internal invariants (bugs) as
@@ -57,6 +61,7 @@ mod topology;
 pub mod binary;
 pub mod graph;
 pub mod io;
+pub mod memory;
 pub mod shapes;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;

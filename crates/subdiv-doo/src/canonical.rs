@@ -19,6 +19,7 @@
 //! the general path gives, bit for bit. Any mismatch (a mesh in another order, a broken
 //! mesh) makes this path give up, and the general path runs and names the face at fault.
 
+use mesh_topo::memory::{advised_vec, filled_vec};
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 
 use glam::DVec3;
@@ -643,10 +644,11 @@ impl CornerHalfedges {
         let v = vertices as u32;
         // Room for the closed case; cut to `2V + 4 * quads` below.
         let room = 4 * vertices;
-        let (mut to, mut next, mut face_of) = (vec![0u32; room], vec![NONE; room], vec![NONE; room]);
+        // (Tens of megabytes for a large mesh, written at random: on huge pages.)
+        let (mut to, mut next, mut face_of) = (filled_vec(room, 0u32), filled_vec(room, NONE), filled_vec(room, NONE));
         let mut face_halfedge = Vec::with_capacity(faces);
         // F_F faces: vertex `c` is corner `c`; the next and previous corner of each.
-        let (mut corner_next, mut corner_prev) = (Vec::with_capacity(vertices), Vec::with_capacity(vertices));
+        let (mut corner_next, mut corner_prev) = (advised_vec(vertices), advised_vec(vertices));
         let mut f = 0;
         let mut start = 0u32;
         while start < v {
@@ -670,8 +672,8 @@ impl CornerHalfedges {
         // F_E quads, for as long as the faces are quads of that form: the twins, and the
         // quad side leaving each twinned vertex.
         let ff = f;
-        let mut twin = vec![NONE; vertices];
-        let mut side = vec![NONE; vertices];
+        let mut twin = filled_vec(vertices, NONE);
+        let mut side = filled_vec(vertices, NONE);
         let mut last_claim = None;
         while f < faces {
             let Ok(&[c, a, t, b]) = <&[u32; 4]>::try_from(&indices[offsets[f] as usize..offsets[f + 1] as usize])
@@ -1135,7 +1137,7 @@ pub(crate) fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark:
 /// scale of the automatic choice's zero test), on one thread from the slices while they
 /// are in cache; else zero.
 fn expand_in_order(offsets: &[u32], maps: &FaceMaps, positions: &[DVec3], diagonal: bool) -> (Vec<DVec3>, f64) {
-    let mut out = Vec::with_capacity(offsets.last().map_or(0, |&n| n as usize));
+    let mut out = advised_vec(offsets.last().map_or(0, |&n| n as usize));
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for w in offsets.windows(2) {
         let (b, e) = (w[0] as usize, w[1] as usize);

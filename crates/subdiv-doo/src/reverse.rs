@@ -124,6 +124,7 @@
 //! 26 faces and 24 vertices) but linearity holds since `|F_E| = |E_int| <= |NV| / 2`.
 
 use glam::DVec3;
+use mesh_topo::memory::advised_vec;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use serde::{Deserialize, Serialize};
 
@@ -2289,9 +2290,10 @@ pub(crate) fn means_and_details_in(
     let reserve = reserve.max(range.len());
     let (first, end) = (range.start, range.start + reserve);
     let detail_room = details_offset(by_vertex, end) - details_offset(by_vertex, first);
-    let mut means = Vec::with_capacity(reserve);
-    let mut details = Vec::with_capacity(detail_room);
-    let mut energies = Vec::with_capacity(reserve);
+    // (The outputs of a large mesh, written once: on huge pages.)
+    let mut means = advised_vec(reserve);
+    let mut details = advised_vec(detail_room);
+    let mut energies = advised_vec(reserve);
     let offsets = &by_vertex.offsets[range.start..=range.end];
     for (v, w) in (range.start..).zip(offsets.windows(2)) {
         let corners = &by_vertex.corners[w[0] as usize..w[1] as usize];

@@ -31,6 +31,7 @@
 use std::mem::MaybeUninit;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use mesh_topo::memory::{self, advise_huge_pages, huge_page_size};
 use rayon::prelude::*;
 
 /// An array of `len` elements under construction.
@@ -168,45 +169,6 @@ pub(crate) fn par_fill<T: Send>(len: usize, value: impl Fn(usize) -> T + Sync) -
     output.into_vec()
 }
 
-/// Asks the kernel to back the huge-page-aligned part of `bytes` bytes at `start` with
-/// transparent huge pages, before anything touches them. A buffer of a few huge pages
-/// gains already: at level 1 of a 75k-triangle mesh (3.6 MB arrays) the step is ~5% faster.
-///
-/// Works when the system's THP mode is `always` or `madvise`; when it is `never`, the
-/// kernel lacks THP, or the range holds no whole huge page, nothing changes. Errors are
-/// ignored: the hint is an optimisation only.
-#[cfg(target_os = "linux")]
-fn advise_huge_pages(start: *const u8, bytes: usize) {
-    let huge = huge_page_size();
-    // Below one huge page none fits: the buffer keeps the allocator's defaults.
-    if bytes >= huge {
-        advise_whole_pages(start, bytes, huge, libc::MADV_HUGEPAGE);
-    }
-}
-
-/// `madvise(advice)` on the whole pages of `page` bytes (a power of two, a multiple of
-/// the base page) inside the buffer of `bytes` bytes at `start`. Only for the two
-/// advices below, which never change what memory holds; errors are ignored.
-#[cfg(target_os = "linux")]
-fn advise_whole_pages(start: *const u8, bytes: usize, page: usize, advice: libc::c_int) {
-    debug_assert!(advice == libc::MADV_HUGEPAGE || advice == libc::MADV_POPULATE_WRITE);
-    let begin = (start as usize).next_multiple_of(page);
-    let end = (start as usize + bytes) / page * page;
-    if end > begin {
-        // SAFETY: `[begin, end)` lies inside one live allocation that we own and is
-        // page-aligned at both ends. MADV_HUGEPAGE only sets how the kernel backs these
-        // pages (the VMA flag for huge pages). MADV_POPULATE_WRITE faults the pages in as
-        // a write would, without writing: a page already mapped keeps its contents, a new
-        // one is a zero-filled anonymous page of memory that holds no value yet (the slots
-        // of a fresh `Output` are uninitialised). Neither moves, frees or reads memory, so
-        // no Rust object, ours or another, can observe them.
-        unsafe { libc::madvise(begin as *mut libc::c_void, end - begin, advice) };
-    }
-}
-
-#[cfg(not(target_os = "linux"))]
-fn advise_huge_pages(_start: *const u8, _bytes: usize) {}
-
 /// Buffers of at least this many bytes are mapped by [`map_pages`] when allocated.
 const MAP_PAGES_MIN_BYTES: usize = 1 << 18;
 
@@ -228,7 +190,6 @@ const MAP_PAGES_MIN_BYTES: usize = 1 << 18;
 ///
 /// Only whole pages inside the buffer are mapped. Errors (an older kernel) are ignored:
 /// the writes then fault the pages in as before.
-#[cfg(target_os = "linux")]
 fn map_pages(start: *const u8, bytes: usize) {
     if bytes < MAP_PAGES_MIN_BYTES {
         return;
@@ -236,7 +197,7 @@ fn map_pages(start: *const u8, bytes: usize) {
     let threads = rayon::current_num_threads();
     let huge = huge_page_size();
     if threads == 1 || bytes < PARALLEL_MAP_MIN_HUGE_PAGES * huge {
-        advise_whole_pages(start, bytes, base_page_size(), libc::MADV_POPULATE_WRITE);
+        memory::map_pages(start, bytes);
         return;
     }
     // Pieces of whole huge pages, a few per thread so that a slow one is made up for;
@@ -252,27 +213,13 @@ fn map_pages(start: *const u8, bytes: usize) {
     };
     (0..pieces).into_par_iter().for_each(|k| {
         let (from, to) = (cut(k), cut(k + 1));
-        advise_whole_pages(from as *const u8, to - from, base_page_size(), libc::MADV_POPULATE_WRITE);
+        memory::map_pages(from as *const u8, to - from);
     });
 }
 
 /// Buffers of at least this many huge pages are mapped by all threads of the pool (a
 /// smaller one is mapped faster than the threads can be woken).
 const PARALLEL_MAP_MIN_HUGE_PAGES: usize = 4;
-
-#[cfg(not(target_os = "linux"))]
-fn map_pages(_start: *const u8, _bytes: usize) {}
-
-/// The base page size of the system (4 KiB unless it says otherwise).
-#[cfg(target_os = "linux")]
-fn base_page_size() -> usize {
-    static SIZE: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
-    *SIZE.get_or_init(|| {
-        // SAFETY: `sysconf` reads a constant of the system and has no other effect.
-        let size = unsafe { libc::sysconf(libc::_SC_PAGESIZE) };
-        usize::try_from(size).ok().filter(|size| size.is_power_of_two()).unwrap_or(4096)
-    })
-}
 
 /// True if an array of `bytes` read at random is worth prefetching: larger than a
 /// core's share of the caches. Below that the reads hit the cache anyway, and the
@@ -299,19 +246,6 @@ pub(crate) fn prefetch<T>(slice: &[T], i: usize) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = (slice, i);
-}
-
-/// The transparent huge page size (2 MiB on x86-64, read once from sysfs).
-#[cfg(target_os = "linux")]
-fn huge_page_size() -> usize {
-    static SIZE: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
-    *SIZE.get_or_init(|| {
-        std::fs::read_to_string("/sys/kernel/mm/transparent_hugepage/hpage_pmd_size")
-            .ok()
-            .and_then(|s| s.trim().parse().ok())
-            .filter(|&size: &usize| size.is_power_of_two() && size >= 4096)
-            .unwrap_or(2 << 20)
-    })
 }
 
 #[cfg(test)]
