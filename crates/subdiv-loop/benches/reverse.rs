@@ -51,7 +51,9 @@
 //! # Meshes that read several ways
 //! Group `regular_torus` times one level of a refined torus (every valence regular, so
 //! it has several readings and the automatic choice compares them) with and without a
-//! seed vertex, in the canonical order and renumbered, beside the forward step to it.
+//! seed vertex, in the canonical order and renumbered, beside the forward step to it;
+//! the `exact_` rows time the torus refined exactly (zero details), whose first exact
+//! reading settles the choice.
 //!
 //! Ratios are only meaningful within one run (the machine is shared): group `levelL`
 //! times the operations of size `L` back to back; compare `levelL/decompose` with
@@ -186,12 +188,25 @@ fn regular(c: &mut Criterion) {
     let fine = HalfedgeMesh::from_soup(&smooth.reconstruct(2).expect("refined torus")).expect("valid");
     let below = HalfedgeMesh::from_soup(&smooth.reconstruct(1).expect("refined torus")).expect("valid");
     let renumbered = HalfedgeMesh::from_soup(&scramble(fine.to_soup(), 7, 0.0)).expect("valid");
+    // The same torus refined exactly (all details zero): its first reading is settled.
+    let exact = HalfedgeMesh::from_soup(
+        &LoopPyramid::smooth(shapes::torus(128, 64, CellKind::Triangles).expect("torus"), rules, 2)
+            .and_then(|pyramid| pyramid.reconstruct(2))
+            .expect("refined torus"),
+    )
+    .expect("valid");
+    let exact_renumbered = HalfedgeMesh::from_soup(&scramble(exact.to_soup(), 7, 0.0)).expect("valid");
     let automatic = DecomposeOptions { rules, levels: Levels::Count(1), seed_vertices: Vec::new() };
     let seeded = DecomposeOptions { seed_vertices: vec![0], ..automatic.clone() };
     let mut group = c.benchmark_group("regular_torus");
     group.throughput(Throughput::Elements(fine.vertex_count() as u64));
     group.bench_function("forward_one_level", |b| b.iter(|| subdivide(black_box(&below), 1, &rules).expect("valid")));
-    for (name, mesh) in [("canonical", &fine), ("renumbered", &renumbered)] {
+    for (name, mesh) in [
+        ("canonical", &fine),
+        ("renumbered", &renumbered),
+        ("exact_canonical", &exact),
+        ("exact_renumbered", &exact_renumbered),
+    ] {
         group.bench_function(format!("decompose_{name}"), |b| {
             b.iter(|| decompose(black_box(mesh), &automatic).expect("Loop mesh"))
         });
