@@ -53,7 +53,7 @@ use serde::{Deserialize, Serialize};
 use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 
 use crate::LoopError;
-use crate::corner_table::{CornerTable, NONE, VertexStar, next, prev};
+use crate::corner_table::{Corner, CornerTable, MeshCorners, NONE, VertexStar, next, prev};
 use crate::detect::{
     CanonicalGroups, Coarsening, FineOrder, PairedEdge, Renumbering, canonical_groups, coarse_face_is_valid,
     detect_mesh, detect_table, renumber_to_canonical, reverse_canonical_mesh, reverse_canonical_table,
@@ -441,7 +441,7 @@ pub(crate) struct LevelParts {
     pub(crate) several_readings: bool,
 }
 
-/// One level reversed ([`reverse_level_from`]); a component that reads several ways and
+/// One level reversed (`reverse_level_from`); a component that reads several ways and
 /// has no seed gets the reading with the smallest details.
 ///
 /// Detection labels each component from a vertex of irregular valence (or a seed), which
@@ -474,10 +474,10 @@ pub(crate) struct LevelParts {
 /// the first irregular vertex. So a canonical mesh of a torus beside a mesh with
 /// irregular vertices keeps the torus's canonical reading, the one it was made with.
 /// (Bench group `regular_torus`, one thread, a refined torus of 131 072 vertices: the
-/// forward step 2.3 ms; seeded 5.2 ms in the canonical order and 12.5 ms renumbered;
-/// automatic 60 ms and 89 ms: three more readings, each through the search. The torus
-/// refined exactly, automatic: 5.9 ms in the canonical order against 5.6 ms seeded, and
-/// 46 ms renumbered against 15.6 ms, in a later run where the moved torus took 66 / 110 ms.)
+/// forward step 2.5 ms; seeded 5.5 ms in the canonical order and 15.3 ms renumbered;
+/// automatic 53 ms and 79 ms: three more readings, each through the search, which reads
+/// the fine corners once for all of them. The torus refined exactly, automatic: 5.9 ms
+/// in the canonical order, 47 ms renumbered: its first exact reading settles it.)
 pub(crate) fn reverse_level(
     fine: FineLevel<'_>,
     positions: &[DVec3],
@@ -529,6 +529,21 @@ pub(crate) fn reverse_level(
     // The vertex points of the readings found so far: the labeling from a vertex point is
     // forced, so a candidate that is one gives a reading already compared (on a torus,
     // the six neighbours of a vertex point give three readings, two each).
+    // Each reading from its seeds, as `reverse_level_from` would give it, with the fine
+    // corners read once. Its fused canonical attempt is left out, as it cannot succeed:
+    // when it gave the first reading, every seed tried here is an edge point of it (its
+    // vertex points are passed over, see `covered`), which the canonical order does not
+    // allow; else it failed with the caller's seeds alone, and more seeds only add to
+    // what it requires. The positions were checked by the first attempt.
+    let fine_corners = FineCorners::of(fine);
+    let reverse_reading = |all: &[u32]| {
+        #[cfg(test)]
+        MORE_READINGS.set(MORE_READINGS.get() + 1);
+        match reverse_searched(fine, &fine_corners, positions, all, rules) {
+            Some(level) => Ok(level),
+            None => reverse_level_general(fine, positions, all, rules),
+        }
+    };
     let mut covered = vec![false; readings.component.len()];
     if let Some(first) = &first {
         readings.cover(first, &mut covered);
@@ -548,11 +563,9 @@ pub(crate) fn reverse_level(
             continue;
         }
         let with_seeds = |extra: &[(usize, u32)]| {
-            #[cfg(test)]
-            MORE_READINGS.set(MORE_READINGS.get() + 1);
             let mut all = seeds.to_vec();
             all.extend(extra.iter().map(|&(_, s)| s));
-            reverse_level_from(fine, positions, &all, rules)
+            reverse_reading(&all)
         };
         // Whether a component's best changed.
         let mut take = |level: &LevelParts, tried: &[(usize, u32)], covered: &mut [bool]| {
@@ -602,11 +615,9 @@ pub(crate) fn reverse_level(
         // A component without a valid reading: the general detection names the error.
         None if chosen.iter().any(Option::is_none) => reverse_level_general(fine, positions, seeds, rules),
         _ => {
-            #[cfg(test)]
-            MORE_READINGS.set(MORE_READINGS.get() + 1);
             let mut all = seeds.to_vec();
             all.extend(chosen.into_iter().flatten());
-            reverse_level_from(fine, positions, &all, rules)
+            reverse_reading(&all)
         }
     }
 }
@@ -699,36 +710,52 @@ struct RegularReadings {
 }
 
 impl RegularReadings {
+    /// Components by a union-find over the faces' corners and regularity by a count of
+    /// outgoing corners, two sequential passes (a search circulating every vertex's star
+    /// twice cost as much as a reversal): component labels in order of lowest vertex, an
+    /// isolated vertex a component of its own that is not regular.
     fn of(table: &CornerTable, seeds: &[u32]) -> Self {
         let vertices = table.vertex_count();
+        let (corner_vertex, twin) = (table.corner_vertices(), table.twins());
+        // Outgoing corners (the valence inside, one fewer on the boundary), and whether
+        // the vertex is on the boundary.
+        let mut outgoing = vec![0u8; vertices];
+        let mut boundary = vec![false; vertices];
+        let mut parent: Vec<u32> = (0..vertices as u32).collect();
+        let root = |parent: &mut [u32], mut v: u32| {
+            while parent[v as usize] != v {
+                // Path halving.
+                parent[v as usize] = parent[parent[v as usize] as usize];
+                v = parent[v as usize];
+            }
+            v
+        };
+        for (f, face) in corner_vertex.chunks_exact(3).enumerate() {
+            for (k, &v) in face.iter().enumerate() {
+                outgoing[v as usize] = outgoing[v as usize].saturating_add(1);
+                boundary[v as usize] |= twin[3 * f + k] == NONE;
+            }
+            for pair in face.windows(2) {
+                let (a, b) = (root(&mut parent, pair[0]), root(&mut parent, pair[1]));
+                // The lower root stays the root (any choice works; this one is cheap).
+                let (low, high) = (a.min(b), a.max(b));
+                parent[high as usize] = low;
+            }
+        }
         let mut component = vec![NONE; vertices];
         let mut regular = Vec::new();
         let mut lowest = Vec::new();
-        let mut stack = Vec::new();
-        let is_regular = |v: u32| match table.visit_star(v, |_, _| {}) {
-            VertexStar::Interior { valence } => valence == 6,
-            VertexStar::Boundary { valence, .. } => valence == 4,
-            VertexStar::Isolated => false,
-        };
         for v in 0..vertices as u32 {
-            if component[v as usize] != NONE {
-                continue;
+            let r = root(&mut parent, v);
+            if component[r as usize] == NONE {
+                component[r as usize] = regular.len() as u32;
+                regular.push(true);
+                lowest.push(v);
             }
-            let label = regular.len() as u32;
+            let label = component[r as usize];
             component[v as usize] = label;
-            lowest.push(v);
-            let mut all_regular = true;
-            stack.push(v);
-            while let Some(u) = stack.pop() {
-                all_regular &= is_regular(u);
-                table.visit_star(u, |_, w| {
-                    if component[w as usize] == NONE {
-                        component[w as usize] = label;
-                        stack.push(w);
-                    }
-                });
-            }
-            regular.push(all_regular);
+            let expected = if boundary[v as usize] { 3 } else { 6 };
+            regular[label as usize] &= outgoing[v as usize] == expected;
         }
         for &seed in seeds {
             if let Some(&c) = component.get(seed as usize) {
@@ -794,6 +821,9 @@ impl RegularReadings {
 /// its canonical renumbering ([`reverse_renumbered`]) when that is found and valid, else
 /// by detection and [`reverse_positions`] (which also names every error). A user's mesh
 /// with a non-finite position is an error before any connectivity error, on every path.
+/// (What [`reverse_level`] computes for each reading it compares, without the fused
+/// attempt; the tests check that they agree.)
+#[cfg(test)]
 fn reverse_level_from(
     fine: FineLevel<'_>,
     positions: &[DVec3],
@@ -806,7 +836,7 @@ fn reverse_level_from(
     }
 }
 
-/// The fast paths of [`reverse_level_from`]: `None` when neither applies (the general
+/// The fast paths of `reverse_level_from`: `None` when neither applies (the general
 /// detection then decides); an error only for a non-finite position of a user's mesh.
 fn reverse_level_fast(
     fine: FineLevel<'_>,
@@ -842,21 +872,55 @@ fn reverse_level_fast(
     // A mesh in any other order: renumbered into the canonical order of the coarse mesh
     // that detection finds, and reversed by the canonical path, which also checks it.
     // Anything else (errors included) goes through the general detection.
-    let renumbering = match fine {
-        FineLevel::Mesh(mesh) => CornerTable::mesh_corners(mesh).and_then(|corners| {
-            let corner_at = |v| corners.corner_at(mesh, v);
-            renumber_to_canonical(mesh.vertex_count(), &corners.corners, corner_at, seeds)
-        }),
-        FineLevel::Table(table) => {
-            let starts = table.vertex_corners();
-            let corner_at = |v: u32| starts[v as usize];
-            renumber_to_canonical(table.vertex_count(), &table.corners(), corner_at, seeds)
-        }
-    };
-    Ok(renumbering.and_then(|renumbering| reverse_renumbered(renumbering, positions, rules)))
+    Ok(reverse_searched(fine, &FineCorners::of(fine), positions, seeds, rules))
 }
 
-/// The general path of [`reverse_level_from`]: detection (which also names every error)
+/// The corners of a fine level as the search of [`renumber_to_canonical`] reads them,
+/// read once when several searches run on one level (the readings [`reverse_level`]
+/// compares).
+enum FineCorners {
+    /// Those of a half-edge mesh (`None`: a face is not a triangle).
+    Mesh(Option<MeshCorners>),
+    /// Those of a corner table.
+    Table(Vec<Corner>),
+}
+
+impl FineCorners {
+    fn of(fine: FineLevel<'_>) -> Self {
+        match fine {
+            FineLevel::Mesh(mesh) => Self::Mesh(CornerTable::mesh_corners(mesh)),
+            FineLevel::Table(table) => Self::Table(table.corners()),
+        }
+    }
+}
+
+/// The renumbering path of [`reverse_level_fast`]: a mesh in any order renumbered into
+/// the canonical order of the coarse mesh that detection finds from `seeds` and the
+/// irregular vertices, and reversed by the canonical path, which also checks it; `None`
+/// if that fails. `corners`: [`FineCorners::of`] `fine`.
+fn reverse_searched(
+    fine: FineLevel<'_>,
+    corners: &FineCorners,
+    positions: &[DVec3],
+    seeds: &[u32],
+    rules: &LoopOptions,
+) -> Option<LevelParts> {
+    let renumbering = match (fine, corners) {
+        (FineLevel::Mesh(mesh), FineCorners::Mesh(Some(corners))) => {
+            let corner_at = |v| corners.corner_at(mesh, v);
+            renumber_to_canonical(mesh.vertex_count(), &corners.corners, corner_at, seeds)
+        }
+        (FineLevel::Table(table), FineCorners::Table(corners)) => {
+            let starts = table.vertex_corners();
+            let corner_at = |v: u32| starts[v as usize];
+            renumber_to_canonical(table.vertex_count(), corners, corner_at, seeds)
+        }
+        _ => None,
+    };
+    renumbering.and_then(|renumbering| reverse_renumbered(renumbering, positions, rules))
+}
+
+/// The general path of `reverse_level_from`: detection (which also names every error)
 /// and [`reverse_positions`].
 fn reverse_level_general(
     fine: FineLevel<'_>,
@@ -1522,6 +1586,126 @@ mod tests {
         assert_eq!(zero_energy(2.0, 10), 4e-24 * 10.0);
         assert_eq!(zero_energy(0.0, 1), 0.0, "all vertices at one point: exactly zero only");
         assert!(zero_energy(f64::NAN, 1).is_nan(), "(not finite: never settled)");
+    }
+
+    /// The components and candidates as a search from every vertex found them (the
+    /// earlier formulation): the union-find and the corner counts must agree with it.
+    fn readings_by_search(table: &CornerTable, seeds: &[u32]) -> RegularReadings {
+        let vertices = table.vertex_count();
+        let mut component = vec![NONE; vertices];
+        let mut regular = Vec::new();
+        let mut lowest = Vec::new();
+        let mut stack = Vec::new();
+        let is_regular = |v: u32| match table.visit_star(v, |_, _| {}) {
+            VertexStar::Interior { valence } => valence == 6,
+            VertexStar::Boundary { valence, .. } => valence == 4,
+            VertexStar::Isolated => false,
+        };
+        for v in 0..vertices as u32 {
+            if component[v as usize] != NONE {
+                continue;
+            }
+            let label = regular.len() as u32;
+            component[v as usize] = label;
+            lowest.push(v);
+            let mut all_regular = true;
+            stack.push(v);
+            while let Some(u) = stack.pop() {
+                all_regular &= is_regular(u);
+                table.visit_star(u, |_, w| {
+                    if component[w as usize] == NONE {
+                        component[w as usize] = label;
+                        stack.push(w);
+                    }
+                });
+            }
+            regular.push(all_regular);
+        }
+        for &seed in seeds {
+            if let Some(&c) = component.get(seed as usize) {
+                regular[c as usize] = false;
+            }
+        }
+        let candidates = (0..regular.len())
+            .filter(|&c| regular[c])
+            .map(|c| {
+                let v = lowest[c];
+                (c, std::iter::once(v).chain(table.outgoing(v).map(|corner| table.vertex(next(corner)))).collect())
+            })
+            .collect();
+        RegularReadings { component, candidates }
+    }
+
+    #[test]
+    fn components_and_candidates_are_those_of_a_search() {
+        let rules = LoopOptions::default();
+        let torus = loop_step(&mesh(&shapes::torus(6, 4, CellKind::Triangles).unwrap()), &rules);
+        let octahedron = loop_step(&mesh(&shapes::octahedron()), &rules);
+        let cylinder = loop_step(&mesh(&crate::reference::cylinder(6, 3)), &rules);
+        let mut with_isolated = side_by_side(&torus, &cylinder);
+        with_isolated.positions.insert(0, DVec3::ZERO);
+        for index in &mut with_isolated.indices {
+            *index += 1;
+        }
+        with_isolated.positions.push(DVec3::ONE);
+        let soups = [
+            torus.clone(),
+            octahedron.clone(),
+            cylinder.clone(),
+            side_by_side(&torus, &octahedron),
+            side_by_side(&octahedron, &scramble(&torus, 3)),
+            side_by_side(&scramble(&cylinder, 1), &scramble(&torus, 2)),
+            with_isolated,
+        ];
+        // Regular components without a seed, per soup.
+        let expected = [1, 0, 1, 1, 1, 2, 2];
+        for (i, soup) in soups.iter().enumerate() {
+            let table = CornerTable::from_soup(soup).unwrap();
+            assert_eq!(RegularReadings::of(&table, &[]).candidates.len(), expected[i], "soup {i}");
+            for seeds in [vec![], vec![0], vec![soup.positions.len() as u32 - 1]] {
+                let (fast, searched) = (RegularReadings::of(&table, &seeds), readings_by_search(&table, &seeds));
+                assert_eq!(fast.component, searched.component, "soup {i}, seeds {seeds:?}");
+                assert_eq!(fast.candidates, searched.candidates, "soup {i}, seeds {seeds:?}");
+            }
+        }
+    }
+
+    /// The readings `reverse_level` compares are reversed without the fused attempt and
+    /// with the fine corners read once: each equals `reverse_level_from` with the same
+    /// seeds, on a torus in the canonical order and renumbered, moved or not, as a mesh
+    /// and as a corner table, for every candidate seed.
+    #[test]
+    fn readings_with_read_corners_are_those_of_every_path() {
+        let rules = LoopOptions::default();
+        let fine = loop_step(&mesh(&shapes::torus(6, 4, CellKind::Triangles).unwrap()), &rules);
+        let same = |a: &LevelParts, b: &LevelParts| {
+            a.coarse == b.coarse && a.order == b.order && a.positions == b.positions && a.details == b.details
+        };
+        let mut compared = 0;
+        for soup in [fine.clone(), perturb(&fine, 0.1, 3), scramble(&fine, 4), scramble(&perturb(&fine, 0.1, 5), 6)] {
+            let half_edges = mesh(&soup);
+            let table = CornerTable::from_mesh(&half_edges).unwrap();
+            let readings = RegularReadings::of(&table, &[]);
+            let [(_, candidates)] = &readings.candidates[..] else { panic!("one regular component") };
+            for level in [FineLevel::Mesh(&half_edges), FineLevel::Table(&table)] {
+                let corners = FineCorners::of(level);
+                for &seed in candidates {
+                    let searched = match reverse_searched(level, &corners, &soup.positions, &[seed], &rules) {
+                        Some(parts) => Ok(parts),
+                        None => reverse_level_general(level, &soup.positions, &[seed], &rules),
+                    };
+                    match (searched, reverse_level_from(level, &soup.positions, &[seed], &rules)) {
+                        (Ok(a), Ok(b)) => {
+                            assert!(same(&a, &b), "seed {seed}");
+                            compared += 1;
+                        }
+                        (Err(a), Err(b)) => assert_eq!(a, b),
+                        (a, b) => panic!("seed {seed}: {:?} vs {:?}", a.is_ok(), b.is_ok()),
+                    }
+                }
+            }
+        }
+        assert!(compared >= 16, "{compared} readings compared");
     }
 
     /// `b` beside `a` in one soup: `b`'s vertices after `a`'s, moved away along x.
