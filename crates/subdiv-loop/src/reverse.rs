@@ -757,6 +757,19 @@ impl RegularReadings {
             let expected = if boundary[v as usize] { 3 } else { 6 };
             regular[label as usize] &= outgoing[v as usize] == expected;
         }
+        Self::of_components(table, component, regular, &lowest, seeds)
+    }
+
+    /// The readings of the components `component` (of every vertex) given, per
+    /// component, whether its valences are all `regular` and its `lowest` vertex: the
+    /// regular components without a seed, each with its candidate seeds.
+    fn of_components(
+        table: &CornerTable,
+        component: Vec<u32>,
+        mut regular: Vec<bool>,
+        lowest: &[u32],
+        seeds: &[u32],
+    ) -> Self {
         for &seed in seeds {
             if let Some(&c) = component.get(seed as usize) {
                 regular[c as usize] = false;
@@ -1621,19 +1634,7 @@ mod tests {
             }
             regular.push(all_regular);
         }
-        for &seed in seeds {
-            if let Some(&c) = component.get(seed as usize) {
-                regular[c as usize] = false;
-            }
-        }
-        let candidates = (0..regular.len())
-            .filter(|&c| regular[c])
-            .map(|c| {
-                let v = lowest[c];
-                (c, std::iter::once(v).chain(table.outgoing(v).map(|corner| table.vertex(next(corner)))).collect())
-            })
-            .collect();
-        RegularReadings { component, candidates }
+        RegularReadings::of_components(table, component, regular, &lowest, seeds)
     }
 
     #[test]
