@@ -37,8 +37,8 @@ use crate::corner_table::CornerTable;
 use crate::detect::{FineOrder, reverse_canonical_soup};
 use crate::forward::LoopOptions;
 use crate::reverse::{
-    CanonicalLevel, FineLevel, LevelParts, all_valences_regular, check_level, non_finite_bits, reconstruct_levels,
-    reverse_level,
+    CanonicalLevel, FineLevel, LevelParts, all_valences_regular, canonical_reading_is_settled, check_level,
+    non_finite_bits, reconstruct_levels, reverse_level,
 };
 
 /// Magic number of a Loop pyramid file.
@@ -198,8 +198,9 @@ pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<
         && level.coarse.fans_are_single()
         // A mesh of regular valences only (so is the fine mesh, then: edge points are
         // regular, vertex points keep their valence) reads several ways, which
-        // `decompose` compares (see `reverse_level`).
-        && !all_valences_regular(&level.coarse)
+        // `decompose` compares (see `reverse_level`), unless this reading is settled.
+        && (!all_valences_regular(&level.coarse)
+            || canonical_reading_is_settled(&level.coarse, &level.details, &soup.positions))
     {
         let CanonicalLevel { coarse, positions, details, .. } = level;
         return decompose_below(
@@ -1018,6 +1019,15 @@ mod tests {
                 }
                 let read = reverse_canonical_soup(&fine, &[], &rules).expect(name);
                 assert!(read.finite && read.coarse.fans_are_single(), "{name}");
+                if *name == "torus" {
+                    // Regular valences: the exact refinement's reading is settled, so its
+                    // soup is read from its faces too (compared above); the moved one's is
+                    // not (it goes through the mesh, whose readings are compared).
+                    let exact = reverse_canonical_soup(&refined, &[], &rules).expect(name);
+                    assert!(all_valences_regular(&exact.coarse));
+                    assert!(canonical_reading_is_settled(&exact.coarse, &exact.details, &refined.positions));
+                    assert!(!canonical_reading_is_settled(&read.coarse, &read.details, &fine.positions));
+                }
                 canonical += 1;
             }
         }

@@ -494,12 +494,9 @@ pub(crate) fn reverse_level(
     // without the fine connectivity that comparing readings needs.
     if let Some(level) = &first
         && level.order.is_none()
-        && spans_one_component(&level.coarse)
+        && canonical_reading_is_settled(&level.coarse, &level.details, positions)
     {
-        let energy = level.details.iter().map(|d| d.length_squared()).sum();
-        if settled(energy, zero_energy(crate::pyramid::bounding_box_diagonal(positions), positions.len())) {
-            return Ok(first.expect("checked above"));
-        }
+        return Ok(first.expect("checked above"));
     }
     let built;
     let table = match fine {
@@ -652,6 +649,17 @@ pub(crate) fn all_valences_regular(table: &CornerTable) -> bool {
             VertexStar::Boundary { valence, .. } => valence == 4,
             VertexStar::Isolated => true,
         })
+}
+
+/// Whether the canonical reading of a fine mesh (`positions`), of coarse mesh `coarse`
+/// and details `details`, settles the choice among its readings without comparing them
+/// (see [`reverse_level`]): its details are zero at the scale of the mesh
+/// ([`zero_energy`]), and the coarse mesh is one component with no isolated vertex, so
+/// that the mesh's scale is its component's.
+pub(crate) fn canonical_reading_is_settled(coarse: &CornerTable, details: &[DVec3], positions: &[DVec3]) -> bool {
+    let energy = details.iter().map(|d| d.length_squared()).sum();
+    settled(energy, zero_energy(crate::pyramid::bounding_box_diagonal(positions), positions.len()))
+        && spans_one_component(coarse)
 }
 
 /// Whether `table` has a face and is one connected component, every vertex on a face (so
