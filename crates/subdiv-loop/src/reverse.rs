@@ -474,10 +474,10 @@ pub(crate) struct LevelParts {
 /// the first irregular vertex. So a canonical mesh of a torus beside a mesh with
 /// irregular vertices keeps the torus's canonical reading, the one it was made with.
 /// (Bench group `regular_torus`, one thread, a refined torus of 131 072 vertices: the
-/// forward step 2.5 ms; seeded 5.5 ms in the canonical order and 15.3 ms renumbered;
-/// automatic 53 ms and 79 ms: three more readings, each through the search, which reads
-/// the fine corners once for all of them. The torus refined exactly, automatic: 5.9 ms
-/// in the canonical order, 47 ms renumbered: its first exact reading settles it.)
+/// forward step 2.5 ms; seeded 5.4 ms in the canonical order and 15.2 ms renumbered;
+/// automatic 52 ms and 76 ms: three more readings, each through the search, which reads
+/// the fine corners once for all of them. The torus refined exactly, automatic: 6.0 ms
+/// in the canonical order, 37 ms renumbered: its first exact reading settles it.)
 pub(crate) fn reverse_level(
     fine: FineLevel<'_>,
     positions: &[DVec3],
