@@ -924,15 +924,8 @@ fn detect_general(fine: &CornerTable, seeds: &[u32]) -> Result<Coarsening, LoopE
     let nv = fine.vertex_count();
     let mut labeler = Labeler::new(fine);
     // Valence class of every vertex, in one pass over the corners.
-    let mut outgoing = vec![0u8; nv];
-    let mut boundary = vec![false; nv];
-    for c in 0..fine.corner_count() as u32 {
-        let v = fine.vertex(c) as usize;
-        outgoing[v] = outgoing[v].saturating_add(1);
-        boundary[v] |= fine.twin(c) == NONE;
-    }
-    // Outgoing corners: the valence inside, one fewer on the boundary.
-    let irregular = |v: usize| outgoing[v] != if boundary[v] { 3 } else { 6 };
+    let valences = Valences::of(nv, (0..fine.corner_count() as u32).map(|c| (fine.vertex(c), fine.twin(c))));
+    let irregular = |v: usize| valences.is_irregular(v as u32);
 
     for &seed in seeds {
         match labeler.label[seed as usize] {
@@ -1226,8 +1219,37 @@ struct Irregularity<'a> {
     corners: &'a [Corner],
     vertex_count: usize,
     asked: usize,
-    /// Corners of every vertex (saturated), and whether it is on the boundary.
-    counts: Option<(Vec<u8>, Vec<bool>)>,
+    /// Counted once circulation stops.
+    counts: Option<Valences>,
+}
+
+/// The valence class of every vertex of a triangle mesh, from one sequential pass over
+/// its corners: the number of corners at each vertex (its valence inside, one fewer on
+/// the boundary) and whether one of its outgoing half-edges is on the boundary.
+pub(crate) struct Valences {
+    /// Corners of every vertex (saturated).
+    outgoing: Vec<u8>,
+    boundary: Vec<bool>,
+}
+
+impl Valences {
+    /// From the `(vertex, twin)` of every corner (a corner's twin is that of the
+    /// half-edge leaving its vertex, [`NONE`] on the boundary).
+    pub(crate) fn of(vertex_count: usize, corners: impl Iterator<Item = (u32, u32)>) -> Self {
+        let mut outgoing = vec![0u8; vertex_count];
+        let mut boundary = vec![false; vertex_count];
+        for (v, twin) in corners {
+            outgoing[v as usize] = outgoing[v as usize].saturating_add(1);
+            boundary[v as usize] |= twin == NONE;
+        }
+        Self { outgoing, boundary }
+    }
+
+    /// True if vertex `v` cannot be an edge point: its valence is not 6 inside or 4 on
+    /// the boundary (an isolated vertex included).
+    pub(crate) fn is_irregular(&self, v: u32) -> bool {
+        self.outgoing[v as usize] != if self.boundary[v as usize] { 3 } else { 6 }
+    }
 }
 
 impl<'a> Irregularity<'a> {
@@ -1242,18 +1264,10 @@ impl<'a> Irregularity<'a> {
             return is_irregular(self.corners, c);
         }
         let (corners, vertex_count) = (self.corners, self.vertex_count);
-        let (outgoing, boundary) = self.counts.get_or_insert_with(|| {
-            let mut outgoing = vec![0u8; vertex_count];
-            let mut boundary = vec![false; vertex_count];
-            for corner in corners {
-                let u = corner.vertex as usize;
-                outgoing[u] = outgoing[u].saturating_add(1);
-                // The corner's twin is that of the half-edge leaving its vertex.
-                boundary[u] |= corner.twin == NONE;
-            }
-            (outgoing, boundary)
+        let counts = self.counts.get_or_insert_with(|| {
+            Valences::of(vertex_count, corners.iter().map(|corner| (corner.vertex, corner.twin)))
         });
-        outgoing[v as usize] != if boundary[v as usize] { 3 } else { 6 }
+        counts.is_irregular(v)
     }
 }
 

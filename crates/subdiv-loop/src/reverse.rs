@@ -55,7 +55,7 @@ use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 use crate::LoopError;
 use crate::corner_table::{Corner, CornerTable, MeshCorners, NONE, VertexStar, next, prev};
 use crate::detect::{
-    CanonicalGroups, Coarsening, FineOrder, PairedEdge, Renumbering, canonical_groups, coarse_face_is_valid,
+    CanonicalGroups, Coarsening, FineOrder, PairedEdge, Renumbering, Valences, canonical_groups, coarse_face_is_valid,
     detect_mesh, detect_table, renumber_to_canonical, reverse_canonical_mesh, reverse_canonical_table,
 };
 use crate::forward::buffer::{Output, Slots, prefetch, worth_prefetching};
@@ -665,22 +665,9 @@ pub(crate) fn canonical_reading_is_settled(coarse: &CornerTable, details: &[DVec
 /// Whether `table` has a face and is one connected component, every vertex on a face (so
 /// that the canonical refinement of it is one component too, with no isolated vertex).
 fn spans_one_component(table: &CornerTable) -> bool {
-    if table.face_count() == 0 {
-        return false;
-    }
-    let mut reached = vec![false; table.vertex_count()];
-    let first = table.vertex(0);
-    reached[first as usize] = true;
-    let (mut stack, mut count) = (vec![first], 1);
-    while let Some(v) = stack.pop() {
-        table.visit_star(v, |_, u| {
-            if !std::mem::replace(&mut reached[u as usize], true) {
-                count += 1;
-                stack.push(u);
-            }
-        });
-    }
-    count == table.vertex_count()
+    table.face_count() > 0
+        && (0..table.vertex_count() as u32).all(|v| !table.is_isolated(v))
+        && every_component_has_one(table, &[table.vertex(0)])
 }
 
 /// Whether every connected component of `table` with a face holds one of `vertices`
@@ -725,10 +712,7 @@ impl RegularReadings {
     fn of(table: &CornerTable, seeds: &[u32]) -> Self {
         let vertices = table.vertex_count();
         let (corner_vertex, twin) = (table.corner_vertices(), table.twins());
-        // Outgoing corners (the valence inside, one fewer on the boundary), and whether
-        // the vertex is on the boundary.
-        let mut outgoing = vec![0u8; vertices];
-        let mut boundary = vec![false; vertices];
+        let valences = Valences::of(vertices, corner_vertex.iter().copied().zip(twin.iter().copied()));
         let mut parent: Vec<u32> = (0..vertices as u32).collect();
         let root = |parent: &mut [u32], mut v: u32| {
             while parent[v as usize] != v {
@@ -738,11 +722,7 @@ impl RegularReadings {
             }
             v
         };
-        for (f, face) in corner_vertex.chunks_exact(3).enumerate() {
-            for (k, &v) in face.iter().enumerate() {
-                outgoing[v as usize] = outgoing[v as usize].saturating_add(1);
-                boundary[v as usize] |= twin[3 * f + k] == NONE;
-            }
+        for face in corner_vertex.chunks_exact(3) {
             for pair in face.windows(2) {
                 let (a, b) = (root(&mut parent, pair[0]), root(&mut parent, pair[1]));
                 // The lower root stays the root (any choice works; this one is cheap).
@@ -762,8 +742,7 @@ impl RegularReadings {
             }
             let label = component[r as usize];
             component[v as usize] = label;
-            let expected = if boundary[v as usize] { 3 } else { 6 };
-            regular[label as usize] &= outgoing[v as usize] == expected;
+            regular[label as usize] &= !valences.is_irregular(v);
         }
         Self::of_components(table, component, regular, &lowest, seeds)
     }
