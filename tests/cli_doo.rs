@@ -73,7 +73,10 @@ fn subdivide_three_times_move_a_vertex_decompose_and_reconstruct_exactly() {
     // the base mesh; both keep the connectivity.
     ok(&["reconstruct", "moved.mres", "all.obj", "--keep", "1"], d);
     assert!(relative_error(&read(&d.join("all.obj")), &moved) < 1e-12);
-    ok(&["reconstruct", "moved.mres", "none.obj", "--keep", "0"], d);
+    let printed = ok(&["reconstruct", "moved.mres", "none.obj", "--keep", "0"], d);
+    // As many 3-vectors as the fine mesh has vertices: base vertices plus details.
+    let total = moved.vertex_count() - 8;
+    assert!(printed.contains(&format!("keeping the largest 0 of {total} details: --keep 0.0)")), "{printed}");
     let none = read(&d.join("none.obj"));
     let error = relative_error(&none, &moved);
     assert!(error > 1e-4 && error < 0.1, "{error}");
@@ -324,6 +327,8 @@ fn bad_input_gives_one_error_line_and_no_output() {
     fails(&["reconstruct", "moved.mres", "out.obj", "--level", "3"], d, "out.obj");
     fails(&["reconstruct", "moved.mres", "out.obj", "--keep", "1.5"], d, "out.obj");
     fails(&["reconstruct", "moved.mres", "out.obj", "--keep", "NaN"], d, "out.obj");
+    let line = fails(&["reconstruct", "moved.mres", "out.obj", "--keep", "-0.1"], d, "out.obj");
+    assert!(line.contains("--keep -0.1: give a fraction between 0 and 1"), "{line}");
 }
 
 #[test]

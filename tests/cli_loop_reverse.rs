@@ -67,11 +67,20 @@ fn decompose_then_reconstruct_reproduces_the_input() {
     assert_eq!(base.vertex_count(), 6);
     assert!(relative_error(&base, &reversed) < 1e-12);
 
-    // Compression: fewer details, a bounded error.
-    ok(&["reconstruct", "fine.mres", "approx.obj", "--keep", "0.1"], dir.path());
+    // Compression: fewer details, a bounded error; the line says how many were kept.
+    let printed = ok(&["reconstruct", "fine.mres", "approx.obj", "--keep", "0.1"], dir.path());
     let approx = read(&dir.path().join("approx.obj"));
     let error = relative_error(&approx, &input);
     assert!(error > 0.0 && error < 0.05, "{error}");
+    // The octahedron refined three times: 6 base vertices, 258 fine ones.
+    let total = input.vertex_count() - 6;
+    let kept = ((0.1 * total as f64).round()) as usize;
+    assert!(printed.contains(&format!("keeping the largest {kept} of {total} details: --keep 0.1)")), "{printed}");
+    let printed = ok(&["reconstruct", "fine.mres", "none.obj", "--keep", "1e-300"], dir.path());
+    assert!(printed.contains(&format!("keeping the largest 0 of {total} details: --keep 1e-300)")), "{printed}");
+    // A negative fraction reaches the fraction check (not taken for an option).
+    let line = fails(&["reconstruct", "fine.mres", "out.obj", "--keep", "-0.1"], dir.path(), "out.obj");
+    assert!(line.contains("--keep") && line.contains("-0.1"), "{line}");
 }
 
 /// Largest detail left when every detail is dropped (`--keep 0`), relative to the input:

@@ -233,7 +233,10 @@ pub fn reconstruct(args: &ReconstructArgs, bytes: &[u8]) -> CliResult {
         pyramid.boundary,
         soup.vertex_count(),
         soup.face_count(),
-        args.keep.map_or(String::new(), |f| format!(" (keeping the largest {f} of the details)"))
+        args.keep.map_or(String::new(), |fraction| {
+            let total = pyramid.detail_count();
+            super::kept_details(subdiv_doo::pyramid::kept_count(fraction, total), total, fraction)
+        })
     );
     Ok(())
 }

@@ -290,10 +290,11 @@ pub struct ReconstructArgs {
     /// Output mesh.
     pub out: PathBuf,
     /// Level to rebuild (0 = base mesh; default: the finest).
-    #[arg(long)]
+    // (A negative value is read as a value, so that the error says what is wrong with it.)
+    #[arg(long, allow_hyphen_values = true)]
     pub level: Option<u32>,
     /// Keep only this fraction of the details, the largest ones (compression).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub keep: Option<f64>,
 }
 
@@ -398,6 +399,12 @@ pub fn run(cli: Cli) -> CliResult {
         Some(Command::Fit(args)) => spline_cmds::fit(&args),
         Some(Command::Ifs(args)) => ifs_cmds::ifs(&args),
     }
+}
+
+/// What `reconstruct --keep FRACTION` reports it kept: the count, and the fraction
+/// asked for (`{:?}`, which writes a tiny or huge number with an exponent).
+fn kept_details(kept: usize, total: usize, fraction: f64) -> String {
+    format!(" (keeping the largest {kept} of {total} details: --keep {fraction:?})")
 }
 
 /// `.mres` files say which scheme wrote them; dispatch on that.

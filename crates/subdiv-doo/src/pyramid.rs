@@ -965,10 +965,17 @@ fn is_permutation(values: &[u32], n: usize) -> bool {
     values.iter().all(|&v| (v as usize) < n && !std::mem::replace(&mut seen[v as usize], true))
 }
 
-/// The number of detail vectors that the fraction `fraction` keeps of `total`:
-/// `round(fraction × total)`, the one rule of the compression and of its
-/// rate-distortion rows.
-fn kept_count(fraction: f64, total: usize) -> usize {
+/// The number of detail vectors that the fraction `fraction` (in `[0, 1]`) keeps of
+/// `total`: `round(fraction × total)`, the one rule of the compression
+/// ([`DooPyramid::reconstruct`]) and of its rate-distortion rows.
+///
+/// ```
+/// use subdiv_doo::pyramid::kept_count;
+/// assert_eq!(kept_count(0.5, 5), 3);
+/// assert_eq!(kept_count(1e-300, 88), 0);
+/// assert_eq!(kept_count(1.0, 88), 88);
+/// ```
+pub fn kept_count(fraction: f64, total: usize) -> usize {
     ((fraction * total as f64).round() as usize).min(total)
 }
 
