@@ -70,6 +70,16 @@ fn subdivide_errors_name_the_problem() {
     let missing = dir.path().join("missing.obj");
     let message = fails(&["subdivide", path(&missing), path(&out), "--scheme", "ternary-loop"]);
     assert!(message.contains("missing.obj"), "{message}");
+    // Too many levels: refused at once, from the counts, for every scheme.
+    let bunny = common::data("bunny.obj");
+    for scheme in ["loop", "loop-warren", "ternary-loop", "quaternary-loop", "doo-sabin", "doo-centroid"] {
+        let message = fails(&["subdivide", path(&bunny), path(&out), "--scheme", scheme, "--levels", "30"]);
+        assert!(message.contains("too many"), "{scheme}: {message}");
+        assert!(!out.exists(), "{scheme}");
+    }
+    let chaikin = ["subdivide", path(&bunny), path(&out), "--scheme", "doo-sabin", "--boundary", "chaikin"];
+    let message = fails(&[&chaikin[..], &["--levels", "30"]].concat());
+    assert!(message.contains("too many fine corners"), "{message}");
 }
 
 #[test]

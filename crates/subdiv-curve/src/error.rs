@@ -94,6 +94,16 @@ pub enum CurveError {
         /// What is wrong on that line.
         message: String,
     },
+    /// A refinement would make more points than it may ([`crate::MAX_REFINED_POINTS`]).
+    #[error("{points} points refined {levels} times would make more than {max} points")]
+    TooLarge {
+        /// Number of points given.
+        points: usize,
+        /// Number of levels asked for.
+        levels: u32,
+        /// The most points a refinement makes.
+        max: usize,
+    },
     /// The linear system of the exact-global virtual points could not be solved.
     #[error("virtual points: {0}")]
     VirtualPoints(String),

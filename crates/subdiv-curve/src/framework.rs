@@ -253,7 +253,8 @@ impl Framework {
     /// [`CurveError::FlagCount`], [`CurveError::TooFewPoints`], [`CurveError::NonFinite`];
     /// [`CurveError::VirtualPoints`] if the exact-global system does not converge;
     /// [`CurveError::Overflow`] if finite coordinates near `f64::MAX` refine to points that
-    /// are not finite.
+    /// are not finite; [`CurveError::TooLarge`] if the result would have more than
+    /// [`MAX_REFINED_POINTS`](crate::MAX_REFINED_POINTS) points.
     ///
     /// ```
     /// use subdiv_curve::{CurveScheme, Framework, Topology};
@@ -304,6 +305,7 @@ impl Framework {
         out: &mut Vec<P>,
     ) -> Result<(), CurveError> {
         self.check_input(points, flags, topology)?;
+        self.approximating.checked_refined_len(points.len(), topology, levels)?;
         let interpolated: Vec<usize> = (0..points.len()).filter(|&i| flags[i]).collect();
         match self.mode {
             VirtualPoints::SeedCompatible => {

@@ -78,4 +78,6 @@ pub use framework::{Framework, FrameworkAnalysis, VirtualPoints, flags_from_indi
 pub use nalgebra;
 pub use point::{CurvePoint, check_finite};
 pub use refine::Refiner;
-pub use scheme::{CurveScheme, EndRule, FOUR_POINT_TENSION_RANGE, Layout, MAX_RULE_LEN, Rule, Topology};
+pub use scheme::{
+    CurveScheme, EndRule, FOUR_POINT_TENSION_RANGE, Layout, MAX_REFINED_POINTS, MAX_RULE_LEN, Rule, Topology,
+};

@@ -274,7 +274,9 @@ impl<P: CurvePoint> Refiner<P> {
     /// # Errors
     /// [`CurveError::TooFewPoints`] (see [`CurveScheme::min_points`]),
     /// [`CurveError::NonFinite`] for a NaN or infinite coordinate, [`CurveError::Overflow`]
-    /// when finite coordinates near `f64::MAX` refine to points that are not finite.
+    /// when finite coordinates near `f64::MAX` refine to points that are not finite,
+    /// [`CurveError::TooLarge`] when the result would have more than
+    /// [`MAX_REFINED_POINTS`](crate::MAX_REFINED_POINTS) points.
     ///
     /// # Performance
     /// Linear in the output size; no allocation once the buffers have reached their size.
@@ -294,6 +296,7 @@ impl<P: CurvePoint> Refiner<P> {
         out: &mut Vec<P>,
     ) -> Result<(), CurveError> {
         scheme.validate(points, topology)?;
+        scheme.checked_refined_len(points.len(), topology, levels)?;
         self.refine_fused(scheme, points, topology, levels, out, block_len::<P>());
         if !scheme.cannot_overflow(points, levels) {
             crate::point::check_result_finite("refinement", out)?;
@@ -862,5 +865,33 @@ mod tests {
                 assert_eq!(bits(&fused), bits(&reference), "{} {topology:?}, 999-point blocks", scheme.name());
             }
         }
+    }
+
+    #[test]
+    fn too_many_levels_fail_before_any_work() {
+        use crate::{Framework, MAX_REFINED_POINTS};
+        let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        // Closed: 4 * 2^levels points; 2^31 fit, 2^32 do not.
+        let chaikin = CurveScheme::chaikin();
+        assert_eq!(chaikin.checked_refined_len(4, Topology::Closed, 29), Ok(1 << 31));
+        for levels in [30, 63, 64, 200, u32::MAX] {
+            let error = chaikin.refine(&square, Topology::Closed, levels).unwrap_err();
+            assert_eq!(error, CurveError::TooLarge { points: 4, levels, max: MAX_REFINED_POINTS }, "{levels}");
+            let flags = [true, false, false, false];
+            for framework in
+                [Framework::published(), Framework::published().with_mode(crate::VirtualPoints::ExactGlobal)]
+            {
+                let error = framework.refine(&square, &flags, Topology::Closed, levels).unwrap_err();
+                assert!(matches!(error, CurveError::TooLarge { points: 4, .. }), "{error}");
+            }
+        }
+        // Open primal: 2^levels + 1 points from two.
+        let bspline = CurveScheme::cubic_bspline();
+        assert_eq!(bspline.checked_refined_len(2, Topology::open(), 31), Ok((1 << 31) + 1));
+        assert!(bspline.refine(&square[..2], Topology::open(), 32).is_err());
+        // The length itself saturates, and stops early where it cannot grow.
+        assert_eq!(chaikin.refined_len(4, Topology::Closed, u32::MAX), usize::MAX);
+        assert_eq!(bspline.refined_len(1, Topology::open(), u32::MAX), 1);
+        assert_eq!(chaikin.refined_len(0, Topology::Closed, u32::MAX), 0);
     }
 }

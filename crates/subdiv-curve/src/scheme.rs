@@ -163,6 +163,11 @@ impl Topology {
     }
 }
 
+/// The most points one refinement makes: `u32::MAX`, the index range of the project's
+/// meshes. More levels than that allows give [`CurveError::TooLarge`] before anything is
+/// allocated (at 16 or 24 bytes a point, that many points are already 64 or 96 GiB).
+pub const MAX_REFINED_POINTS: usize = u32::MAX as usize;
+
 /// A uniform binary curve subdivision scheme: a name, a [`Layout`] and two [`Rule`]s.
 ///
 /// ```
@@ -377,19 +382,42 @@ impl CurveScheme {
     /// assert_eq!(CurveScheme::chaikin().refined_len(5, Topology::open(), 2), 20); // 2n per level, ends kept
     /// assert_eq!(CurveScheme::chaikin().refined_len(5, Topology::Closed, 2), 20);
     /// ```
+    ///
+    /// A length of `usize::MAX / 2` or more reads as `usize::MAX` (refining that many
+    /// points is refused anyway, see [`MAX_REFINED_POINTS`]).
     pub fn refined_len(&self, n: usize, topology: Topology, levels: u32) -> usize {
         let mut len = n;
         for _ in 0..levels {
-            len = self.next_len(len, topology);
+            let next = self.next_len(len, topology);
+            if next == len {
+                // No point, or one of an open primal polygon: it stays so.
+                break;
+            }
+            if next >= usize::MAX / 2 {
+                return usize::MAX;
+            }
+            len = next;
         }
         len
     }
 
+    /// [`refined_len`](Self::refined_len), or [`CurveError::TooLarge`] beyond
+    /// [`MAX_REFINED_POINTS`]: checked before a refinement allocates anything, so that too
+    /// many levels fail at once.
+    pub(crate) fn checked_refined_len(&self, n: usize, topology: Topology, levels: u32) -> Result<usize, CurveError> {
+        let len = self.refined_len(n, topology, levels);
+        if len > MAX_REFINED_POINTS {
+            return Err(CurveError::TooLarge { points: n, levels, max: MAX_REFINED_POINTS });
+        }
+        Ok(len)
+    }
+
+    /// The length after one step (saturating).
     pub(crate) fn next_len(&self, n: usize, topology: Topology) -> usize {
         match (topology, self.layout) {
-            (Topology::Closed, _) => 2 * n,
-            (Topology::Open(_), Layout::Primal) => 2 * n - 1,
-            (Topology::Open(_), Layout::Dual) => 2 * n,
+            (Topology::Closed, _) => n.saturating_mul(2),
+            (Topology::Open(_), Layout::Primal) => n.saturating_mul(2).saturating_sub(1),
+            (Topology::Open(_), Layout::Dual) => n.saturating_mul(2),
         }
     }
 

@@ -426,11 +426,19 @@ impl DooTopology {
     }
 }
 
-fn check_size(what: &'static str, count: usize) -> Result<(), DooError> {
+pub(crate) fn check_size(what: &'static str, count: usize) -> Result<(), DooError> {
     if count >= NONE as usize {
         return Err(DooError::TooLarge { what, count, max: NONE as usize - 1 });
     }
     Ok(())
+}
+
+/// The size check of [`doo_topology`] for one step of a mesh of `corners` corners and
+/// `interior_edges` interior edges: the fine vertices (one per corner), and the fine
+/// corners counted as if every corner had an F_V corner.
+pub(crate) fn check_step_size(corners: usize, interior_edges: usize) -> Result<(), DooError> {
+    check_size("fine vertices", corners)?;
+    check_size("fine corners", corners.saturating_mul(2).saturating_add(interior_edges.saturating_mul(4)))
 }
 
 /// One Doo-Sabin step on the connectivity (see [`crate::forward`] for the order of the
@@ -451,7 +459,7 @@ pub(crate) fn doo_topology(coarse: &CornerMesh, with_adjacency: bool) -> Result<
     let quad_base = corners as u32;
     let fv_base = corners + 4 * interior_edges;
     // Fine corners: at most one F_V corner per coarse corner.
-    check_size("fine corners", fv_base + corners)?;
+    check_step_size(corners, interior_edges)?;
 
     let mut offsets = Vec::with_capacity(faces + interior_edges + coarse.vertex_count + 1);
     offsets.extend_from_slice(&coarse.offsets);

@@ -49,7 +49,9 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup};
 
 use crate::DooError;
 use crate::boundary::{BoundaryRule, Ring};
-use crate::corner::{CornerMesh, DooTopology, FaceKind, FaceOrigin, NONE, doo_topology, face_points, side_by_side};
+use crate::corner::{
+    CornerMesh, DooTopology, FaceKind, FaceOrigin, NONE, check_step_size, doo_topology, face_points, side_by_side,
+};
 use crate::rule::{FaceMaps, FaceRule};
 
 /// Options of [`subdivide`].
@@ -405,8 +407,11 @@ pub(crate) fn check_finite(positions: &[DVec3]) -> Result<(), DooError> {
 /// [`DooError::NonFinite`] for a NaN or infinite position;
 /// [`DooError::ValenceTwoVertex`] for an interior vertex with two edges (its vertex face
 /// would be a digon); [`DooError::InvalidParameter`] for a centroid parameter outside
-/// `(0, 1)`; [`DooError::TooLarge`] if the result would not fit `u32` indices.
-/// Non-manifold input and faces with fewer than three corners cannot be a
+/// `(0, 1)`; [`DooError::TooLarge`] if a level would not fit `u32` indices, found from
+/// the input's counts before any level is built (so that too many levels fail at once,
+/// not after filling the memory; under the Chaikin rule the count named is that of the
+/// shrink rule's level, which the Chaikin level exceeds, and a level that passes this
+/// check is checked again as it is built). Non-manifold input and faces with fewer than three corners cannot be a
 /// [`HalfedgeMesh`]; [`subdivide_soup`] reports them.
 pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, DooError> {
     options.rule.validate()?;
@@ -422,7 +427,102 @@ pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, D
         return Ok(DooMesh { positions: soup.positions, topology });
     }
     let corners = CornerMesh::from_halfedge(mesh);
+    // Before any work: a level count whose output cannot be indexed fails at once, not
+    // after the levels below it have filled the memory. The counts are those of the
+    // shrink rule; a Chaikin level contains the shrink level (its ring is added to the
+    // same faces, and a larger mesh has every interior edge and vertex of a smaller one),
+    // so they bound the Chaikin rule's from below and what fails here fails there too.
+    let mut counts = LevelCounts::of(&corners);
+    for _ in 0..options.levels {
+        check_step_size(counts.corners, counts.interior_edges)?;
+        counts = counts.next();
+    }
     subdivide_corner_mesh(corners, mesh.positions().to_vec(), options)
+}
+
+/// The counts of one level that determine those of the next under the shrink boundary
+/// rule, so that the sizes of many levels are known without building them.
+///
+/// One step (see the module docs): every corner becomes a fine vertex; the fine faces are
+/// the F_F faces (their sides: one fine edge per corner), a quad per interior edge (two
+/// more fine edges each, its end sides) and a face per interior vertex (whose sides are
+/// quad end sides). A fine vertex lies on the boundary exactly when its coarse vertex
+/// does; an F_F side along a boundary edge and a quad end side at a boundary vertex are
+/// boundary edges. Hence, with `B` the boundary end points of the interior edges (an edge
+/// with both ends on the boundary counts twice), the next level has `F + E_i + V_i`
+/// faces, `2C + 4E_i - C_b` corners, `C + 2E_i` edges of which `E_b + B` on the
+/// boundary, `C - C_b` interior vertices, `C_b + 2B` corners at boundary vertices, and
+/// `2B` boundary end points of interior edges (each interior edge gives two F_F sides,
+/// whose ends are on the boundary where its own are). Tested against subdivision.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct LevelCounts {
+    faces: usize,
+    corners: usize,
+    interior_edges: usize,
+    boundary_edges: usize,
+    /// Interior vertices with a face (each gets an F_V face).
+    interior_vertices: usize,
+    /// Corners at boundary vertices.
+    boundary_corners: usize,
+    /// Boundary end points of the interior edges.
+    boundary_ends: usize,
+}
+
+impl LevelCounts {
+    /// The counts of `mesh` (one pass over its corners).
+    fn of(mesh: &CornerMesh) -> Self {
+        let (vertex, twin, next) = (&mesh.corner_vertex, &mesh.corner_twin, &mesh.corner_next);
+        let mut on_boundary = vec![false; mesh.vertex_count];
+        let mut has_corner = vec![false; mesh.vertex_count];
+        let mut boundary_edges = 0;
+        for c in 0..mesh.corner_count() {
+            has_corner[vertex[c] as usize] = true;
+            if twin[c] == NONE {
+                boundary_edges += 1;
+                on_boundary[vertex[c] as usize] = true;
+                on_boundary[vertex[next[c] as usize] as usize] = true;
+            }
+        }
+        let (mut interior_edges, mut boundary_corners, mut boundary_ends) = (0, 0, 0);
+        for c in 0..mesh.corner_count() {
+            let (from, to) = (on_boundary[vertex[c] as usize], on_boundary[vertex[next[c] as usize] as usize]);
+            boundary_corners += usize::from(from);
+            if twin[c] != NONE && (c as u32) < twin[c] {
+                interior_edges += 1;
+                boundary_ends += usize::from(from) + usize::from(to);
+            }
+        }
+        let interior_vertices = (0..mesh.vertex_count).filter(|&v| has_corner[v] && !on_boundary[v]).count();
+        Self {
+            faces: mesh.face_count(),
+            corners: mesh.corner_count(),
+            interior_edges,
+            boundary_edges,
+            interior_vertices,
+            boundary_corners,
+            boundary_ends,
+        }
+    }
+
+    /// The counts of the next level (saturating: only compared with limits).
+    fn next(self) -> Self {
+        let Self { faces, corners, interior_edges, boundary_edges, interior_vertices, boundary_corners, boundary_ends } =
+            self;
+        let edges = corners.saturating_add(interior_edges.saturating_mul(2));
+        let fine_boundary_edges = boundary_edges.saturating_add(boundary_ends);
+        Self {
+            faces: faces.saturating_add(interior_edges).saturating_add(interior_vertices),
+            corners: corners
+                .saturating_mul(2)
+                .saturating_add(interior_edges.saturating_mul(4))
+                .saturating_sub(boundary_corners),
+            interior_edges: edges.saturating_sub(fine_boundary_edges),
+            boundary_edges: fine_boundary_edges,
+            interior_vertices: corners.saturating_sub(boundary_corners),
+            boundary_corners: boundary_corners.saturating_add(boundary_ends.saturating_mul(2)),
+            boundary_ends: boundary_ends.saturating_mul(2),
+        }
+    }
 }
 
 /// [`subdivide`] for a polygon soup, validated first.
@@ -530,6 +630,108 @@ mod tests {
             };
             assert_eq!(rebuilt(1), rebuilt(2), "{boundary:?}");
         }
+    }
+
+    /// Meshes of every kind the counts must follow: closed, open (a single quad, grids,
+    /// holes), several components, an isolated vertex.
+    fn count_cases() -> Vec<PolygonSoup> {
+        let mut two = shapes::cube();
+        let tetrahedron = shapes::tetrahedron();
+        let shift = two.vertex_count() as u32;
+        let mut faces: Vec<Vec<u32>> = two.faces().map(<[u32]>::to_vec).collect();
+        faces.extend(tetrahedron.faces().map(|f| f.iter().map(|&v| v + shift).collect::<Vec<_>>()));
+        two.positions.extend(tetrahedron.positions.iter().map(|&p| p + DVec3::X * 3.0));
+        let mut positions = two.positions.clone();
+        positions.push(DVec3::splat(9.0));
+        let with_isolated = PolygonSoup::from_faces(positions, faces.clone());
+        let two = PolygonSoup::from_faces(two.positions, faces);
+        // A torus with two holes (two faces far apart removed).
+        let torus = shapes::torus(8, 6, CellKind::Quads).unwrap();
+        let holed = PolygonSoup::from_faces(
+            torus.positions.clone(),
+            torus.faces().enumerate().filter(|&(f, _)| f != 0 && f != 27).map(|(_, f)| f.to_vec()).collect::<Vec<_>>(),
+        );
+        vec![
+            shapes::cube(),
+            shapes::tetrahedron(),
+            shapes::icosahedron(),
+            shapes::grid(1, 1, CellKind::Quads).unwrap(),
+            shapes::grid(3, 2, CellKind::Triangles).unwrap(),
+            shapes::grid(4, 4, CellKind::Mixed).unwrap(),
+            shapes::torus(4, 3, CellKind::Mixed).unwrap(),
+            holed,
+            two,
+            with_isolated,
+        ]
+    }
+
+    /// The counts of every level, as [`LevelCounts::next`] predicts them from the input
+    /// alone, are those of the subdivided mesh.
+    fn assert_counts_follow(soup: &PolygonSoup, levels: u32) {
+        let mesh = HalfedgeMesh::from_soup(soup).unwrap();
+        let mut predicted = LevelCounts::of(&CornerMesh::from_halfedge(&mesh));
+        for level in 1..=levels {
+            predicted = predicted.next();
+            let fine = subdivide(&mesh, &DooOptions::new(FaceRule::DooSabin, level)).unwrap();
+            let counted = LevelCounts::of(&CornerMesh::from_halfedge(&fine.to_mesh().unwrap()));
+            assert_eq!(predicted, counted, "level {level} of {soup:?}");
+            assert_eq!((predicted.faces, predicted.corners), (fine.face_count(), fine.topology.indices.len()));
+        }
+    }
+
+    #[test]
+    fn level_counts_predict_the_subdivided_meshes() {
+        for soup in count_cases() {
+            assert_counts_follow(&soup, 3);
+        }
+        // The counts see what they must: boundary corners and ends on an open grid.
+        let grid = HalfedgeMesh::from_soup(&shapes::grid(2, 1, CellKind::Quads).unwrap()).unwrap();
+        let counts = LevelCounts::of(&CornerMesh::from_halfedge(&grid));
+        assert_eq!((counts.interior_edges, counts.boundary_edges, counts.boundary_ends), (1, 6, 2));
+        assert_eq!((counts.interior_vertices, counts.boundary_corners), (0, 8));
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+        #[test]
+        fn level_counts_follow_random_meshes(soup in mesh_topo::testing::arb_mesh()) {
+            assert_counts_follow(&soup, 2);
+        }
+    }
+
+    #[test]
+    fn too_many_levels_fail_before_any_work() {
+        // The cube's corners quadruple every level (24 * 4^k); at level 13 the check of
+        // the fine corners (twice the corners plus four per interior edge: 4 * 24 * 4^13)
+        // exceeds the u32 range, so 14 levels or more fail at once, naming that count.
+        let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
+        for levels in [14, 30, u32::MAX] {
+            let error = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, levels)).unwrap_err();
+            let expected =
+                DooError::TooLarge { what: "fine corners", count: 4 * 24 * 4usize.pow(13), max: NONE as usize - 1 };
+            assert_eq!(error, expected, "{levels} levels");
+        }
+        // The Chaikin rule's levels are larger than the shrink rule's: what fails for one
+        // fails for the other, at once.
+        let grid = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads).unwrap()).unwrap();
+        let chaikin = DooOptions { boundary: BoundaryRule::Chaikin, ..DooOptions::new(FaceRule::DooSabin, 40) };
+        assert!(matches!(subdivide(&grid, &chaikin), Err(DooError::TooLarge { what: "fine corners", .. })));
+        for soup in count_cases() {
+            let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+            let mut counts = LevelCounts::of(&CornerMesh::from_halfedge(&mesh));
+            for level in 1..=3 {
+                counts = counts.next();
+                let options =
+                    DooOptions { boundary: BoundaryRule::Chaikin, ..DooOptions::new(FaceRule::DooSabin, level) };
+                let fine = subdivide(&mesh, &options).unwrap();
+                let at_least = LevelCounts::of(&CornerMesh::from_halfedge(&fine.to_mesh().unwrap()));
+                assert!(at_least.corners >= counts.corners && at_least.interior_edges >= counts.interior_edges);
+            }
+        }
+        // An open mesh that shrinks does not grow: a single quad takes any number of levels.
+        let quad = HalfedgeMesh::from_soup(&shapes::grid(1, 1, CellKind::Quads).unwrap()).unwrap();
+        let fine = subdivide(&quad, &DooOptions::new(FaceRule::DooSabin, 1000)).unwrap();
+        assert_eq!((fine.vertex_count(), fine.face_count()), (4, 1));
     }
 
     #[test]

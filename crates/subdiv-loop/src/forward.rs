@@ -300,7 +300,7 @@ impl LoopMesh {
 pub fn subdivide(mesh: &HalfedgeMesh, levels: u32, options: &LoopOptions) -> Result<LoopMesh, LoopError> {
     check_finite(mesh.positions())?;
     let topology = Topology::from_mesh(mesh)?;
-    check_sizes(&topology, levels)?;
+    check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels)?;
     let (positions, topology) = refine(topology, mesh.positions(), levels, &Rules::new(options));
     Ok(LoopMesh { positions, triangles: topology.triangles })
 }
@@ -365,7 +365,7 @@ pub fn refine_attribute<T: Attribute>(
         return Err(LoopError::AttributeCount { expected: mesh.vertex_count(), found: values.len() });
     }
     let topology = Topology::from_mesh(mesh)?;
-    check_sizes(&topology, levels)?;
+    check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels)?;
     Ok(refine(topology, values, levels, &Rules::new(options)).0)
 }
 
@@ -444,11 +444,12 @@ pub(crate) fn check_triangles(soup: &PolygonSoup) -> Result<(), LoopError> {
     }
 }
 
-/// Checks that every level fits the `u32` layout: half-edge indices and edge counts of
-/// the levels that are refined further, vertex indices of the last.
-fn check_sizes(topology: &Topology, levels: u32) -> Result<(), LoopError> {
-    let (mut v, mut e, mut f) =
-        (topology.vertex_count as u64, topology.edge_count as u64, topology.face_count() as u64);
+/// Checks that every level of `levels` steps from a mesh of `vertices`, `edges` and
+/// `faces` fits the `u32` layout: half-edge indices and edge counts of the levels that
+/// are refined further, vertex indices of the last (from the counts alone, before any
+/// work: `V + E`, `2E + 3F` and `4F` per step).
+pub(crate) fn check_sizes(vertices: usize, edges: usize, faces: usize, levels: u32) -> Result<(), LoopError> {
+    let (mut v, mut e, mut f) = (vertices as u64, edges as u64, faces as u64);
     let too_large = |what: &'static str, count: u64, max: u64| {
         Err(MeshError::TooLarge { what, count: count.min(usize::MAX as u64) as usize, max: max as usize }.into())
     };

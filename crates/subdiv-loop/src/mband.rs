@@ -58,7 +58,7 @@
 use std::collections::BTreeMap;
 
 use glam::DVec3;
-use mesh_topo::{HalfedgeId, HalfedgeMesh};
+use mesh_topo::{HalfedgeId, HalfedgeMesh, MAX_ELEMENTS, MeshError};
 use serde::{Deserialize, Serialize};
 
 use crate::LoopError;
@@ -336,7 +336,9 @@ pub fn ternary_edge_weights(n: usize, lambda: f64) -> Vec<f64> {
 ///
 /// # Errors
 /// [`LoopError::InvalidParameter`] for `lambda` outside `(1/9, 1/2]`; the mesh errors of
-/// [`subdivide`] (non-triangles, pillows, non-finite positions).
+/// [`subdivide`] (non-triangles, pillows, non-finite positions); [`MeshError::TooLarge`]
+/// if a level would have more vertices or face corners than `u32` handles address,
+/// found from the counts before any level is built.
 pub fn ternary_subdivide(mesh: &HalfedgeMesh, levels: u32, options: &TernaryOptions) -> Result<LoopMesh, LoopError> {
     check_finite(mesh.positions())?;
     let (positions, triangles) = ternary_levels(mesh, mesh.positions(), levels, options)?;
@@ -440,6 +442,7 @@ pub(crate) fn ternary_levels<T: Attribute>(
 ) -> Result<(Vec<T>, Vec<[u32; 3]>), LoopError> {
     options.validate()?;
     Topology::from_mesh(mesh)?; // triangles only, no pillows
+    check_ternary_sizes(mesh, levels)?;
     let mut triangles: Vec<[u32; 3]> = mesh.faces().map(|f| face_corners(mesh, f)).collect();
     if levels == 0 {
         return Ok((values.to_vec(), triangles));
@@ -455,6 +458,30 @@ pub(crate) fn ternary_levels<T: Attribute>(
         triangles = tri;
     }
     Ok((current, triangles))
+}
+
+/// Every level of `levels` ternary steps must be a mesh that `u32` handles address (as
+/// [`HalfedgeMesh::from_soup`] requires of each level built on the way): checked from the
+/// counts before any work, so that too many levels fail at once, not after filling the
+/// memory. A step makes `V + 2E + F` vertices (two per edge, one per face), `3E + 9F`
+/// edges and `9F` faces, boundary or not.
+fn check_ternary_sizes(mesh: &HalfedgeMesh, levels: u32) -> Result<(), LoopError> {
+    let (mut vertices, mut edges, mut faces) = (mesh.vertex_count(), mesh.edge_count(), mesh.face_count());
+    for _ in 0..levels {
+        (vertices, edges, faces) = (
+            vertices.saturating_add(edges.saturating_mul(2)).saturating_add(faces),
+            edges.saturating_mul(3).saturating_add(faces.saturating_mul(9)),
+            faces.saturating_mul(9),
+        );
+        if vertices > MAX_ELEMENTS {
+            return Err(MeshError::TooLarge { what: "vertices", count: vertices, max: MAX_ELEMENTS }.into());
+        }
+        let corners = faces.saturating_mul(3);
+        if corners > MAX_ELEMENTS / 2 {
+            return Err(MeshError::TooLarge { what: "face corners", count: corners, max: MAX_ELEMENTS / 2 }.into());
+        }
+    }
+    Ok(())
 }
 
 fn face_corners(mesh: &HalfedgeMesh, f: mesh_topo::FaceId) -> [u32; 3] {

@@ -301,9 +301,20 @@ impl LoopPyramid {
     /// ```
     ///
     /// # Errors
-    /// Any [`mesh_topo::MeshError`] of `base`, or [`LoopError::NotTriangle`].
+    /// Any [`mesh_topo::MeshError`] of `base`, or [`LoopError::NotTriangle`];
+    /// [`MeshError::TooLarge`](mesh_topo::MeshError::TooLarge) if the levels would not fit
+    /// the `u32` layout of [`subdivide`](crate::forward::subdivide) (checked before any
+    /// work); [`LoopError::InvalidParameter`] for more than 32 levels (a mesh with a face
+    /// does not fit that layout after 16; a base without faces would only pile up empty
+    /// levels).
     pub fn smooth(base: PolygonSoup, rules: LoopOptions, levels: usize) -> Result<Self, LoopError> {
         let mut table = CornerTable::from_soup(&base)?;
+        // (More than 16 levels fail here for any mesh with a face.)
+        let steps = levels.min(33) as u32;
+        crate::forward::check_sizes(table.vertex_count(), table.edge_count(), table.face_count(), steps)?;
+        if levels > 32 {
+            return Err(LoopError::InvalidParameter { name: "levels", reason: format!("{levels}: at most 32") });
+        }
         let mut detail_levels = Vec::with_capacity(levels);
         for _ in 0..levels {
             detail_levels.push(DetailLevel { details: vec![DVec3::ZERO; table.edge_count()], order: None });
@@ -687,6 +698,36 @@ mod tests {
 
     fn mesh(soup: &PolygonSoup) -> HalfedgeMesh {
         HalfedgeMesh::from_soup(soup).expect("valid test mesh")
+    }
+
+    #[test]
+    fn a_smooth_pyramid_of_too_many_levels_fails_before_any_work() {
+        let options = LoopOptions::default();
+        // The octahedron's 12 edges become 12 * 2^L + 3 * 8 * (4^L - 2^L) / 2: more than the
+        // layout's edges before level 14 is refined.
+        let error = LoopPyramid::smooth(shapes::octahedron(), options, 40).unwrap_err();
+        assert!(matches!(error, LoopError::Mesh(mesh_topo::MeshError::TooLarge { what: "edges", .. })), "{error}");
+        // The same error as `subdivide` gives, from the first level count it refuses on
+        // (the levels below it would be built: gigabytes at 13).
+        let mesh = HalfedgeMesh::from_soup(&shapes::octahedron()).unwrap();
+        let check = |levels: usize| {
+            crate::forward::check_sizes(mesh.vertex_count(), mesh.edge_count(), mesh.face_count(), levels as u32)
+        };
+        let first_refused = (1..40).find(|&levels| check(levels).is_err()).unwrap();
+        assert!(first_refused > 12);
+        for levels in [first_refused, first_refused + 1, 40] {
+            let smooth = LoopPyramid::smooth(shapes::octahedron(), options, levels).unwrap_err();
+            assert_eq!(smooth.to_string(), check(levels).unwrap_err().to_string(), "{levels} levels");
+        }
+        // A base without faces: empty levels, up to 32 of them.
+        let point = PolygonSoup::from_faces(vec![DVec3::ZERO], Vec::<Vec<u32>>::new());
+        let empty = LoopPyramid::smooth(point.clone(), options, 32).unwrap();
+        assert_eq!((empty.level_count(), empty.detail_count()), (32, 0));
+        assert_eq!(empty.reconstruct(32).unwrap(), point);
+        for levels in [33, usize::MAX] {
+            let error = LoopPyramid::smooth(point.clone(), options, levels).unwrap_err();
+            assert!(matches!(error, LoopError::InvalidParameter { name: "levels", .. }), "{error}");
+        }
     }
 
     #[test]

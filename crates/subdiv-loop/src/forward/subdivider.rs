@@ -140,7 +140,9 @@ impl Subdivider {
             vertex_halfedge: take(&mut scratch.starts[0]),
             ..Topology::default()
         };
-        let built = topology.rebuild(mesh, &mut scratch.compact).and_then(|()| check_sizes(&topology, levels));
+        let built = topology
+            .rebuild(mesh, &mut scratch.compact)
+            .and_then(|()| check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels));
         if let Err(error) = built {
             park(topology, None, 0, levels, out, scratch);
             return Err(error);

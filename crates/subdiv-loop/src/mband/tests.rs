@@ -480,3 +480,32 @@ proptest! {
         prop_assert!(a.to_halfedge_mesh().is_ok());
     }
 }
+
+#[test]
+fn ternary_counts_are_checked_before_any_work() {
+    // The counts of each level are those of the closed form the check uses, with and
+    // without a boundary.
+    for soup in [shapes::icosahedron(), shapes::grid(3, 2, CellKind::Triangles).unwrap()] {
+        let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+        let (mut v, mut e, mut f) = (mesh.vertex_count(), mesh.edge_count(), mesh.face_count());
+        for levels in 1..=2 {
+            (v, e, f) = (v + 2 * e + f, 3 * e + 9 * f, 9 * f);
+            let fine = ternary_subdivide(&mesh, levels, &TernaryOptions::default()).unwrap();
+            let built = HalfedgeMesh::from_soup(&fine.to_soup()).unwrap();
+            assert_eq!((built.vertex_count(), built.edge_count(), built.face_count()), (v, e, f));
+        }
+    }
+    // The icosahedron's 20 faces become 20 * 9^8 at level 8: 3 * 20 * 9^8 face corners,
+    // more than a half-edge mesh holds, so 8 levels or more fail at once.
+    let mesh = HalfedgeMesh::from_soup(&shapes::icosahedron()).unwrap();
+    for levels in [8, 30, u32::MAX] {
+        let error = ternary_subdivide(&mesh, levels, &TernaryOptions::default()).unwrap_err();
+        let corners = 60 * 9usize.pow(8);
+        assert_eq!(
+            error.to_string(),
+            LoopError::from(MeshError::TooLarge { what: "face corners", count: corners, max: MAX_ELEMENTS / 2 })
+                .to_string(),
+            "{levels} levels"
+        );
+    }
+}
