@@ -427,17 +427,29 @@ pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, D
         return Ok(DooMesh { positions: soup.positions, topology });
     }
     let corners = CornerMesh::from_halfedge(mesh);
-    // Before any work: a level count whose output cannot be indexed fails at once, not
-    // after the levels below it have filled the memory. The counts are those of the
-    // shrink rule; a Chaikin level contains the shrink level (its ring is added to the
-    // same faces, and a larger mesh has every interior edge and vertex of a smaller one),
-    // so they bound the Chaikin rule's from below and what fails here fails there too.
-    let mut counts = LevelCounts::of(&corners);
-    for _ in 0..options.levels {
+    check_level_sizes(&corners, options.levels)?;
+    subdivide_corner_mesh(corners, mesh.positions().to_vec(), options)
+}
+
+/// Before any work, a level count whose output cannot be indexed fails at once, not
+/// after the levels below it have filled the memory. The counts are those of the shrink
+/// rule; a Chaikin level contains the shrink level (its ring is added to the same faces,
+/// and a larger mesh has every interior edge and vertex of a smaller one), so they bound
+/// the Chaikin rule's from below and what fails here fails there too.
+fn check_level_sizes(mesh: &CornerMesh, levels: u32) -> Result<(), DooError> {
+    // A step at most quadruples the corners (a closed mesh's exactly: `2C + 4E_i - C_b`
+    // with `2E_i <= C`), and a step's check counts at most four times its corners: when
+    // `4^levels` times the corners fit, every level fits, and the mesh is not read.
+    let bound = (0..levels).try_fold(mesh.corner_count(), |c, _| c.checked_mul(4).filter(|&c| c < NONE as usize));
+    if bound.is_some() {
+        return Ok(());
+    }
+    let mut counts = LevelCounts::of(mesh);
+    for _ in 0..levels {
         check_step_size(counts.corners, counts.interior_edges)?;
         counts = counts.next();
     }
-    subdivide_corner_mesh(corners, mesh.positions().to_vec(), options)
+    Ok(())
 }
 
 /// The counts of one level that determine those of the next under the shrink boundary
@@ -671,7 +683,10 @@ mod tests {
         let mesh = HalfedgeMesh::from_soup(soup).unwrap();
         let mut predicted = LevelCounts::of(&CornerMesh::from_halfedge(&mesh));
         for level in 1..=levels {
+            let coarser = predicted;
             predicted = predicted.next();
+            // The bound that spares the count pass (`check_level_sizes`).
+            assert!(predicted.corners <= 4 * coarser.corners && 2 * coarser.interior_edges <= coarser.corners);
             let fine = subdivide(&mesh, &DooOptions::new(FaceRule::DooSabin, level)).unwrap();
             let counted = LevelCounts::of(&CornerMesh::from_halfedge(&fine.to_mesh().unwrap()));
             assert_eq!(predicted, counted, "level {level} of {soup:?}");
