@@ -426,7 +426,7 @@ impl DooTopology {
     }
 }
 
-pub(crate) fn check_size(what: &'static str, count: usize) -> Result<(), DooError> {
+fn check_size(what: &'static str, count: usize) -> Result<(), DooError> {
     if count >= NONE as usize {
         return Err(DooError::TooLarge { what, count, max: NONE as usize - 1 });
     }
@@ -452,13 +452,11 @@ pub(crate) fn check_step_size(corners: usize, interior_edges: usize) -> Result<(
 pub(crate) fn doo_topology(coarse: &CornerMesh, with_adjacency: bool) -> Result<DooTopology, DooError> {
     let corners = coarse.corner_count();
     let faces = coarse.face_count();
-    check_size("fine vertices", corners)?;
     let twin = &coarse.corner_twin;
     let next = &coarse.corner_next;
     let interior_edges = (0..corners as u32).filter(|&c| twin[c as usize] != NONE && c < twin[c as usize]).count();
     let quad_base = corners as u32;
     let fv_base = corners + 4 * interior_edges;
-    // Fine corners: at most one F_V corner per coarse corner.
     check_step_size(corners, interior_edges)?;
 
     let mut offsets = Vec::with_capacity(faces + interior_edges + coarse.vertex_count + 1);
