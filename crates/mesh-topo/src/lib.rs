@@ -68,7 +68,7 @@ pub mod testing;
 
 pub use error::{InvariantError, MeshError};
 pub use ids::{EdgeId, FaceId, HalfedgeId, MAX_ELEMENTS, VertexId};
-pub use mesh::{HalfedgeMesh, LoopCirculator, PositionsError, VertexCirculator};
+pub use mesh::{HalfedgeMesh, LoopCirculator, PositionsError, VertexCirculator, check_capacity};
 pub use soup::PolygonSoup;
 pub use topology::{ComponentStats, Components, TopologyStats};
 

@@ -638,8 +638,20 @@ fn for_each_side(soup: &PolygonSoup, mut visit: impl FnMut(usize, u32, u32)) {
     }
 }
 
-/// Refuses soups whose elements `u32` handles cannot address.
-fn check_capacity(vertices: usize, corners: usize) -> Result<(), MeshError> {
+/// Refuses soups whose elements `u32` handles cannot address: what
+/// [`HalfedgeMesh::from_soup`] checks first, for callers that know the counts of a mesh
+/// before they build it (say, a subdivision level) and want to fail before any work.
+///
+/// ```
+/// use mesh_topo::{MAX_ELEMENTS, MeshError, check_capacity};
+/// assert_eq!(check_capacity(MAX_ELEMENTS, MAX_ELEMENTS / 2), Ok(()));
+/// assert!(matches!(check_capacity(3, MAX_ELEMENTS), Err(MeshError::TooLarge { what: "face corners", .. })));
+/// ```
+///
+/// # Errors
+/// [`MeshError::TooLarge`] for more than [`MAX_ELEMENTS`] vertices or more than half as
+/// many face corners (every corner can create two half-edges).
+pub fn check_capacity(vertices: usize, corners: usize) -> Result<(), MeshError> {
     if vertices > MAX_ELEMENTS {
         return Err(MeshError::TooLarge { what: "vertices", count: vertices, max: MAX_ELEMENTS });
     }

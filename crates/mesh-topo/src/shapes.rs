@@ -6,7 +6,6 @@
 use glam::DVec3;
 
 use crate::error::MeshError;
-use crate::ids::MAX_ELEMENTS;
 use crate::soup::PolygonSoup;
 
 /// How grid cells are split into faces.
@@ -157,17 +156,9 @@ pub fn grid(width: u32, height: u32, kind: CellKind) -> Result<PolygonSoup, Mesh
 /// Refuses shapes whose vertex or corner count does not fit the mesh's `u32` indices.
 /// Counts are `u128` so that no product of two `u32` sizes overflows.
 fn check_size(vertices: u128, cells: u128, kind: CellKind) -> Result<(), MeshError> {
-    let max = MAX_ELEMENTS as u128;
-    if vertices > max {
-        return Err(MeshError::TooLarge { what: "vertices", count: saturate(vertices), max: MAX_ELEMENTS });
-    }
-    // A triangulated cell has 6 corners, a quad 4; the builder allows MAX_ELEMENTS / 2 corners.
+    // A triangulated cell has 6 corners, a quad 4.
     let corners_per_cell = if kind == CellKind::Quads { 4 } else { 6 };
-    let corners = cells * corners_per_cell;
-    if corners > max / 2 {
-        return Err(MeshError::TooLarge { what: "face corners", count: saturate(corners), max: MAX_ELEMENTS / 2 });
-    }
-    Ok(())
+    crate::check_capacity(saturate(vertices), saturate(cells * corners_per_cell))
 }
 
 /// The count for the error message; saturates where `usize` cannot hold it.
@@ -228,6 +219,7 @@ pub fn torus(around: u32, along: u32, kind: CellKind) -> Result<PolygonSoup, Mes
 mod tests {
     use super::*;
     use crate::HalfedgeMesh;
+    use crate::ids::MAX_ELEMENTS;
 
     #[test]
     fn shapes_have_expected_topology() {

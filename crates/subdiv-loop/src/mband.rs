@@ -58,7 +58,7 @@
 use std::collections::BTreeMap;
 
 use glam::DVec3;
-use mesh_topo::{HalfedgeId, HalfedgeMesh, MAX_ELEMENTS, MeshError};
+use mesh_topo::{HalfedgeId, HalfedgeMesh};
 use serde::{Deserialize, Serialize};
 
 use crate::LoopError;
@@ -336,7 +336,7 @@ pub fn ternary_edge_weights(n: usize, lambda: f64) -> Vec<f64> {
 ///
 /// # Errors
 /// [`LoopError::InvalidParameter`] for `lambda` outside `(1/9, 1/2]`; the mesh errors of
-/// [`subdivide`] (non-triangles, pillows, non-finite positions); [`MeshError::TooLarge`]
+/// [`subdivide`] (non-triangles, pillows, non-finite positions); [`mesh_topo::MeshError::TooLarge`]
 /// if a level would have more vertices or face corners than `u32` handles address,
 /// found from the counts before any level is built.
 pub fn ternary_subdivide(mesh: &HalfedgeMesh, levels: u32, options: &TernaryOptions) -> Result<LoopMesh, LoopError> {
@@ -473,13 +473,7 @@ fn check_ternary_sizes(mesh: &HalfedgeMesh, levels: u32) -> Result<(), LoopError
             edges.saturating_mul(3).saturating_add(faces.saturating_mul(9)),
             faces.saturating_mul(9),
         );
-        if vertices > MAX_ELEMENTS {
-            return Err(MeshError::TooLarge { what: "vertices", count: vertices, max: MAX_ELEMENTS }.into());
-        }
-        let corners = faces.saturating_mul(3);
-        if corners > MAX_ELEMENTS / 2 {
-            return Err(MeshError::TooLarge { what: "face corners", count: corners, max: MAX_ELEMENTS / 2 }.into());
-        }
+        mesh_topo::check_capacity(vertices, faces.saturating_mul(3))?;
     }
     Ok(())
 }

@@ -3,7 +3,7 @@
 use glam::DVec3;
 use mesh_topo::shapes::{self, CellKind};
 use mesh_topo::testing::{arb_triangle_mesh, scramble};
-use mesh_topo::{HalfedgeMesh, PolygonSoup};
+use mesh_topo::{HalfedgeMesh, MAX_ELEMENTS, MeshError, PolygonSoup};
 use proptest::prelude::*;
 
 use super::*;
