@@ -122,13 +122,18 @@ fn errors_are_one_line_with_the_location() {
     let length = std::fs::metadata(&truncated).unwrap().len();
     assert!(err.contains(&format!("short.ply: byte {length}: file ends early")), "{err}");
     let err = fails(&["info", "tests/data/README.md"]);
-    assert!(err.contains("unsupported format"), "{err}");
+    // The file named once.
+    assert_eq!(
+        err.trim_end(),
+        "multires: tests/data/README.md: unsupported format (the extension must be .obj, .off or .ply)"
+    );
     let err = fails(&["info", "tests/data/no-such-mesh.off"]);
     assert!(err.contains("no-such-mesh.off"), "{err}");
     let err = fails(&["compare", "tests/data/cube_quad.off", bad.to_str().unwrap()]);
     assert!(err.contains("line 5"), "{err}");
     let err = fails(&["convert", "tests/data/cube_quad.off", "out.stl"]);
     assert!(err.contains("out.stl: unsupported format"), "{err}");
+    assert_eq!(err.matches("out.stl").count(), 1, "{err}");
 }
 
 #[test]

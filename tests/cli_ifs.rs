@@ -109,7 +109,7 @@ fn every_kind_runs() {
 #[test]
 fn bad_arguments_give_one_clear_error_line() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&[&str], &str); 16] = [
+    let cases: [(&[&str], &str); 18] = [
         // |z| < 1 but |1 - z| >= 1, and |z| >= 1.
         (&["--kind", "complex", "--z", "-0.5,0"], "|1 - z| = 1.5"),
         (&["--kind", "complex", "--z", "1.2,0"], "|z| = 1.2 >= 1"),
@@ -129,6 +129,10 @@ fn bad_arguments_give_one_clear_error_line() {
         (&["--preset", "nope"], "known: quadratic-bezier"),
         (&["--preset", "levy", "--size", "0x10"], "--size"),
         (&["--preset", "levy", "--levels", "40"], "budget"),
+        // A chaos game kept in memory to be written: refused at once (not an abort on
+        // the allocation, and no hours of iteration first).
+        (&["--preset", "levy", "--points", "18446744073709551615", "--out-points", "p.txt"], "at most 16777216"),
+        (&["--preset", "levy", "--points", "16777217", "--out-points", "p.txt"], "--points 16777217 with --out-points"),
     ];
     for (args, expected) in cases {
         let mut all = args.to_vec();
@@ -139,6 +143,7 @@ fn bad_arguments_give_one_clear_error_line() {
         assert_eq!(message.trim_end().lines().count(), 1, "{args:?}: {message}");
         assert!(message.contains(expected), "{args:?}: {message}");
         assert!(!dir.path().join("x.png").exists(), "{args:?} wrote an image");
+        assert!(!dir.path().join("p.txt").exists(), "{args:?} wrote points");
     }
     // The geometric-mean error names the point, its value and the mean's domain.
     let output = run(

@@ -13,6 +13,8 @@ use super::{CliError, CliResult};
 pub fn io_error(path: &Path, error: IoError) -> CliError {
     match error {
         IoError::File { path, source } => CliError::Io { path, source },
+        // Its message names the file already.
+        unknown @ IoError::UnknownExtension { .. } => CliError::Input(unknown.to_string()),
         other => CliError::Input(format!("{}: {other}", path.display())),
     }
 }

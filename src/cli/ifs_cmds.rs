@@ -68,7 +68,8 @@ pub struct IfsArgs {
     pub seed: u64,
 }
 
-/// Most points the deterministic algorithm may produce from the command line.
+/// Most points the command line keeps in memory: those of the deterministic algorithm,
+/// and those of a chaos game written with `--out-points`.
 const POINT_BUDGET: usize = 1 << 24;
 
 /// What to render: the IFS, its deterministic start set and levels, and the projection.
@@ -108,6 +109,12 @@ pub fn ifs(args: &IfsArgs) -> CliResult {
         Some(n) => {
             let game = ChaosGame { points: n, seed: args.seed, ..ChaosGame::default() };
             if args.out_points.is_some() {
+                if n > POINT_BUDGET {
+                    return Err(CliError::Input(format!(
+                        "--points {n} with --out-points: the points are kept to be written, at most \
+                         {POINT_BUDGET} (without --out-points any number streams into the image)"
+                    )));
+                }
                 let points = ifs::chaos_points(ifs, &game).map_err(|e| input_error("chaos game", e))?;
                 let image = ifs::render_points(&points, width, height, job.projection, ToneMap::Log)
                     .map_err(|e| input_error("render", e))?;

@@ -111,6 +111,16 @@ pub enum IfsError {
         /// The budget.
         budget: usize,
     },
+    /// The chaos game's point list does not fit in memory (its length overflows, or the
+    /// allocation is refused): [`chaos_density`](crate::chaos_density) renders any number
+    /// of points without keeping them.
+    #[error("{points} points ({bytes} bytes) do not fit in memory; render them into a density image instead")]
+    TooManyPoints {
+        /// Points asked for.
+        points: usize,
+        /// Bytes the list would take (saturated).
+        bytes: u128,
+    },
     /// A rendering parameter is unusable (empty image, empty view, ...).
     #[error("rendering: {0}")]
     Render(String),

@@ -330,6 +330,8 @@ fn check_game(game: &ChaosGame) -> Result<()> {
 ///
 /// # Errors
 /// [`IfsError::ParameterOutOfRange`] for zero points or bad probabilities;
+/// [`IfsError::TooManyPoints`] when the list of `game.points` points cannot be allocated
+/// (before any iteration);
 /// [`IfsError::Domain`] when a nonlinear map leaves its domain.
 ///
 /// ```
@@ -343,7 +345,13 @@ pub fn chaos_points<I: Ifs + ?Sized>(ifs: &I, game: &ChaosGame) -> Result<Vec<[f
     check_game(game)?;
     let thresholds = thresholds(ifs, &game.probabilities)?;
     let start = chaos_start(ifs)?;
-    let mut points = vec![[0.0; 3]; game.points];
+    // Asked for, not given: a count beyond memory is an error, not an abort.
+    let mut points = Vec::new();
+    points.try_reserve_exact(game.points).map_err(|_| IfsError::TooManyPoints {
+        points: game.points,
+        bytes: game.points as u128 * size_of::<[f64; 3]>() as u128,
+    })?;
+    points.resize(game.points, [0.0; 3]);
     points
         .par_chunks_mut(CHAOS_CHUNK)
         .enumerate()
@@ -851,6 +859,13 @@ mod tests {
         let bad =
             ChaosGame { points: 5, probabilities: Probabilities::Custom(vec![1.0, -1.0, 1.0]), ..ChaosGame::default() };
         assert!(chaos_points(&ifs, &bad).is_err());
+        // A list longer than the address space: an error before any iteration, not an
+        // abort (a count the allocator refuses gives the same error).
+        for points in [usize::MAX, isize::MAX as usize / 24 + 1] {
+            let huge = ChaosGame { points, ..ChaosGame::default() };
+            let expected = IfsError::TooManyPoints { points, bytes: points as u128 * 24 };
+            assert_eq!(chaos_points(&ifs, &huge), Err(expected));
+        }
         assert!(Canvas::new(0, 10, View::new([0.0, 0.0], [1.0, 1.0]).unwrap()).is_err());
         assert!(View::new([0.0, 0.0], [0.0, 1.0]).is_err());
     }
