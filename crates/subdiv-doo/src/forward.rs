@@ -411,7 +411,8 @@ pub(crate) fn check_finite(positions: &[DVec3]) -> Result<(), DooError> {
 /// the input's counts before any level is built (so that too many levels fail at once,
 /// not after filling the memory; under the Chaikin rule the count named is that of the
 /// shrink rule's level, which the Chaikin level exceeds, and a level that passes this
-/// check is checked again as it is built). Non-manifold input and faces with fewer than three corners cannot be a
+/// check is checked again as it is built); [`DooError::InvalidParameter`] for more than
+/// [`MAX_LEVELS`] levels. Non-manifold input and faces with fewer than three corners cannot be a
 /// [`HalfedgeMesh`]; [`subdivide_soup`] reports them.
 pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, DooError> {
     options.rule.validate()?;
@@ -436,21 +437,50 @@ pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, D
 /// rule; a Chaikin level contains the shrink level (its ring is added to the same faces,
 /// and a larger mesh has every interior edge and vertex of a smaller one), so they bound
 /// the Chaikin rule's from below and what fails here fails there too.
+///
+/// Then more than [`MAX_LEVELS`] levels are refused, so that a mesh that does not grow
+/// (one face, or none) is not refined for hours; a mesh that grows is told its size.
 fn check_level_sizes(mesh: &CornerMesh, levels: u32) -> Result<(), DooError> {
+    let checked = levels.min(MAX_LEVELS + 1);
     // A step at most quadruples the corners (a closed mesh's exactly: `2C + 4E_i - C_b`
     // with `2E_i <= C`), and a step's check counts at most four times its corners: when
     // `4^levels` times the corners fit, every level fits, and the mesh is not read.
-    let bound = (0..levels).try_fold(mesh.corner_count(), |c, _| c.checked_mul(4).filter(|&c| c < NONE as usize));
-    if bound.is_some() {
-        return Ok(());
+    let bound = (0..checked).try_fold(mesh.corner_count(), |c, _| c.checked_mul(4).filter(|&c| c < NONE as usize));
+    if bound.is_none() {
+        let mut counts = LevelCounts::of(mesh);
+        for _ in 0..checked {
+            check_step_size(counts.corners, counts.interior_edges)?;
+            counts = counts.next();
+        }
     }
-    let mut counts = LevelCounts::of(mesh);
-    for _ in 0..levels {
-        check_step_size(counts.corners, counts.interior_edges)?;
-        counts = counts.next();
+    if levels > MAX_LEVELS {
+        return Err(DooError::InvalidParameter {
+            name: "levels",
+            value: levels as f64,
+            reason: "at most 32 levels are refined (a mesh that grows exceeds u32 indices after 16)",
+        });
     }
     Ok(())
 }
+
+/// The most levels [`subdivide`] refines and [`decompose`](crate::decompose) reverses.
+/// A mesh that grows no longer fits `u32` indices after 16 levels (every level at least
+/// doubles the corners of a closed mesh); one that does not grow (a single face, faces
+/// that share no edge, no faces at all) only repeats its step, each face contracting
+/// towards its centroid, so that more levels would only take longer (`u32::MAX` of them,
+/// hours).
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes::{self, CellKind}};
+/// use subdiv_doo::{DooError, DooOptions, FaceRule, MAX_LEVELS, subdivide};
+///
+/// let quad = HalfedgeMesh::from_soup(&shapes::grid(1, 1, CellKind::Quads)?)?;
+/// assert_eq!(subdivide(&quad, &DooOptions::new(FaceRule::DooSabin, MAX_LEVELS))?.face_count(), 1);
+/// let error = subdivide(&quad, &DooOptions::new(FaceRule::DooSabin, MAX_LEVELS + 1)).unwrap_err();
+/// assert!(matches!(error, DooError::InvalidParameter { name: "levels", .. }));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub const MAX_LEVELS: u32 = 32;
 
 /// The counts of one level that determine those of the next under the shrink boundary
 /// rule, so that the sizes of many levels are known without building them.
@@ -743,10 +773,29 @@ mod tests {
                 assert!(at_least.corners >= counts.corners && at_least.interior_edges >= counts.interior_edges);
             }
         }
-        // An open mesh that shrinks does not grow: a single quad takes any number of levels.
+        // An open mesh that shrinks does not grow: a single quad takes every level up to
+        // the limit, and no more (before the limit, `u32::MAX` levels of it ran for hours;
+        // so did a mesh without faces).
         let quad = HalfedgeMesh::from_soup(&shapes::grid(1, 1, CellKind::Quads).unwrap()).unwrap();
-        let fine = subdivide(&quad, &DooOptions::new(FaceRule::DooSabin, 1000)).unwrap();
+        let fine = subdivide(&quad, &DooOptions::new(FaceRule::DooSabin, MAX_LEVELS)).unwrap();
         assert_eq!((fine.vertex_count(), fine.face_count()), (4, 1));
+        let points = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X], Vec::<[u32; 3]>::new());
+        let faceless = HalfedgeMesh::from_soup(&points).unwrap();
+        for mesh in [&quad, &faceless] {
+            for rule in [FaceRule::DooSabin, FaceRule::Centroid { a: 0.25 }] {
+                for boundary in [BoundaryRule::Shrink, BoundaryRule::Chaikin] {
+                    for levels in [MAX_LEVELS + 1, u32::MAX] {
+                        let options = DooOptions::new(rule, levels).with_boundary(boundary);
+                        let error = subdivide(mesh, &options).unwrap_err();
+                        let DooError::InvalidParameter { name: "levels", value, reason } = error else {
+                            panic!("{levels} levels: {error}");
+                        };
+                        assert_eq!(value, levels as f64);
+                        assert!(reason.contains(&format!("at most {MAX_LEVELS} levels")), "{reason}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]

@@ -44,7 +44,7 @@ pub mod rule;
 pub use boundary::BoundaryRule;
 pub use corner::{FaceKind, FaceOrigin};
 pub use error::DooError;
-pub use forward::{DooMesh, DooOptions, subdivide, subdivide_soup};
+pub use forward::{DooMesh, DooOptions, MAX_LEVELS, subdivide, subdivide_soup};
 pub use pyramid::{
     DecomposeOptions, Decomposition, Depth, DooPyramid, PreparedDooPyramid, RateDistortion, decompose, decompose_soup,
     is_doo_pyramid,

@@ -221,8 +221,9 @@ pub struct RateDistortion {
     pub rms_error: f64,
 }
 
-/// Levels decomposed by [`Depth::Max`] at most.
-pub const MAX_LEVELS: u32 = 32;
+/// Levels decomposed by [`Depth::Max`] at most, and by [`Depth::Levels`]: those that
+/// [`subdivide`](crate::subdivide) refines.
+pub use crate::forward::MAX_LEVELS;
 
 /// Decomposes a mesh into a base mesh and per-level details by repeated reverse
 /// Doo-Sabin.
@@ -246,11 +247,24 @@ pub const MAX_LEVELS: u32 = 32;
 ///
 /// # Errors
 /// The errors of [`crate::reverse`](mod@crate::reverse) for the first level; for [`Depth::Levels`], also
-/// for any further level (the error says which level failed).
+/// for any further level (the error says which level failed), and
+/// [`DooError::InvalidParameter`] for no level or more than [`MAX_LEVELS`].
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
     if options.depth == Depth::Levels(0) {
         check_finite(mesh.positions())?;
         return Err(DooError::InvalidParameter { name: "levels", value: 0.0, reason: "decompose at least one level" });
+    }
+    // A mesh whose faces share no edge reverses to itself, level after level: without
+    // the limit, `u32::MAX` levels of it overflowed the stack.
+    if let Depth::Levels(levels) = options.depth
+        && levels > MAX_LEVELS
+    {
+        check_finite(mesh.positions())?;
+        return Err(DooError::InvalidParameter {
+            name: "levels",
+            value: levels as f64,
+            reason: "decompose at most 32 levels (a mesh that grows exceeds u32 indices after 16)",
+        });
     }
     // A mesh in the canonical order: the first level without the general search (the
     // same result; `None` when it does not apply, also when a position is not finite,
@@ -300,7 +314,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
 /// # Errors
 /// Those of [`HalfedgeMesh::from_soup`] (as [`DooError::Mesh`]) and of [`decompose`].
 pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
-    if options.depth != Depth::Levels(0)
+    if !matches!(options.depth, Depth::Levels(levels) if levels == 0 || levels > MAX_LEVELS)
         && options.boundary == BoundaryRule::Shrink
         && canonical_enabled()
         && let Some(halfedges) = CornerHalfedges::of_canonical_soup(soup)
@@ -1384,6 +1398,20 @@ mod tests {
             // An explicit depth is still honoured: the user asked for it.
             let deeper = decompose(&mesh, &DecomposeOptions::levels(rule, 3)).unwrap();
             assert_eq!(deeper.pyramid.level_count(), 3);
+            // Up to the limit of levels; beyond it an error at once (`u32::MAX` levels
+            // overflowed the stack), from the mesh and from its soup.
+            let deepest = decompose_soup(&soup, &DecomposeOptions::levels(rule, MAX_LEVELS)).unwrap();
+            assert_eq!(deepest.pyramid.level_count(), MAX_LEVELS as usize);
+            for levels in [MAX_LEVELS + 1, u32::MAX] {
+                let options = DecomposeOptions::levels(rule, levels);
+                for error in [decompose(&mesh, &options).unwrap_err(), decompose_soup(&soup, &options).unwrap_err()] {
+                    let DooError::InvalidParameter { name: "levels", value, reason } = error else {
+                        panic!("{levels} levels: {error}");
+                    };
+                    assert_eq!(value, levels as f64);
+                    assert!(reason.contains(&format!("at most {MAX_LEVELS} levels")), "{reason}");
+                }
+            }
         }
         // A real refinement still decomposes all the way.
         let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();

@@ -296,7 +296,8 @@ impl LoopMesh {
 /// # Errors
 /// [`LoopError::NotTriangle`] naming the first face that is not a triangle;
 /// [`LoopError::Mesh`] with [`MeshError::NonFiniteCoordinate`] if a position is NaN or
-/// infinite, or [`MeshError::TooLarge`] if the output would not fit `u32` indices.
+/// infinite, or [`MeshError::TooLarge`] if the output would not fit `u32` indices;
+/// [`LoopError::InvalidParameter`] for more than [`MAX_LEVELS`] levels.
 pub fn subdivide(mesh: &HalfedgeMesh, levels: u32, options: &LoopOptions) -> Result<LoopMesh, LoopError> {
     check_finite(mesh.positions())?;
     let topology = Topology::from_mesh(mesh)?;
@@ -444,16 +445,43 @@ pub(crate) fn check_triangles(soup: &PolygonSoup) -> Result<(), LoopError> {
     }
 }
 
+/// The most levels the functions of this crate refine (Loop steps; ternary levels):
+/// a mesh with a face no longer fits the `u32` layout after 16 Loop steps (10 ternary
+/// levels), and a mesh without faces does not change at all, so more levels could only
+/// repeat work on it (`u32::MAX` of them would take hours). Asking for more is
+/// [`LoopError::InvalidParameter`] at once.
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, PolygonSoup};
+/// use subdiv_loop::LoopError;
+/// use subdiv_loop::forward::{LoopOptions, MAX_LEVELS, subdivide};
+///
+/// // Two isolated vertices: no faces to refine.
+/// let points = HalfedgeMesh::from_soup(&PolygonSoup::from_faces(vec![glam::DVec3::ZERO; 2], Vec::<[u32; 3]>::new()))?;
+/// assert_eq!(subdivide(&points, MAX_LEVELS, &LoopOptions::default())?.positions.len(), 2);
+/// let error = subdivide(&points, MAX_LEVELS + 1, &LoopOptions::default()).unwrap_err();
+/// assert!(matches!(error, LoopError::InvalidParameter { name: "levels", .. }));
+/// # Ok::<(), LoopError>(())
+/// ```
+pub const MAX_LEVELS: u32 = 32;
+
+/// The error for `levels` levels where at most `max` are refined.
+pub(crate) fn too_many_levels(levels: u32, max: u32) -> LoopError {
+    LoopError::InvalidParameter { name: "levels", reason: format!("{levels}: at most {max}") }
+}
+
 /// Checks that every level of `levels` steps from a mesh of `vertices`, `edges` and
 /// `faces` fits the `u32` layout: half-edge indices and edge counts of the levels that
 /// are refined further, vertex indices of the last (from the counts alone, before any
-/// work: `V + E`, `2E + 3F` and `4F` per step).
+/// work: `V + E`, `2E + 3F` and `4F` per step); then that `levels` is at most
+/// [`MAX_LEVELS`] (so that a mesh with a face, which fails the sizes first, is told its
+/// size).
 pub(crate) fn check_sizes(vertices: usize, edges: usize, faces: usize, levels: u32) -> Result<(), LoopError> {
     let (mut v, mut e, mut f) = (vertices as u64, edges as u64, faces as u64);
     let too_large = |what: &'static str, count: u64, max: u64| {
         Err(MeshError::TooLarge { what, count: count.min(usize::MAX as u64) as usize, max: max as usize }.into())
     };
-    for _ in 0..levels {
+    for _ in 0..levels.min(MAX_LEVELS + 1) {
         if f > MAX_FACES {
             return too_large("faces", f, MAX_FACES);
         }
@@ -465,7 +493,10 @@ pub(crate) fn check_sizes(vertices: usize, edges: usize, faces: usize, levels: u
     if v >= u32::MAX as u64 {
         return too_large("vertices", v, u32::MAX as u64 - 1);
     }
-    Ok(())
+    match levels {
+        0..=MAX_LEVELS => Ok(()),
+        _ => Err(too_many_levels(levels, MAX_LEVELS)),
+    }
 }
 
 #[cfg(test)]

@@ -63,7 +63,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::LoopError;
 use crate::forward::topology::Topology;
-use crate::forward::{Attribute, LoopMesh, LoopOptions, SparseRow, SubdivisionMatrix, check_finite, subdivide};
+use crate::forward::{
+    Attribute, LoopMesh, LoopOptions, MAX_LEVELS, SparseRow, SubdivisionMatrix, check_finite, subdivide,
+    too_many_levels,
+};
 
 /// Largest arity [`box_spline_masks`] accepts (numerators then stay far below `u64`).
 pub const MAX_ARITY: u32 = 64;
@@ -335,7 +338,8 @@ pub fn ternary_edge_weights(n: usize, lambda: f64) -> Vec<f64> {
 /// ```
 ///
 /// # Errors
-/// [`LoopError::InvalidParameter`] for `lambda` outside `(1/9, 1/2]`; the mesh errors of
+/// [`LoopError::InvalidParameter`] for `lambda` outside `(1/9, 1/2]` or more than
+/// [`MAX_LEVELS`] levels; the mesh errors of
 /// [`subdivide`] (non-triangles, pillows, non-finite positions); [`mesh_topo::MeshError::TooLarge`]
 /// if a level would have more vertices or face corners than `u32` handles address,
 /// found from the counts before any level is built.
@@ -424,13 +428,16 @@ pub fn ternary_matrix(
 /// ```
 ///
 /// # Errors
-/// As [`subdivide`]; [`LoopError::InvalidParameter`] if `2 * levels` overflows.
+/// As [`subdivide`]; [`LoopError::InvalidParameter`] for more than
+/// [`MAX_LEVELS`]` / 2` levels.
 pub fn quaternary_subdivide(mesh: &HalfedgeMesh, levels: u32, options: &LoopOptions) -> Result<LoopMesh, LoopError> {
-    let steps = levels.checked_mul(2).ok_or(LoopError::InvalidParameter {
-        name: "levels",
-        reason: format!("{levels} quaternary levels are too many"),
-    })?;
-    subdivide(mesh, steps, options)
+    // Two Loop steps per level, so half as many levels as Loop's limit. Beyond it the
+    // errors of the steps come first (a mesh with a face is too large after 8 levels),
+    // then the limit, named in quaternary levels.
+    match subdivide(mesh, 2 * levels.min(MAX_LEVELS / 2 + 1), options) {
+        Err(LoopError::InvalidParameter { name: "levels", .. }) => Err(too_many_levels(levels, MAX_LEVELS / 2)),
+        result => result,
+    }
 }
 
 /// Runs `levels` ternary steps (building the half-edge mesh of each intermediate level).
@@ -467,7 +474,8 @@ pub(crate) fn ternary_levels<T: Attribute>(
 /// edges and `9F` faces, boundary or not.
 fn check_ternary_sizes(mesh: &HalfedgeMesh, levels: u32) -> Result<(), LoopError> {
     let (mut vertices, mut edges, mut faces) = (mesh.vertex_count(), mesh.edge_count(), mesh.face_count());
-    for _ in 0..levels {
+    // A mesh with a face fails by level 11; then the level limit.
+    for _ in 0..levels.min(MAX_LEVELS + 1) {
         (vertices, edges, faces) = (
             vertices.saturating_add(edges.saturating_mul(2)).saturating_add(faces),
             edges.saturating_mul(3).saturating_add(faces.saturating_mul(9)),
@@ -475,7 +483,10 @@ fn check_ternary_sizes(mesh: &HalfedgeMesh, levels: u32) -> Result<(), LoopError
         );
         mesh_topo::check_capacity(vertices, faces.saturating_mul(3))?;
     }
-    Ok(())
+    match levels {
+        0..=MAX_LEVELS => Ok(()),
+        _ => Err(too_many_levels(levels, MAX_LEVELS)),
+    }
 }
 
 fn face_corners(mesh: &HalfedgeMesh, f: mesh_topo::FaceId) -> [u32; 3] {

@@ -304,17 +304,14 @@ impl LoopPyramid {
     /// Any [`mesh_topo::MeshError`] of `base`, or [`LoopError::NotTriangle`];
     /// [`MeshError::TooLarge`](mesh_topo::MeshError::TooLarge) if the levels would not fit
     /// the `u32` layout of [`subdivide`](crate::forward::subdivide) (checked before any
-    /// work); [`LoopError::InvalidParameter`] for more than 32 levels (a mesh with a face
-    /// does not fit that layout after 16; a base without faces would only pile up empty
-    /// levels).
+    /// work); [`LoopError::InvalidParameter`] for more than
+    /// [`MAX_LEVELS`](crate::forward::MAX_LEVELS) levels (a mesh with a face does not fit
+    /// that layout after 16; a base without faces would only pile up empty levels).
     pub fn smooth(base: PolygonSoup, rules: LoopOptions, levels: usize) -> Result<Self, LoopError> {
         let mut table = CornerTable::from_soup(&base)?;
-        // (More than 16 levels fail here for any mesh with a face.)
-        let steps = levels.min(33) as u32;
+        // More than 16 levels fail here for any mesh with a face, more than 32 for any.
+        let steps = u32::try_from(levels).unwrap_or(u32::MAX);
         crate::forward::check_sizes(table.vertex_count(), table.edge_count(), table.face_count(), steps)?;
-        if levels > 32 {
-            return Err(LoopError::InvalidParameter { name: "levels", reason: format!("{levels}: at most 32") });
-        }
         let mut detail_levels = Vec::with_capacity(levels);
         for _ in 0..levels {
             detail_levels.push(DetailLevel { details: vec![DVec3::ZERO; table.edge_count()], order: None });

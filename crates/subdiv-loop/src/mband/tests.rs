@@ -509,3 +509,50 @@ fn ternary_counts_are_checked_before_any_work() {
         );
     }
 }
+
+/// A mesh without faces does not change under any of the schemes, so the level limit
+/// is what stops a huge level count (before, `u32::MAX` levels of it ran for hours); a
+/// mesh with a face is told its size first, as before.
+#[test]
+fn level_limits_stop_meshes_that_do_not_grow() {
+    use crate::forward::{MAX_LEVELS, Subdivider, refine_attribute, subdivision_matrix};
+    let points = vec![DVec3::new(1.0, 2.0, 3.0), DVec3::new(-4.0, 0.5, 8.0)];
+    let soup = PolygonSoup::from_faces(points.clone(), Vec::<[u32; 3]>::new());
+    let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+    let loop_options = LoopOptions::default();
+    let ternary_options = TernaryOptions::default();
+    let is_level_limit = |error: LoopError, levels: u32, max: u32| {
+        let expected = format!("{levels}: at most {max}");
+        assert!(
+            matches!(&error, LoopError::InvalidParameter { name: "levels", reason } if *reason == expected),
+            "{levels} levels: {error}"
+        );
+    };
+    // Up to the limit: the points unchanged, no faces.
+    let same = |fine: LoopMesh| assert_eq!((fine.positions, fine.triangles.len()), (points.clone(), 0));
+    same(subdivide(&mesh, MAX_LEVELS, &loop_options).unwrap());
+    same(ternary_subdivide(&mesh, MAX_LEVELS, &ternary_options).unwrap());
+    same(quaternary_subdivide(&mesh, MAX_LEVELS / 2, &loop_options).unwrap());
+    for levels in [MAX_LEVELS + 1, u32::MAX] {
+        is_level_limit(subdivide(&mesh, levels, &loop_options).unwrap_err(), levels, MAX_LEVELS);
+        is_level_limit(refine_attribute(&mesh, levels, &loop_options, &[1.0, 2.0]).unwrap_err(), levels, MAX_LEVELS);
+        is_level_limit(subdivision_matrix(&mesh, levels, &loop_options).unwrap_err(), levels, MAX_LEVELS);
+        let mut out = LoopMesh::default();
+        let error = Subdivider::new(loop_options).subdivide_into(&mesh, levels, &mut out).unwrap_err();
+        is_level_limit(error, levels, MAX_LEVELS);
+        is_level_limit(ternary_subdivide(&mesh, levels, &ternary_options).unwrap_err(), levels, MAX_LEVELS);
+        is_level_limit(ternary_matrix(&mesh, levels, &ternary_options).unwrap_err(), levels, MAX_LEVELS);
+    }
+    // Quaternary levels are two Loop steps: the limit is half, and named in its levels.
+    for levels in [MAX_LEVELS / 2 + 1, MAX_LEVELS + 1, u32::MAX] {
+        is_level_limit(quaternary_subdivide(&mesh, levels, &loop_options).unwrap_err(), levels, MAX_LEVELS / 2);
+    }
+    // A mesh with a face: the size error, at any level count past its size.
+    let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron()).unwrap();
+    for levels in [20, MAX_LEVELS + 1, u32::MAX] {
+        let too_large = |error: LoopError| matches!(error, LoopError::Mesh(MeshError::TooLarge { .. }));
+        assert!(too_large(subdivide(&octahedron, levels, &loop_options).unwrap_err()), "{levels}");
+        assert!(too_large(quaternary_subdivide(&octahedron, levels, &loop_options).unwrap_err()), "{levels}");
+        assert!(too_large(ternary_subdivide(&octahedron, levels, &ternary_options).unwrap_err()), "{levels}");
+    }
+}
