@@ -80,6 +80,31 @@ fn subdivide_errors_name_the_problem() {
     let chaikin = ["subdivide", path(&bunny), path(&out), "--scheme", "doo-sabin", "--boundary", "chaikin"];
     let message = fails(&[&chaikin[..], &["--levels", "30"]].concat());
     assert!(message.contains("too many fine corners"), "{message}");
+    // A mesh that does not grow (two points, no faces; a single triangle under Doo-Sabin):
+    // the level limit, at once (it ran for hours before), and for Doo-Sabin's reversal
+    // of a lone face, which is its own coarse mesh (it overflowed the stack).
+    let points = dir.path().join("points.off");
+    std::fs::write(&points, "OFF\n2 0 0\n0 0 0\n1 2 3\n").unwrap();
+    let triangle = dir.path().join("triangle.off");
+    std::fs::write(&triangle, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").unwrap();
+    let many = "4294967295";
+    for (mesh, scheme, expected) in [
+        (&points, "loop", "invalid levels: 4294967295: at most 32"),
+        (&points, "ternary-loop", "invalid levels: 4294967295: at most 32"),
+        (&points, "quaternary-loop", "invalid levels: 4294967295: at most 16"),
+        (&points, "doo-sabin", "levels = 4294967295: at most 32 levels"),
+        (&triangle, "doo-simple", "levels = 4294967295: at most 32 levels"),
+    ] {
+        let message = fails(&["subdivide", path(mesh), path(&out), "--scheme", scheme, "--levels", many]);
+        assert!(message.contains(expected), "{scheme}: {message}");
+        assert!(!out.exists(), "{scheme}");
+    }
+    let mres = dir.path().join("triangle.mres");
+    let message = fails(&["decompose", path(&triangle), path(&mres), "--scheme", "doo", "--levels", many]);
+    assert!(message.contains("levels = 4294967295: decompose at most 32 levels"), "{message}");
+    assert!(!mres.exists());
+    let message = fails(&["reverse", path(&triangle), path(&out), "--scheme", "doo", "--levels", "33"]);
+    assert!(message.contains("levels = 33: decompose at most 32 levels"), "{message}");
 }
 
 #[test]
