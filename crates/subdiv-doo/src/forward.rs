@@ -409,10 +409,9 @@ pub(crate) fn check_finite(positions: &[DVec3]) -> Result<(), DooError> {
 /// would be a digon); [`DooError::InvalidParameter`] for a centroid parameter outside
 /// `(0, 1)`; [`DooError::TooLarge`] if a level would not fit `u32` indices, found from
 /// the input's counts before any level is built (so that too many levels fail at once,
-/// not after filling the memory; under the Chaikin rule the count named is that of the
-/// shrink rule's level, which the Chaikin level exceeds, and a level that passes this
-/// check is checked again as it is built); [`DooError::InvalidParameter`] for more than
-/// [`MAX_LEVELS`] levels. Non-manifold input and faces with fewer than three corners cannot be a
+/// not after filling the memory, with the error the build of that level would give, under
+/// either boundary rule); [`DooError::InvalidParameter`] for more than [`MAX_LEVELS`]
+/// levels. Non-manifold input and faces with fewer than three corners cannot be a
 /// [`HalfedgeMesh`]; [`subdivide_soup`] reports them.
 pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, DooError> {
     options.rule.validate()?;
@@ -428,29 +427,44 @@ pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, D
         return Ok(DooMesh { positions: soup.positions, topology });
     }
     let corners = CornerMesh::from_halfedge(mesh);
-    check_level_sizes(&corners, options.levels)?;
+    check_level_sizes(&corners, options.levels, options.boundary)?;
     subdivide_corner_mesh(corners, mesh.positions().to_vec(), options)
 }
 
 /// Before any work, a level count whose output cannot be indexed fails at once, not
-/// after the levels below it have filled the memory. The counts are those of the shrink
-/// rule; a Chaikin level contains the shrink level (its ring is added to the same faces,
-/// and a larger mesh has every interior edge and vertex of a smaller one), so they bound
-/// the Chaikin rule's from below and what fails here fails there too.
+/// after the levels below it have filled the memory. The counts follow the boundary rule
+/// ([`LevelCounts::next`], [`LevelCounts::next_chaikin`]); each level gets the checks
+/// its build makes, in the same order, so the error is the one the build would give.
 ///
 /// Then more than [`MAX_LEVELS`] levels are refused, so that a mesh that does not grow
 /// (one face, or none) is not refined for hours; a mesh that grows is told its size.
-fn check_level_sizes(mesh: &CornerMesh, levels: u32) -> Result<(), DooError> {
+fn check_level_sizes(mesh: &CornerMesh, levels: u32, boundary: BoundaryRule) -> Result<(), DooError> {
     let checked = levels.min(MAX_LEVELS + 1);
-    // A step at most quadruples the corners (a closed mesh's exactly: `2C + 4E_i - C_b`
-    // with `2E_i <= C`), and a step's check counts at most four times its corners: when
-    // `4^levels` times the corners fit, every level fits, and the mesh is not read.
-    let bound = (0..checked).try_fold(mesh.corner_count(), |c, _| c.checked_mul(4).filter(|&c| c < NONE as usize));
+    // A Shrink step at most quadruples the corners (a closed mesh's exactly: `2C + 4E_i
+    // - C_b` with `2E_i <= C`), and a step's check counts at most four times its corners;
+    // a Chaikin step gives `2C + 4E_i + 6E_b = 4C + 4E_b <= 8C` corners. When `4^levels`
+    // (`8^levels`) times the corners fit, every level fits, and the mesh is not read.
+    let growth = match boundary {
+        BoundaryRule::Shrink => 4,
+        BoundaryRule::Chaikin => 8,
+    };
+    let bound = (0..checked).try_fold(mesh.corner_count(), |c, _| c.checked_mul(growth).filter(|&c| c < NONE as usize));
     if bound.is_none() {
         let mut counts = LevelCounts::of(mesh);
         for _ in 0..checked {
             check_step_size(counts.corners, counts.interior_edges)?;
-            counts = counts.next();
+            counts = match boundary {
+                BoundaryRule::Shrink => counts.next(),
+                BoundaryRule::Chaikin => {
+                    // The build counts the fine corners once the ring is added.
+                    let fine = counts.next_chaikin();
+                    if fine.corners >= NONE as usize {
+                        let max = NONE as usize - 1;
+                        return Err(DooError::TooLarge { what: "fine corners", count: fine.corners, max });
+                    }
+                    fine
+                }
+            };
         }
     }
     if levels > MAX_LEVELS {
@@ -563,6 +577,35 @@ impl LevelCounts {
             interior_vertices: corners.saturating_sub(boundary_corners),
             boundary_corners: boundary_corners.saturating_add(boundary_ends.saturating_mul(2)),
             boundary_ends: boundary_ends.saturating_mul(2),
+        }
+    }
+
+    /// The counts of the next level under the Chaikin boundary rule (see
+    /// [`crate::boundary`]): the Shrink step's faces and corners, plus per boundary edge
+    /// two Chaikin points, a boundary quad and (at the vertex it leaves, one per boundary
+    /// fan) a boundary vertex face of `k + 2` corners for `k` corners at that vertex.
+    /// So `F + E_i + V_i + 2E_b` faces and `2C + 4E_i + 6E_b` corners. Every coarse corner
+    /// is an interior fine vertex (`C`); the Chaikin points are the boundary vertices,
+    /// each with two corners (`4E_b`) and one interior edge (`2E_b` ends), and the fine
+    /// boundary has `2E_b` edges, so `C + 2E_i + 2E_b` of the `(C' + E_b') / 2` edges are
+    /// interior. Tested against subdivision.
+    fn next_chaikin(self) -> Self {
+        let Self { faces, corners, interior_edges, boundary_edges, interior_vertices, .. } = self;
+        let twice_boundary = boundary_edges.saturating_mul(2);
+        Self {
+            faces: faces
+                .saturating_add(interior_edges)
+                .saturating_add(interior_vertices)
+                .saturating_add(twice_boundary),
+            corners: corners
+                .saturating_mul(2)
+                .saturating_add(interior_edges.saturating_mul(4))
+                .saturating_add(boundary_edges.saturating_mul(6)),
+            interior_edges: corners.saturating_add(interior_edges.saturating_mul(2)).saturating_add(twice_boundary),
+            boundary_edges: twice_boundary,
+            interior_vertices: corners,
+            boundary_corners: boundary_edges.saturating_mul(4),
+            boundary_ends: twice_boundary,
         }
     }
 }
@@ -707,20 +750,28 @@ mod tests {
         ]
     }
 
-    /// The counts of every level, as [`LevelCounts::next`] predicts them from the input
-    /// alone, are those of the subdivided mesh.
+    /// The counts of every level, as [`LevelCounts::next`] and
+    /// [`LevelCounts::next_chaikin`] predict them from the input alone, are those of the
+    /// subdivided mesh, under either boundary rule.
     fn assert_counts_follow(soup: &PolygonSoup, levels: u32) {
         let mesh = HalfedgeMesh::from_soup(soup).unwrap();
-        let mut predicted = LevelCounts::of(&CornerMesh::from_halfedge(&mesh));
-        for level in 1..=levels {
-            let coarser = predicted;
-            predicted = predicted.next();
-            // The bound that spares the count pass (`check_level_sizes`).
-            assert!(predicted.corners <= 4 * coarser.corners && 2 * coarser.interior_edges <= coarser.corners);
-            let fine = subdivide(&mesh, &DooOptions::new(FaceRule::DooSabin, level)).unwrap();
-            let counted = LevelCounts::of(&CornerMesh::from_halfedge(&fine.to_mesh().unwrap()));
-            assert_eq!(predicted, counted, "level {level} of {soup:?}");
-            assert_eq!((predicted.faces, predicted.corners), (fine.face_count(), fine.topology.indices.len()));
+        for boundary in [BoundaryRule::Shrink, BoundaryRule::Chaikin] {
+            let mut predicted = LevelCounts::of(&CornerMesh::from_halfedge(&mesh));
+            for level in 1..=levels {
+                let coarser = predicted;
+                predicted = match boundary {
+                    BoundaryRule::Shrink => predicted.next(),
+                    BoundaryRule::Chaikin => predicted.next_chaikin(),
+                };
+                // The bound that spares the count pass (`check_level_sizes`).
+                let growth = if boundary == BoundaryRule::Shrink { 4 } else { 8 };
+                assert!(predicted.corners <= growth * coarser.corners && 2 * coarser.interior_edges <= coarser.corners);
+                let options = DooOptions::new(FaceRule::DooSabin, level).with_boundary(boundary);
+                let fine = subdivide(&mesh, &options).unwrap();
+                let counted = LevelCounts::of(&CornerMesh::from_halfedge(&fine.to_mesh().unwrap()));
+                assert_eq!(predicted, counted, "{boundary:?} level {level} of {soup:?}");
+                assert_eq!((predicted.faces, predicted.corners), (fine.face_count(), fine.topology.indices.len()));
+            }
         }
     }
 
@@ -756,43 +807,45 @@ mod tests {
                 DooError::TooLarge { what: "fine corners", count: 4 * 24 * 4usize.pow(13), max: NONE as usize - 1 };
             assert_eq!(error, expected, "{levels} levels");
         }
-        // The Chaikin rule's levels are larger than the shrink rule's: what fails for one
-        // fails for the other, at once.
+        // Under the Chaikin rule a lone quad grows (its boundary ring doubles every level)
+        // where the Shrink rule's does not: its own counts (corners `C_k = 12 * 4^k - 8 *
+        // 2^k`, boundary edges `4 * 2^k`) refuse the step from level 14 at once, by the
+        // check its build makes first. Before, only the Shrink counts were checked, and
+        // the levels were built until an allocation failed.
+        let quad = HalfedgeMesh::from_soup(&shapes::grid(1, 1, CellKind::Quads).unwrap()).unwrap();
+        let corners = 12 * 4usize.pow(14) - 8 * 2usize.pow(14);
+        let interior_edges = (corners - 4 * 2usize.pow(14)) / 2;
+        let expected = DooError::TooLarge {
+            what: "fine corners",
+            count: 2 * corners + 4 * interior_edges,
+            max: NONE as usize - 1,
+        };
+        for levels in [15, 16, MAX_LEVELS + 1, u32::MAX] {
+            let chaikin = DooOptions::new(FaceRule::DooSabin, levels).with_boundary(BoundaryRule::Chaikin);
+            assert_eq!(subdivide(&quad, &chaikin).unwrap_err(), expected, "{levels} levels");
+        }
         let grid = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads).unwrap()).unwrap();
         let chaikin = DooOptions { boundary: BoundaryRule::Chaikin, ..DooOptions::new(FaceRule::DooSabin, 40) };
         assert!(matches!(subdivide(&grid, &chaikin), Err(DooError::TooLarge { what: "fine corners", .. })));
-        for soup in count_cases() {
-            let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
-            let mut counts = LevelCounts::of(&CornerMesh::from_halfedge(&mesh));
-            for level in 1..=3 {
-                counts = counts.next();
-                let options =
-                    DooOptions { boundary: BoundaryRule::Chaikin, ..DooOptions::new(FaceRule::DooSabin, level) };
-                let fine = subdivide(&mesh, &options).unwrap();
-                let at_least = LevelCounts::of(&CornerMesh::from_halfedge(&fine.to_mesh().unwrap()));
-                assert!(at_least.corners >= counts.corners && at_least.interior_edges >= counts.interior_edges);
-            }
-        }
         // An open mesh that shrinks does not grow: a single quad takes every level up to
         // the limit, and no more (before the limit, `u32::MAX` levels of it ran for hours;
         // so did a mesh without faces).
-        let quad = HalfedgeMesh::from_soup(&shapes::grid(1, 1, CellKind::Quads).unwrap()).unwrap();
         let fine = subdivide(&quad, &DooOptions::new(FaceRule::DooSabin, MAX_LEVELS)).unwrap();
         assert_eq!((fine.vertex_count(), fine.face_count()), (4, 1));
         let points = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X], Vec::<[u32; 3]>::new());
         let faceless = HalfedgeMesh::from_soup(&points).unwrap();
-        for mesh in [&quad, &faceless] {
+        let not_growing =
+            [(&quad, BoundaryRule::Shrink), (&faceless, BoundaryRule::Shrink), (&faceless, BoundaryRule::Chaikin)];
+        for (mesh, boundary) in not_growing {
             for rule in [FaceRule::DooSabin, FaceRule::Centroid { a: 0.25 }] {
-                for boundary in [BoundaryRule::Shrink, BoundaryRule::Chaikin] {
-                    for levels in [MAX_LEVELS + 1, u32::MAX] {
-                        let options = DooOptions::new(rule, levels).with_boundary(boundary);
-                        let error = subdivide(mesh, &options).unwrap_err();
-                        let DooError::InvalidParameter { name: "levels", value, reason } = error else {
-                            panic!("{levels} levels: {error}");
-                        };
-                        assert_eq!(value, levels as f64);
-                        assert!(reason.contains(&format!("at most {MAX_LEVELS} levels")), "{reason}");
-                    }
+                for levels in [MAX_LEVELS + 1, u32::MAX] {
+                    let options = DooOptions::new(rule, levels).with_boundary(boundary);
+                    let error = subdivide(mesh, &options).unwrap_err();
+                    let DooError::InvalidParameter { name: "levels", value, reason } = error else {
+                        panic!("{levels} levels: {error}");
+                    };
+                    assert_eq!(value, levels as f64);
+                    assert!(reason.contains(&format!("at most {MAX_LEVELS} levels")), "{reason}");
                 }
             }
         }
