@@ -78,6 +78,18 @@ pub enum DooError {
     /// A pyramid file could not be encoded or decoded.
     #[error("pyramid encoding: {0}")]
     Binary(String),
+    /// Finite input whose subdivision leaves the `f64` range: coordinates so large that
+    /// a sum of the rules overflows (the first fine vertex that is not finite).
+    #[error(
+        "fine vertex {vertex} is not finite: the input's coordinates (up to {largest:e} in magnitude) overflow the \
+         f64 range when the rules sum them; scale the mesh down"
+    )]
+    Overflow {
+        /// The first fine vertex that is not finite.
+        vertex: usize,
+        /// The largest coordinate magnitude of the input.
+        largest: f64,
+    },
     /// A mesh has more elements than `u32` indices can address.
     #[error("too many {what}: {count} (at most {max} are supported)")]
     TooLarge {

@@ -383,6 +383,35 @@ pub(crate) fn check_finite(positions: &[DVec3]) -> Result<(), DooError> {
     }
 }
 
+/// Coordinates up to this magnitude cannot overflow in a step: every rule is a sum of
+/// fewer than `2^32` terms (a face's corners, a vertex's faces) with non-negative weights
+/// summing to one, so no partial sum exceeds `2^32` times the largest coordinate.
+const OVERFLOW_FREE: f64 = f64::MAX / 4_294_967_296.0;
+
+/// [`check_finite`], and the largest coordinate magnitude (in the same pass).
+fn check_finite_largest(positions: &[DVec3]) -> Result<f64, DooError> {
+    let mut largest = 0.0f64;
+    for (vertex, p) in positions.iter().enumerate() {
+        if !p.is_finite() {
+            return Err(DooError::NonFinite { vertex, value: p.to_array() });
+        }
+        largest = largest.max(p.abs().max_element());
+    }
+    Ok(largest)
+}
+
+/// Finite input of coordinates beyond [`OVERFLOW_FREE`] may subdivide into infinities:
+/// then the first fine vertex that is not finite is [`DooError::Overflow`].
+fn check_no_overflow(fine: DooMesh, largest: f64) -> Result<DooMesh, DooError> {
+    if largest <= OVERFLOW_FREE {
+        return Ok(fine);
+    }
+    match fine.positions.iter().position(|p| !p.is_finite()) {
+        Some(vertex) => Err(DooError::Overflow { vertex, largest }),
+        None => Ok(fine),
+    }
+}
+
 /// Doo-Sabin subdivision of a polygon mesh, `options.levels` steps.
 ///
 /// ```
@@ -404,7 +433,8 @@ pub(crate) fn check_finite(positions: &[DVec3]) -> Result<(), DooError> {
 /// ```
 ///
 /// # Errors
-/// [`DooError::NonFinite`] for a NaN or infinite position;
+/// [`DooError::NonFinite`] for a NaN or infinite position, [`DooError::Overflow`] for
+/// finite coordinates so large (beyond `f64::MAX / 2^32`) that the result is not;
 /// [`DooError::ValenceTwoVertex`] for an interior vertex with two edges (its vertex face
 /// would be a digon); [`DooError::InvalidParameter`] for a centroid parameter outside
 /// `(0, 1)`; [`DooError::TooLarge`] if a level would not fit `u32` indices, found from
@@ -415,7 +445,7 @@ pub(crate) fn check_finite(positions: &[DVec3]) -> Result<(), DooError> {
 /// [`HalfedgeMesh`]; [`subdivide_soup`] reports them.
 pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, DooError> {
     options.rule.validate()?;
-    check_finite(mesh.positions())?;
+    let largest = check_finite_largest(mesh.positions())?;
     if options.levels == 0 {
         let soup = mesh.to_soup();
         let topology = DooTopology {
@@ -428,7 +458,7 @@ pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, D
     }
     let corners = CornerMesh::from_halfedge(mesh);
     check_level_sizes(&corners, options.levels, options.boundary)?;
-    subdivide_corner_mesh(corners, mesh.positions().to_vec(), options)
+    check_no_overflow(subdivide_corner_mesh(corners, mesh.positions().to_vec(), options)?, largest)
 }
 
 /// Before any work, a level count whose output cannot be indexed fails at once, not
@@ -849,6 +879,39 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Finite coordinates whose rules overflow give an error naming the fine vertex, not
+    /// infinities; large coordinates that do not overflow subdivide as usual.
+    #[test]
+    fn overflowing_coordinates_are_an_error() {
+        // The cube with corners at -1 and 1, scaled.
+        let mut cube = shapes::cube();
+        cube.positions.iter_mut().for_each(|p| *p = 2.0 * *p - DVec3::ONE);
+        let scaled = |factor: f64| {
+            let positions = cube.positions.iter().map(|p| *p * factor).collect();
+            HalfedgeMesh::from_soup(&PolygonSoup { positions, ..cube.clone() }).unwrap()
+        };
+        let mut overflowed = 0;
+        for rule in [FaceRule::DooSabin, FaceRule::Simple, FaceRule::Centroid { a: 0.5 }] {
+            let unit = subdivide(&scaled(1.0), &DooOptions::new(rule, 2)).unwrap();
+            let same_as_unit = |fine: &DooMesh, factor: f64| {
+                fine.positions.iter().zip(&unit.positions).all(|(p, q)| (*p / factor - *q).length() < 1e-12)
+            };
+            // Large, far from overflowing: the unit cube's result, scaled.
+            assert!(same_as_unit(&subdivide(&scaled(1e300), &DooOptions::new(rule, 2)).unwrap(), 1e300));
+            // At 1.7e308 a sum of two coordinates overflows: an error if the rule's sums
+            // do (the centroid's does), else the scaled result, finite.
+            match subdivide(&scaled(1.7e308), &DooOptions::new(rule, 2)) {
+                Err(DooError::Overflow { largest, .. }) => {
+                    assert_eq!(largest, 1.7e308);
+                    overflowed += 1;
+                }
+                Ok(fine) => assert!(same_as_unit(&fine, 1.7e308), "{rule:?}"),
+                Err(error) => panic!("{rule:?}: {error}"),
+            }
+        }
+        assert!(overflowed > 0);
     }
 
     #[test]
