@@ -41,6 +41,10 @@ use crate::scheme::CurveScheme;
 
 /// Largest `L` tried by [`analyze`] in the difference test.
 pub const DEFAULT_MAX_STEPS: usize = 12;
+
+/// The most steps [`contractivity`] tries, whatever it is asked: the `L`-step product
+/// has about `2^L` times the symbol's coefficients.
+pub const MAX_CONTRACTIVITY_STEPS: usize = 24;
 /// Largest smoothness order tried by [`analyze`].
 pub const DEFAULT_MAX_ORDER: usize = 4;
 /// Tolerance of eigenvalue equalities (`λ0 = 1`, `λ2 = λ1^2`). Loose enough for the
@@ -290,7 +294,8 @@ impl Contractivity {
     }
 }
 
-/// The difference-scheme test for C^`order`, trying `L = 1..=max_steps`.
+/// The difference-scheme test for C^`order`, trying `L = 1..=max_steps` (at most
+/// [`MAX_CONTRACTIVITY_STEPS`]).
 ///
 /// ```
 /// use subdiv_curve::{CurveScheme, analysis::contractivity};
@@ -302,9 +307,16 @@ impl Contractivity {
 /// # Ok::<(), subdiv_curve::CurveError>(())
 /// ```
 pub fn contractivity(symbol: &Symbol, order: usize, max_steps: usize) -> Contractivity {
+    // The product's support doubles with every step: beyond this many it would only
+    // exhaust the memory (the default tries 12).
+    let max_steps = max_steps.min(MAX_CONTRACTIVITY_STEPS);
     let mut b = Some(symbol.clone());
+    // (Stops once a division fails: `order` may be any number.)
     for _ in 0..=order {
         b = b.and_then(|s| s.divide_by_one_plus_z());
+        if b.is_none() {
+            break;
+        }
     }
     let Some(b) = b.map(|s| s.scaled(2f64.powi(order as i32))) else {
         return Contractivity {
@@ -457,7 +469,8 @@ pub fn local_matrix(scheme: &CurveScheme) -> LocalMatrix {
     LocalMatrix { indices, matrix }
 }
 
-/// Eigenvalues sorted by decreasing modulus (ties: larger real part first).
+/// Eigenvalues sorted by decreasing modulus (ties: larger real part first); all NaN for
+/// a matrix with a NaN or infinite entry.
 ///
 /// ```
 /// use subdiv_curve::{CurveScheme, analysis::{eigenvalues, local_matrix}};
@@ -466,6 +479,10 @@ pub fn local_matrix(scheme: &CurveScheme) -> LocalMatrix {
 /// assert_eq!(moduli, vec![1.0, 0.5, 0.25, 0.25]);
 /// ```
 pub fn eigenvalues(matrix: &DMatrix<f64>) -> Vec<Complex<f64>> {
+    // A NaN or infinite entry has no spectrum; the iterations would not end on it.
+    if !matrix.iter().all(|v| v.is_finite()) {
+        return vec![Complex::new(f64::NAN, f64::NAN); matrix.nrows().min(matrix.ncols())];
+    }
     let mut values = bounded_eigenvalues(matrix).unwrap_or_else(|| {
         // Both orientations stalled: a relative perturbation at rounding level moves simple
         // eigenvalues by as much and unsticks the iteration.

@@ -915,15 +915,22 @@ fn unwrapped_positions(sorted: &[usize], n: usize, topology: Topology, lo: i64, 
 /// Flags for `n` points with the given indices set to *interpolate*.
 ///
 /// # Errors
-/// [`CurveError::IndexOutOfRange`] for an index `>= n`.
+/// [`CurveError::IndexOutOfRange`] for an index `>= n`; [`CurveError::TooLarge`] for
+/// more than [`MAX_REFINED_POINTS`](crate::MAX_REFINED_POINTS) points.
 ///
 /// ```
 /// use subdiv_curve::flags_from_indices;
 /// assert_eq!(flags_from_indices(4, &[0, 2])?, vec![true, false, true, false]);
 /// assert!(flags_from_indices(4, &[4]).is_err());
+/// // More points than any polygon of the crate: an error, not a failed allocation.
+/// assert!(flags_from_indices(usize::MAX, &[0]).is_err());
 /// # Ok::<(), subdiv_curve::CurveError>(())
 /// ```
 pub fn flags_from_indices(n: usize, indices: &[usize]) -> Result<Vec<bool>, CurveError> {
+    // No polygon has more points than a refinement may make.
+    if n > crate::MAX_REFINED_POINTS {
+        return Err(CurveError::TooLarge { points: n, levels: 0, max: crate::MAX_REFINED_POINTS });
+    }
     let mut flags = vec![false; n];
     for &index in indices {
         *flags.get_mut(index).ok_or(CurveError::IndexOutOfRange { index, len: n })? = true;

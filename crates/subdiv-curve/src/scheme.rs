@@ -51,7 +51,8 @@ impl Rule {
     ///
     /// # Errors
     /// [`CurveError::InvalidRule`] if the weights are empty (or all zero), longer than
-    /// [`MAX_RULE_LEN`], not finite, or do not sum to 1 within `1e-12`.
+    /// [`MAX_RULE_LEN`], not finite, or do not sum to 1 within `1e-12`, or if the first
+    /// non-zero weight is more than [`MAX_RULE_LEN`] points away from `i`.
     ///
     /// ```
     /// use subdiv_curve::Rule;
@@ -82,9 +83,17 @@ impl Rule {
                 "weights sum to {sum}, not 1: rules must be affine combinations"
             )));
         }
-        let offset = i32::try_from(first).ok().and_then(|f| offset.checked_add(f));
-        let offset = offset.ok_or_else(|| CurveError::InvalidRule("offset out of range".into()))?;
-        Ok(Rule { offset, weights: trimmed.to_vec() })
+        // A rule reads near its point: far offsets would make the analysis's symbols and
+        // the refinement's padding as long as the offset (gigabytes at 1e9).
+        let reach = MAX_RULE_LEN as i32;
+        let reads_from = i32::try_from(first).ok().and_then(|f| offset.checked_add(f));
+        let Some(reads_from) = reads_from.filter(|o| (-reach..=reach).contains(o)) else {
+            return Err(CurveError::InvalidRule(format!(
+                "offset {offset} (first non-zero weight {first} further): a rule reads points at most \
+                 {MAX_RULE_LEN} away from its own"
+            )));
+        };
+        Ok(Rule { offset: reads_from, weights: trimmed.to_vec() })
     }
 
     /// Offset of the first point read, relative to `i`.

@@ -287,6 +287,36 @@ fn bad_input_is_reported() {
         "{err}"
     );
     assert!(Rule::new(0, &[]).is_err() && Rule::new(0, &[f64::INFINITY]).is_err());
+    // A rule reads near its point: far offsets made the analysis and the refinement's
+    // padding as long as the offset (hours, or gigabytes, at 1e9).
+    let reach = subdiv_curve::MAX_RULE_LEN as i32;
+    for offset in [-reach, reach] {
+        assert!(Rule::new(offset, &[1.0]).is_ok(), "{offset}");
+    }
+    for offset in [-reach - 1, reach + 1, 1 << 29, i32::MIN, i32::MAX] {
+        let err = Rule::new(offset, &[1.0]).unwrap_err();
+        assert!(err.to_string().contains(&format!("at most {reach} away")), "{offset}: {err}");
+    }
+    // Leading zeros count: the first non-zero weight is where the rule reads.
+    assert!(Rule::new(reach - 1, &[0.0, 0.0, 1.0]).is_err());
+}
+
+/// The analysis ends on any input: a step count far beyond the memory is capped, an order
+/// beyond the symbol's divisibility stops at the first failed division, and a matrix
+/// with a NaN entry has NaN eigenvalues (the iteration did not end on it).
+#[test]
+fn analysis_ends_on_any_input() {
+    let cubic = CurveScheme::cubic_bspline().symbol();
+    let capped = contractivity(&cubic, 0, usize::MAX);
+    assert_eq!(capped.norms.len(), analysis::MAX_CONTRACTIVITY_STEPS);
+    assert_eq!(capped.norms[..6], contractivity(&cubic, 0, 6).norms[..]);
+    let beyond = contractivity(&cubic, usize::MAX, 3);
+    assert!(!beyond.divisible && beyond.norms.is_empty());
+    let nan = nalgebra::DMatrix::from_element(3, 3, f64::NAN);
+    let values = analysis::eigenvalues(&nan);
+    assert_eq!(values.len(), 3);
+    assert!(values.iter().all(|v| v.re.is_nan()));
+    assert!(analysis::eigenvalues(&nalgebra::DMatrix::from_element(2, 2, f64::INFINITY)).iter().all(|v| v.re.is_nan()));
 }
 
 #[test]
