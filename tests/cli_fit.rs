@@ -231,6 +231,11 @@ fn bad_input_gives_one_clear_line_and_no_output_file() {
         (vec!["fit", path(&grid12), "--tolerance=-1"], &["tolerance", "positive"]),
         (vec!["fit", path(&grid12), "--hit-tol", "nan"], &["hit-tol"]),
         (vec!["fit", path(&grid12), "--samples", "0"], &["--samples"]),
+        // Used to panic ("capacity overflow") or abort reserving one record per iteration.
+        (vec!["fit", path(&grid12), "--iterations", "18446744073709551615"], &["--iterations", "1000000"]),
+        (vec!["fit", path(&grid12), "--iterations", "100000000"], &["--iterations", "1000000"]),
+        // Used to abort allocating `degree` knots per vertex before the degree was checked.
+        (vec!["fit", path(&grid12), "--surface", "tri-bspline", "--degree", "4294967296"], &["degree 4294967296"]),
     ];
     for (mut args, needles) in cases {
         args.extend(["--out", path(&out), "--plot", path(&plot)]);

@@ -109,7 +109,7 @@ fn every_kind_runs() {
 #[test]
 fn bad_arguments_give_one_clear_error_line() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&[&str], &str); 18] = [
+    let cases: [(&[&str], &str); 20] = [
         // |z| < 1 but |1 - z| >= 1, and |z| >= 1.
         (&["--kind", "complex", "--z", "-0.5,0"], "|1 - z| = 1.5"),
         (&["--kind", "complex", "--z", "1.2,0"], "|z| = 1.2 >= 1"),
@@ -133,6 +133,9 @@ fn bad_arguments_give_one_clear_error_line() {
         // the allocation, and no hours of iteration first).
         (&["--preset", "levy", "--points", "18446744073709551615", "--out-points", "p.txt"], "at most 16777216"),
         (&["--preset", "levy", "--points", "16777217", "--out-points", "p.txt"], "--points 16777217 with --out-points"),
+        // Streamed into the image: used to run forever.
+        (&["--kind", "bezier", "--control", "0,0 1,1 2,0", "--points", "18446744073709551615"], "at most 4294967296"),
+        (&["--preset", "levy", "--points", "4294967297"], "--points 4294967297: at most 4294967296"),
     ];
     for (args, expected) in cases {
         let mut all = args.to_vec();

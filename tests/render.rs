@@ -89,3 +89,22 @@ fn bad_options_are_one_line_and_write_nothing() {
         assert!(!out.exists(), "{extra:?} wrote a file");
     }
 }
+
+#[test]
+fn oversized_images_name_the_pixel_limit() {
+    // Used to abort allocating 58 GB of supersampled buffers.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("never.png");
+    let sizes: [&[&str]; 2] =
+        [&["--size", "16384x16384"], &["--size", "4096x2048", "--side-by-side", "tests/data/cube_poly.off"]];
+    for extra in sizes {
+        let mut args = vec!["render", "tests/data/cube_quad.off", out.to_str().unwrap()];
+        args.extend(extra);
+        let run = multires(&args);
+        assert!(!run.status.success(), "{extra:?}");
+        let stderr = String::from_utf8(run.stderr).unwrap();
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.contains("--size") && stderr.contains("at most 8388608"), "{stderr}");
+        assert!(!out.exists(), "{extra:?} wrote a file");
+    }
+}

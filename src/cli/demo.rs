@@ -542,7 +542,7 @@ fn write_picture_view(path: &Path, soups: &[&PolygonSoup], view: (f64, f64)) -> 
             let wireframe = soup.face_count() < 20_000;
             render_with_camera(soup, &RenderOptions { wireframe, ..options.clone() }, camera)
         })
-        .collect();
+        .collect::<CliResult<_>>()?;
     Image::side_by_side(&panels).write_png(path).map_err(|source| CliError::Io { path: path.to_path_buf(), source })
 }
 

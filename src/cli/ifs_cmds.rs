@@ -60,7 +60,7 @@ pub struct IfsArgs {
     /// Deterministic algorithm with this many levels.
     #[arg(long, conflicts_with = "points")]
     pub levels: Option<u32>,
-    /// Chaos game with this many points.
+    /// Chaos game with this many points (at most 2^32, or 2^24 with --out-points).
     #[arg(long)]
     pub points: Option<usize>,
     /// Seed of the chaos game.
@@ -71,6 +71,10 @@ pub struct IfsArgs {
 /// Most points the command line keeps in memory: those of the deterministic algorithm,
 /// and those of a chaos game written with `--out-points`.
 const POINT_BUDGET: usize = 1 << 24;
+
+/// Most chaos-game points streamed into the image: a bound on the running time (minutes,
+/// not forever) far beyond what a density image can show.
+const MAX_STREAMED_POINTS: u64 = 1 << 32;
 
 /// What to render: the IFS, its deterministic start set and levels, and the projection.
 struct Job {
@@ -120,6 +124,11 @@ pub fn ifs(args: &IfsArgs) -> CliResult {
                     .map_err(|e| input_error("render", e))?;
                 (image, Some(points))
             } else {
+                if n as u64 > MAX_STREAMED_POINTS {
+                    return Err(CliError::Input(format!(
+                        "--points {n}: at most {MAX_STREAMED_POINTS} chaos-game points"
+                    )));
+                }
                 // Stream into the density image; the view comes from a short run of the same game.
                 let preview = ChaosGame { points: n.min(1 << 15), ..game.clone() };
                 let sample = ifs::chaos_points(ifs, &preview).map_err(|e| input_error("chaos game", e))?;

@@ -12,6 +12,8 @@ use std::path::Path;
 use glam::{DVec2, DVec3};
 use mesh_topo::PolygonSoup;
 
+use super::{CliError, CliResult};
+
 /// How faces are shaded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Shading {
@@ -61,6 +63,10 @@ const FRONT_COLOUR: DVec3 = DVec3::new(0.55, 0.68, 0.85);
 const BACK_COLOUR: DVec3 = DVec3::new(0.85, 0.62, 0.50);
 const WIRE_COLOUR: DVec3 = DVec3::new(0.12, 0.14, 0.18);
 const SUPERSAMPLE: u32 = 3;
+/// Most pixels of a `multires render` image (all panels together, e.g. 4096x2048):
+/// 3x3 supersampling keeps nine colours and depths, 288 bytes, per pixel, so this
+/// bounds the working memory to about 2.4 GB.
+pub const MAX_PIXELS: u64 = 1 << 23;
 
 impl Image {
     /// The pixel at column `x`, row `y`.
@@ -162,7 +168,10 @@ impl Camera {
 
 /// Renders a polygon soup (faces fan-triangulated) with the camera framing its own
 /// bounding box.
-pub fn render(soup: &PolygonSoup, options: &RenderOptions) -> Image {
+///
+/// # Errors
+/// As [`render_with_camera`].
+pub fn render(soup: &PolygonSoup, options: &RenderOptions) -> CliResult<Image> {
     let camera = Camera::framing(
         &soup.positions,
         options.azimuth,
@@ -173,12 +182,53 @@ pub fn render(soup: &PolygonSoup, options: &RenderOptions) -> Image {
     render_with_camera(soup, options, camera)
 }
 
-/// Renders with a given camera (so several meshes can share one view).
-pub fn render_with_camera(soup: &PolygonSoup, options: &RenderOptions, camera: Camera) -> Image {
+/// Renders with a given camera (so several meshes can share one view). An image above
+/// [`MAX_PIXELS`], or whose buffers the allocator refuses, is an error rather than an
+/// overflow or an abort.
+///
+/// # Errors
+/// [`CliError::Input`] naming the size and the limit.
+pub fn render_with_camera(soup: &PolygonSoup, options: &RenderOptions, camera: Camera) -> CliResult<Image> {
+    let pixels = u64::from(options.width) * u64::from(options.height);
+    if pixels > MAX_PIXELS {
+        return Err(CliError::Input(format!(
+            "{}x{} image: {pixels} pixels, at most {MAX_PIXELS} for the {SUPERSAMPLE}x{SUPERSAMPLE}-supersampled buffers",
+            options.width, options.height
+        )));
+    }
+    let too_large = || {
+        CliError::Input(format!(
+            "{}x{} image: cannot allocate its {SUPERSAMPLE}x{SUPERSAMPLE}-supersampled buffers (288 bytes per pixel)",
+            options.width, options.height
+        ))
+    };
+    // Within MAX_PIXELS the supersampled sides and count fit the u32 pixel indices.
     let (w, h) = (options.width * SUPERSAMPLE, options.height * SUPERSAMPLE);
+    let count = (w * h) as usize;
+    let mut colour = Vec::new();
+    colour.try_reserve_exact(count).map_err(|_| too_large())?;
+    colour.resize(count, background());
+    let mut depth = Vec::new();
+    depth.try_reserve_exact(count).map_err(|_| too_large())?;
+    depth.resize(count, f64::INFINITY);
+    draw(soup, options, camera, (w, h), &mut colour, &mut depth);
+    Ok(downsample(&colour, options.width, options.height))
+}
+
+fn background() -> DVec3 {
+    DVec3::from_array(BACKGROUND.map(|c| c as f64 / 255.0))
+}
+
+/// Rasterizes into the supersampled `w x h` buffers.
+fn draw(
+    soup: &PolygonSoup,
+    options: &RenderOptions,
+    camera: Camera,
+    (w, h): (u32, u32),
+    colour: &mut [DVec3],
+    depth: &mut [f64],
+) {
     let camera = camera.scaled(SUPERSAMPLE as f64);
-    let mut colour = vec![DVec3::from_array(BACKGROUND.map(|c| c as f64 / 255.0)); (w * h) as usize];
-    let mut depth = vec![f64::INFINITY; (w * h) as usize];
     let screen: Vec<DVec3> = soup.positions.iter().map(|&p| camera.project(p)).collect();
     let vertex_normals = (options.shading == Shading::Smooth).then(|| vertex_normals(soup));
     let light = (-camera.forward + 0.6 * camera.up + 0.4 * camera.right).normalize();
@@ -191,7 +241,7 @@ pub fn render_with_camera(soup: &PolygonSoup, options: &RenderOptions, camera: C
                 Some(n) => n[v as usize],
                 None => face_normal,
             });
-            raster_triangle(corners.map(|v| screen[v as usize]), normals, light, (w, h), &mut colour, &mut depth);
+            raster_triangle(corners.map(|v| screen[v as usize]), normals, light, (w, h), colour, depth);
         }
     }
     if options.wireframe {
@@ -201,11 +251,10 @@ pub fn render_with_camera(soup: &PolygonSoup, options: &RenderOptions, camera: C
                 // Interior edges are drawn from both faces; painting a pixel twice with
                 // the same colour changes nothing.
                 let (a, b) = (face[k], face[(k + 1) % face.len()]);
-                draw_line(screen[a as usize], screen[b as usize], thickness, (w, h), &mut colour, &depth);
+                draw_line(screen[a as usize], screen[b as usize], thickness, (w, h), colour, depth);
             }
         }
     }
-    downsample(&colour, options.width, options.height)
 }
 
 fn polygon_normal(soup: &PolygonSoup, face: &[u32]) -> DVec3 {
@@ -328,8 +377,7 @@ fn downsample(colour: &[DVec3], width: u32, height: u32) -> Image {
 }
 
 /// `multires render MESH OUT.png [--size WxH] [--wireframe] [--view az,el] [--side-by-side B ...]`.
-pub fn run(args: &super::mesh_cmds::RenderArgs) -> super::CliResult {
-    use super::CliError;
+pub fn run(args: &super::mesh_cmds::RenderArgs) -> CliResult {
     let (width, height) = parse_pair(&args.size, 'x')
         .filter(|&(w, h)| {
             (1.0..=16384.0).contains(&w) && (1.0..=16384.0).contains(&h) && w.fract() == 0.0 && h.fract() == 0.0
@@ -337,6 +385,15 @@ pub fn run(args: &super::mesh_cmds::RenderArgs) -> super::CliResult {
         .ok_or_else(|| {
             CliError::Input(format!("--size {}: expected WxH with whole numbers from 1 to 16384", args.size))
         })?;
+    let panels = 1 + args.side_by_side.len() as u64;
+    let pixels = (width as u64) * (height as u64) * panels;
+    if pixels > MAX_PIXELS {
+        let across = if panels > 1 { format!(" in {panels} panels") } else { String::new() };
+        return Err(CliError::Input(format!(
+            "--size {}: {pixels} pixels{across}, at most {MAX_PIXELS} (e.g. 4096x2048) for the supersampled buffers",
+            args.size
+        )));
+    }
     let (azimuth, elevation) = parse_pair(&args.view, ',')
         .filter(|&(a, e)| a.is_finite() && (-90.0..=90.0).contains(&e))
         .ok_or_else(|| {
@@ -363,13 +420,13 @@ pub fn run(args: &super::mesh_cmds::RenderArgs) -> super::CliResult {
         soups.push(soup);
     }
     let image = if soups.len() == 1 {
-        render(&soups[0], &options)
+        render(&soups[0], &options)?
     } else {
         // Side-by-side panels share one camera framing all meshes, so levels compare 1:1.
         let all: Vec<DVec3> = soups.iter().flat_map(|s| s.positions.iter().copied()).collect();
         let camera = Camera::framing(&all, azimuth, elevation, width, height);
-        let panels: Vec<Image> = soups.iter().map(|soup| render_with_camera(soup, &options, camera)).collect();
-        Image::side_by_side(&panels)
+        let panels = soups.iter().map(|soup| render_with_camera(soup, &options, camera));
+        Image::side_by_side(&panels.collect::<CliResult<Vec<Image>>>()?)
     };
     image.write_png(&args.out).map_err(|source| CliError::Io { path: args.out.clone(), source })?;
     println!(
@@ -395,7 +452,7 @@ mod tests {
     #[test]
     fn cube_is_centred_lit_and_framed() {
         let options = RenderOptions { width: 120, height: 90, ..RenderOptions::default() };
-        let image = render(&shapes::cube(), &options);
+        let image = render(&shapes::cube(), &options).unwrap();
         let coverage = image.coverage();
         assert!(coverage > 0.3 && coverage < 0.9, "coverage {coverage}");
         assert_eq!(image.pixel(0, 0), BACKGROUND);
@@ -405,14 +462,14 @@ mod tests {
         // The front colour is bluish: blue channel dominates red.
         assert!(centre[2] > centre[0], "{centre:?}");
         // Deterministic.
-        assert_eq!(render(&shapes::cube(), &options), image);
+        assert_eq!(render(&shapes::cube(), &options).unwrap(), image);
     }
 
     #[test]
     fn wireframe_adds_dark_pixels() {
         let options = RenderOptions { width: 100, height: 100, wireframe: true, ..RenderOptions::default() };
-        let wired = render(&shapes::icosahedron(), &options);
-        let plain = render(&shapes::icosahedron(), &RenderOptions { wireframe: false, ..options });
+        let wired = render(&shapes::icosahedron(), &options).unwrap();
+        let plain = render(&shapes::icosahedron(), &RenderOptions { wireframe: false, ..options }).unwrap();
         let brightness = |p: [u8; 3]| p.iter().map(|&c| c as u32).sum::<u32>();
         let changed: Vec<usize> = (0..wired.pixels.len()).filter(|&i| wired.pixels[i] != plain.pixels[i]).collect();
         assert!(changed.len() > 200, "{} pixels changed", changed.len());
@@ -423,11 +480,21 @@ mod tests {
     #[test]
     fn side_by_side_concatenates() {
         let options = RenderOptions { width: 40, height: 30, ..RenderOptions::default() };
-        let a = render(&shapes::cube(), &options);
-        let b = render(&shapes::tetrahedron(), &options);
+        let a = render(&shapes::cube(), &options).unwrap();
+        let b = render(&shapes::tetrahedron(), &options).unwrap();
         let both = Image::side_by_side(&[a.clone(), b.clone()]);
         assert_eq!((both.width, both.height), (80, 30));
         assert_eq!(both.pixel(10, 10), a.pixel(10, 10));
         assert_eq!(both.pixel(50, 12), b.pixel(10, 12));
+    }
+
+    #[test]
+    fn sizes_beyond_the_buffers_are_an_error() {
+        // Used to overflow the u32 index (or abort allocating 58 GB at 16384x16384).
+        for (width, height) in [(u32::MAX, 1), (1, u32::MAX), (40_000, 40_000), (16_384, 16_384), (4097, 2048)] {
+            let options = RenderOptions { width, height, ..RenderOptions::default() };
+            let error = render(&shapes::cube(), &options).unwrap_err().to_string();
+            assert!(error.contains(&format!("{width}x{height} image")) && error.contains("at most"), "{error}");
+        }
     }
 }

@@ -55,7 +55,7 @@ pub struct FitArgs {
     /// Number of reverse-Loop levels that give the control net.
     #[arg(long, default_value_t = 2)]
     pub reverse_levels: u32,
-    /// Maximum number of iterations.
+    /// Maximum number of iterations (1 to 1000000).
     #[arg(long, default_value_t = 10)]
     pub iterations: usize,
     /// Stop when the mean error falls below this (absolute).
@@ -88,10 +88,16 @@ pub struct FitArgs {
     pub samples: usize,
 }
 
+/// Most iterations `fit` runs: every one is a row of the table (and of the JSON).
+const MAX_ITERATIONS: usize = 1_000_000;
+
 /// `multires fit`.
 pub fn fit(args: &FitArgs) -> CliResult {
     if args.samples == 0 || args.samples > 4096 {
         return Err(CliError::Input(format!("--samples {}: expected 1 to 4096 segments per edge", args.samples)));
+    }
+    if args.iterations > MAX_ITERATIONS {
+        return Err(CliError::Input(format!("--iterations {}: expected 1 to {MAX_ITERATIONS}", args.iterations)));
     }
     let mesh = common::read_mesh(&args.mesh)?;
     let options = FitOptions {

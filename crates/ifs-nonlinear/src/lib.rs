@@ -98,6 +98,6 @@ pub use nonlinear::{CoordinateTransform, ExpY, FnTransform, NonlinearIfs, Polar,
 pub use num_complex::Complex64;
 pub use presets::{PRESETS, Scene, barnsley_fern, canonical_preset, preset};
 pub use render::{
-    CHAOS_CHUNK, Canvas, ChaosGame, Density, Image, PointStats, Probabilities, Projection, ToneMap, View,
-    chaos_density, chaos_points, deterministic_into, deterministic_points, render_points,
+    CHAOS_CHUNK, Canvas, ChaosGame, Density, Image, MAX_BURN_IN, MAX_LEVELS, PointStats, Probabilities, Projection,
+    ToneMap, View, chaos_density, chaos_points, deterministic_into, deterministic_points, render_points,
 };

@@ -25,6 +25,14 @@ use crate::ifs::Ifs;
 /// Points per chaos-game chunk (each chunk has its own random stream and burn-in).
 pub const CHAOS_CHUNK: usize = 1 << 14;
 
+/// Most deterministic levels. With two or more maps the point budget binds long before;
+/// this bounds the work of a single map (`K = 1`), whose point count never grows.
+pub const MAX_LEVELS: u32 = 4096;
+
+/// Most burn-in iterates per chaos-game chunk: 65536 reach 1e-19 relative even for a
+/// contraction of 0.9993, and the bound keeps the per-chunk work finite.
+pub const MAX_BURN_IN: u32 = 1 << 16;
+
 /// How the chaos game chooses its maps.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub enum Probabilities {
@@ -77,11 +85,13 @@ fn thresholds<I: Ifs + ?Sized>(ifs: &I, probabilities: &Probabilities) -> Result
                     reason: "need one weight per map",
                 });
             }
-            if weights.iter().any(|w| !(w.is_finite() && *w >= 0.0)) || weights.iter().sum::<f64>() <= 0.0 {
+            // The sum normalizes the weights, so it must be finite too (f64::MAX twice is not).
+            let sum = weights.iter().sum::<f64>();
+            if weights.iter().any(|w| !(w.is_finite() && *w >= 0.0)) || !(sum > 0.0 && sum.is_finite()) {
                 return Err(IfsError::ParameterOutOfRange {
                     name: "probabilities",
                     value: format!("{weights:?}"),
-                    reason: "weights must be finite, non-negative and not all zero",
+                    reason: "weights must be finite, non-negative, not all zero, with a finite sum",
                 });
             }
             weights.clone()
@@ -119,7 +129,15 @@ fn domain_error<I: Ifs + ?Sized>(ifs: &I, index: usize, map: usize, state: &[f64
 
 /// Number of points of `levels` deterministic levels from `starts` start states (saturating).
 fn deterministic_count(starts: usize, maps: usize, levels: u32) -> u128 {
-    (0..levels).fold(starts as u128, |n, _| n.saturating_mul(maps as u128))
+    let mut n = starts as u128;
+    for _ in 0..levels {
+        // Stop once the count can no longer change: no walk through u32::MAX levels.
+        if n == 0 || n == u128::MAX || maps == 1 {
+            break;
+        }
+        n = n.saturating_mul(maps as u128);
+    }
+    n
 }
 
 /// The deterministic algorithm (ALGORITHMS.md §15.2): `A_0` = the start states,
@@ -132,7 +150,9 @@ fn deterministic_count(starts: usize, maps: usize, levels: u32) -> u128 {
 ///
 /// # Errors
 /// [`IfsError::BudgetExceeded`] when `starts · K^levels > budget`;
-/// [`IfsError::ParameterOutOfRange`] when `start` is empty or not a whole number of states;
+/// [`IfsError::ParameterOutOfRange`] when `start` is empty or not a whole number of states,
+/// or for more than [`MAX_LEVELS`] levels;
+/// [`IfsError::TooManyPoints`] when the points within the budget cannot be allocated;
 /// [`IfsError::Domain`] when a nonlinear map leaves its domain.
 ///
 /// ```
@@ -187,6 +207,13 @@ pub fn deterministic_into<I: Ifs + ?Sized>(
     if needed > budget as u128 {
         return Err(IfsError::BudgetExceeded { levels, needed, budget });
     }
+    if levels > MAX_LEVELS {
+        return Err(IfsError::ParameterOutOfRange {
+            name: "levels",
+            value: levels.to_string(),
+            reason: "at most 4096 deterministic levels",
+        });
+    }
     let total = needed as usize;
     // Split the words by a prefix of `split` letters so that there are enough tasks.
     let mut split = 0;
@@ -198,6 +225,11 @@ pub fn deterministic_into<I: Ifs + ?Sized>(
     // Every entry is overwritten below: a reused buffer of the right length is not re-zeroed.
     if points.len() != total {
         points.clear();
+        // A generous budget is not memory: a count the allocator refuses is an error.
+        points.try_reserve_exact(total).map_err(|_| IfsError::TooManyPoints {
+            points: total,
+            bytes: total as u128 * size_of::<[f64; 3]>() as u128,
+        })?;
         points.resize(total, [0.0; 3]);
     }
     let prefixes = k.pow(split);
@@ -319,6 +351,13 @@ fn check_game(game: &ChaosGame) -> Result<()> {
             name: "points",
             value: "0".into(),
             reason: "need at least one point",
+        });
+    }
+    if game.burn_in > MAX_BURN_IN {
+        return Err(IfsError::ParameterOutOfRange {
+            name: "burn_in",
+            value: game.burn_in.to_string(),
+            reason: "at most 65536 iterates per chunk",
         });
     }
     Ok(())
@@ -868,6 +907,35 @@ mod tests {
         }
         assert!(Canvas::new(0, 10, View::new([0.0, 0.0], [1.0, 1.0]).unwrap()).is_err());
         assert!(View::new([0.0, 0.0], [0.0, 1.0]).is_err());
+    }
+
+    #[test]
+    fn huge_budgets_levels_burn_in_and_weights_are_errors() {
+        let ifs = sierpinski();
+        // Within a usize::MAX budget but beyond memory: used to abort allocating.
+        let needed = 3 * 3usize.pow(30);
+        assert_eq!(
+            deterministic_points(&ifs, None, 30, usize::MAX),
+            Err(IfsError::TooManyPoints { points: needed, bytes: needed as u128 * 24 })
+        );
+        // One map never exceeds the budget: u32::MAX levels used to hang.
+        let single = AffineIfs::new(2, vec![AffineMap::planar(0.5, 0.0, 0.0, 0.5, 0.0, 0.0)]).unwrap();
+        assert!(matches!(
+            deterministic_points(&single, Some(&[1.0, 1.0]), u32::MAX, 10),
+            Err(IfsError::ParameterOutOfRange { name: "levels", .. })
+        ));
+        let converged = deterministic_points(&single, Some(&[1.0, 1.0]), MAX_LEVELS, 10).unwrap();
+        assert_eq!(converged, vec![[0.0; 3]]);
+        // Levels beyond the budget still say so first.
+        assert!(matches!(deterministic_points(&ifs, None, u32::MAX, 1000), Err(IfsError::BudgetExceeded { .. })));
+        // A burn-in of u32::MAX per chunk used to hang.
+        let game = ChaosGame { points: 5, burn_in: u32::MAX, ..ChaosGame::default() };
+        assert!(matches!(chaos_points(&ifs, &game), Err(IfsError::ParameterOutOfRange { name: "burn_in", .. })));
+        let game = ChaosGame { points: 5, burn_in: MAX_BURN_IN, ..ChaosGame::default() };
+        assert_eq!(chaos_points(&ifs, &game).unwrap().len(), 5);
+        // Finite weights whose sum is infinite used to pass and normalize to NaN.
+        let game = ChaosGame { points: 5, probabilities: Probabilities::Custom(vec![f64::MAX; 3]), ..game };
+        assert!(matches!(chaos_points(&ifs, &game), Err(IfsError::ParameterOutOfRange { name: "probabilities", .. })));
     }
 
     #[test]

@@ -307,6 +307,10 @@ impl DmsBasis {
         triangles: Vec<[u32; 3]>,
         placement: KnotPlacement,
     ) -> Result<Self, SplineError> {
+        // Checked before `generate_knots` allocates `degree` knots per vertex.
+        if !(1..=MAX_DMS_DEGREE).contains(&degree) {
+            return Err(SplineError::Degree { degree, min: 1, max: MAX_DMS_DEGREE });
+        }
         let mut last = None;
         let mut radius = placement.radius;
         for attempt in 0..12u64 {
@@ -808,5 +812,18 @@ mod tests {
         assert!(matches!(DmsBasis::new(n, v.clone(), t.clone(), good[1..].to_vec()), Err(SplineError::Count { .. })));
         assert!(matches!(DmsBasis::new(0, v.clone(), t.clone(), vec![]), Err(SplineError::Degree { .. })));
         assert!(matches!(DmsBasis::new(7, v, t, vec![]), Err(SplineError::Degree { .. })));
+    }
+
+    #[test]
+    fn generated_knots_check_the_degree_before_allocating() {
+        // Used to abort allocating `degree` knots per vertex before `new` checked it.
+        let v = vec![DVec2::ZERO, DVec2::X, DVec2::Y];
+        for degree in [0, 1 << 33, usize::MAX] {
+            let basis = DmsBasis::with_generated_knots(degree, v.clone(), vec![[0, 1, 2]], KnotPlacement::default());
+            assert!(
+                matches!(basis, Err(SplineError::Degree { degree: d, max: MAX_DMS_DEGREE, .. }) if d == degree),
+                "{basis:?}"
+            );
+        }
     }
 }

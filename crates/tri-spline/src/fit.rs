@@ -212,6 +212,9 @@ fn residuals(n: &SparseMatrix, data: &[DVec3], control: &[DVec3]) -> Vec<DVec3> 
     data.par_iter().zip(fitted).map(|(&d, s)| d - s).collect()
 }
 
+/// Most iteration records reserved before iterating.
+const ITERATION_RESERVE: usize = 1024;
+
 /// Shared loop: evaluate, record, stop, update.
 fn iterate(
     n: &SparseMatrix,
@@ -221,8 +224,11 @@ fn iterate(
     mut update: impl FnMut(&mut Vec<DVec3>, &[DVec3]) -> Result<(), SplineError>,
 ) -> Result<IterationOutcome, SplineError> {
     let start = Instant::now();
-    let mut records = Vec::with_capacity(options.max_iterations);
-    let mut norms = Vec::with_capacity(options.max_iterations);
+    // Grow with the iterations run: `max_iterations` is a cap (often huge, with a
+    // tolerance to stop earlier), not a size to reserve up front.
+    let reserve = options.max_iterations.min(ITERATION_RESERVE);
+    let mut records = Vec::with_capacity(reserve);
+    let mut norms = Vec::with_capacity(reserve);
     let mut reached = false;
     for k in 1..=options.max_iterations {
         let e = residuals(n, data, &control);
@@ -354,8 +360,16 @@ pub struct LspiaSpectrum {
 /// The spectrum of `NᵀN` and the spectral radius of `I - μ NᵀN` (dense, `O(m_c³)`).
 ///
 /// # Errors
+/// [`SplineError::BadOption`] if `N` has no columns (no control points, no spectrum);
 /// [`SplineError::Singular`] if the eigenvalue computation fails.
 pub fn lspia_spectrum(n: &SparseMatrix, mu: f64) -> Result<LspiaSpectrum, SplineError> {
+    if n.cols() == 0 {
+        return Err(SplineError::BadOption {
+            name: "collocation matrix",
+            value: format!("{} x 0", n.rows()),
+            reason: "needs at least one control point (column)",
+        });
+    }
     // Dense product: N is often dense (Bézier rows) and m_c is small enough here.
     let dense = n.to_dense();
     let gram = dense.transpose() * &dense;
@@ -620,5 +634,35 @@ mod tests {
         let stop = IterationOptions { max_iterations: 10, tolerance: Some(1e-9), hit_tol: 0.1 };
         let out = pia(&n, &d, &n, &d, d.clone(), 1.0, &stop).unwrap();
         assert!(out.reached_tolerance && out.records.len() == 1);
+    }
+
+    #[test]
+    fn huge_iteration_cap_is_not_preallocated() {
+        // Used to panic with "capacity overflow" (and abort for 1e8) before iterating.
+        let n = SparseMatrix::identity(3);
+        let d = vec![DVec3::ONE; 3];
+        for max_iterations in [usize::MAX, 100_000_000] {
+            let stop = IterationOptions { max_iterations, tolerance: Some(1.0), hit_tol: 0.1 };
+            let out = lspia(&n, &d, vec![DVec3::ZERO; 3], 0.5, &stop).unwrap();
+            assert_eq!(out.records.len(), 2);
+            assert!(out.records.capacity() <= ITERATION_RESERVE);
+            let out = pia(&n, &d, &n, &d, vec![DVec3::ZERO; 3], 0.5, &stop).unwrap();
+            assert!(out.reached_tolerance);
+        }
+    }
+
+    #[test]
+    fn mismatched_or_empty_matrices_are_errors() {
+        // Used to index out of bounds: data shorter than the rows, and an empty spectrum.
+        let n = SparseMatrix::identity(3);
+        assert!(matches!(
+            least_squares_fit(&n, &[DVec3::ZERO; 2], 0.1),
+            Err(SplineError::Count { expected: 3, got: 2, .. })
+        ));
+        assert!(matches!(lspia_spectrum(&SparseMatrix::from_rows(0, vec![]), 1.0), Err(SplineError::BadOption { .. })));
+        assert!(matches!(
+            lspia_spectrum(&SparseMatrix::from_rows(0, vec![vec![]; 2]), 1.0),
+            Err(SplineError::BadOption { .. })
+        ));
     }
 }

@@ -262,10 +262,18 @@ pub fn spectral_radius(a: &Mat<f64>) -> Result<f64, SplineError> {
 /// normal equations, whose condition number is the square of `N`'s), sequential.
 ///
 /// # Errors
+/// [`SplineError::Count`] unless there is one data point per row of `N`;
 /// [`SplineError::Singular`] when `N` has fewer rows than columns or is rank deficient
 /// (a zero on the diagonal of `R`).
 pub fn least_squares(n: &SparseMatrix, data: &[DVec3]) -> Result<Vec<DVec3>, SplineError> {
     let (m, k) = (n.rows(), n.cols());
+    if data.len() != m {
+        return Err(SplineError::Count {
+            what: "data points (rows of the collocation matrix)",
+            expected: m,
+            got: data.len(),
+        });
+    }
     if m < k || k == 0 {
         return Err(SplineError::Singular { what: "least squares (fewer data points than control points)" });
     }
@@ -371,5 +379,18 @@ mod tests {
         assert!((c[1] - DVec3::new(3.0, 6.0, 1.0)).length() < 1e-12);
         let deficient = SparseMatrix::from_rows(2, vec![vec![(0, 1.0)], vec![(0, 1.0)]]);
         assert!(least_squares(&deficient, &data[..2]).is_err());
+    }
+
+    #[test]
+    fn least_squares_needs_one_data_point_per_row() {
+        // Used to index `data` out of bounds.
+        let n = SparseMatrix::identity(3);
+        for len in [0, 2, 4] {
+            let data = vec![DVec3::ZERO; len];
+            assert_eq!(
+                least_squares(&n, &data),
+                Err(SplineError::Count { what: "data points (rows of the collocation matrix)", expected: 3, got: len })
+            );
+        }
     }
 }

@@ -48,6 +48,10 @@ pub fn disk_patch(mesh: &HalfedgeMesh, seed_vertex: usize, rings: usize) -> Opti
     distance[seed.index()] = 0;
     let mut frontier = vec![seed];
     for d in 1..=rings {
+        // The whole component is reached: more rings add nothing (and usize::MAX never ends).
+        if frontier.is_empty() {
+            break;
+        }
         let mut next = Vec::new();
         for v in frontier {
             for w in mesh.vertex_neighbors(v) {
@@ -177,4 +181,18 @@ pub fn resample_on_grid(mesh: &HalfedgeMesh, n: usize) -> Result<PolygonSoup, cr
         positions[tri_index(n, j, k)] = p[a] * l[0] + p[b] * l[1] + p[c] * l[2];
     }
     Ok(PolygonSoup::from_faces(positions, grid_triangles(n, true)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn disk_patch_stops_when_the_mesh_is_exhausted() {
+        // usize::MAX rings used to loop over empty frontiers forever.
+        let mesh = HalfedgeMesh::from_soup(&triangle_grid(4, smooth_surface)).unwrap();
+        let all = disk_patch(&mesh, 0, usize::MAX).expect("the whole grid is a disk");
+        assert_eq!(all.face_count(), 16);
+        assert_eq!(disk_patch(&mesh, 0, 100), Some(all));
+    }
 }
