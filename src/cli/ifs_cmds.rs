@@ -116,7 +116,7 @@ pub fn ifs(args: &IfsArgs) -> CliResult {
                 if n > POINT_BUDGET {
                     return Err(CliError::Input(format!(
                         "--points {n} with --out-points: the points are kept to be written, at most \
-                         {POINT_BUDGET} (without --out-points any number streams into the image)"
+                         {POINT_BUDGET} (without --out-points up to {MAX_STREAMED_POINTS} stream into the image)"
                     )));
                 }
                 let points = ifs::chaos_points(ifs, &game).map_err(|e| input_error("chaos game", e))?;

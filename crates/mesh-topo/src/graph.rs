@@ -28,8 +28,11 @@ impl Graph {
     ///
     /// # Panics
     /// If an edge names a node `>= node_count` (the caller builds edges from its own
-    /// indices, so this is a programming error, not bad user data).
+    /// indices, so this is a programming error, not bad user data), or if `node_count`
+    /// or twice the edge count exceeds `u32::MAX` (nodes and offsets are `u32`).
     pub fn from_edges(node_count: usize, edges: &[(u32, u32)]) -> Self {
+        assert!(node_count <= u32::MAX as usize, "graph of {node_count} nodes: at most u32::MAX");
+        assert!(edges.len() <= u32::MAX as usize / 2, "graph of {} edges: at most u32::MAX / 2", edges.len());
         let mut offsets = vec![0u32; node_count + 1];
         for &(a, b) in edges {
             assert!((a as usize) < node_count && (b as usize) < node_count, "graph edge out of range");
@@ -61,11 +64,17 @@ impl Graph {
     }
 
     /// Neighbours of `node`, in insertion order.
+    ///
+    /// # Panics
+    /// If `node >= self.node_count()` (a programming error, as in [`Graph::from_edges`]).
     pub fn neighbors(&self, node: u32) -> &[u32] {
         &self.targets[self.offsets[node as usize] as usize..self.offsets[node as usize + 1] as usize]
     }
 
     /// Nodes reachable from `start` in breadth-first order.
+    ///
+    /// # Panics
+    /// If `start >= self.node_count()`.
     pub fn bfs_order(&self, start: u32) -> Vec<u32> {
         let mut visited = vec![false; self.node_count()];
         let mut order = Vec::new();
@@ -75,6 +84,9 @@ impl Graph {
 
     /// Nodes reachable from `start` in depth-first (preorder) order, neighbours visited
     /// in insertion order.
+    ///
+    /// # Panics
+    /// If `start >= self.node_count()`.
     pub fn dfs_order(&self, start: u32) -> Vec<u32> {
         let mut visited = vec![false; self.node_count()];
         let mut order = Vec::new();
@@ -159,11 +171,19 @@ pub struct UnionFind {
 
 impl UnionFind {
     /// `n` singleton sets.
+    ///
+    /// # Panics
+    /// If `n > u32::MAX` (elements are `u32`).
     pub fn new(n: usize) -> Self {
+        assert!(n <= u32::MAX as usize, "union-find of {n} elements: at most u32::MAX");
         Self { parent: (0..n as u32).collect(), size: vec![1; n], sets: n }
     }
 
     /// Representative of `x`'s set.
+    ///
+    /// # Panics
+    /// If `x` is not an element (`x >= n`): the caller's own index, a programming error
+    /// as in [`Graph::from_edges`]. So do [`UnionFind::union`] and [`UnionFind::same`].
     pub fn find(&mut self, mut x: u32) -> u32 {
         while self.parent[x as usize] != x {
             let grandparent = self.parent[self.parent[x as usize] as usize];
@@ -174,6 +194,9 @@ impl UnionFind {
     }
 
     /// Merges the sets of `a` and `b`; returns false if they were already one set.
+    ///
+    /// # Panics
+    /// If `a` or `b` is not an element.
     pub fn union(&mut self, a: u32, b: u32) -> bool {
         let (mut ra, mut rb) = (self.find(a), self.find(b));
         if ra == rb {
@@ -189,6 +212,9 @@ impl UnionFind {
     }
 
     /// True if `a` and `b` are in the same set.
+    ///
+    /// # Panics
+    /// If `a` or `b` is not an element.
     pub fn same(&mut self, a: u32, b: u32) -> bool {
         self.find(a) == self.find(b)
     }
@@ -227,6 +253,21 @@ mod tests {
         assert_eq!(g.dfs_order(0), vec![0, 1, 3, 2, 4]);
         assert_eq!(g.bfs_order(0), vec![0, 1, 2, 3, 4]);
         assert_eq!(g.edge_count(), 4);
+    }
+
+    #[test]
+    #[should_panic(expected = "at most u32::MAX")]
+    fn a_graph_of_more_nodes_than_u32_panics_with_a_message() {
+        // `node_count + 1` used to wrap, then an index panic.
+        Graph::from_edges(usize::MAX, &[]);
+    }
+
+    #[test]
+    #[should_panic(expected = "at most u32::MAX")]
+    fn a_union_find_of_more_elements_than_u32_panics_with_a_message() {
+        // `0..n as u32` used to truncate silently: a set count that disagrees with the
+        // elements.
+        UnionFind::new(u32::MAX as usize + 1);
     }
 
     proptest! {

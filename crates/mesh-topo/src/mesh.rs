@@ -34,6 +34,13 @@ pub(crate) const INVALID: u32 = u32::MAX;
 /// boundary vertex it starts at the outgoing *boundary* half-edge (whose face is `None`),
 /// so the faces follow in fan order.
 ///
+/// # Handles
+/// [`VertexId`], [`FaceId`], [`EdgeId`] and [`HalfedgeId`] are plain indices, not tied
+/// to a mesh: the accessors that take one index this mesh's arrays with it and panic if
+/// it is out of range (a handle of a larger mesh); a handle of another mesh that is in
+/// range names this mesh's element of the same index. Get handles from the mesh they are
+/// used with ([`vertex`](Self::vertex) and the others check the index).
+///
 /// ```
 /// use glam::DVec3;
 /// use mesh_topo::{HalfedgeMesh, PolygonSoup};
@@ -204,6 +211,9 @@ impl HalfedgeMesh {
     }
 
     /// Position of a vertex.
+    ///
+    /// # Panics
+    /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn position(&self, v: VertexId) -> DVec3 {
         self.positions[v.index()]
@@ -226,12 +236,18 @@ impl HalfedgeMesh {
     // Connectivity.
 
     /// The half-edge after `h` in its face (or boundary loop).
+    ///
+    /// # Panics
+    /// If `h` is not a half-edge of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn next(&self, h: HalfedgeId) -> HalfedgeId {
         HalfedgeId::new(self.halfedge_next[h.index()])
     }
 
     /// The half-edge before `h` in its face (or boundary loop).
+    ///
+    /// # Panics
+    /// If `h` is not a half-edge of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn prev(&self, h: HalfedgeId) -> HalfedgeId {
         HalfedgeId::new(self.halfedge_prev[h.index()])
@@ -244,18 +260,27 @@ impl HalfedgeMesh {
     }
 
     /// The vertex `h` points to.
+    ///
+    /// # Panics
+    /// If `h` is not a half-edge of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn target(&self, h: HalfedgeId) -> VertexId {
         VertexId::new(self.halfedge_to[h.index()])
     }
 
     /// The vertex `h` starts from.
+    ///
+    /// # Panics
+    /// If `h` is not a half-edge of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn origin(&self, h: HalfedgeId) -> VertexId {
         VertexId::new(self.halfedge_to[h.twin().index()])
     }
 
     /// The face on the left of `h`, or `None` for a boundary half-edge.
+    ///
+    /// # Panics
+    /// If `h` is not a half-edge of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn halfedge_face(&self, h: HalfedgeId) -> Option<FaceId> {
         let f = self.halfedge_face[h.index()];
@@ -263,12 +288,18 @@ impl HalfedgeMesh {
     }
 
     /// True if `h` has no face (it runs along a hole).
+    ///
+    /// # Panics
+    /// If `h` is not a half-edge of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn is_boundary_halfedge(&self, h: HalfedgeId) -> bool {
         self.halfedge_face[h.index()] == INVALID
     }
 
     /// True if one side of the edge has no face.
+    ///
+    /// # Panics
+    /// If `e` is not an edge of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn is_boundary_edge(&self, e: EdgeId) -> bool {
         self.is_boundary_halfedge(e.halfedge(0)) || self.is_boundary_halfedge(e.halfedge(1))
@@ -276,6 +307,9 @@ impl HalfedgeMesh {
 
     /// An outgoing half-edge of `v` (the boundary one if `v` is on the boundary), or
     /// `None` for an isolated vertex.
+    ///
+    /// # Panics
+    /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn vertex_halfedge(&self, v: VertexId) -> Option<HalfedgeId> {
         let h = self.vertex_halfedge[v.index()];
@@ -283,12 +317,18 @@ impl HalfedgeMesh {
     }
 
     /// The half-edge leaving the first corner of face `f`.
+    ///
+    /// # Panics
+    /// If `f` is not a face of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn face_halfedge(&self, f: FaceId) -> HalfedgeId {
         HalfedgeId::new(self.face_halfedge[f.index()])
     }
 
     /// The two end vertices of an edge, in the direction of its half-edge 0.
+    ///
+    /// # Panics
+    /// If `e` is not an edge of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn edge_vertices(&self, e: EdgeId) -> [VertexId; 2] {
         let h = e.halfedge(0);
@@ -296,12 +336,18 @@ impl HalfedgeMesh {
     }
 
     /// True if `v` has no incident edge.
+    ///
+    /// # Panics
+    /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn is_isolated(&self, v: VertexId) -> bool {
         self.vertex_halfedge[v.index()] == INVALID
     }
 
     /// True if `v` lies on a boundary loop.
+    ///
+    /// # Panics
+    /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn is_boundary_vertex(&self, v: VertexId) -> bool {
         self.vertex_halfedge(v).is_some_and(|h| self.is_boundary_halfedge(h))
@@ -309,18 +355,27 @@ impl HalfedgeMesh {
 
     /// Number of edges at `v`. For an interior vertex this is also its number of faces;
     /// a boundary vertex has one face fewer than its valence.
+    ///
+    /// # Panics
+    /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn valence(&self, v: VertexId) -> usize {
         self.outgoing_halfedges(v).count()
     }
 
     /// Number of corners of face `f`.
+    ///
+    /// # Panics
+    /// If `f` is not a face of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn face_degree(&self, f: FaceId) -> usize {
         self.face_halfedges(f).count()
     }
 
     /// The half-edge from `from` to `to`, if that edge exists.
+    ///
+    /// # Panics
+    /// If `from` or `to` is not a vertex of this mesh (see [Handles](Self#handles)).
     pub fn find_halfedge(&self, from: VertexId, to: VertexId) -> Option<HalfedgeId> {
         self.outgoing_halfedges(from).find(|&h| self.target(h) == to)
     }
@@ -331,6 +386,9 @@ impl HalfedgeMesh {
     /// The outgoing half-edges of `v`, counter-clockwise, starting at
     /// [`vertex_halfedge`](Self::vertex_halfedge) (the boundary half-edge for a boundary
     /// vertex). Empty for an isolated vertex.
+    ///
+    /// # Panics
+    /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn outgoing_halfedges(&self, v: VertexId) -> VertexCirculator<'_> {
         let start = self.vertex_halfedge[v.index()];
@@ -338,6 +396,9 @@ impl HalfedgeMesh {
     }
 
     /// The neighbours of `v` (targets of its outgoing half-edges), counter-clockwise.
+    ///
+    /// # Panics
+    /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn vertex_neighbors(&self, v: VertexId) -> impl Iterator<Item = VertexId> + '_ {
         self.outgoing_halfedges(v).map(|h| self.target(h))
@@ -345,12 +406,18 @@ impl HalfedgeMesh {
 
     /// The faces around `v`, counter-clockwise (for a boundary vertex from the face after
     /// the boundary to the face before it).
+    ///
+    /// # Panics
+    /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn vertex_faces(&self, v: VertexId) -> impl Iterator<Item = FaceId> + '_ {
         self.outgoing_halfedges(v).filter_map(|h| self.halfedge_face(h))
     }
 
     /// The half-edges of face `f` in order, starting at its first corner.
+    ///
+    /// # Panics
+    /// If `f` is not a face of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn face_halfedges(&self, f: FaceId) -> LoopCirculator<'_> {
         let start = self.face_halfedge[f.index()];
@@ -358,12 +425,18 @@ impl HalfedgeMesh {
     }
 
     /// The half-edges of the loop through `h` (a face or a boundary loop), starting at `h`.
+    ///
+    /// # Panics
+    /// When iterated, if `h` is not a half-edge of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn halfedge_loop(&self, h: HalfedgeId) -> LoopCirculator<'_> {
         LoopCirculator { mesh: self, start: h.raw(), current: h.raw() }
     }
 
     /// The corners of face `f` in order, as given when the mesh was built.
+    ///
+    /// # Panics
+    /// If `f` is not a face of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn face_vertices(&self, f: FaceId) -> impl Iterator<Item = VertexId> + '_ {
         self.face_halfedges(f).map(|h| self.origin(h))
@@ -371,6 +444,9 @@ impl HalfedgeMesh {
 
     /// The faces sharing an edge with `f`, in the order of `f`'s half-edges (boundary
     /// edges skipped).
+    ///
+    /// # Panics
+    /// If `f` is not a face of this mesh (see [Handles](Self#handles)).
     #[inline]
     pub fn face_neighbors(&self, f: FaceId) -> impl Iterator<Item = FaceId> + '_ {
         self.face_halfedges(f).filter_map(|h| self.halfedge_face(h.twin()))

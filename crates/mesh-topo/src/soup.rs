@@ -96,12 +96,32 @@ impl PolygonSoup {
     }
 
     /// Iterator over the faces as index slices.
+    ///
+    /// # Panics
+    /// On malformed offsets (decreasing, or past the end of the indices): only a soup
+    /// built by hand has them, and [`HalfedgeMesh::from_soup`] reports them.
+    ///
+    /// [`HalfedgeMesh::from_soup`]: crate::HalfedgeMesh::from_soup
     pub fn faces(&self) -> impl ExactSizeIterator<Item = &[u32]> + '_ {
         self.offsets.windows(2).map(|w| &self.indices[w[0] as usize..w[1] as usize])
     }
 
-    /// True if every face has exactly three corners.
+    /// True if every face has exactly three corners (false for decreasing offsets,
+    /// which a soup built by hand may have).
     pub fn is_triangle_soup(&self) -> bool {
-        self.offsets.windows(2).all(|w| w[1] - w[0] == 3)
+        self.offsets.windows(2).all(|w| w[1].checked_sub(w[0]) == Some(3))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decreasing_offsets_are_not_a_triangle_soup() {
+        let soup = PolygonSoup { positions: vec![DVec3::ZERO; 3], offsets: vec![0, 3, 0], indices: vec![0, 1, 2] };
+        // `w[1] - w[0]` used to wrap (a panic with overflow checks).
+        assert!(!soup.is_triangle_soup());
+        assert!(PolygonSoup::from_faces(vec![DVec3::ZERO; 3], [[0u32, 1, 2]]).is_triangle_soup());
     }
 }

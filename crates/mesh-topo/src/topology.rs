@@ -186,6 +186,9 @@ impl HalfedgeMesh {
 
     /// Faces reachable from `start` across interior edges, breadth-first. Neighbours are
     /// visited in the order of each face's half-edges, so the order is deterministic.
+    ///
+    /// # Panics
+    /// If `start` is not a face of this mesh (see [Handles](HalfedgeMesh#handles)).
     pub fn face_bfs(&self, start: FaceId) -> Vec<FaceId> {
         let mut visited = vec![false; self.face_count()];
         let mut order = vec![start];
@@ -204,6 +207,9 @@ impl HalfedgeMesh {
     }
 
     /// Faces reachable from `start` across interior edges, depth-first preorder.
+    ///
+    /// # Panics
+    /// If `start` is not a face of this mesh (see [Handles](HalfedgeMesh#handles)).
     pub fn face_dfs(&self, start: FaceId) -> Vec<FaceId> {
         let mut visited = vec![false; self.face_count()];
         let mut order = Vec::new();
@@ -221,6 +227,9 @@ impl HalfedgeMesh {
 
     /// Vertices reachable from `start` along edges, breadth-first, neighbours in
     /// counter-clockwise circulation order.
+    ///
+    /// # Panics
+    /// If `start` is not a vertex of this mesh (see [Handles](HalfedgeMesh#handles)).
     pub fn vertex_bfs(&self, start: VertexId) -> Vec<VertexId> {
         let mut visited = vec![false; self.vertex_count()];
         let mut order = vec![start];

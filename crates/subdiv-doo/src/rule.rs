@@ -144,9 +144,16 @@ impl FaceRule {
     /// the vertex `k` steps further along the face). They sum to 1.
     ///
     /// # Panics
-    /// If `m < 3`.
+    /// If `m < 3`, `m >` [`MAX_FACE_CORNERS`] or the rule fails [`FaceRule::validate`]
+    /// (the weights of such a rule are not finite).
     pub fn weights(&self, m: usize) -> Vec<f64> {
-        assert!(m >= 3, "faces have at least 3 corners");
+        self.check_face(m);
+        self.dense_weights(m)
+    }
+
+    /// [`FaceRule::weights`] unchecked: the crate's face maps are built for rules that
+    /// their callers validate.
+    fn dense_weights(&self, m: usize) -> Vec<f64> {
         let (alpha, beta, gamma, delta) = self.coefficients();
         let mf = m as f64;
         (0..m)
@@ -173,9 +180,13 @@ impl FaceRule {
     /// ```
     ///
     /// # Panics
-    /// If `m < 3`.
+    /// As [`FaceRule::weights`].
     pub fn eigenvalues(&self, m: usize) -> Vec<f64> {
-        assert!(m >= 3, "faces have at least 3 corners");
+        self.check_face(m);
+        self.dense_eigenvalues(m)
+    }
+
+    fn dense_eigenvalues(&self, m: usize) -> Vec<f64> {
         let (alpha, beta, _, delta) = self.coefficients();
         (0..m)
             .map(|k| {
@@ -202,9 +213,13 @@ impl FaceRule {
     /// ```
     ///
     /// # Panics
-    /// If `m < 3`.
+    /// As [`FaceRule::weights`].
     pub fn inverse_weights(&self, m: usize) -> Vec<f64> {
-        assert!(m >= 3, "faces have at least 3 corners");
+        self.check_face(m);
+        self.dense_inverse_weights(m)
+    }
+
+    fn dense_inverse_weights(&self, m: usize) -> Vec<f64> {
         let mf = m as f64;
         match *self {
             FaceRule::DooSabin => (0..m)
@@ -215,13 +230,36 @@ impl FaceRule {
                 })
                 .collect(),
             FaceRule::Centroid { a } => (0..m).map(|j| (if j == 0 { 1.0 } else { 0.0 } - a / mf) / (1.0 - a)).collect(),
-            FaceRule::Simple => {
-                let lambda = self.eigenvalues(m);
+            FaceRule::Simple if m <= DENSE_MAX => {
+                let lambda = self.dense_eigenvalues(m);
                 (0..m).map(|j| (0..m).map(|k| cos_turns(j * k % m, m) / lambda[k]).sum::<f64>() / mf).collect()
+            }
+            FaceRule::Simple => {
+                // The DFT sum is O(m^2) (minutes for large faces): the weights are the
+                // inverse map of the unit vector `e_0` instead, the O(m) solve of
+                // `inverse_large`, symmetrised (`u_j = u_{m-j}`) against rounding.
+                let rhs: Vec<DVec3> =
+                    (0..m).map(|j| DVec3::splat(if j == 0 { 1.0 } else { 0.0 } - 0.25 / mf)).collect();
+                let mut u = vec![DVec3::ZERO; m];
+                solve_cyclic_tridiagonal(0.5, 0.125, &rhs, &mut u);
+                (0..m).map(|j| if j == 0 { u[0].x } else { (u[j].x + u[m - j].x) / 2.0 }).collect()
             }
         }
     }
+
+    /// The panics of [`FaceRule::weights`].
+    fn check_face(&self, m: usize) {
+        assert!((3..=MAX_FACE_CORNERS).contains(&m), "faces have 3 to {MAX_FACE_CORNERS} corners, not {m}");
+        if let Err(error) = self.validate() {
+            panic!("{error}");
+        }
+    }
 }
+
+/// The most corners of a face whose weights [`FaceRule::weights`] and its kin compute: no
+/// face of a mesh has more ([`mesh_topo::check_capacity`]), and the weights of a larger
+/// one would not fit in memory.
+pub const MAX_FACE_CORNERS: usize = mesh_topo::MAX_ELEMENTS / 2;
 
 /// `cos(2π j / m)`, exact at multiples of a quarter and of a sixth of a turn (so that
 /// triangle and quad weights are exact: `(9, 3, 1, 3)/16` on quads).
@@ -263,8 +301,8 @@ impl FaceMaps {
         let mut forward = vec![Vec::new(); DENSE_MAX + 1];
         let mut inverse = vec![Vec::new(); DENSE_MAX + 1];
         for m in 3..=DENSE_MAX {
-            forward[m] = rule.weights(m);
-            inverse[m] = rule.inverse_weights(m);
+            forward[m] = rule.dense_weights(m);
+            inverse[m] = rule.dense_inverse_weights(m);
         }
         Self { rule, forward, inverse }
     }
@@ -570,5 +608,47 @@ mod tests {
         assert!(FaceRule::Centroid { a: 1.0 }.validate().is_err());
         assert!(FaceRule::Centroid { a: f64::NAN }.validate().is_err());
         assert!(FaceRule::Centroid { a: 0.5 }.validate().is_ok());
+    }
+
+    #[test]
+    fn large_simple_inverse_weights_are_linear_time_and_invert() {
+        // m = 200 000 used to take minutes (a DFT sum per weight).
+        let m = 200_000;
+        let u = FaceRule::Simple.inverse_weights(m);
+        // Affine, up to the rounding of 200 000 terms.
+        assert!((u.iter().sum::<f64>() - 1.0).abs() < 1e-10);
+        // The solve agrees with the DFT sum just above the dense sizes, and inverts the
+        // forward weights.
+        for m in [DENSE_MAX + 1, 40] {
+            let (u, l, w) =
+                (FaceRule::Simple.inverse_weights(m), FaceRule::Simple.eigenvalues(m), FaceRule::Simple.weights(m));
+            for j in 0..m {
+                let dft: f64 = (0..m).map(|k| cos_turns(j * k, m) / l[k]).sum::<f64>() / m as f64;
+                assert!((dft - u[j]).abs() < 1e-13, "m={m} j={j}");
+                assert_eq!(u[j], u[(m - j) % m]);
+                let product: f64 = (0..m).map(|k| w[k] * u[(j + m - k) % m]).sum();
+                assert!((product - if j == 0 { 1.0 } else { 0.0 }).abs() < 1e-13, "m={m} j={j}");
+            }
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "corners")]
+    fn weights_of_a_face_larger_than_any_mesh_face_panic_with_a_message() {
+        // Used to panic on a capacity overflow.
+        FaceRule::DooSabin.weights(usize::MAX);
+    }
+
+    #[test]
+    #[should_panic(expected = "0 < a < 1")]
+    fn inverse_weights_of_a_bad_centroid_parameter_panic_with_a_message() {
+        // `a = 1` used to give infinite weights.
+        FaceRule::Centroid { a: 1.0 }.inverse_weights(4);
+    }
+
+    #[test]
+    #[should_panic(expected = "0 < a < 1")]
+    fn weights_of_a_nan_centroid_parameter_panic_with_a_message() {
+        FaceRule::Centroid { a: f64::NAN }.weights(4);
     }
 }

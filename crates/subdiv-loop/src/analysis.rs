@@ -114,7 +114,9 @@ pub struct AnalysisOptions {
     /// the eigenvalue conditions are known).
     pub characteristic_map: bool,
     /// Steps of the characteristic-map check (default: 4 for Loop, 3 for ternary, 2 for
-    /// quaternary: a resolution of 1/16 to 1/27 of the ring).
+    /// quaternary: a resolution of 1/16 to 1/27 of the ring). At most 7 for Loop, 4 for
+    /// ternary, 3 for quaternary (a resolution of 1/81 to 1/128): each step multiplies
+    /// the work by `M^2`, and one step more takes seconds, two take minutes.
     pub characteristic_steps: Option<u32>,
 }
 
@@ -367,9 +369,10 @@ pub fn local_subdivision_matrix(
 /// ```
 ///
 /// # Errors
-/// [`LoopError::InvalidParameter`] for a valence outside `3 ..= 200` or a bad ternary
-/// `lambda`.
+/// [`LoopError::InvalidParameter`] for a valence outside `3 ..= 200`, a bad ternary
+/// `lambda` or more [`AnalysisOptions::characteristic_steps`] than documented there.
 pub fn analyze(scheme: Scheme, valence: usize, options: &AnalysisOptions) -> Result<Analysis, LoopError> {
+    check_characteristic_steps(scheme, options)?;
     let n = valence;
     let local = local_subdivision_matrix(scheme, n, 4, options)?;
     let size = 1 + 3 * n;
@@ -497,6 +500,25 @@ fn check_valence(valence: usize) -> Result<(), LoopError> {
             name: "valence",
             reason: format!("{valence}; the analysis covers valences 3 to {MAX_VALENCE}"),
         })
+    }
+}
+
+/// The bound of [`AnalysisOptions::characteristic_steps`]: the steps whose refinement
+/// `M^steps` stays within 128 (Loop 7, ternary 4, quaternary 3), well under a second at
+/// low valence; a step more costs `M^2` times as much (`u32::MAX` steps would exhaust the
+/// memory).
+fn check_characteristic_steps(scheme: Scheme, options: &AnalysisOptions) -> Result<(), LoopError> {
+    let max = match scheme {
+        Scheme::Loop | Scheme::LoopWarren => 7,
+        Scheme::TernaryLoop => 4,
+        Scheme::QuaternaryLoop => 3,
+    };
+    match options.characteristic_steps {
+        Some(steps) if steps > max => Err(LoopError::InvalidParameter {
+            name: "characteristic_steps",
+            reason: format!("{steps}: at most {max} for {}", scheme.name()),
+        }),
+        _ => Ok(()),
     }
 }
 

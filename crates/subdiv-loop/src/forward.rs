@@ -437,12 +437,20 @@ pub(crate) fn check_finite(positions: &[DVec3]) -> Result<(), LoopError> {
     }
 }
 
-/// Rejects soups with non-triangular faces, naming the first one.
+/// Rejects soups with non-triangular faces, naming the first one. Reads the offsets
+/// without slicing the indices, so that a hand-built soup with malformed offsets
+/// (decreasing, past the indices) does not panic here: it stops at the first bad range
+/// and leaves the typed error to [`HalfedgeMesh::from_soup`].
 pub(crate) fn check_triangles(soup: &PolygonSoup) -> Result<(), LoopError> {
-    match soup.faces().position(|f| f.len() != 3) {
-        None => Ok(()),
-        Some(face) => Err(LoopError::NotTriangle { face, corners: soup.face(face).len() }),
+    for (face, w) in soup.offsets.windows(2).enumerate() {
+        if w[1] < w[0] || w[1] as usize > soup.indices.len() {
+            return Ok(());
+        }
+        if w[1] - w[0] != 3 {
+            return Err(LoopError::NotTriangle { face, corners: (w[1] - w[0]) as usize });
+        }
     }
+    Ok(())
 }
 
 /// The most levels the functions of this crate refine (Loop steps; ternary levels):

@@ -242,22 +242,33 @@ pub fn box_spline_masks(arity: u32) -> Result<BoxSplineMasks, LoopError> {
 ///
 /// # Errors
 /// [`LoopError::InvalidParameter`] if the lattice is smaller than 4 x 4 (stencils would
-/// wrap onto themselves) or `values.len() != width * height`.
+/// wrap onto themselves), `values.len() != width * height`, or either lattice has more
+/// points than memory holds (sizes are checked, never wrapped).
 pub fn subdivide_lattice<T: Attribute>(
     values: &[T],
     width: usize,
     height: usize,
     masks: &BoxSplineMasks,
 ) -> Result<Vec<T>, LoopError> {
-    if width < 4 || height < 4 || values.len() != width * height {
-        return Err(LoopError::InvalidParameter {
-            name: "lattice",
-            reason: format!("{} values for a {width} x {height} lattice (at least 4 x 4)", values.len()),
-        });
+    let bad = |reason: String| LoopError::InvalidParameter { name: "lattice", reason };
+    let Some(points) = width.checked_mul(height) else {
+        return Err(bad(format!("a {width} x {height} lattice has more points than a slice holds")));
+    };
+    if width < 4 || height < 4 || values.len() != points {
+        return Err(bad(format!("{} values for a {width} x {height} lattice (at least 4 x 4)", values.len())));
     }
     let m = masks.arity as usize;
     let denominator = masks.denominator() as f64;
-    let (fine_width, fine_height) = (m * width, m * height);
+    // The coarse sizes fit (they hold `values`); the fine ones must be checked (a wrapped
+    // size would index out of range). Then every size is below `usize::MAX / 4`, so the
+    // `i64` stencil offsets below do not wrap either.
+    let fine_bytes = |w: usize, h: usize| w.checked_mul(h)?.checked_mul(size_of::<T>().max(1));
+    let fine_sizes = m.checked_mul(width).zip(m.checked_mul(height));
+    let Some((fine_width, fine_height)) =
+        fine_sizes.filter(|&(w, h)| fine_bytes(w, h).is_some_and(|bytes| bytes <= isize::MAX as usize))
+    else {
+        return Err(bad(format!("a {width} x {height} lattice refined by {m} has more points than memory holds")));
+    };
     let mut fine = Vec::with_capacity(fine_width * fine_height);
     for fj in 0..fine_height {
         for fi in 0..fine_width {
@@ -311,13 +322,72 @@ pub const TERNARY_ALPHA: f64 = 5.0 / 9.0;
 
 /// The ring weights `gamma_l` (`l = 0 .. n-1`) of the 1/3-point of an edge at a vertex
 /// of valence `n`.
-pub fn ternary_edge_weights(n: usize, lambda: f64) -> Vec<f64> {
+///
+/// ```
+/// use subdiv_loop::mband::ternary_edge_weights;
+///
+/// // Valence 6 with lambda = 1/3: the regular stencil, (20, 10, 2, 1, 2, 10) / 81.
+/// let gamma = ternary_edge_weights(6, 1.0 / 3.0)?;
+/// assert!((gamma[0] * 81.0 - 20.0).abs() < 1e-13);
+/// assert!(ternary_edge_weights(2, 1.0 / 3.0).is_err());
+/// # Ok::<(), subdiv_loop::LoopError>(())
+/// ```
+///
+/// # Errors
+/// [`LoopError::InvalidParameter`] for a valence outside `3 ..=`
+/// [`MAX_VALENCE`](crate::analysis::MAX_VALENCE) (the valences the rule is analysed
+/// for; the cost grows as `n^2`) or `lambda` outside `(1/9, 1/2]`, as for
+/// [`TernaryOptions`].
+pub fn ternary_edge_weights(n: usize, lambda: f64) -> Result<Vec<f64>, LoopError> {
+    if !(3..=crate::analysis::MAX_VALENCE).contains(&n) {
+        return Err(LoopError::InvalidParameter {
+            name: "valence",
+            reason: format!("{n}; the ternary edge weights cover valences 3 to {}", crate::analysis::MAX_VALENCE),
+        });
+    }
+    TernaryOptions { lambda }.validate()?;
+    Ok(edge_weights(n, lambda))
+}
+
+/// [`ternary_edge_weights`] for any valence of a mesh (checked `lambda`): the sum of the
+/// definition up to [`MAX_VALENCE`](crate::analysis::MAX_VALENCE), its `O(n)` closed
+/// form above (the sum is `O(n^2)`: minutes at a vertex of valence `10^5`).
+fn edge_weights(n: usize, lambda: f64) -> Vec<f64> {
+    if n > crate::analysis::MAX_VALENCE {
+        return edge_weights_closed(n, lambda);
+    }
     (0..n)
         .map(|l| {
             let mut sum = 5.0 / 9.0;
             for k in 1..n {
                 let angle = std::f64::consts::TAU * (k * l) as f64 / n as f64;
                 sum += lambda.powi(k.min(n - k) as i32) * angle.cos();
+            }
+            sum / n as f64
+        })
+        .collect()
+}
+
+/// The closed form of [`edge_weights`]: with `θ = 2π l / n` and `H = (n - 1) / 2`,
+/// `sum_k λ^min(k, n-k) cos(kθ) = 2 Re sum_{k=1}^{H} z^k` (`z = λ e^{iθ}`, a geometric
+/// series), plus `λ^(n/2) (-1)^l` for even `n`. `|z| <= 1/2`, so `1 - z` is well away
+/// from 0.
+fn edge_weights_closed(n: usize, lambda: f64) -> Vec<f64> {
+    let turn = |m: u128| std::f64::consts::TAU * (m % n as u128) as f64 / n as f64;
+    let h = (n - 1) / 2;
+    let lambda_h = lambda.powf(h as f64);
+    (0..n)
+        .map(|l| {
+            let (sin, cos) = turn(l as u128).sin_cos();
+            let (sin_h, cos_h) = turn(l as u128 * h as u128).sin_cos();
+            // z (1 - z^H) / (1 - z), real part.
+            let (zr, zi) = (lambda * cos, lambda * sin);
+            let (ar, ai) = (1.0 - lambda_h * cos_h, -lambda_h * sin_h);
+            let (nr, ni) = (zr * ar - zi * ai, zr * ai + zi * ar);
+            let (dr, di) = (1.0 - zr, -zi);
+            let mut sum = 5.0 / 9.0 + 2.0 * (nr * dr + ni * di) / (dr * dr + di * di);
+            if n.is_multiple_of(2) {
+                sum += lambda.powf((n / 2) as f64) * if l % 2 == 0 { 1.0 } else { -1.0 };
             }
             sum / n as f64
         })
@@ -547,7 +617,7 @@ fn ternary_step<T: Attribute>(
         let mut vertex = vec![(p, TERNARY_ALPHA)];
         vertex.extend(ring.iter().map(|&q| (q, (1.0 - TERNARY_ALPHA) / n as f64)));
         out[v.index()] = Some(combine(values, &vertex));
-        let gamma = weights.entry(n).or_insert_with(|| ternary_edge_weights(n, lambda));
+        let gamma = weights.entry(n).or_insert_with(|| edge_weights(n, lambda));
         for (j, &h) in outgoing.iter().enumerate() {
             let mut terms = vec![(p, 4.0 / 9.0)];
             terms.extend((0..n).map(|l| (ring[(j + l) % n], gamma[l])));

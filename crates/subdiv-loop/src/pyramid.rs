@@ -147,8 +147,13 @@ pub struct RateDistortion {
 /// connectivity.
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
     if wanted_levels(options) == 0 {
-        // No reversal reads the input: check it here.
+        // No reversal reads the input: check it here, seeds included (a seed that does
+        // not exist is an error at any level count, as detection reports it).
         check_input_positions(mesh.positions())?;
+        let vertex_count = mesh.vertex_count();
+        if let Some(&vertex) = options.seed_vertices.iter().find(|&&seed| seed as usize >= vertex_count) {
+            return Err(LoopError::SeedOutOfRange { vertex, vertex_count });
+        }
         let base = CornerTable::from_mesh(mesh)?.to_soup(mesh.positions().to_vec());
         return Ok(LoopPyramid { rules: options.rules, base, levels: Vec::new() });
     }
@@ -1176,5 +1181,16 @@ mod tests {
             let decoded = LoopPyramid::from_bytes(&pyramid.to_bytes().unwrap()).unwrap();
             prop_assert_eq!(decoded, pyramid);
         }
+    }
+
+    #[test]
+    fn zero_levels_reject_a_seed_out_of_range() {
+        // Used to return the mesh, the seed silently ignored.
+        let options = DecomposeOptions { levels: Levels::Count(0), seed_vertices: vec![999_999], ..Default::default() };
+        let expected = Err(LoopError::SeedOutOfRange { vertex: 999_999, vertex_count: 6 });
+        assert_eq!(decompose(&mesh(&shapes::octahedron()), &options).map(|p| p.level_count()), expected);
+        assert_eq!(decompose_soup(&shapes::octahedron(), &options).map(|p| p.level_count()), expected);
+        let in_range = DecomposeOptions { seed_vertices: vec![5], ..options };
+        assert_eq!(decompose(&mesh(&shapes::octahedron()), &in_range).map(|p| p.level_count()), Ok(0));
     }
 }

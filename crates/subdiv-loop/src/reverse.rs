@@ -74,6 +74,11 @@ fn beta(weights: VertexWeights, valence: usize) -> f64 {
 /// `(μ, η)` of the exact inverse of the interior vertex rule at valence `l`:
 /// `p = μ p' + η Σ e'_j`.
 ///
+/// Valence 0 (an isolated vertex, which the forward step copies) gives `(1, 0)`, the
+/// copy back: the formula would divide by zero there. Every other valence has finite
+/// weights with `μ + lη = 1` (valences 1 and 2 included, though only 2 occurs in a
+/// manifold mesh), so no error is needed.
+///
 /// ```
 /// use subdiv_loop::forward::VertexWeights;
 /// use subdiv_loop::reverse::inverse_weights;
@@ -81,8 +86,12 @@ fn beta(weights: VertexWeights, valence: usize) -> f64 {
 /// assert!((mu - 2.5).abs() < 1e-15 && (eta + 0.25).abs() < 1e-15);
 /// let (mu, eta) = inverse_weights(VertexWeights::Loop, 3);
 /// assert!((mu - 10.0).abs() < 1e-12 && (eta + 3.0).abs() < 1e-12);
+/// assert_eq!(inverse_weights(VertexWeights::Warren, 0), (1.0, 0.0));
 /// ```
 pub fn inverse_weights(weights: VertexWeights, valence: usize) -> (f64, f64) {
+    if valence == 0 {
+        return (1.0, 0.0);
+    }
     let beta = beta(weights, valence);
     let alpha = 1.0 - valence as f64 * beta;
     let denominator = 8.0 * alpha - 3.0;
@@ -1407,6 +1416,18 @@ mod tests {
             let a = 1.0 - l as f64 * beta;
             assert!((m - 5.0 / (8.0 * a - 3.0)).abs() < 1e-12);
             assert!((e - (a - 1.0) / (l as f64 * (a - 0.375))).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn inverse_weights_are_finite_at_every_valence() {
+        for weights in [VertexWeights::Loop, VertexWeights::Warren] {
+            // Valence 0 used to give (NaN, NaN); it is the copy of an isolated vertex.
+            assert_eq!(inverse_weights(weights, 0), (1.0, 0.0));
+            for l in [1, 2, 1000, usize::MAX] {
+                let (mu, eta) = inverse_weights(weights, l);
+                assert!(mu.is_finite() && eta.is_finite(), "{weights:?} valence {l}");
+            }
         }
     }
 

@@ -167,3 +167,24 @@ fn bad_parameters_are_rejected() {
     assert_eq!("ternary-loop".parse::<Scheme>().unwrap(), Scheme::TernaryLoop);
     assert!("butterfly".parse::<Scheme>().is_err());
 }
+
+#[test]
+fn too_many_characteristic_steps_are_rejected_at_once() {
+    // `u32::MAX` steps used to refine until the allocation aborted.
+    for (scheme, max) in
+        [(Scheme::Loop, 7), (Scheme::LoopWarren, 7), (Scheme::TernaryLoop, 4), (Scheme::QuaternaryLoop, 3)]
+    {
+        for steps in [max + 1, u32::MAX] {
+            let options = AnalysisOptions { characteristic_steps: Some(steps), ..AnalysisOptions::default() };
+            assert!(
+                matches!(
+                    analyze(scheme, 5, &options),
+                    Err(LoopError::InvalidParameter { name: "characteristic_steps", .. })
+                ),
+                "{scheme:?} {steps}"
+            );
+        }
+    }
+    let none = AnalysisOptions { characteristic_steps: Some(0), ..AnalysisOptions::default() };
+    assert!(analyze(Scheme::Loop, 5, &none).is_ok());
+}

@@ -66,10 +66,12 @@ impl SubdivisionMatrix {
         if column_indices.len() != values.len() {
             return Err(bad(format!("{} column indices but {} values", column_indices.len(), values.len())));
         }
+        // All offsets first: with the ends checked, non-decreasing offsets stay within
+        // the entries, so the rows below can be sliced.
+        if let Some(row) = row_offsets.windows(2).position(|w| w[0] > w[1]) {
+            return Err(bad(format!("row {row}: offsets decrease")));
+        }
         for (row, w) in row_offsets.windows(2).enumerate() {
-            if w[0] > w[1] {
-                return Err(bad(format!("row {row}: offsets decrease")));
-            }
             let cols = &column_indices[w[0]..w[1]];
             if cols.windows(2).any(|p| p[0] >= p[1]) || cols.last().is_some_and(|&c| c as usize >= columns) {
                 return Err(bad(format!("row {row}: columns must increase strictly and stay below {columns}")));
@@ -149,8 +151,12 @@ impl SubdivisionMatrix {
         if row >= self.rows() {
             return 0.0;
         }
+        // A column past `u32` would alias a small one if cast.
+        let Ok(column) = u32::try_from(column) else {
+            return 0.0;
+        };
         let (cols, vals) = self.row(row);
-        cols.binary_search(&(column as u32)).map_or(0.0, |k| vals[k])
+        cols.binary_search(&column).map_or(0.0, |k| vals[k])
     }
 
     /// The raw CSR arrays: row offsets, column indices, values.
@@ -277,5 +283,41 @@ impl SubdivisionMatrix {
                 row
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+    use mesh_topo::PolygonSoup;
+
+    use super::*;
+    use crate::forward::{LoopOptions, subdivide_soup};
+
+    #[test]
+    fn from_csr_rejects_an_offset_past_the_entries() {
+        // Ends right, middle past the 3 entries: used to panic slicing row 0.
+        let error = SubdivisionMatrix::from_csr(2, vec![0, 5, 3], vec![0, 1, 0], vec![1.0; 3]).unwrap_err();
+        assert!(matches!(error, LoopError::InvalidParameter { name: "csr", .. }));
+    }
+
+    #[test]
+    fn get_beyond_u32_columns_is_zero() {
+        let s = SubdivisionMatrix::from_csr(2, vec![0, 1], vec![0], vec![0.5]).unwrap();
+        assert_eq!(s.get(0, 0), 0.5);
+        // `1 << 32` used to be cast to column 0.
+        assert_eq!(s.get(0, 1usize << 32), 0.0);
+    }
+
+    /// `check_triangles` (in `forward.rs`, whose tests live elsewhere) on malformed
+    /// offsets: a typed mesh error, not a slice panic.
+    #[test]
+    fn subdivide_soup_with_malformed_offsets_is_an_error() {
+        for offsets in [vec![0, 5, 3], vec![4, 3], vec![0, 3, 0]] {
+            let soup =
+                PolygonSoup { positions: vec![DVec3::ZERO, DVec3::X, DVec3::Y], offsets, indices: vec![0, 1, 2] };
+            let error = subdivide_soup(&soup, 1, &LoopOptions::default()).unwrap_err();
+            assert!(matches!(error, LoopError::Mesh(_)), "{error:?}");
+        }
     }
 }

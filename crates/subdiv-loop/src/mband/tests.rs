@@ -399,13 +399,13 @@ fn every_arity_refines_the_same_box_spline() {
 
 #[test]
 fn ternary_weights_at_valence_six_are_the_regular_ones() {
-    let gamma = ternary_edge_weights(6, 1.0 / 3.0);
+    let gamma = ternary_edge_weights(6, 1.0 / 3.0).unwrap();
     for (g, expected) in gamma.iter().zip([20.0, 10.0, 2.0, 1.0, 2.0, 10.0]) {
         assert!((g * 81.0 - expected).abs() < 1e-13);
     }
     for n in 3..=20 {
         // Affine: 4/9 + sum gamma = 1, and positive at lambda = 1/3.
-        let gamma = ternary_edge_weights(n, 1.0 / 3.0);
+        let gamma = ternary_edge_weights(n, 1.0 / 3.0).unwrap();
         assert!((4.0 / 9.0 + gamma.iter().sum::<f64>() - 1.0).abs() < 1e-14);
         assert!(gamma.iter().all(|&g| g > 0.0), "n = {n}: {gamma:?}");
     }
@@ -555,4 +555,57 @@ fn level_limits_stop_meshes_that_do_not_grow() {
         assert!(too_large(quaternary_subdivide(&octahedron, levels, &loop_options).unwrap_err()), "{levels}");
         assert!(too_large(ternary_subdivide(&octahedron, levels, &ternary_options).unwrap_err()), "{levels}");
     }
+}
+
+#[test]
+fn ternary_edge_weights_reject_bad_valences_and_lambdas() {
+    // `usize::MAX` used to overflow the capacity, 200 000 to run for a minute, NaN to
+    // give NaN weights.
+    for n in [0, 2, crate::analysis::MAX_VALENCE + 1, 200_000, usize::MAX] {
+        assert!(
+            matches!(ternary_edge_weights(n, 0.3), Err(LoopError::InvalidParameter { name: "valence", .. })),
+            "{n}"
+        );
+    }
+    for lambda in [f64::NAN, f64::INFINITY, 0.1, 0.6] {
+        assert!(
+            matches!(ternary_edge_weights(5, lambda), Err(LoopError::InvalidParameter { name: "lambda", .. })),
+            "{lambda}"
+        );
+    }
+    assert_eq!(ternary_edge_weights(crate::analysis::MAX_VALENCE, 0.5).unwrap().len(), crate::analysis::MAX_VALENCE);
+}
+
+#[test]
+fn lattice_sizes_that_overflow_are_rejected() {
+    let masks = box_spline_masks(2).unwrap();
+    // `width * height` used to wrap to 0 (then a panic, or `Ok(vec![])`).
+    for (width, height) in [(1usize << 62, 4), (1 << 63, 4), (4, usize::MAX), (usize::MAX, usize::MAX)] {
+        assert!(
+            matches!(
+                subdivide_lattice::<f64>(&[], width, height, &masks),
+                Err(LoopError::InvalidParameter { name: "lattice", .. })
+            ),
+            "{width} x {height}"
+        );
+    }
+}
+
+#[test]
+fn closed_form_edge_weights_agree_with_the_sum_and_are_linear_time() {
+    for n in (3..=40).chain([199, 200, 201, 202]) {
+        for lambda in [0.2, 1.0 / 3.0, 0.5] {
+            let (closed, sum) = (edge_weights_closed(n, lambda), edge_weights(n.min(200), lambda));
+            if n <= 200 {
+                for (l, (a, b)) in closed.iter().zip(&sum).enumerate() {
+                    assert!((a - b).abs() < 1e-15, "n = {n}, lambda = {lambda}, l = {l}: {a} vs {b}");
+                }
+            }
+            assert!((4.0 / 9.0 + closed.iter().sum::<f64>() - 1.0).abs() < 1e-13, "n = {n}");
+        }
+    }
+    // A mesh vertex of valence 200 000 used to cost 4e10 terms (minutes).
+    let gamma = edge_weights(200_000, 1.0 / 3.0);
+    assert!((4.0 / 9.0 + gamma.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    assert!(gamma.iter().all(|g| g.is_finite()));
 }
