@@ -67,6 +67,19 @@ pub enum LoopError {
         /// The vertex.
         vertex: usize,
     },
+    /// Finite input whose subdivision (or limit) leaves the `f64` range: coordinates so
+    /// large that a sum of the rules overflows (the first output vertex that is not
+    /// finite).
+    #[error(
+        "vertex {vertex} of the result is not finite: the input's coordinates (up to {largest:e} in magnitude) \
+         overflow the f64 range when the rules sum them; scale the mesh down"
+    )]
+    Overflow {
+        /// The first output vertex that is not finite.
+        vertex: usize,
+        /// The largest coordinate magnitude of the input.
+        largest: f64,
+    },
     /// A pyramid file could not be encoded or decoded.
     #[error("Loop pyramid: {0}")]
     Binary(String),

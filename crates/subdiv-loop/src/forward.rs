@@ -297,12 +297,15 @@ impl LoopMesh {
 /// [`LoopError::NotTriangle`] naming the first face that is not a triangle;
 /// [`LoopError::Mesh`] with [`MeshError::NonFiniteCoordinate`] if a position is NaN or
 /// infinite, or [`MeshError::TooLarge`] if the output would not fit `u32` indices;
-/// [`LoopError::InvalidParameter`] for more than [`MAX_LEVELS`] levels.
+/// [`LoopError::InvalidParameter`] for more than [`MAX_LEVELS`] levels;
+/// [`LoopError::Overflow`] for finite coordinates so large (beyond `f64::MAX / 2^32`)
+/// that the result is not.
 pub fn subdivide(mesh: &HalfedgeMesh, levels: u32, options: &LoopOptions) -> Result<LoopMesh, LoopError> {
-    check_finite(mesh.positions())?;
+    let largest = check_finite_largest(mesh.positions())?;
     let topology = Topology::from_mesh(mesh)?;
     check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels)?;
     let (positions, topology) = refine(topology, mesh.positions(), levels, &Rules::new(options));
+    check_no_overflow(&positions, largest)?;
     Ok(LoopMesh { positions, triangles: topology.triangles })
 }
 
@@ -425,15 +428,39 @@ pub(crate) fn triangle_offsets(faces: usize) -> Vec<u32> {
     buffer::par_fill(faces + 1, |f| (3 * f) as u32)
 }
 
-/// Rejects NaN and infinite coordinates, naming the vertex.
-pub(crate) fn check_finite(positions: &[DVec3]) -> Result<(), LoopError> {
-    match positions.iter().position(|p| !p.is_finite()) {
-        None => Ok(()),
-        Some(vertex) => {
-            let p = positions[vertex];
+/// Rejects NaN and infinite coordinates, naming the vertex; else the largest coordinate
+/// magnitude (in the same pass), for [`check_no_overflow`].
+pub(crate) fn check_finite_largest(positions: &[DVec3]) -> Result<f64, LoopError> {
+    let mut largest = 0.0f64;
+    for (vertex, p) in positions.iter().enumerate() {
+        if !p.is_finite() {
             let axis = (0..3).find(|&a| !p[a].is_finite()).unwrap_or(0);
-            Err(MeshError::NonFiniteCoordinate { vertex, axis, value: p[axis] }.into())
+            return Err(MeshError::NonFiniteCoordinate { vertex, axis, value: p[axis] }.into());
         }
+        largest = largest.max(p.abs().max_element());
+    }
+    Ok(largest)
+}
+
+/// Coordinates up to this magnitude cannot overflow: every rule of the crate (vertex,
+/// edge, boundary and limit masks, forward and M-band) is a sum of fewer than `2^32`
+/// terms (a vertex's neighbours) whose weights have absolute values summing to a few
+/// units at most, so no partial sum exceeds `2^32` times the largest coordinate.
+const OVERFLOW_FREE: f64 = f64::MAX / 4_294_967_296.0;
+
+/// Finite input of coordinates beyond [`OVERFLOW_FREE`] (`largest`, from
+/// [`check_finite_largest`]) may give infinities: then the first output vertex that is
+/// not finite is [`LoopError::Overflow`]. Below it nothing is read.
+pub(crate) fn check_no_overflow<'a>(
+    output: impl IntoIterator<Item = &'a DVec3>,
+    largest: f64,
+) -> Result<(), LoopError> {
+    if largest <= OVERFLOW_FREE {
+        return Ok(());
+    }
+    match output.into_iter().position(|p| !p.is_finite()) {
+        Some(vertex) => Err(LoopError::Overflow { vertex, largest }),
+        None => Ok(()),
     }
 }
 

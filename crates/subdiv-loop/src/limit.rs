@@ -41,7 +41,7 @@ use mesh_topo::{HalfedgeMesh, VertexId};
 use crate::LoopError;
 use crate::forward::kernel::{loop_beta, warren_beta};
 use crate::forward::topology::Topology;
-use crate::forward::{LoopOptions, VertexWeights, check_finite};
+use crate::forward::{LoopOptions, VertexWeights, check_finite_largest, check_no_overflow};
 
 /// Limit positions of all vertices of `mesh` (isolated vertices are returned as they are).
 ///
@@ -63,8 +63,10 @@ use crate::forward::{LoopOptions, VertexWeights, check_finite};
 /// [`LoopError::NotTriangle`], [`LoopError::InteriorValenceTwo`] and non-finite
 /// positions, as for [`subdivide`](crate::forward::subdivide).
 pub fn limit_positions(mesh: &HalfedgeMesh, options: &LoopOptions) -> Result<Vec<DVec3>, LoopError> {
-    check_mesh(mesh)?;
-    Ok(mesh.vertices().map(|v| limit_frame(mesh, v, options).0).collect())
+    let largest = check_mesh(mesh)?;
+    let positions: Vec<DVec3> = mesh.vertices().map(|v| limit_frame(mesh, v, options).0).collect();
+    check_no_overflow(&positions, largest)?;
+    Ok(positions)
 }
 
 /// Unit limit normals of all vertices of `mesh` (the zero vector for isolated vertices
@@ -87,14 +89,8 @@ pub fn limit_positions(mesh: &HalfedgeMesh, options: &LoopOptions) -> Result<Vec
 /// # Errors
 /// As [`limit_positions`].
 pub fn limit_normals(mesh: &HalfedgeMesh, options: &LoopOptions) -> Result<Vec<DVec3>, LoopError> {
-    check_mesh(mesh)?;
-    Ok(mesh
-        .vertices()
-        .map(|v| {
-            let (_, [t1, t2]) = limit_frame(mesh, v, options);
-            t1.cross(t2).normalize_or_zero()
-        })
-        .collect())
+    let frames = limit_tangents(mesh, options)?;
+    Ok(frames.iter().map(|(_, [t1, t2])| t1.cross(*t2).normalize_or_zero()).collect())
 }
 
 /// Limit positions and the two (unnormalized) limit tangents of every vertex: for
@@ -122,14 +118,23 @@ pub fn limit_normals(mesh: &HalfedgeMesh, options: &LoopOptions) -> Result<Vec<D
 /// # Errors
 /// As [`limit_positions`].
 pub fn limit_tangents(mesh: &HalfedgeMesh, options: &LoopOptions) -> Result<Vec<(DVec3, [DVec3; 2])>, LoopError> {
-    check_mesh(mesh)?;
-    Ok(mesh.vertices().map(|v| limit_frame(mesh, v, options)).collect())
+    let largest = check_mesh(mesh)?;
+    let frames: Vec<(DVec3, [DVec3; 2])> = mesh.vertices().map(|v| limit_frame(mesh, v, options)).collect();
+    // Three vectors per vertex: the first that is not finite names its vertex.
+    let vectors = frames.iter().flat_map(|(p, [t1, t2])| [p, t1, t2]);
+    check_no_overflow(vectors, largest).map_err(|error| match error {
+        LoopError::Overflow { vertex, largest } => LoopError::Overflow { vertex: vertex / 3, largest },
+        other => other,
+    })?;
+    Ok(frames)
 }
 
-/// The checks of `subdivide`: triangles, finite positions, no pillows.
-fn check_mesh(mesh: &HalfedgeMesh) -> Result<(), LoopError> {
-    check_finite(mesh.positions())?;
-    Topology::from_mesh(mesh).map(|_| ())
+/// The checks of `subdivide`: triangles, finite positions, no pillows; the largest
+/// coordinate magnitude (see [`check_no_overflow`]).
+fn check_mesh(mesh: &HalfedgeMesh) -> Result<f64, LoopError> {
+    let largest = check_finite_largest(mesh.positions())?;
+    Topology::from_mesh(mesh)?;
+    Ok(largest)
 }
 
 /// Across-boundary tangent weights for a boundary vertex with `k >= 2` faces:

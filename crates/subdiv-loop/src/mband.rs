@@ -64,8 +64,8 @@ use serde::{Deserialize, Serialize};
 use crate::LoopError;
 use crate::forward::topology::Topology;
 use crate::forward::{
-    Attribute, LoopMesh, LoopOptions, MAX_LEVELS, SparseRow, SubdivisionMatrix, check_finite, subdivide,
-    too_many_levels,
+    Attribute, LoopMesh, LoopOptions, MAX_LEVELS, SparseRow, SubdivisionMatrix, check_finite_largest,
+    check_no_overflow, subdivide, too_many_levels,
 };
 
 /// Largest arity [`box_spline_masks`] accepts (numerators then stay far below `u64`).
@@ -410,12 +410,13 @@ fn edge_weights_closed(n: usize, lambda: f64) -> Vec<f64> {
 /// # Errors
 /// [`LoopError::InvalidParameter`] for `lambda` outside `(1/9, 1/2]` or more than
 /// [`MAX_LEVELS`] levels; the mesh errors of
-/// [`subdivide`] (non-triangles, pillows, non-finite positions); [`mesh_topo::MeshError::TooLarge`]
+/// [`subdivide`] (non-triangles, pillows, non-finite positions, [`LoopError::Overflow`]); [`mesh_topo::MeshError::TooLarge`]
 /// if a level would have more vertices or face corners than `u32` handles address,
 /// found from the counts before any level is built.
 pub fn ternary_subdivide(mesh: &HalfedgeMesh, levels: u32, options: &TernaryOptions) -> Result<LoopMesh, LoopError> {
-    check_finite(mesh.positions())?;
+    let largest = check_finite_largest(mesh.positions())?;
     let (positions, triangles) = ternary_levels(mesh, mesh.positions(), levels, options)?;
+    check_no_overflow(&positions, largest)?;
     Ok(LoopMesh { positions, triangles })
 }
 

@@ -8,7 +8,7 @@ use mesh_topo::HalfedgeMesh;
 
 use super::kernel::{self, Buffers, Rules};
 use super::topology::Topology;
-use super::{LoopMesh, LoopOptions, check_finite, check_sizes};
+use super::{LoopMesh, LoopOptions, check_finite_largest, check_no_overflow, check_sizes};
 use crate::LoopError;
 
 /// Loop subdivision that reuses its memory from one call to the next.
@@ -132,7 +132,7 @@ impl Subdivider {
     fn run(&mut self, mesh: &HalfedgeMesh, levels: u32, out: &mut LoopMesh) -> Result<(), LoopError> {
         out.positions.clear();
         out.triangles.clear();
-        check_finite(mesh.positions())?;
+        let largest = check_finite_largest(mesh.positions())?;
         let scratch = &mut self.scratch;
         let mut topology = Topology {
             triangles: take(triangles_of(0, levels, out, scratch)),
@@ -178,6 +178,7 @@ impl Subdivider {
         let triangles = take(&mut topology.triangles);
         park(topology, None, levels, levels, out, scratch);
         out.triangles = triangles;
+        check_no_overflow(&out.positions, largest)?;
         Ok(())
     }
 }

@@ -609,3 +609,65 @@ fn closed_form_edge_weights_agree_with_the_sum_and_are_linear_time() {
     assert!((4.0 / 9.0 + gamma.iter().sum::<f64>() - 1.0).abs() < 1e-12);
     assert!(gamma.iter().all(|g| g.is_finite()));
 }
+
+/// Finite coordinates whose rules overflow give an error naming the output vertex, not
+/// infinities, for every scheme and the limit masks (or, where a scheme's sums do not
+/// overflow, the scaled result); large coordinates that do not overflow give the scaled
+/// result.
+#[test]
+fn overflowing_coordinates_are_an_error() {
+    use crate::forward::Subdivider;
+    use crate::limit::{limit_positions, limit_tangents};
+    // The soup with its largest coordinate magnitude scaled to `largest`.
+    let scaled = |soup: &PolygonSoup, largest: f64| {
+        let unit = soup.positions.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        let positions = soup.positions.iter().map(|p| *p / unit * largest).collect();
+        HalfedgeMesh::from_soup(&PolygonSoup { positions, ..soup.clone() }).unwrap()
+    };
+    let loop_options = LoopOptions::default();
+    type Operation<'a> = Box<dyn Fn(&HalfedgeMesh) -> Result<Vec<DVec3>, LoopError> + 'a>;
+    let operations: Vec<(&str, Operation<'_>)> = vec![
+        ("loop", Box::new(|m| subdivide(m, 1, &loop_options).map(|f| f.positions))),
+        (
+            "subdivider",
+            Box::new(|m| {
+                let mut out = LoopMesh::default();
+                let result = Subdivider::new(loop_options).subdivide_into(m, 1, &mut out);
+                result.map(|()| out.positions)
+            }),
+        ),
+        ("ternary", Box::new(|m| ternary_subdivide(m, 1, &TernaryOptions::default()).map(|f| f.positions))),
+        ("quaternary", Box::new(|m| quaternary_subdivide(m, 1, &loop_options).map(|f| f.positions))),
+        ("limit", Box::new(|m| limit_positions(m, &loop_options))),
+        (
+            "tangents",
+            Box::new(|m| {
+                limit_tangents(m, &loop_options).map(|f| f.iter().flat_map(|(p, [a, b])| [*p, *a, *b]).collect())
+            }),
+        ),
+    ];
+    let mut overflowed = Vec::new();
+    for soup in [shapes::icosahedron(), shapes::grid(2, 2, CellKind::Triangles).unwrap()] {
+        // Coordinates of magnitude up to 1, 1e300 (no overflow) and 1.7e308 (a sum of two
+        // neighbours overflows).
+        let (unit, large, huge) = (scaled(&soup, 1.0), scaled(&soup, 1e300), scaled(&soup, 1.7e308));
+        for (name, operation) in &operations {
+            let reference = operation(&unit).unwrap();
+            let close = |result: &[DVec3], factor: f64| {
+                result.len() == reference.len()
+                    && result.iter().zip(&reference).all(|(p, q)| (*p / factor - *q).length() < 1e-12)
+            };
+            assert!(close(&operation(&large).unwrap(), 1e300), "{name}");
+            match operation(&huge) {
+                Err(LoopError::Overflow { largest, .. }) => {
+                    assert_eq!(largest, 1.7e308, "{name}");
+                    overflowed.push(*name);
+                }
+                Ok(result) => assert!(close(&result, 1.7e308), "{name}"),
+                Err(error) => panic!("{name}: {error}"),
+            }
+        }
+    }
+    // Loop's edge points sum two neighbours before weighting them.
+    assert!(overflowed.contains(&"loop") && overflowed.contains(&"subdivider"), "{overflowed:?}");
+}
