@@ -74,37 +74,36 @@ fn side_by_side_panels_share_the_height() {
     assert_eq!((width, height), (128, 48));
 }
 
-#[test]
-fn bad_options_are_one_line_and_write_nothing() {
+/// Runs `multires render cube_quad.off never.png EXTRA...`, which must fail with one
+/// line on stderr and write nothing; the line.
+fn fails_with_one_line(extra: &[&str]) -> String {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("never.png");
+    let mut args = vec!["render", "tests/data/cube_quad.off", out.to_str().unwrap()];
+    args.extend(extra);
+    let run = multires(&args);
+    assert!(!run.status.success(), "{extra:?}");
+    let stderr = String::from_utf8(run.stderr).unwrap();
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(stderr.starts_with("multires: "), "{stderr}");
+    assert!(!out.exists(), "{extra:?} wrote a file");
+    stderr
+}
+
+#[test]
+fn bad_options_are_one_line_and_write_nothing() {
     for extra in [["--size", "0x10"], ["--size", "big"], ["--view", "0,120"]] {
-        let mut args = vec!["render", "tests/data/cube_quad.off", out.to_str().unwrap()];
-        args.extend(extra);
-        let run = multires(&args);
-        assert!(!run.status.success(), "{extra:?}");
-        let stderr = String::from_utf8(run.stderr).unwrap();
-        assert_eq!(stderr.lines().count(), 1, "{stderr}");
-        assert!(stderr.starts_with("multires: "), "{stderr}");
-        assert!(!out.exists(), "{extra:?} wrote a file");
+        fails_with_one_line(&extra);
     }
 }
 
 #[test]
 fn oversized_images_name_the_pixel_limit() {
     // Used to abort allocating 58 GB of supersampled buffers.
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("never.png");
     let sizes: [&[&str]; 2] =
         [&["--size", "16384x16384"], &["--size", "4096x2048", "--side-by-side", "tests/data/cube_poly.off"]];
     for extra in sizes {
-        let mut args = vec!["render", "tests/data/cube_quad.off", out.to_str().unwrap()];
-        args.extend(extra);
-        let run = multires(&args);
-        assert!(!run.status.success(), "{extra:?}");
-        let stderr = String::from_utf8(run.stderr).unwrap();
-        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        let stderr = fails_with_one_line(extra);
         assert!(stderr.contains("--size") && stderr.contains("at most 8388608"), "{stderr}");
-        assert!(!out.exists(), "{extra:?} wrote a file");
     }
 }
