@@ -313,6 +313,8 @@ impl Framework {
             }
             VirtualPoints::ExactGlobal => {
                 let virtual_polygon = self.solve_virtual(points, &interpolated, topology)?;
+                // (Its refinement would blame a point of the input for an infinite one.)
+                crate::point::check_result_finite("virtual polygon", &virtual_polygon)?;
                 refiner.refine_into(&self.approximating, &virtual_polygon, topology, levels, out)?;
                 for &i in &interpolated {
                     out[i << levels] = points[i];
@@ -346,8 +348,8 @@ impl Framework {
     ) -> Result<Vec<P>, CurveError> {
         self.check_input(points, flags, topology)?;
         let interpolated: Vec<usize> = (0..points.len()).filter(|&i| flags[i]).collect();
-        match self.mode {
-            VirtualPoints::ExactGlobal => self.solve_virtual(points, &interpolated, topology),
+        let polygon = match self.mode {
+            VirtualPoints::ExactGlobal => self.solve_virtual(points, &interpolated, topology)?,
             VirtualPoints::SeedCompatible => {
                 let (left, right) = self.halo(points.len(), topology);
                 let mut extended = vec![P::zero(); left + points.len() + right];
@@ -358,9 +360,12 @@ impl Framework {
                 for &i in &interpolated {
                     polygon[i] = self.virtual_point(&level, i as i64);
                 }
-                Ok(polygon)
+                polygon
             }
-        }
+        };
+        // Finite input near `f64::MAX` can push a virtual point past it.
+        crate::point::check_result_finite("virtual polygon", &polygon)?;
+        Ok(polygon)
     }
 
     fn halo(&self, n: usize, topology: Topology) -> (usize, usize) {
@@ -943,6 +948,25 @@ mod tests {
     use proptest::prelude::*;
 
     use super::*;
+
+    /// Finite points whose virtual polygon overflows: `Overflow` naming the virtual
+    /// polygon, in both modes (it was `Ok` with an infinity; the exact-global refinement
+    /// blamed an input point for it).
+    #[test]
+    fn an_overflowing_virtual_polygon_is_an_error() {
+        let points = [[1e308, 0.0], [-1e308, 0.0], [1e308, 1.0], [0.0, -1e308]];
+        let flags = [true; 4];
+        for framework in [Framework::published(), Framework::published().with_mode(VirtualPoints::ExactGlobal)] {
+            let error = framework.virtual_polygon(&points, &flags, Topology::Closed).unwrap_err();
+            assert!(matches!(error, CurveError::Overflow { what: "virtual polygon", .. }), "{error}");
+            // The refinement: finite points (the interpolated points are the input's), or
+            // the same error.
+            match framework.refine(&points, &flags, Topology::Closed, 1) {
+                Ok(refined) => assert!(refined.iter().all(|p| p.iter().all(|c| c.is_finite()))),
+                Err(error) => assert!(matches!(error, CurveError::Overflow { what: "virtual polygon", .. }), "{error}"),
+            }
+        }
+    }
 
     fn bits(points: &[[f64; 2]]) -> Vec<u64> {
         points.iter().flat_map(|p| p.map(f64::to_bits)).collect()

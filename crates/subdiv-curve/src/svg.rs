@@ -82,12 +82,15 @@ pub fn render_svg<P: CurvePoint>(scene: &SvgScene<'_, P>) -> String {
     if lo.0 > hi.0 {
         (lo, hi) = ((0.0, 0.0), (1.0, 1.0));
     }
-    let span = (hi.0 - lo.0).max(hi.1 - lo.1).max(f64::MIN_POSITIVE);
-    let scale = (WIDTH - 2.0 * MARGIN) / span;
-    let height = ((hi.1 - lo.1) * scale + 2.0 * MARGIN).max(2.0 * MARGIN);
+    // Differences of halves: the extent of points near +-f64::MAX does not overflow (a
+    // halving is exact, so other drawings are the same to the bit).
+    let half = |a: f64, b: f64| a / 2.0 - b / 2.0;
+    let half_span = half(hi.0, lo.0).max(half(hi.1, lo.1)).max(f64::MIN_POSITIVE);
+    let scale = (WIDTH - 2.0 * MARGIN) / half_span;
+    let height = (half(hi.1, lo.1) * scale + 2.0 * MARGIN).max(2.0 * MARGIN);
     let to_screen = |p: &P| {
         let (x, y) = xy(p);
-        (MARGIN + (x - lo.0) * scale, height - MARGIN - (y - lo.1) * scale)
+        (MARGIN + half(x, lo.0) * scale, height - MARGIN - half(y, lo.1) * scale)
     };
     let mut svg = String::new();
     let _ = writeln!(
@@ -149,4 +152,28 @@ pub fn render_svg<P: CurvePoint>(scene: &SvgScene<'_, P>) -> String {
     }
     svg.push_str("</svg>\n");
     svg
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points at the ends of the `f64` range are drawn (their extent overflowed to
+    /// infinity, and every coordinate was written as NaN); ordinary points are drawn at
+    /// the same places as by the plain differences.
+    #[test]
+    fn extreme_points_are_drawn_with_finite_coordinates() {
+        let extreme = [[-f64::MAX, 0.0], [f64::MAX, 1.0], [0.0, -f64::MAX]];
+        let svg = render_svg(&SvgScene { control: &extreme, curve: &extreme, closed: true, marks: &[] });
+        assert!(!svg.contains("NaN") && !svg.contains("inf"), "{svg}");
+        assert!(svg.contains("24.000,") && svg.contains("776.000,"), "{svg}");
+        let square = [[0.0, 0.0], [3.0, 0.0], [3.0, 1.5], [0.0, 1.5]];
+        let svg = render_svg(&SvgScene { control: &square, curve: &[], closed: true, marks: &[] });
+        let scale = (WIDTH - 2.0 * MARGIN) / 3.0;
+        let height = 1.5 * scale + 2.0 * MARGIN;
+        for [x, y] in square {
+            let (sx, sy) = (MARGIN + x * scale, height - MARGIN - y * scale);
+            assert!(svg.contains(&format!("{sx:.3},{sy:.3}")), "{sx:.3},{sy:.3} in {svg}");
+        }
+    }
 }
