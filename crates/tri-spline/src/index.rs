@@ -43,16 +43,27 @@ pub fn multi_indices(n: usize) -> impl ExactSizeIterator<Item = [usize; 3]> + Cl
 
 /// `n! / (β0! β1! β2!)`, exactly as `f64` for the degrees used here.
 pub fn multinomial(beta: [usize; 3]) -> f64 {
-    // Product of binomials, each exact in f64 up to far beyond the supported degrees.
-    binomial(beta[0] + beta[1] + beta[2], beta[0]) * binomial(beta[1] + beta[2], beta[1])
+    // Product of binomials, each exact in f64 up to far beyond the supported degrees
+    // (a degree beyond `usize` is infinite).
+    let Some(n) = beta[0].checked_add(beta[1]).and_then(|n| n.checked_add(beta[2])) else {
+        return f64::INFINITY;
+    };
+    binomial(n, beta[0]) * binomial(beta[1] + beta[2], beta[1])
 }
 
-/// Binomial coefficient `C(n, k)` as `f64`.
+/// Binomial coefficient `C(n, k)` as `f64`: 0 for `k > n`, infinite beyond the `f64`
+/// range (found after a few hundred factors, not `k` of them).
 pub fn binomial(n: usize, k: usize) -> f64 {
+    if k > n {
+        return 0.0;
+    }
     let k = k.min(n - k);
     let mut value = 1.0;
     for i in 0..k {
         value = value * (n - i) as f64 / (i + 1) as f64;
+        if value.is_infinite() {
+            return value;
+        }
     }
     value.round()
 }
@@ -60,6 +71,18 @@ pub fn binomial(n: usize, k: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Arguments beyond the degrees in use end at once with the right value (they wrapped,
+    /// or ran `k` iterations: hours at `usize::MAX / 2`).
+    #[test]
+    fn binomials_of_any_size_end() {
+        assert_eq!(binomial(2, 3), 0.0);
+        assert_eq!(binomial(10, 3), 120.0);
+        assert_eq!(binomial(usize::MAX, usize::MAX / 2), f64::INFINITY);
+        assert_eq!(binomial(usize::MAX, 0), 1.0);
+        assert_eq!(multinomial([usize::MAX, 1, 0]), f64::INFINITY);
+        assert_eq!(multinomial([1, 1, 1]), 6.0);
+    }
 
     #[test]
     fn storage_order_is_dense_and_row_major() {

@@ -26,7 +26,8 @@ impl SparseMatrix {
     /// summed).
     ///
     /// # Panics
-    /// If a column index is `>= cols` (an internal invariant of the callers).
+    /// If a column index is `>= cols` (an internal invariant of the callers) or beyond
+    /// the `u32` column indices.
     pub fn from_rows(cols: usize, rows: Vec<Vec<(usize, f64)>>) -> Self {
         let mut row_start = Vec::with_capacity(rows.len() + 1);
         row_start.push(0);
@@ -37,7 +38,7 @@ impl SparseMatrix {
             row.sort_unstable_by_key(|e| e.0);
             let start = col_index.len();
             for (c, v) in row {
-                assert!(c < cols, "internal: column {c} out of range {cols}");
+                assert!(c < cols && u32::try_from(c).is_ok(), "internal: column {c} out of range {cols}");
                 if col_index.len() > start && *col_index.last().expect("internal: non-empty") as usize == c {
                     *values.last_mut().expect("internal: non-empty") += v;
                 } else {
@@ -163,6 +164,9 @@ impl SparseMatrix {
     }
 }
 
+/// Most power iterations [`gram_lambda_max_bound`] runs, whatever it is asked.
+pub const MAX_POWER_ITERATIONS: usize = 1 << 16;
+
 /// A rigorous upper bound on `λ_max(NᵀN)`, tight for non-negative `N`: the
 /// Collatz–Wielandt bound `max_i (A x)_i / x_i` along power iterations with a positive
 /// vector (Perron–Frobenius), else `‖N‖₁ ‖N‖∞`.
@@ -174,7 +178,8 @@ pub fn gram_lambda_max_bound(n: &SparseMatrix, iterations: usize) -> f64 {
     let nt = n.transpose();
     let mut x = vec![1.0f64; n.cols()];
     let mut best = crude;
-    for _ in 0..iterations {
+    // (At most `MAX_POWER_ITERATIONS`: a caller's `usize::MAX` would never end.)
+    for _ in 0..iterations.min(MAX_POWER_ITERATIONS) {
         let y = nt.mul_vec(&n.mul_vec(&x));
         // Components that vanish would make the ratio meaningless: stop there.
         if x.iter().any(|&v| v <= 0.0) {
@@ -186,7 +191,12 @@ pub fn gram_lambda_max_bound(n: &SparseMatrix, iterations: usize) -> f64 {
         if scale <= 0.0 {
             break;
         }
-        x = y.into_iter().map(|v| v / scale).collect();
+        let next: Vec<f64> = y.into_iter().map(|v| v / scale).collect();
+        // A fixed point repeats itself: every further iteration gives the same bound.
+        if next == x {
+            break;
+        }
+        x = next;
     }
     best
 }
@@ -349,6 +359,24 @@ mod tests {
         assert!((dense - direct).norm_max() < 1e-15);
         assert_eq!(a.norm_inf(), 1.0);
         assert_eq!(a.norm_1(), 2.0);
+    }
+
+    /// Any iteration count ends: at a fixed point at once (the identity), else after
+    /// [`MAX_POWER_ITERATIONS`], with the bound of the iterations asked for.
+    #[test]
+    fn lambda_bound_ends_for_any_iteration_count() {
+        assert_eq!(gram_lambda_max_bound(&SparseMatrix::identity(3), usize::MAX), 1.0);
+        let a = sample();
+        let capped = gram_lambda_max_bound(&a, usize::MAX);
+        assert!(capped <= gram_lambda_max_bound(&a, 50));
+        assert_eq!(capped, gram_lambda_max_bound(&a, MAX_POWER_ITERATIONS));
+    }
+
+    #[test]
+    #[should_panic(expected = "out of range")]
+    fn a_column_beyond_u32_panics_rather_than_wrapping() {
+        // Stored column 0 before (an `as u32`).
+        SparseMatrix::from_rows(usize::MAX, vec![vec![(1 << 32, 1.0)]]);
     }
 
     #[test]
