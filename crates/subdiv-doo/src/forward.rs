@@ -377,10 +377,7 @@ impl DooMesh {
 
 /// Checks that every position is finite.
 pub(crate) fn check_finite(positions: &[DVec3]) -> Result<(), DooError> {
-    match positions.iter().position(|p| !p.is_finite()) {
-        Some(vertex) => Err(DooError::NonFinite { vertex, value: positions[vertex].to_array() }),
-        None => Ok(()),
-    }
+    check_finite_largest(positions).map(|_| ())
 }
 
 /// Coordinates up to this magnitude cannot overflow in a step: every rule is a sum of

@@ -488,6 +488,15 @@ const UNKNOWN: u8 = 0;
 const EVEN: u8 = 1;
 const ODD: u8 = 2;
 
+/// [`LoopError::SeedOutOfRange`] for the first seed that is not a vertex of a mesh of
+/// `vertex_count` vertices.
+pub(crate) fn check_seeds(seeds: &[u32], vertex_count: usize) -> Result<(), LoopError> {
+    match seeds.iter().find(|&&seed| seed as usize >= vertex_count) {
+        Some(&vertex) => Err(LoopError::SeedOutOfRange { vertex, vertex_count }),
+        None => Ok(()),
+    }
+}
+
 fn broken(at: FineElement, reason: String) -> LoopError {
     LoopError::NotLoopConnectivity { at, reason }
 }
@@ -499,10 +508,7 @@ fn broken(at: FineElement, reason: String) -> LoopError {
 /// in face order; only components whose valences are all regular go through the
 /// candidate search, each attempt validating the component's own faces.
 pub(crate) fn detect_table(fine: &CornerTable, seeds: &[u32]) -> Result<Coarsening, LoopError> {
-    let nv = fine.vertex_count();
-    if let Some(&seed) = seeds.iter().find(|&&seed| seed as usize >= nv) {
-        return Err(LoopError::SeedOutOfRange { vertex: seed, vertex_count: nv });
-    }
+    check_seeds(seeds, fine.vertex_count())?;
     if fine.face_count() == 0 {
         // Only isolated vertices: "reversing" would change nothing, forever.
         return Err(LoopError::NoFaces);

@@ -505,6 +505,11 @@ pub(crate) fn too_many_levels(levels: u32, max: u32) -> LoopError {
     LoopError::InvalidParameter { name: "levels", reason: format!("{levels}: at most {max}") }
 }
 
+/// [`MAX_LEVELS`] levels or fewer, else [`too_many_levels`].
+pub(crate) fn check_level_limit(levels: u32) -> Result<(), LoopError> {
+    if levels > MAX_LEVELS { Err(too_many_levels(levels, MAX_LEVELS)) } else { Ok(()) }
+}
+
 /// Checks that every level of `levels` steps from a mesh of `vertices`, `edges` and
 /// `faces` fits the `u32` layout: half-edge indices and edge counts of the levels that
 /// are refined further, vertex indices of the last (from the counts alone, before any
@@ -528,10 +533,7 @@ pub(crate) fn check_sizes(vertices: usize, edges: usize, faces: usize, levels: u
     if v >= u32::MAX as u64 {
         return too_large("vertices", v, u32::MAX as u64 - 1);
     }
-    match levels {
-        0..=MAX_LEVELS => Ok(()),
-        _ => Err(too_many_levels(levels, MAX_LEVELS)),
-    }
+    check_level_limit(levels)
 }
 
 #[cfg(test)]

@@ -65,7 +65,7 @@ use crate::LoopError;
 use crate::forward::topology::Topology;
 use crate::forward::{
     Attribute, LoopMesh, LoopOptions, MAX_LEVELS, SparseRow, SubdivisionMatrix, check_finite_largest,
-    check_no_overflow, subdivide, too_many_levels,
+    check_level_limit, check_no_overflow, subdivide, too_many_levels,
 };
 
 /// Largest arity [`box_spline_masks`] accepts (numerators then stay far below `u64`).
@@ -554,10 +554,7 @@ fn check_ternary_sizes(mesh: &HalfedgeMesh, levels: u32) -> Result<(), LoopError
         );
         mesh_topo::check_capacity(vertices, faces.saturating_mul(3))?;
     }
-    match levels {
-        0..=MAX_LEVELS => Ok(()),
-        _ => Err(too_many_levels(levels, MAX_LEVELS)),
-    }
+    check_level_limit(levels)
 }
 
 fn face_corners(mesh: &HalfedgeMesh, f: mesh_topo::FaceId) -> [u32; 3] {

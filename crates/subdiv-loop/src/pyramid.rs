@@ -150,10 +150,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Loop
         // No reversal reads the input: check it here, seeds included (a seed that does
         // not exist is an error at any level count, as detection reports it).
         check_input_positions(mesh.positions())?;
-        let vertex_count = mesh.vertex_count();
-        if let Some(&vertex) = options.seed_vertices.iter().find(|&&seed| seed as usize >= vertex_count) {
-            return Err(LoopError::SeedOutOfRange { vertex, vertex_count });
-        }
+        crate::detect::check_seeds(&options.seed_vertices, mesh.vertex_count())?;
         let base = CornerTable::from_mesh(mesh)?.to_soup(mesh.positions().to_vec());
         return Ok(LoopPyramid { rules: options.rules, base, levels: Vec::new() });
     }
