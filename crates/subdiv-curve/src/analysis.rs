@@ -37,6 +37,7 @@
 
 use nalgebra::{Complex, DMatrix, DVector};
 
+use crate::CurveError;
 use crate::scheme::CurveScheme;
 
 /// Largest `L` tried by [`analyze`] in the difference test.
@@ -470,7 +471,8 @@ pub fn local_matrix(scheme: &CurveScheme) -> LocalMatrix {
 }
 
 /// Eigenvalues sorted by decreasing modulus (ties: larger real part first); all NaN for
-/// a matrix with a NaN or infinite entry.
+/// a matrix with a NaN or infinite entry, none for a matrix that is not square (or
+/// empty): only a square matrix has a spectrum.
 ///
 /// ```
 /// use subdiv_curve::{CurveScheme, analysis::{eigenvalues, local_matrix}};
@@ -479,6 +481,9 @@ pub fn local_matrix(scheme: &CurveScheme) -> LocalMatrix {
 /// assert_eq!(moduli, vec![1.0, 0.5, 0.25, 0.25]);
 /// ```
 pub fn eigenvalues(matrix: &DMatrix<f64>) -> Vec<Complex<f64>> {
+    if !matrix.is_square() || matrix.is_empty() {
+        return Vec::new();
+    }
     // A NaN or infinite entry has no spectrum; the iterations would not end on it.
     if !matrix.iter().all(|v| v.is_finite()) {
         return vec![Complex::new(f64::NAN, f64::NAN); matrix.nrows().min(matrix.ncols())];
@@ -543,12 +548,38 @@ pub struct EigenChecks {
 ///
 /// ```
 /// use subdiv_curve::{CurveScheme, analysis::{eigen_checks, local_matrix}};
-/// let cubic = eigen_checks(&local_matrix(&CurveScheme::cubic_bspline()), None);
+/// let cubic = eigen_checks(&local_matrix(&CurveScheme::cubic_bspline()), None)?;
 /// assert!(cubic.c1 && cubic.c2);
-/// let chaikin = eigen_checks(&local_matrix(&CurveScheme::chaikin()), None);
+/// let chaikin = eigen_checks(&local_matrix(&CurveScheme::chaikin()), None)?;
 /// assert!(chaikin.c1 && !chaikin.c2); // λ2 = λ3 = 1/4
+/// # Ok::<(), subdiv_curve::CurveError>(())
 /// ```
-pub fn eigen_checks(local: &LocalMatrix, to_virtual: Option<&DMatrix<f64>>) -> EigenChecks {
+///
+/// # Errors
+/// [`CurveError::IncompatibleLength`] when the parts do not fit together (a hand-built
+/// [`LocalMatrix`]): the matrix is not square, it is empty, there is not one label per
+/// row, or `to_virtual` does not map vectors of that length to vectors of that length.
+pub fn eigen_checks(local: &LocalMatrix, to_virtual: Option<&DMatrix<f64>>) -> Result<EigenChecks, CurveError> {
+    let (rows, columns) = local.matrix.shape();
+    let mismatch = |detail: String| Err(CurveError::IncompatibleLength { what: "eigen checks", detail });
+    if rows != columns || rows == 0 {
+        return mismatch(format!("the local matrix is {rows} x {columns}, not square and non-empty"));
+    }
+    if local.indices.len() != rows {
+        return mismatch(format!("{} labels for a local matrix of {rows} rows", local.indices.len()));
+    }
+    if let Some(map) = to_virtual
+        && map.shape() != (rows, rows)
+    {
+        let (r, c) = map.shape();
+        return mismatch(format!("the map to virtual points is {r} x {c}, not {rows} x {rows}"));
+    }
+    Ok(checked_eigen_checks(local, to_virtual))
+}
+
+/// [`eigen_checks`] of parts that fit together (as [`local_matrix`] and the framework
+/// build them).
+pub(crate) fn checked_eigen_checks(local: &LocalMatrix, to_virtual: Option<&DMatrix<f64>>) -> EigenChecks {
     let values = eigenvalues(&local.matrix);
     let lambda = |k: usize| values.get(k).copied().unwrap_or(Complex::new(0.0, 0.0));
     let is_real = |l: Complex<f64>| l.im.abs() <= EIGEN_TOLERANCE;
@@ -626,7 +657,7 @@ pub fn analyze(scheme: &CurveScheme) -> Analysis {
         (0..=DEFAULT_MAX_ORDER).map(|m| self::contractivity(&symbol, m, DEFAULT_MAX_STEPS)).collect();
     let local = local_matrix(scheme);
     let eigenvalues = eigenvalues(&local.matrix);
-    let eigen = eigen_checks(&local, None);
+    let eigen = checked_eigen_checks(&local, None);
     let smoothness = combine_smoothness(&contractivity, &eigen);
     Analysis {
         scheme: scheme.name().to_string(),

@@ -734,7 +734,7 @@ impl Framework {
         let local = self.local_matrix();
         let eigenvalues = analysis::eigenvalues(&local.matrix);
         let to_virtual = self.local_virtual_map(&local.indices);
-        let eigen = analysis::eigen_checks(&local, Some(&to_virtual));
+        let eigen = analysis::checked_eigen_checks(&local, Some(&to_virtual));
         let theorem_residual = self.theorem_residual();
         let smoothness = if theorem_residual <= 1e-12 {
             analysis::combine_smoothness(&approximating.contractivity, &eigen)

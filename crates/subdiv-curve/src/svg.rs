@@ -72,7 +72,12 @@ const MARGIN: f64 = 24.0;
 /// assert!(svg.ends_with("</svg>\n"));
 /// ```
 pub fn render_svg<P: CurvePoint>(scene: &SvgScene<'_, P>) -> String {
-    let xy = |p: &P| (p.coord(0), if P::DIM > 1 { p.coord(1) } else { 0.0 });
+    // The projection of `to_dvec3` (missing coordinates are 0, so a point type of fewer
+    // than two coordinates, even none, draws on the x axis or at the origin).
+    let xy = |p: &P| {
+        let p = p.to_dvec3();
+        (p.x, p.y)
+    };
     let all = scene.control.iter().chain(scene.curve).map(xy);
     let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));
     for (x, y) in all {
@@ -85,7 +90,9 @@ pub fn render_svg<P: CurvePoint>(scene: &SvgScene<'_, P>) -> String {
     // Differences of halves: the extent of points near +-f64::MAX does not overflow (a
     // halving is exact, so other drawings are the same to the bit).
     let half = |a: f64, b: f64| a / 2.0 - b / 2.0;
-    let half_span = half(hi.0, lo.0).max(half(hi.1, lo.1)).max(f64::MIN_POSITIVE);
+    // At least the span whose scale is `f64::MAX`: points that all coincide (a span of
+    // zero) are drawn at the corner, not at `0 × ∞ = NaN`.
+    let half_span = half(hi.0, lo.0).max(half(hi.1, lo.1)).max((WIDTH - 2.0 * MARGIN) / f64::MAX);
     let scale = (WIDTH - 2.0 * MARGIN) / half_span;
     let height = (half(hi.1, lo.1) * scale + 2.0 * MARGIN).max(2.0 * MARGIN);
     let to_screen = |p: &P| {
@@ -175,5 +182,25 @@ mod tests {
             let (sx, sy) = (MARGIN + x * scale, height - MARGIN - y * scale);
             assert!(svg.contains(&format!("{sx:.3},{sy:.3}")), "{sx:.3},{sy:.3} in {svg}");
         }
+    }
+
+    /// Point types of fewer than two coordinates are drawn (a zero-dimensional type
+    /// indexed coordinate 0, which it does not have, and panicked): 1D points on the x
+    /// axis, 0D points at the origin. Points that all coincide are drawn at the corner
+    /// (every coordinate was NaN: a zero span scaled by infinity).
+    #[test]
+    fn low_dimensional_and_coincident_points_are_drawn() {
+        let none = [[0.0f64; 0]; 3];
+        let svg =
+            render_svg(&SvgScene { control: &none, curve: &none, closed: false, marks: &[(1, Mark::Interpolated)] });
+        // Three control points, the mark and its legend entry.
+        assert_eq!(svg.matches("<circle").count(), 5, "{svg}");
+        assert!(!svg.contains("NaN") && svg.contains("cx=\"24.000\" cy=\"24.000\""), "{svg}");
+        let same = [[1.5, -2.0]; 2];
+        let svg = render_svg(&SvgScene { control: &same, curve: &same, closed: true, marks: &[] });
+        assert!(!svg.contains("NaN") && svg.contains("points=\"24.000,24.000 24.000,24.000\""), "{svg}");
+        let line = [0.0f64, 2.0, 1.0];
+        let svg = render_svg(&SvgScene { control: &line, curve: &line, closed: false, marks: &[] });
+        assert!(svg.contains("24.000,") && svg.contains("776.000,") && !svg.contains("NaN"), "{svg}");
     }
 }

@@ -319,6 +319,35 @@ fn analysis_ends_on_any_input() {
     assert!(analysis::eigenvalues(&nalgebra::DMatrix::from_element(2, 2, f64::INFINITY)).iter().all(|v| v.re.is_nan()));
 }
 
+/// Hand-built local matrices whose parts do not fit together are an error (each of
+/// these panicked inside the linear algebra), and a matrix that is not square, or is
+/// empty, has no eigenvalues (panicked too).
+#[test]
+fn inconsistent_local_matrices_are_reported() {
+    use analysis::{LocalMatrix, eigen_checks, local_matrix};
+    use nalgebra::DMatrix;
+    assert!(analysis::eigenvalues(&DMatrix::zeros(2, 3)).is_empty());
+    assert!(analysis::eigenvalues(&DMatrix::zeros(0, 0)).is_empty());
+    let chaikin = local_matrix(&CurveScheme::chaikin());
+    let mut short = chaikin.clone();
+    short.indices.pop();
+    let cases = [
+        (short, None, "3 labels for a local matrix of 4 rows"),
+        (chaikin.clone(), Some(DMatrix::zeros(2, 2)), "the map to virtual points is 2 x 2, not 4 x 4"),
+        (LocalMatrix { indices: vec![0, 1], matrix: DMatrix::zeros(2, 3) }, None, "is 2 x 3, not square"),
+        (LocalMatrix { indices: vec![], matrix: DMatrix::zeros(0, 0) }, None, "is 0 x 0, not square and non-empty"),
+    ];
+    for (local, map, message) in cases {
+        let error = eigen_checks(&local, map.as_ref()).unwrap_err();
+        assert!(matches!(error, CurveError::IncompatibleLength { what: "eigen checks", .. }), "{error}");
+        assert!(error.to_string().contains(message), "{error}");
+    }
+    // Consistent parts: the same checks as the analysis makes.
+    let identity = DMatrix::identity(4, 4);
+    assert_eq!(eigen_checks(&chaikin, Some(&identity)).unwrap(), eigen_checks(&chaikin, None).unwrap());
+    assert_eq!(eigen_checks(&chaikin, None).unwrap(), analysis::analyze(&CurveScheme::chaikin()).eigen);
+}
+
 #[test]
 fn the_tension_range_is_where_convergence_is_established() {
     let (lo, hi) = subdiv_curve::FOUR_POINT_TENSION_RANGE;

@@ -80,6 +80,23 @@ pub enum LoopError {
         /// The largest coordinate magnitude of the input.
         largest: f64,
     },
+    /// An attribute value given to refine is NaN or infinite (see
+    /// [`Attribute::is_finite`](crate::forward::Attribute::is_finite)).
+    #[error("the attribute value of vertex {vertex} is not finite")]
+    NonFiniteAttribute {
+        /// The first vertex (or lattice point, or matrix column) whose value is not finite.
+        vertex: usize,
+    },
+    /// Finite attribute values whose refinement leaves the `f64` range: values so large
+    /// that a sum of the rules overflows.
+    #[error(
+        "refined attribute value {vertex} is not finite: the input values overflow the f64 range when the \
+         rules sum them; scale them down"
+    )]
+    AttributeOverflow {
+        /// The first refined value (fine vertex, lattice point or matrix row) that is not finite.
+        vertex: usize,
+    },
     /// A pyramid file could not be encoded or decoded.
     #[error("Loop pyramid: {0}")]
     Binary(String),

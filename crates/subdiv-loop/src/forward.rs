@@ -87,7 +87,7 @@ use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 use serde::{Deserialize, Serialize};
 
 pub use attribute::Attribute;
-pub(crate) use attribute::SparseRow;
+pub(crate) use attribute::{SparseRow, check_finite_values, checked_refined};
 pub use matrix::SubdivisionMatrix;
 pub use subdivider::Subdivider;
 
@@ -357,8 +357,10 @@ pub fn subdivide_soup(soup: &PolygonSoup, levels: u32, options: &LoopOptions) ->
 /// ```
 ///
 /// # Errors
-/// [`LoopError::AttributeCount`] if `values.len() != mesh.vertex_count()`; the errors
-/// of [`subdivide`] for the mesh.
+/// [`LoopError::AttributeCount`] if `values.len() != mesh.vertex_count()`,
+/// [`LoopError::NonFiniteAttribute`] for a value that is not finite
+/// ([`Attribute::is_finite`]), [`LoopError::AttributeOverflow`] when finite values are so
+/// large that the refined ones are not; the errors of [`subdivide`] for the mesh.
 pub fn refine_attribute<T: Attribute>(
     mesh: &HalfedgeMesh,
     levels: u32,
@@ -368,9 +370,10 @@ pub fn refine_attribute<T: Attribute>(
     if values.len() != mesh.vertex_count() {
         return Err(LoopError::AttributeCount { expected: mesh.vertex_count(), found: values.len() });
     }
+    attribute::check_finite_values(values)?;
     let topology = Topology::from_mesh(mesh)?;
     check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels)?;
-    Ok(refine(topology, values, levels, &Rules::new(options)).0)
+    attribute::checked_refined(refine(topology, values, levels, &Rules::new(options)).0)
 }
 
 /// The sparse matrix of `levels` Loop steps: row `i` holds the weights of fine vertex

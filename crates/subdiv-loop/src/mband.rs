@@ -65,7 +65,7 @@ use crate::LoopError;
 use crate::forward::topology::Topology;
 use crate::forward::{
     Attribute, LoopMesh, LoopOptions, MAX_LEVELS, SparseRow, SubdivisionMatrix, check_finite_largest,
-    check_level_limit, check_no_overflow, subdivide, too_many_levels,
+    check_finite_values, check_level_limit, check_no_overflow, checked_refined, subdivide, too_many_levels,
 };
 
 /// Largest arity [`box_spline_masks`] accepts (numerators then stay far below `u64`).
@@ -243,7 +243,10 @@ pub fn box_spline_masks(arity: u32) -> Result<BoxSplineMasks, LoopError> {
 /// # Errors
 /// [`LoopError::InvalidParameter`] if the lattice is smaller than 4 x 4 (stencils would
 /// wrap onto themselves), `values.len() != width * height`, or either lattice has more
-/// points than memory holds (sizes are checked, never wrapped).
+/// points than memory holds (sizes are checked, never wrapped);
+/// [`LoopError::NonFiniteAttribute`] (naming the lattice index) and
+/// [`LoopError::AttributeOverflow`] as for
+/// [`refine_attribute`](crate::forward::refine_attribute).
 pub fn subdivide_lattice<T: Attribute>(
     values: &[T],
     width: usize,
@@ -257,6 +260,7 @@ pub fn subdivide_lattice<T: Attribute>(
     if width < 4 || height < 4 || values.len() != points {
         return Err(bad(format!("{} values for a {width} x {height} lattice (at least 4 x 4)", values.len())));
     }
+    check_finite_values(values)?;
     let m = masks.arity as usize;
     let denominator = masks.denominator() as f64;
     // The coarse sizes fit (they hold `values`); the fine ones must be checked (a wrapped
@@ -286,7 +290,7 @@ pub fn subdivide_lattice<T: Attribute>(
             fine.push(value);
         }
     }
-    Ok(fine)
+    checked_refined(fine)
 }
 
 /// Options of ternary Loop subdivision.
@@ -439,8 +443,10 @@ pub fn ternary_subdivide(mesh: &HalfedgeMesh, levels: u32, options: &TernaryOpti
 /// ```
 ///
 /// # Errors
-/// [`LoopError::AttributeCount`] if `values` does not have one entry per vertex; the
-/// errors of [`ternary_subdivide`].
+/// [`LoopError::AttributeCount`] if `values` does not have one entry per vertex,
+/// [`LoopError::NonFiniteAttribute`] and [`LoopError::AttributeOverflow`] as for
+/// [`refine_attribute`](crate::forward::refine_attribute); the errors of
+/// [`ternary_subdivide`].
 pub fn ternary_refine_attribute<T: Attribute>(
     mesh: &HalfedgeMesh,
     levels: u32,
@@ -450,7 +456,8 @@ pub fn ternary_refine_attribute<T: Attribute>(
     if values.len() != mesh.vertex_count() {
         return Err(LoopError::AttributeCount { expected: mesh.vertex_count(), found: values.len() });
     }
-    Ok(ternary_levels(mesh, values, levels, options)?.0)
+    check_finite_values(values)?;
+    checked_refined(ternary_levels(mesh, values, levels, options)?.0)
 }
 
 /// The sparse matrix of `levels` ternary steps (rows: fine vertices).

@@ -2,6 +2,8 @@
 
 use glam::{DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
 
+use crate::LoopError;
+
 /// Per-vertex data that supports weighted sums: positions, colours, texture
 /// coordinates, scalar fields, ... (OpenSubdiv calls these *primvars*).
 ///
@@ -45,12 +47,44 @@ pub trait Attribute: Clone + Send + Sync {
     fn add(&mut self, other: &Self) {
         self.add_scaled(other, 1.0);
     }
+
+    /// Whether every component is finite (no NaN, no infinity). The refining functions
+    /// refuse input values for which this is false
+    /// ([`LoopError::NonFiniteAttribute`]), and report finite input whose refinement
+    /// is not ([`LoopError::AttributeOverflow`]), so that a NaN never spreads silently
+    /// over its neighbours' fine values. The default, `true`, is for types without such
+    /// a notion; the implementations of this crate test every component.
+    #[inline]
+    fn is_finite(&self) -> bool {
+        true
+    }
+}
+
+/// [`LoopError::NonFiniteAttribute`] for the first of `values` that is not finite.
+pub(crate) fn check_finite_values<T: Attribute>(values: &[T]) -> Result<(), LoopError> {
+    match values.iter().position(|value| !value.is_finite()) {
+        Some(vertex) => Err(LoopError::NonFiniteAttribute { vertex }),
+        None => Ok(()),
+    }
+}
+
+/// `refined`, or [`LoopError::AttributeOverflow`] for the first of its values that is not
+/// finite (the input was checked: only an overflow of the sums makes one).
+pub(crate) fn checked_refined<T: Attribute>(refined: Vec<T>) -> Result<Vec<T>, LoopError> {
+    match refined.iter().position(|value| !value.is_finite()) {
+        Some(vertex) => Err(LoopError::AttributeOverflow { vertex }),
+        None => Ok(refined),
+    }
 }
 
 impl Attribute for f64 {
     #[inline]
     fn scaled(&self, weight: f64) -> Self {
         self * weight
+    }
+    #[inline]
+    fn is_finite(&self) -> bool {
+        f64::is_finite(*self)
     }
     #[inline]
     fn add_scaled(&mut self, other: &Self, weight: f64) {
@@ -66,6 +100,10 @@ impl Attribute for f32 {
     #[inline]
     fn scaled(&self, weight: f64) -> Self {
         self * weight as f32
+    }
+    #[inline]
+    fn is_finite(&self) -> bool {
+        f32::is_finite(*self)
     }
     #[inline]
     fn add_scaled(&mut self, other: &Self, weight: f64) {
@@ -92,6 +130,10 @@ macro_rules! impl_vector_attribute {
             fn add(&mut self, other: &Self) {
                 *self += *other;
             }
+            #[inline]
+            fn is_finite(&self) -> bool {
+                <$ty>::is_finite(*self)
+            }
         }
     )*};
 }
@@ -102,6 +144,10 @@ impl<const N: usize> Attribute for [f64; N] {
     #[inline]
     fn scaled(&self, weight: f64) -> Self {
         self.map(|x| x * weight)
+    }
+    #[inline]
+    fn is_finite(&self) -> bool {
+        self.iter().all(|x| x.is_finite())
     }
     #[inline]
     fn add_scaled(&mut self, other: &Self, weight: f64) {

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::attribute::{Attribute, SparseRow};
+use super::attribute::{Attribute, SparseRow, check_finite_values, checked_refined};
 use crate::LoopError;
 
 /// A sparse matrix in compressed-row (CSR) form: `P_fine = S · P_coarse`, one row per
@@ -187,11 +187,15 @@ impl SubdivisionMatrix {
     /// ```
     ///
     /// # Errors
-    /// [`LoopError::AttributeCount`] if `values` does not have one entry per column.
+    /// [`LoopError::AttributeCount`] if `values` does not have one entry per column,
+    /// [`LoopError::NonFiniteAttribute`] (naming the column) for a value that is not
+    /// finite, [`LoopError::AttributeOverflow`] (naming the row) when finite values are
+    /// so large that a row's sum is not.
     pub fn apply<T: Attribute>(&self, values: &[T]) -> Result<Vec<T>, LoopError> {
         if values.len() != self.columns {
             return Err(LoopError::AttributeCount { expected: self.columns, found: values.len() });
         }
+        check_finite_values(values)?;
         let Some(zero) = values.first().map(|v| v.scaled(0.0)) else {
             return if self.rows() == 0 {
                 Ok(Vec::new())
@@ -199,21 +203,23 @@ impl SubdivisionMatrix {
                 Err(LoopError::InvalidParameter { name: "matrix", reason: "rows over zero columns".into() })
             };
         };
-        Ok((0..self.rows())
-            .map(|i| {
-                let (cols, weights) = self.row(i);
-                match cols.first() {
-                    None => zero.clone(),
-                    Some(&c0) => {
-                        let mut acc = values[c0 as usize].scaled(weights[0]);
-                        for (&c, &w) in cols.iter().zip(weights).skip(1) {
-                            acc.add_scaled(&values[c as usize], w);
+        checked_refined(
+            (0..self.rows())
+                .map(|i| {
+                    let (cols, weights) = self.row(i);
+                    match cols.first() {
+                        None => zero.clone(),
+                        Some(&c0) => {
+                            let mut acc = values[c0 as usize].scaled(weights[0]);
+                            for (&c, &w) in cols.iter().zip(weights).skip(1) {
+                                acc.add_scaled(&values[c as usize], w);
+                            }
+                            acc
                         }
-                        acc
                     }
-                }
-            })
-            .collect())
+                })
+                .collect::<Vec<T>>(),
+        )
     }
 
     /// The product `self · other` (apply `other` first): the matrix of two steps.

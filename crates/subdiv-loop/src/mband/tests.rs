@@ -671,3 +671,68 @@ fn overflowing_coordinates_are_an_error() {
     // Loop's edge points sum two neighbours before weighting them.
     assert!(overflowed.contains(&"loop") && overflowed.contains(&"subdivider"), "{overflowed:?}");
 }
+
+/// Attribute values that are not finite are refused by every attribute entry point,
+/// naming the vertex (lattice point, matrix column); finite values so large that the
+/// rules' sums overflow are reported, naming the first refined value; before, both
+/// spread NaN or infinity over the neighbours' fine values and returned `Ok`. Types
+/// without a finiteness test (the trait's default) refine as before.
+#[test]
+fn non_finite_and_overflowing_attributes_are_errors() {
+    use crate::forward::{refine_attribute, subdivision_matrix};
+    let mesh = HalfedgeMesh::from_soup(&shapes::icosahedron()).unwrap();
+    let (loop_options, ternary) = (LoopOptions::default(), TernaryOptions::default());
+    let masks = box_spline_masks(3).unwrap();
+    let matrix = subdivision_matrix(&mesh, 1, &loop_options).unwrap();
+    type Refine<'a> = Box<dyn Fn(&[f64]) -> Result<Vec<f64>, LoopError> + 'a>;
+    let operations: Vec<(&str, Refine<'_>)> = vec![
+        ("loop", Box::new(|v| refine_attribute(&mesh, 1, &loop_options, v))),
+        ("ternary", Box::new(|v| ternary_refine_attribute(&mesh, 1, &ternary, v))),
+        ("matrix", Box::new(|v| matrix.apply(v))),
+        // The 12 values on a 4 x 3 lattice would be too small; 4 x 4 with 4 more.
+        ("lattice", Box::new(|v| subdivide_lattice(&[v, &v[..4]].concat(), 4, 4, &masks))),
+    ];
+    let mut overflowed = Vec::new();
+    for (name, operation) in &operations {
+        let unit: Vec<f64> = (0..12).map(|i| (i as f64 * 0.7).sin()).collect();
+        let reference = operation(&unit).unwrap();
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut values = unit.clone();
+            values[7] = bad;
+            match operation(&values) {
+                Err(LoopError::NonFiniteAttribute { vertex: 7 }) => {}
+                other => panic!("{name}: {bad}: {other:?}"),
+            }
+        }
+        // Scaled to 1e300 the result is the scaled reference; near f64::MAX a rule that
+        // sums neighbours before weighting them (Loop's edge points) overflows, the
+        // others keep the constant (affine rules).
+        let large: Vec<f64> = unit.iter().map(|v| v * 1e300).collect();
+        let refined = operation(&large).unwrap();
+        assert!(refined.iter().zip(&reference).all(|(a, b)| (a / 1e300 - b).abs() < 1e-12), "{name}");
+        match operation(&[1.7e308; 12]) {
+            Err(LoopError::AttributeOverflow { vertex }) => {
+                assert!(vertex < reference.len(), "{name}");
+                overflowed.push(*name);
+            }
+            Ok(constant) => assert!(constant.iter().all(|v| (v / 1.7e308 - 1.0).abs() < 1e-12), "{name}"),
+            other => panic!("{name}: {other:?}"),
+        }
+    }
+    assert!(overflowed.contains(&"loop"), "{overflowed:?}");
+    let message = refine_attribute(&mesh, 1, &loop_options, &[f64::NAN; 12]).unwrap_err().to_string();
+    assert_eq!(message, "the attribute value of vertex 0 is not finite");
+    // Vectors and channel arrays test every component.
+    let mut colours = vec![[0.5f64, 0.25, 1.0]; 12];
+    colours[3][2] = f64::NAN;
+    assert!(matches!(
+        refine_attribute(&mesh, 1, &loop_options, &colours),
+        Err(LoopError::NonFiniteAttribute { vertex: 3 })
+    ));
+    let mut positions = mesh.positions().to_vec();
+    positions[5].y = f64::INFINITY;
+    assert!(matches!(
+        refine_attribute(&mesh, 1, &loop_options, &positions),
+        Err(LoopError::NonFiniteAttribute { vertex: 5 })
+    ));
+}
