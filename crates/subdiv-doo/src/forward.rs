@@ -523,6 +523,10 @@ fn check_level_sizes(mesh: &CornerMesh, levels: u32, boundary: BoundaryRule) -> 
 /// ```
 pub const MAX_LEVELS: u32 = 32;
 
+/// The messages of the level limit (here and in [`crate::pyramid`]) spell the number
+/// out, as an error's reason is a static string: they change with it.
+const _: () = assert!(MAX_LEVELS == 32, "update the level-limit reasons of subdivide and decompose");
+
 /// The counts of one level that determine those of the next under the shrink boundary
 /// rule, so that the sizes of many levels are known without building them.
 ///

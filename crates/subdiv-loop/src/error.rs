@@ -67,9 +67,11 @@ pub enum LoopError {
         /// The vertex.
         vertex: usize,
     },
-    /// Finite input whose subdivision (or limit) leaves the `f64` range: coordinates so
-    /// large that a sum of the rules overflows (the first output vertex that is not
-    /// finite).
+    /// Finite input whose subdivision, limit or reversal leaves the `f64` range:
+    /// coordinates so large that a sum of the rules overflows (the first output vertex
+    /// that is not finite; for a reversal, in the fine mesh's canonical numbering: a
+    /// coarse vertex, or the detail of coarse edge `e` as the coarse vertex count plus
+    /// `e`).
     #[error(
         "vertex {vertex} of the result is not finite: the input's coordinates (up to {largest:e} in magnitude) \
          overflow the f64 range when the rules sum them; scale the mesh down"

@@ -142,9 +142,10 @@ pub struct RateDistortion {
 ///
 /// # Errors
 /// [`LoopError::NotTriangle`], [`LoopError::SeedOutOfRange`], [`LoopError::SeedConflict`],
-/// [`LoopError::Mesh`] for non-finite positions, and [`LoopError::NotLoopConnectivity`]
+/// [`LoopError::Mesh`] for non-finite positions, [`LoopError::NotLoopConnectivity`]
 /// when a requested level (or, with [`Levels::Max`], the first level) has no Loop
-/// connectivity.
+/// connectivity, and [`LoopError::Overflow`] for finite coordinates so large (near
+/// `f64::MAX`) that a level's coarse positions or details are not.
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
     if wanted_levels(options) == 0 {
         // No reversal reads the input: check it here, seeds included (a seed that does
@@ -898,7 +899,8 @@ mod tests {
 
     /// Non-finite input positions are an error whichever path the decomposition takes
     /// (the fast path of canonical meshes finds them through its results), at every
-    /// kind of fine vertex and for any number of levels; huge finite ones are not.
+    /// kind of fine vertex and for any number of levels; huge finite ones are not
+    /// (their reversal overflows: that is [`LoopError::Overflow`], naming them as finite).
     #[test]
     fn non_finite_input_is_an_error_on_every_path() {
         let rules = LoopOptions::default();
@@ -929,7 +931,10 @@ mod tests {
         }
         let mut huge = mesh(&canonical);
         huge.positions_mut()[0] = DVec3::splat(f64::MAX);
-        assert!(decompose(&huge, &max_levels(rules)).is_ok());
+        assert!(matches!(
+            decompose(&huge, &max_levels(rules)),
+            Err(LoopError::Overflow { largest: f64::MAX, .. })
+        ));
     }
 
     #[test]

@@ -158,7 +158,8 @@ pub struct ReverseOptions {
 /// # Errors
 /// [`LoopError::Mesh`] for a non-finite position, and [`LoopError::NotTriangle`],
 /// [`LoopError::SeedOutOfRange`], [`LoopError::SeedConflict`] and
-/// [`LoopError::NotLoopConnectivity`] from detection.
+/// [`LoopError::NotLoopConnectivity`] from detection; [`LoopError::Overflow`] for
+/// finite coordinates so large (near `f64::MAX`) that the inverse rules' sums are not.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<ReversedLevel, LoopError> {
     let LevelParts { coarse, order, positions, details, .. } =
         reverse_level(FineLevel::Mesh(fine), fine.positions(), &options.seed_vertices, &options.rules)?;
@@ -525,13 +526,15 @@ pub(crate) fn reverse_level(
     // Per component: the smallest energy so far, and the seed of its reading (`None`: the
     // first reading's, or none found yet). Without a first reading, the first candidate
     // that gives a valid reading sets it, as detection would pick it.
+    // Energies and zero thresholds on scaled values (see `energy_scale`).
+    let scale = energy_scale(positions);
     let mut best: Vec<(f64, Option<u32>)> = match &first {
-        Some(first) => readings.energies(first).into_iter().map(|energy| (energy, None)).collect(),
+        Some(first) => readings.energies(first, scale).into_iter().map(|energy| (energy, None)).collect(),
         None => vec![(f64::INFINITY, None); readings.energies_len()],
     };
     // A component whose best reading so far has zero details is an exact refinement in
     // that reading: no other can do better than round-off, so none is tried.
-    let zero = readings.zero_energies(positions);
+    let zero = readings.zero_energies(positions, scale);
     // The vertex points of the readings found so far: the labeling from a vertex point is
     // forced, so a candidate that is one gives a reading already compared (on a torus,
     // the six neighbours of a vertex point give three readings, two each).
@@ -575,7 +578,7 @@ pub(crate) fn reverse_level(
         };
         // Whether a component's best changed.
         let mut take = |level: &LevelParts, tried: &[(usize, u32)], covered: &mut [bool]| {
-            let energies = readings.energies(level);
+            let energies = readings.energies(level, scale);
             let mut changed = false;
             for &(c, seed) in tried {
                 if energies[c] < best[c].0 {
@@ -628,6 +631,27 @@ pub(crate) fn reverse_level(
     }
 }
 
+/// A power of two that brings the largest coordinate magnitude of `positions` to about
+/// 1 when it lies outside `2^±256` (1 otherwise, and for no or non-finite positions).
+/// The energies of the readings (sums of squared details) and their zero thresholds are
+/// computed on values scaled by it, so that the squares neither overflow nor underflow:
+/// coordinates near 1e300 made every energy infinite, and the choice among readings
+/// arbitrary. A power of two scales exactly, so every comparison is that of the
+/// unscaled values; inside the range nothing changes, to the bit.
+pub(crate) fn energy_scale(positions: &[DVec3]) -> f64 {
+    const SAFE_EXPONENT: i32 = 256;
+    let largest = positions.iter().fold(0.0f64, |largest, p| largest.max(p.abs().max_element()));
+    if largest == 0.0 || !largest.is_finite() {
+        return 1.0;
+    }
+    let exponent = largest.log2().floor() as i32;
+    if (-SAFE_EXPONENT..=SAFE_EXPONENT).contains(&exponent) {
+        return 1.0;
+    }
+    // 2^-exponent, a normal number for every exponent kept.
+    f64::from_bits(((1023 - exponent.clamp(-1022, 1022)) as u64) << 52)
+}
+
 /// The largest sum of squared details of `count` vertices that counts as zero at the
 /// scale `diagonal` (a bounding-box diagonal): `(1e-12 diagonal)^2` per vertex, the
 /// round-off of an exact Loop refinement (the zero test of the Doo-Sabin automatic
@@ -666,9 +690,11 @@ pub(crate) fn all_valences_regular(table: &CornerTable) -> bool {
 /// ([`zero_energy`]), and the coarse mesh is one component with no isolated vertex, so
 /// that the mesh's scale is its component's.
 pub(crate) fn canonical_reading_is_settled(coarse: &CornerTable, details: &[DVec3], positions: &[DVec3]) -> bool {
-    let energy = details.iter().map(|d| d.length_squared()).sum();
-    settled(energy, zero_energy(crate::pyramid::bounding_box_diagonal(positions), positions.len()))
-        && spans_one_component(coarse)
+    let scale = energy_scale(positions);
+    let energy = details.iter().map(|d| (*d * scale).length_squared()).sum();
+    let (lo, hi) = positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let diagonal = if positions.is_empty() { 0.0 } else { (lo * scale).distance(hi * scale) };
+    settled(energy, zero_energy(diagonal, positions.len())) && spans_one_component(coarse)
 }
 
 /// Whether `table` has a face and is one connected component, every vertex on a face (so
@@ -797,14 +823,14 @@ impl RegularReadings {
     /// Per component, the largest sum of squared details that is still zero at its scale
     /// ([`details_are_zero`] with the bounding-box diagonal of its vertices and their
     /// number).
-    fn zero_energies(&self, positions: &[DVec3]) -> Vec<f64> {
+    fn zero_energies(&self, positions: &[DVec3], scale: f64) -> Vec<f64> {
         let components = self.energies_len();
         let mut boxes = vec![(DVec3::INFINITY, DVec3::NEG_INFINITY, 0usize); components];
         for (&c, &p) in self.component.iter().zip(positions) {
             let (lo, hi, count) = &mut boxes[c as usize];
             (*lo, *hi, *count) = (lo.min(p), hi.max(p), *count + 1);
         }
-        boxes.into_iter().map(|(lo, hi, count)| zero_energy(lo.distance(hi), count)).collect()
+        boxes.into_iter().map(|(lo, hi, count)| zero_energy((lo * scale).distance(hi * scale), count)).collect()
     }
 
     /// The number of components (the length of [`energies`](Self::energies)).
@@ -814,13 +840,13 @@ impl RegularReadings {
 
     /// The sum of squared details of every component in `level` (a reading of the mesh):
     /// detail `e` is that of canonical fine vertex `V + e`.
-    fn energies(&self, level: &LevelParts) -> Vec<f64> {
+    fn energies(&self, level: &LevelParts, scale: f64) -> Vec<f64> {
         let mut energies = vec![0.0; self.energies_len()];
         let first_odd = level.coarse.vertex_count();
         for (e, detail) in level.details.iter().enumerate() {
             let canonical = first_odd + e;
             let v = level.order.as_ref().map_or(canonical as u32, |order| order.vertex_of_canonical[canonical]);
-            energies[self.component[v as usize] as usize] += detail.length_squared();
+            energies[self.component[v as usize] as usize] += (*detail * scale).length_squared();
         }
         energies
     }
@@ -863,7 +889,9 @@ fn reverse_level_fast(
     };
     if let Some(level) = fused {
         if !level.finite {
+            // Finite input (else named here) whose reversal is not: an overflow.
             check_input()?;
+            return Err(reversal_overflow(&level.positions, &level.details, positions));
         }
         // A canonical mesh's reading is that of its numbering, compared with the others
         // only when all its valences are regular (see `reverse_level`) and some component
@@ -882,6 +910,17 @@ fn reverse_level_fast(
     // that detection finds, and reversed by the canonical path, which also checks it.
     // Anything else (errors included) goes through the general detection.
     Ok(reverse_searched(fine, &FineCorners::of(fine), positions, seeds, rules))
+}
+
+/// [`LoopError::Overflow`] for a reversal of finite `input` positions whose coarse
+/// `positions` and `details` are not all finite: coordinates so large that a sum of the
+/// inverse rules leaves the `f64` range. It names the first value that is not finite in
+/// the fine mesh's canonical numbering: coarse vertex `v`, or the detail of coarse edge
+/// `e` as `v_count + e` (its edge point).
+fn reversal_overflow(positions: &[DVec3], details: &[DVec3], input: &[DVec3]) -> LoopError {
+    let vertex = positions.iter().chain(details).position(|p| !p.is_finite()).unwrap_or(0);
+    let largest = input.iter().fold(0.0f64, |largest, p| largest.max(p.abs().max_element()));
+    LoopError::Overflow { vertex, largest }
 }
 
 /// The corners of a fine level as the search of [`renumber_to_canonical`] reads them,
@@ -942,6 +981,9 @@ fn reverse_level_general(
         FineLevel::Table(table) => detect_table(table, seeds)?,
     };
     let (coarse_positions, details) = reverse_positions(&coarsening, positions, rules);
+    if !(crate::pyramid::all_finite(&coarse_positions) && crate::pyramid::all_finite(&details)) {
+        return Err(reversal_overflow(&coarse_positions, &details, positions));
+    }
     let order = coarsening.fine_order();
     // (Reached, for a valid mesh, when the search from the seeds and the irregular
     // vertices missed a component: one whose valences are all regular.)
@@ -960,6 +1002,10 @@ fn reverse_renumbered(renumbering: Renumbering, positions: &[DVec3], rules: &Loo
     // the seed, if any, a vertex point); the rest is checked as for any canonical mesh.
     let identity = renumbering.is_identity();
     let level = reverse_canonical_groups(renumbering.groups, positions.len(), &canonical_positions, rules)?;
+    if !level.finite {
+        // An overflow: the general path reports it.
+        return None;
+    }
     let order = (!identity).then_some(renumbering.order);
     // The search reached every component from a seed or an irregular vertex.
     Some(LevelParts {
@@ -2148,6 +2194,49 @@ mod tests {
             prop_assert!(relative_distance(&b.coarse.to_soup(), &expected) < 1e-11);
             for (da, db) in a.details.iter().zip(&b.details) {
                 prop_assert!((map * *da).distance(*db) < 1e-11 * (1.0 + da.length()));
+            }
+        }
+    }
+
+    /// Finite coordinates so large that the inverse rules' sums overflow are
+    /// [`LoopError::Overflow`] on every path (the canonical, renumbered and general
+    /// reversals, a torus whose readings are compared, `decompose` and
+    /// `decompose_soup`); `reverse` panicked building the coarse mesh from NaN
+    /// positions, and `decompose` returned them. Coordinates up to 1e300 reverse to the
+    /// scaled unit result.
+    #[test]
+    fn overflowing_coordinates_are_an_error() {
+        use crate::pyramid::{DecomposeOptions, Levels, decompose, decompose_soup};
+        let rules = LoopOptions::default();
+        let refined = |soup: &PolygonSoup| crate::forward::subdivide(&mesh(soup), 1, &rules).unwrap().into_soup();
+        let scaled = |soup: &PolygonSoup, largest: f64| {
+            let unit = soup.positions.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+            PolygonSoup { positions: soup.positions.iter().map(|p| *p / unit * largest).collect(), ..soup.clone() }
+        };
+        let options = DecomposeOptions { rules, levels: Levels::Count(1), seed_vertices: Vec::new() };
+        for (name, coarse) in [
+            ("icosahedron", shapes::icosahedron()),
+            ("open grid", shapes::grid(3, 3, CellKind::Triangles).unwrap()),
+            ("regular torus", shapes::torus(6, 4, CellKind::Triangles).unwrap()),
+        ] {
+            let canonical = perturb(&refined(&coarse), 1e-3, 5);
+            for fine in [canonical.clone(), scramble(&canonical, 9)] {
+                let unit = reverse(&mesh(&scaled(&fine, 1.0)), &ReverseOptions::default()).unwrap();
+                let large = reverse(&mesh(&scaled(&fine, 1e300)), &ReverseOptions::default()).unwrap();
+                for (p, q) in large.coarse.positions().iter().zip(unit.coarse.positions()) {
+                    assert!((*p / 1e300).distance(*q) < 1e-12, "{name}");
+                }
+                let huge = scaled(&fine, 1.7e308);
+                for result in [
+                    reverse(&mesh(&huge), &ReverseOptions::default()).map(drop),
+                    decompose(&mesh(&huge), &options).map(drop),
+                    decompose_soup(&huge, &options).map(drop),
+                ] {
+                    match result {
+                        Err(LoopError::Overflow { largest, .. }) => assert_eq!(largest, 1.7e308, "{name}"),
+                        other => panic!("{name}: {other:?}"),
+                    }
+                }
             }
         }
     }
