@@ -73,8 +73,26 @@ pub(crate) fn casteljau_level<P: Point>(buf: &mut [P], m: usize, w: [f64; 3]) {
 
 /// The Bernstein polynomials of degree `n` at barycentric coordinates `l`, in storage
 /// order, by the upward recursion `B^{m+1}_γ = sum_i l_i B^m_{γ - e_i}` (non-negative
-/// inside the triangle, sums to one exactly up to rounding). `out` is resized.
-pub fn bernstein_basis(n: usize, l: [f64; 3], out: &mut Vec<f64>) {
+/// inside the triangle, sums to one exactly up to rounding). `out` is resized to
+/// `(n + 1)(n + 2) / 2` values.
+///
+/// # Errors
+/// [`SplineError::Degree`] above [`MAX_BEZIER_DEGREE`], the largest patch degree, checked
+/// before `out` grows (a mistyped degree such as `1 << 20` used to allocate half a
+/// trillion values).
+///
+/// ```
+/// use tri_spline::bezier::bernstein_basis;
+/// let mut values = Vec::new();
+/// bernstein_basis(2, [0.5, 0.5, 0.0], &mut values)?;
+/// assert_eq!(values, [0.25, 0.5, 0.25, 0.0, 0.0, 0.0]);
+/// assert!(bernstein_basis(1 << 20, [1.0, 0.0, 0.0], &mut values).is_err());
+/// # Ok::<(), tri_spline::SplineError>(())
+/// ```
+pub fn bernstein_basis(n: usize, l: [f64; 3], out: &mut Vec<f64>) -> Result<(), SplineError> {
+    if n > MAX_BEZIER_DEGREE {
+        return Err(SplineError::Degree { degree: n, min: 0, max: MAX_BEZIER_DEGREE });
+    }
     out.clear();
     out.resize(tri_count(n), 0.0);
     out[0] = 1.0;
@@ -98,6 +116,7 @@ pub fn bernstein_basis(n: usize, l: [f64; 3], out: &mut Vec<f64>) {
             }
         }
     }
+    Ok(())
 }
 
 impl<P: Point> TriBezier<P> {
@@ -157,10 +176,31 @@ impl<P: Point> TriBezier<P> {
     /// The control point `b_β`.
     ///
     /// # Panics
-    /// If `|β|` is not the degree.
+    /// If `β0 + β1 + β2` is not the degree (the message names `β` and the degree);
+    /// [`try_control_point`](Self::try_control_point) returns an error instead.
     pub fn control_point(&self, beta: [usize; 3]) -> P {
-        assert_eq!(beta.iter().sum::<usize>(), self.degree, "multi-index of the wrong degree");
-        self.control[tri_index(self.degree, beta[1], beta[2])]
+        self.try_control_point(beta).unwrap_or_else(|e| panic!("TriBezier::control_point: {e}"))
+    }
+
+    /// The control point `b_β`, for a multi-index given by a caller.
+    ///
+    /// # Errors
+    /// [`SplineError::MultiIndexDegree`] unless `β0 + β1 + β2` is the degree (also when the
+    /// sum overflows, which used to wrap to a valid-looking degree).
+    ///
+    /// ```
+    /// use tri_spline::{DomainTriangle, SplineError, TriBezier};
+    /// let patch = TriBezier::new(1, DomainTriangle::reference(), vec![1.0, 2.0, 3.0])?;
+    /// assert_eq!(patch.try_control_point([0, 1, 0])?, 2.0);
+    /// assert!(matches!(patch.try_control_point([1, 1, 0]), Err(SplineError::MultiIndexDegree { degree: 1, .. })));
+    /// # Ok::<(), SplineError>(())
+    /// ```
+    pub fn try_control_point(&self, beta: [usize; 3]) -> Result<P, SplineError> {
+        let sum = beta[0].checked_add(beta[1]).and_then(|s| s.checked_add(beta[2]));
+        if sum != Some(self.degree) {
+            return Err(SplineError::MultiIndexDegree { beta, degree: self.degree });
+        }
+        Ok(self.control[tri_index(self.degree, beta[1], beta[2])])
     }
 
     /// `S(u)` by de Casteljau's algorithm.
@@ -355,7 +395,7 @@ mod tests {
         let mut basis = Vec::new();
         for n in 0..10 {
             let l = [0.2, 0.5, 0.3];
-            bernstein_basis(n, l, &mut basis);
+            bernstein_basis(n, l, &mut basis).unwrap();
             assert!((basis.iter().sum::<f64>() - 1.0).abs() < 1e-14);
             for (beta, b) in multi_indices(n).zip(&basis) {
                 let direct = multinomial(beta)
@@ -405,6 +445,34 @@ mod tests {
         assert!(matches!(TriBezier::new(1, d, vec![0.0, f64::NAN, 1.0]), Err(SplineError::NonFinite { index: 1, .. })));
         assert!(TriBezier::new(1000, d, vec![0.0]).is_err());
         assert!(TriBezier::new(1, d, vec![0.0; 3]).unwrap().blossom(&[]).is_err());
+    }
+
+    /// Used to allocate `tri_count(1 << 20)` values (about 4 TiB) before failing.
+    #[test]
+    fn bernstein_basis_rejects_a_degree_beyond_the_limit_before_allocating() {
+        let mut out = vec![7.0];
+        for n in [MAX_BEZIER_DEGREE + 1, 1 << 20, usize::MAX] {
+            let result = bernstein_basis(n, [1.0, 0.0, 0.0], &mut out);
+            assert!(matches!(result, Err(SplineError::Degree { degree, max: MAX_BEZIER_DEGREE, .. }) if degree == n));
+            assert_eq!(out, [7.0], "left untouched");
+        }
+        bernstein_basis(MAX_BEZIER_DEGREE, [0.2, 0.3, 0.5], &mut out).unwrap();
+        assert_eq!(out.len(), tri_count(MAX_BEZIER_DEGREE));
+    }
+
+    /// A multi-index of the wrong degree, or one whose sum overflows (it wrapped to 0 for
+    /// a degree-0 patch and then indexed out of bounds), is an error; the panicking
+    /// accessor names the multi-index.
+    #[test]
+    fn control_point_checks_the_multi_index() {
+        let p = TriBezier::new(0, DomainTriangle::reference(), vec![5.0]).unwrap();
+        assert_eq!(p.try_control_point([0, 0, 0]), Ok(5.0));
+        for beta in [[1, 0, 0], [usize::MAX, 1, 0], [0, usize::MAX, 1]] {
+            assert_eq!(p.try_control_point(beta), Err(SplineError::MultiIndexDegree { beta, degree: 0 }));
+        }
+        let caught = std::panic::catch_unwind(|| p.control_point([usize::MAX, 1, 0])).unwrap_err();
+        let message = caught.downcast_ref::<String>().unwrap();
+        assert!(message.contains("multi-index [18446744073709551615, 1, 0] does not sum to the degree 0"), "{message}");
     }
 
     proptest! {

@@ -52,8 +52,32 @@ impl KnotSequences {
     }
 
     /// The knot triangle `(r_i, s_j, t_k)`.
+    ///
+    /// # Panics
+    /// If an index is beyond its sequence (the message names the sequence, the index and
+    /// the length); [`try_triangle`](Self::try_triangle) returns an error instead.
     pub fn triangle(&self, i: usize, j: usize, k: usize) -> [DVec2; 3] {
-        [self.r[i], self.s[j], self.t[k]]
+        self.try_triangle(i, j, k).unwrap_or_else(|e| panic!("KnotSequences::triangle: {e}"))
+    }
+
+    /// The knot triangle `(r_i, s_j, t_k)`, for indices given by a caller (the sequences
+    /// are public fields, so their lengths are not known to match a degree).
+    ///
+    /// # Errors
+    /// [`SplineError::IndexOutOfRange`] naming the first index beyond its sequence.
+    ///
+    /// ```
+    /// use tri_spline::{DomainTriangle, KnotSequences, SplineError};
+    /// let knots = KnotSequences::bezier(&DomainTriangle::reference(), 2);
+    /// assert_eq!(knots.try_triangle(1, 0, 1)?, DomainTriangle::reference().corners());
+    /// assert!(matches!(knots.try_triangle(0, 2, 0), Err(SplineError::IndexOutOfRange { what: "s knot", index: 2, len: 2 })));
+    /// # Ok::<(), SplineError>(())
+    /// ```
+    pub fn try_triangle(&self, i: usize, j: usize, k: usize) -> Result<[DVec2; 3], SplineError> {
+        let knot = |what: &'static str, sequence: &[DVec2], index: usize| {
+            sequence.get(index).copied().ok_or(SplineError::IndexOutOfRange { what, index, len: sequence.len() })
+        };
+        Ok([knot("r knot", &self.r, i)?, knot("s knot", &self.s, j)?, knot("t knot", &self.t, k)?])
     }
 }
 
@@ -493,6 +517,19 @@ mod tests {
         let short = KnotSequences { r: vec![DVec2::ZERO], s: vec![DVec2::X], t: vec![] };
         assert!(matches!(BPatchBasis::new(1, short), Err(SplineError::Count { .. })));
         assert!(BPatchBasis::new(0, KnotSequences::bezier(&d, 0)).is_err());
+    }
+
+    /// The sequences are public fields of any length: an index beyond one used to panic
+    /// with a bare slice-index message.
+    #[test]
+    fn knot_triangle_indices_are_checked() {
+        let knots = KnotSequences { r: vec![DVec2::ZERO; 3], s: vec![DVec2::X; 1], t: vec![] };
+        assert_eq!(knots.try_triangle(2, 0, 0), Err(SplineError::IndexOutOfRange { what: "t knot", index: 0, len: 0 }));
+        assert_eq!(knots.try_triangle(3, 0, 0), Err(SplineError::IndexOutOfRange { what: "r knot", index: 3, len: 3 }));
+        assert_eq!(knots.try_triangle(0, 1, 0), Err(SplineError::IndexOutOfRange { what: "s knot", index: 1, len: 1 }));
+        let caught = std::panic::catch_unwind(|| knots.triangle(0, 0, 5)).unwrap_err();
+        let message = caught.downcast_ref::<String>().unwrap();
+        assert!(message.contains("t knot 5 is out of range (there are 0)"), "{message}");
     }
 
     proptest! {

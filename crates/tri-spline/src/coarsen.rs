@@ -139,7 +139,7 @@ fn level_operator(
 pub fn reverse_loop(mesh: &HalfedgeMesh, levels: u32, options: &CoarsenOptions) -> Result<Coarsening, SplineError> {
     let mut current = mesh.clone();
     let mut fine_vertex: Vec<usize> = (0..mesh.vertex_count()).collect();
-    let mut operator = SparseMatrix::identity(mesh.vertex_count());
+    let mut operator = SparseMatrix::identity(mesh.vertex_count())?;
     let mut seed = options.seed_vertex;
     for level in 0..levels {
         let reverse_options = ReverseOptions { rules: options.rules, seed_vertices: seed.into_iter().collect() };

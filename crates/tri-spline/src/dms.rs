@@ -352,8 +352,24 @@ impl DmsBasis {
     }
 
     /// The knot cloud of vertex `v` (`n + 1` knots, the vertex first).
+    ///
+    /// # Panics
+    /// If `v` is not a vertex (the message names it and the vertex count);
+    /// [`try_cloud`](Self::try_cloud) returns an error instead.
     pub fn cloud(&self, v: usize) -> &[DVec2] {
-        &self.clouds[v * (self.degree + 1)..(v + 1) * (self.degree + 1)]
+        self.try_cloud(v).unwrap_or_else(|e| panic!("DmsBasis::cloud: {e}"))
+    }
+
+    /// The knot cloud of vertex `v`, for an index given by a caller.
+    ///
+    /// # Errors
+    /// [`SplineError::IndexOutOfRange`] if `v` is not a vertex.
+    pub fn try_cloud(&self, v: usize) -> Result<&[DVec2], SplineError> {
+        if v >= self.vertices.len() {
+            return Err(SplineError::IndexOutOfRange { what: "vertex", index: v, len: self.vertices.len() });
+        }
+        let k = self.degree + 1;
+        Ok(&self.clouds[v * k..(v + 1) * k])
     }
 
     /// Number of basis functions: `(n + 1)(n + 2)/2` per triangle.
@@ -362,29 +378,99 @@ impl DmsBasis {
     }
 
     /// Index of `N^I_β` (triangle-major, multi-indices in [`crate::index`] order).
+    ///
+    /// # Panics
+    /// If `triangle` is not a triangle or `|β|` is not the degree (it used to return the
+    /// index of another basis function, or one beyond them all);
+    /// [`try_basis_index`](Self::try_basis_index) returns an error instead.
     pub fn basis_index(&self, triangle: usize, beta: [usize; 3]) -> usize {
-        triangle * self.masks.len() + crate::index::beta_index(beta)
+        self.try_basis_index(triangle, beta).unwrap_or_else(|e| panic!("DmsBasis::basis_index: {e}"))
+    }
+
+    /// Index of `N^I_β`, for a triangle and multi-index given by a caller.
+    ///
+    /// # Errors
+    /// [`SplineError::IndexOutOfRange`] if `triangle` is not a triangle,
+    /// [`SplineError::MultiIndexDegree`] unless `β0 + β1 + β2` is the degree.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::{DmsBasis, SplineError};
+    /// let extra = vec![DVec2::new(-0.1, -0.05), DVec2::new(1.1, -0.07), DVec2::new(-0.08, 1.06)];
+    /// let basis = DmsBasis::new(1, vec![DVec2::ZERO, DVec2::X, DVec2::Y], vec![[0, 1, 2]], extra)?;
+    /// assert_eq!(basis.try_basis_index(0, [0, 0, 1])?, 2);
+    /// assert!(matches!(basis.try_basis_index(1, [1, 0, 0]), Err(SplineError::IndexOutOfRange { what: "triangle", .. })));
+    /// assert!(matches!(basis.try_basis_index(0, [1, 1, 0]), Err(SplineError::MultiIndexDegree { degree: 1, .. })));
+    /// # Ok::<(), SplineError>(())
+    /// ```
+    pub fn try_basis_index(&self, triangle: usize, beta: [usize; 3]) -> Result<usize, SplineError> {
+        self.check_basis_function(triangle, beta)?;
+        Ok(triangle * self.masks.len() + crate::index::beta_index(beta))
+    }
+
+    /// Whether `N^I_β` exists: `triangle` is a triangle and `|β|` is the degree.
+    fn check_basis_function(&self, triangle: usize, beta: [usize; 3]) -> Result<(), SplineError> {
+        if triangle >= self.triangles.len() {
+            return Err(SplineError::IndexOutOfRange { what: "triangle", index: triangle, len: self.triangles.len() });
+        }
+        if beta[0].checked_add(beta[1]).and_then(|s| s.checked_add(beta[2])) != Some(self.degree) {
+            return Err(SplineError::MultiIndexDegree { beta, degree: self.degree });
+        }
+        Ok(())
     }
 
     /// The blossom arguments `r_0..r_{β0-1}, s_0..s_{β1-1}, t_0..t_{β2-1}` of the control
     /// point `c^I_β`: with `c^I_β = F_P(args)` the spline reproduces the polynomial `P`.
+    ///
+    /// # Panics
+    /// As [`basis_index`](Self::basis_index); [`try_blossom_args`](Self::try_blossom_args)
+    /// returns an error instead.
     pub fn blossom_args(&self, triangle: usize, beta: [usize; 3]) -> Vec<DVec2> {
+        self.try_blossom_args(triangle, beta).unwrap_or_else(|e| panic!("DmsBasis::blossom_args: {e}"))
+    }
+
+    /// The blossom arguments of `c^I_β`, for a triangle and multi-index given by a caller.
+    ///
+    /// # Errors
+    /// As [`try_basis_index`](Self::try_basis_index).
+    pub fn try_blossom_args(&self, triangle: usize, beta: [usize; 3]) -> Result<Vec<DVec2>, SplineError> {
+        self.check_basis_function(triangle, beta)?;
         let k = self.degree + 1;
-        let knots = &self.tri_knots[triangle * 3 * k..(triangle + 1) * 3 * k];
+        let knots = self.triangle_knots(triangle);
         let mut args = Vec::with_capacity(self.degree);
         args.extend_from_slice(&knots[..beta[0]]);
         args.extend_from_slice(&knots[k..k + beta[1]]);
         args.extend_from_slice(&knots[2 * k..2 * k + beta[2]]);
-        args
+        Ok(args)
     }
 
     /// The Greville point of basis function `index`: the mean of its blossom arguments
     /// (a linear function's control point is its value there).
+    ///
+    /// # Panics
+    /// If `index >= basis_count()` (the message names both);
+    /// [`try_greville`](Self::try_greville) returns an error instead.
     pub fn greville(&self, index: usize) -> DVec2 {
+        self.try_greville(index).unwrap_or_else(|e| panic!("DmsBasis::greville: {e}"))
+    }
+
+    /// The Greville point of basis function `index`, for an index given by a caller.
+    ///
+    /// # Errors
+    /// [`SplineError::IndexOutOfRange`] if `index >= basis_count()`.
+    pub fn try_greville(&self, index: usize) -> Result<DVec2, SplineError> {
+        self.check_basis_function_index(index)?;
         let nb = self.masks.len();
         let beta = multi_indices(self.degree).nth(index % nb).expect("internal: multi-index");
-        let args = self.blossom_args(index / nb, beta);
-        args.iter().copied().sum::<DVec2>() / self.degree as f64
+        let args = self.try_blossom_args(index / nb, beta)?;
+        Ok(args.iter().copied().sum::<DVec2>() / self.degree as f64)
+    }
+
+    fn check_basis_function_index(&self, index: usize) -> Result<(), SplineError> {
+        if index >= self.basis_count() {
+            return Err(SplineError::IndexOutOfRange { what: "basis function", index, len: self.basis_count() });
+        }
+        Ok(())
     }
 
     /// The non-zero basis functions at `u` as `(index, value)`, ascending by index.
@@ -456,13 +542,27 @@ impl DmsBasis {
 
     /// Evaluates one basis function with a chosen `W` rule (for testing that the value
     /// does not depend on it).
+    ///
+    /// # Panics
+    /// If `index >= basis_count()` (the message names both);
+    /// [`try_eval_one_with`](Self::try_eval_one_with) returns an error instead.
     pub fn eval_one_with(&self, index: usize, u: DVec2, choice: WChoice) -> f64 {
+        self.try_eval_one_with(index, u, choice).unwrap_or_else(|e| panic!("DmsBasis::eval_one_with: {e}"))
+    }
+
+    /// Evaluates basis function `index` with a chosen `W` rule, for an index given by a
+    /// caller.
+    ///
+    /// # Errors
+    /// [`SplineError::IndexOutOfRange`] if `index >= basis_count()`.
+    pub fn try_eval_one_with(&self, index: usize, u: DVec2, choice: WChoice) -> Result<f64, SplineError> {
+        self.check_basis_function_index(index)?;
         let nb = self.masks.len();
         let t = index / nb;
         let mut memo = Memo::default();
         memo.reset(3 * (self.degree + 1));
         let mut rec = SimplexRecurrence { knots: self.triangle_knots(t), u, choice, memo: &mut memo, degenerate: None };
-        self.scales[index] * rec.value(self.masks[index % nb])
+        Ok(self.scales[index] * rec.value(self.masks[index % nb]))
     }
 }
 
@@ -812,6 +912,39 @@ mod tests {
         assert!(matches!(DmsBasis::new(n, v.clone(), t.clone(), good[1..].to_vec()), Err(SplineError::Count { .. })));
         assert!(matches!(DmsBasis::new(0, v.clone(), t.clone(), vec![]), Err(SplineError::Degree { .. })));
         assert!(matches!(DmsBasis::new(7, v, t, vec![]), Err(SplineError::Degree { .. })));
+    }
+
+    /// Out-of-range indices used to panic with bare slice messages (`cloud`,
+    /// `blossom_args`, `greville`, `eval_one_with`) or to return another function's index
+    /// (`basis_index`).
+    #[test]
+    fn index_accessors_check_their_indices() {
+        let b = basis(2, 3);
+        let (vertices, triangles, count) = (b.vertices().len(), b.triangles().len(), b.basis_count());
+        assert_eq!(b.try_cloud(vertices - 1).unwrap(), b.cloud(vertices - 1));
+        assert_eq!(
+            b.try_cloud(vertices),
+            Err(SplineError::IndexOutOfRange { what: "vertex", index: vertices, len: vertices })
+        );
+        let triangle_error = SplineError::IndexOutOfRange { what: "triangle", index: triangles, len: triangles };
+        assert_eq!(b.try_basis_index(triangles, [2, 0, 0]), Err(triangle_error.clone()));
+        assert_eq!(b.try_blossom_args(triangles, [2, 0, 0]), Err(triangle_error));
+        for beta in [[3, 0, 0], [0, 0, 1], [usize::MAX, 3, 0]] {
+            let degree_error = SplineError::MultiIndexDegree { beta, degree: 2 };
+            assert_eq!(b.try_basis_index(0, beta), Err(degree_error.clone()));
+            assert_eq!(b.try_blossom_args(0, beta), Err(degree_error));
+        }
+        assert_eq!(b.try_basis_index(triangles - 1, [0, 0, 2]), Ok(count - 1));
+        let function_error = SplineError::IndexOutOfRange { what: "basis function", index: count, len: count };
+        assert_eq!(b.try_greville(count), Err(function_error.clone()));
+        assert_eq!(b.try_eval_one_with(count, DVec2::ONE, WChoice::First), Err(function_error));
+        assert_eq!(b.try_greville(count - 1), Ok(b.greville(count - 1)));
+        let caught = std::panic::catch_unwind(|| b.basis_index(0, [3, 0, 0])).unwrap_err();
+        let message = caught.downcast_ref::<String>().unwrap();
+        assert!(message.contains("multi-index [3, 0, 0] does not sum to the degree 2"), "{message}");
+        let caught = std::panic::catch_unwind(|| b.cloud(vertices)).unwrap_err();
+        let message = caught.downcast_ref::<String>().unwrap();
+        assert!(message.contains(&format!("vertex {vertices} is out of range (there are {vertices})")), "{message}");
     }
 
     #[test]

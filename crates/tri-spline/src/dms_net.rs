@@ -239,7 +239,7 @@ mod tests {
             let samples: Vec<DVec2> = multi_indices(s)
                 .map(|[i, j, k]| d.point([i as f64 / s as f64, j as f64 / s as f64, k as f64 / s as f64]))
                 .collect();
-            let n = SurfaceBasis::Dms(dn.basis.clone()).collocation(&samples).mul(&dn.lift);
+            let n = SurfaceBasis::Dms(dn.basis.clone()).collocation(&samples).unwrap().mul(&dn.lift);
             let affine = |u: DVec2| DVec3::new(2.0 * u.x - u.y + 0.5, u.x + 3.0 * u.y, -u.x + 0.25);
             let values: Vec<DVec3> = params.iter().map(|&u| affine(u)).collect();
             let fitted = n.mul_vec(&values);

@@ -42,6 +42,63 @@ pub enum SplineError {
         /// Its index.
         index: usize,
     },
+    /// A size given by the caller is beyond the documented limit of the function (checked
+    /// before anything is allocated, so that a mistyped size is an error, not an abort).
+    #[error("{what} {requested} is too large (at most {max})")]
+    TooLarge {
+        /// What the size counts.
+        what: &'static str,
+        /// The requested size.
+        requested: usize,
+        /// The largest supported size.
+        max: usize,
+    },
+    /// An index given by the caller is out of range.
+    #[error("{what} {index} is out of range (there are {len})")]
+    IndexOutOfRange {
+        /// What the index selects.
+        what: &'static str,
+        /// The index.
+        index: usize,
+        /// Number of valid indices (`0..len`).
+        len: usize,
+    },
+    /// A multi-index `β` does not have the degree of the patch or basis (`β0 + β1 + β2`
+    /// must be the degree `n`).
+    #[error("multi-index {beta:?} does not sum to the degree {degree}")]
+    MultiIndexDegree {
+        /// The multi-index.
+        beta: [usize; 3],
+        /// The degree it must sum to.
+        degree: usize,
+    },
+    /// An iteration produced a NaN or infinite value from finite input: it diverged (for
+    /// LSPIA and PIA usually because the step or weight is too large).
+    #[error("{method} diverged at iteration {iteration}: {what} {index} is not finite; {hint}")]
+    Diverged {
+        /// The method (`lspia`, `pia`, `seed`).
+        method: &'static str,
+        /// The iteration (numbered from 1, as in the records) whose control net or
+        /// residual first holds a non-finite value.
+        iteration: usize,
+        /// The first non-finite value: `"control point"` or `"residual of data point"`.
+        what: &'static str,
+        /// Its index.
+        index: usize,
+        /// What to do about it.
+        hint: &'static str,
+    },
+    /// Finite input so large that a derived quantity of the result overflows the `f64`
+    /// range.
+    #[error(
+        "{what} overflows the f64 range: the largest input coordinate is {largest_coordinate:e}; scale the input down"
+    )]
+    Overflow {
+        /// The quantity that overflows.
+        what: &'static str,
+        /// The largest absolute coordinate of the input.
+        largest_coordinate: f64,
+    },
     /// A B-patch knot triangle `(r_i, s_j, t_k)`, `i + j + k <= n - 1`, is degenerate.
     #[error("B-patch knot triangle (r_{i}, s_{j}, t_{k}) = {points:?} is degenerate")]
     DegenerateKnotTriangle {

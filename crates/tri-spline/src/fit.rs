@@ -83,18 +83,65 @@ pub struct ErrorStats {
     pub norm2: f64,
 }
 
-/// Statistics of the residual vectors `residuals`.
+/// Statistics of the residual vectors `residuals` (all zero for no residuals).
+///
+/// A NaN residual makes `eps_max`, `eps_avg` and `norm2` NaN and is not a hit: a NaN
+/// must not look like a perfect fit (`f64::max` would drop it). Lengths and sums are
+/// rescaled where squaring would overflow or underflow, so finite residuals give finite,
+/// non-zero statistics at any magnitude (e.g. residuals of `1e200` or `1e-200`).
+///
+/// ```
+/// use glam::DVec3;
+/// use tri_spline::fit::error_stats;
+/// let stats = error_stats(&[DVec3::new(3.0, 4.0, 0.0), DVec3::ZERO], 1.0);
+/// assert_eq!((stats.eps_max, stats.eps_avg, stats.n_eps, stats.norm2), (5.0, 2.5, 50.0, 5.0));
+/// assert!(error_stats(&[DVec3::NAN, DVec3::ONE], 1.0).eps_max.is_nan());
+/// assert_eq!(error_stats(&[DVec3::splat(1e300)], 1.0).eps_max, 3f64.sqrt() * 1e300);
+/// ```
 pub fn error_stats(residuals: &[DVec3], hit_tol: f64) -> ErrorStats {
     let m = residuals.len().max(1) as f64;
     let (mut max, mut sum, mut sum2, mut hits) = (0.0f64, 0.0, 0.0, 0usize);
-    for e in residuals {
-        let len = e.length();
+    let mut any_nan = false;
+    for &e in residuals {
+        let len = robust_length(e);
+        any_nan |= len.is_nan();
         max = max.max(len);
         sum += len;
         sum2 += len * len;
         hits += usize::from(len <= hit_tol);
     }
-    ErrorStats { eps_max: max, eps_avg: sum / m, n_eps: 100.0 * hits as f64 / m, norm2: sum2.sqrt() }
+    if any_nan {
+        max = f64::NAN;
+    }
+    // Rare second passes, only where the plain sums left the f64 range: the mean is at
+    // most the maximum, and the 2-norm at most sqrt(m) times it.
+    let mut mean = sum / m;
+    if mean.is_infinite() && max.is_finite() {
+        mean = residuals.iter().map(|&e| robust_length(e) / m).sum();
+    }
+    let mut norm2 = sum2.sqrt();
+    let squares_left_range = norm2.is_infinite() || (norm2 < MIN_SAFE_LENGTH && max > 0.0);
+    if squares_left_range && max.is_finite() {
+        norm2 = max * residuals.iter().map(|&e| (robust_length(e) / max).powi(2)).sum::<f64>().sqrt();
+    }
+    ErrorStats { eps_max: max, eps_avg: mean, n_eps: 100.0 * hits as f64 / m, norm2 }
+}
+
+/// Below this a length may have lost digits to underflowing squares (`2^-500`).
+const MIN_SAFE_LENGTH: f64 = 3.054_936_363_499_605e-151;
+
+/// `|v|`, rescaled by its largest coordinate when the plain formula's squares overflow
+/// (finite `v` with an infinite length) or underflow (a tiny length): the same value,
+/// bit for bit, for every `v` in between.
+fn robust_length(v: DVec3) -> f64 {
+    let plain = v.length();
+    if (plain.is_infinite() || plain < MIN_SAFE_LENGTH) && v.is_finite() {
+        let largest = v.abs().max_element();
+        if largest > 0.0 {
+            return largest * (v / largest).length();
+        }
+    }
+    plain
 }
 
 /// When to stop and how to count hits.
@@ -143,7 +190,7 @@ impl LinearOperator for SparseMatrix {
         self.rows()
     }
     fn apply(&self, x: &[DVec3]) -> Result<Vec<DVec3>, SplineError> {
-        Ok(self.mul_vec(x))
+        self.try_mul_vec(x)
     }
 }
 
@@ -190,19 +237,39 @@ fn check_options(options: &IterationOptions) -> Result<(), SplineError> {
     Ok(())
 }
 
-fn check_dims(n: &SparseMatrix, data: &[DVec3], control: &[DVec3]) -> Result<(), SplineError> {
+/// What the linear problem's inputs are called in errors.
+struct ProblemNames {
+    /// The rows of the matrix (and the points on its left-hand side).
+    rows: &'static str,
+    /// A single such point, for [`SplineError::NonFinite`].
+    point: &'static str,
+    /// A row of the matrix with a non-finite entry.
+    matrix_row: &'static str,
+}
+
+const DATA_NAMES: ProblemNames = ProblemNames {
+    rows: "data points (rows of the collocation matrix)",
+    point: "data point",
+    matrix_row: "collocation matrix row",
+};
+
+/// Checks that `data` has one point per row of `n` and `control` one per column, and
+/// that the three are finite (a NaN there would run through every iteration unnoticed).
+fn check_problem(n: &SparseMatrix, data: &[DVec3], control: &[DVec3], names: &ProblemNames) -> Result<(), SplineError> {
     if data.len() != n.rows() {
-        return Err(SplineError::Count {
-            what: "data points (rows of the collocation matrix)",
-            expected: n.rows(),
-            got: data.len(),
-        });
+        return Err(SplineError::Count { what: names.rows, expected: n.rows(), got: data.len() });
     }
     if control.len() != n.cols() {
-        return Err(SplineError::Count { what: "control points", expected: n.cols(), got: control.len() });
+        return Err(SplineError::Count { what: "initial control points", expected: n.cols(), got: control.len() });
     }
     if let Some(index) = data.iter().position(|p| !p.is_finite()) {
-        return Err(SplineError::NonFinite { what: "data point", index });
+        return Err(SplineError::NonFinite { what: names.point, index });
+    }
+    if let Some(index) = control.iter().position(|p| !p.is_finite()) {
+        return Err(SplineError::NonFinite { what: "initial control point", index });
+    }
+    if let Some(index) = n.first_non_finite_row() {
+        return Err(SplineError::NonFinite { what: names.matrix_row, index });
     }
     Ok(())
 }
@@ -215,12 +282,24 @@ fn residuals(n: &SparseMatrix, data: &[DVec3], control: &[DVec3]) -> Vec<DVec3> 
 /// Most iteration records reserved before iterating.
 const ITERATION_RESERVE: usize = 1024;
 
-/// Shared loop: evaluate, record, stop, update.
+/// How a method's divergence is reported ([`SplineError::Diverged`]).
+struct Divergence {
+    method: &'static str,
+    /// Why an update made a value non-finite, and what to do about it.
+    hint: &'static str,
+}
+
+/// Shared loop: evaluate, check, record, stop, update.
+///
+/// The iterate and its residual are checked to be finite at every iteration: a step too
+/// large overflows within a few iterations, and without the check NaN control points
+/// would come back as a successful fit.
 fn iterate(
     n: &SparseMatrix,
     data: &[DVec3],
     mut control: Vec<DVec3>,
     options: &IterationOptions,
+    divergence: &Divergence,
     mut update: impl FnMut(&mut Vec<DVec3>, &[DVec3]) -> Result<(), SplineError>,
 ) -> Result<IterationOutcome, SplineError> {
     let start = Instant::now();
@@ -232,6 +311,15 @@ fn iterate(
     let mut reached = false;
     for k in 1..=options.max_iterations {
         let e = residuals(n, data, &control);
+        let non_finite =
+            control.par_iter().position_first(|p| !p.is_finite()).map(|index| ("control point", index)).or_else(|| {
+                e.par_iter().position_first(|r| !r.is_finite()).map(|index| ("residual of data point", index))
+            });
+        if let Some((what, index)) = non_finite {
+            // The first iterate is the (checked, finite) input: only N C itself can overflow.
+            let hint = if k == 1 { "the input is so large that N C overflows; scale it down" } else { divergence.hint };
+            return Err(SplineError::Diverged { method: divergence.method, iteration: k, what, index, hint });
+        }
         let stats = error_stats(&e, options.hit_tol);
         records.push(IterationRecord {
             k,
@@ -256,8 +344,28 @@ fn iterate(
 /// LSPIA: `C ← C + μ Nᵀ (D - N C)` from `initial`.
 ///
 /// # Errors
-/// [`SplineError::Count`] / [`SplineError::NonFinite`] for inconsistent or bad input,
-/// [`SplineError::BadOption`] for bad options or a step `μ` outside `(0, ∞)`.
+/// [`SplineError::Count`] / [`SplineError::NonFinite`] for inconsistent or non-finite
+/// input (data, initial control points, entries of `n`), [`SplineError::BadOption`] for
+/// bad options or a step `μ` outside `(0, ∞)`, [`SplineError::Diverged`] naming the
+/// first iteration with a non-finite control point or residual: the step is far too
+/// large (LSPIA is stable for `μ < 2/λ_max(NᵀN)`; [`default_lspia_step`] is safe).
+///
+/// ```
+/// use glam::DVec3;
+/// use tri_spline::SplineError;
+/// use tri_spline::fit::{IterationOptions, default_lspia_step, lspia};
+/// use tri_spline::linalg::SparseMatrix;
+/// // Two control points, three data points: the ends and their midpoint.
+/// let n = SparseMatrix::from_rows(2, vec![vec![(0, 1.0)], vec![(0, 0.5), (1, 0.5)], vec![(1, 1.0)]]);
+/// let data = [DVec3::ZERO, DVec3::new(0.5, 0.1, 0.0), DVec3::X];
+/// let options = IterationOptions { max_iterations: 50, tolerance: None, hit_tol: 1e-3 };
+/// let fit = lspia(&n, &data, vec![DVec3::ZERO; 2], default_lspia_step(&n), &options)?;
+/// assert!((fit.control[1] - DVec3::new(1.0, 0.0333, 0.0)).length() < 1e-3);
+/// // A step far beyond 2/λ_max overflows within a few iterations: an error, not NaNs.
+/// let diverged = lspia(&n, &data, vec![DVec3::ZERO; 2], 1e300, &options);
+/// assert!(matches!(diverged, Err(SplineError::Diverged { method: "lspia", iteration: 3, .. })));
+/// # Ok::<(), SplineError>(())
+/// ```
 pub fn lspia(
     n: &SparseMatrix,
     data: &[DVec3],
@@ -266,12 +374,16 @@ pub fn lspia(
     options: &IterationOptions,
 ) -> Result<IterationOutcome, SplineError> {
     check_options(options)?;
-    check_dims(n, data, &initial)?;
+    check_problem(n, data, &initial, &DATA_NAMES)?;
     if !(mu.is_finite() && mu > 0.0) {
         return Err(SplineError::BadOption { name: "mu", value: mu.to_string(), reason: "a positive step" });
     }
     let nt = n.transpose();
-    iterate(n, data, initial, options, |control, e| {
+    let divergence = Divergence {
+        method: "lspia",
+        hint: "the step μ is too large (LSPIA is stable for μ < 2/λ_max(NᵀN); default_lspia_step gives a safe step)",
+    };
+    iterate(n, data, initial, options, &divergence, |control, e| {
         let step = nt.mul_vec(e);
         control.par_iter_mut().zip(step).for_each(|(c, s)| *c += s * mu);
         Ok(())
@@ -294,7 +406,10 @@ pub fn default_lspia_step(n: &SparseMatrix) -> f64 {
 /// through `n`: `C ← C + w (T - N_T C)`, `C⁰ = initial`.
 ///
 /// # Errors
-/// As [`lspia`]; [`SplineError::Count`] if `n_targets` is not square of the control size.
+/// As [`lspia`] (a weight outside `(0, ∞)` is [`SplineError::BadOption`]; divergence
+/// means `ρ(I - w N_T) >= 1`, see [`pia_spectral_radius`]); [`SplineError::Count`] if
+/// `n_targets` is not square of the control size; [`SplineError::NonFinite`] naming a
+/// non-finite target.
 pub fn pia(
     n: &SparseMatrix,
     data: &[DVec3],
@@ -305,12 +420,21 @@ pub fn pia(
     options: &IterationOptions,
 ) -> Result<IterationOutcome, SplineError> {
     check_options(options)?;
-    check_dims(n, data, &initial)?;
-    check_dims(n_targets, targets, &initial)?;
+    check_problem(n, data, &initial, &DATA_NAMES)?;
+    let target_names = ProblemNames {
+        rows: "targets (rows of the target collocation matrix)",
+        point: "target",
+        matrix_row: "target collocation matrix row",
+    };
+    check_problem(n_targets, targets, &initial, &target_names)?;
     if !(weight.is_finite() && weight > 0.0) {
         return Err(SplineError::BadOption { name: "weight", value: weight.to_string(), reason: "a positive weight" });
     }
-    iterate(n, data, initial, options, |control, _| {
+    let divergence = Divergence {
+        method: "pia",
+        hint: "the weight w is too large (PIA converges iff ρ(I - w N_T) < 1; pia_spectral_radius computes it)",
+    };
+    iterate(n, data, initial, options, &divergence, |control, _| {
         let fitted = n_targets.mul_vec(control);
         control.par_iter_mut().zip(targets.par_iter().zip(fitted)).for_each(|(c, (&t, f))| *c += (t - f) * weight);
         Ok(())
@@ -320,8 +444,9 @@ pub fn pia(
 /// The seed loop: `P* := D`; repeat `C := R(P*)`, `E := D - N C`, `P* := P* + E`.
 ///
 /// # Errors
-/// As [`lspia`]; [`SplineError::Count`] if `r` does not map data to control points;
-/// errors of `r`.
+/// As [`lspia`] (divergence means `ρ(I - R N) >= 1`, see [`seed_spectral_radius`]);
+/// [`SplineError::Count`] if `r` does not map data to control points (also when its
+/// result has the wrong length); errors of `r`.
 pub fn seed_iteration(
     n: &SparseMatrix,
     data: &[DVec3],
@@ -338,10 +463,23 @@ pub fn seed_iteration(
     }
     let mut shifted = data.to_vec();
     let initial = r.apply(&shifted)?;
-    check_dims(n, data, &initial)?;
-    iterate(n, data, initial, options, |control, e| {
+    check_problem(n, data, &initial, &DATA_NAMES)?;
+    let divergence = Divergence {
+        method: "seed",
+        hint: "the seed loop does not converge here (it needs ρ(I - R N) < 1; seed_spectral_radius computes it)",
+    };
+    iterate(n, data, initial, options, &divergence, |control, e| {
         shifted.par_iter_mut().zip(e).for_each(|(p, &d)| *p += d);
-        *control = r.apply(&shifted)?;
+        let next = r.apply(&shifted)?;
+        // A caller's operator may break its own `output_len`.
+        if next.len() != control.len() {
+            return Err(SplineError::Count {
+                what: "reverse map result (control points)",
+                expected: control.len(),
+                got: next.len(),
+            });
+        }
+        *control = next;
         Ok(())
     })
 }
@@ -360,9 +498,17 @@ pub struct LspiaSpectrum {
 /// The spectrum of `NᵀN` and the spectral radius of `I - μ NᵀN` (dense, `O(m_c³)`).
 ///
 /// # Errors
-/// [`SplineError::BadOption`] if `N` has no columns (no control points, no spectrum);
-/// [`SplineError::Singular`] if the eigenvalue computation fails.
+/// [`SplineError::BadOption`] if `N` has no columns (no control points, no spectrum) or
+/// `μ` is not finite (the radius would be NaN or infinite); [`SplineError::NonFinite`]
+/// for a row of `N` with a non-finite entry; [`SplineError::Singular`] if the eigenvalue
+/// computation fails.
 pub fn lspia_spectrum(n: &SparseMatrix, mu: f64) -> Result<LspiaSpectrum, SplineError> {
+    if !mu.is_finite() {
+        return Err(SplineError::BadOption { name: "mu", value: mu.to_string(), reason: "a finite step" });
+    }
+    if let Some(index) = n.first_non_finite_row() {
+        return Err(SplineError::NonFinite { what: "collocation matrix row", index });
+    }
     if n.cols() == 0 {
         return Err(SplineError::BadOption {
             name: "collocation matrix",
@@ -382,9 +528,16 @@ pub fn lspia_spectrum(n: &SparseMatrix, mu: f64) -> Result<LspiaSpectrum, Spline
 /// `ρ(I - w N_T)` for a square collocation matrix (dense, `O(m_c³)`).
 ///
 /// # Errors
-/// [`SplineError::Count`] if `n_targets` is not square; [`SplineError::Singular`] if the
-/// eigenvalue computation fails.
+/// [`SplineError::Count`] if `n_targets` is not square; [`SplineError::BadOption`] if the
+/// weight is not finite; [`SplineError::NonFinite`] for a row with a non-finite entry;
+/// [`SplineError::Singular`] if the eigenvalue computation fails.
 pub fn pia_spectral_radius(n_targets: &SparseMatrix, weight: f64) -> Result<f64, SplineError> {
+    if !weight.is_finite() {
+        return Err(SplineError::BadOption { name: "weight", value: weight.to_string(), reason: "a finite weight" });
+    }
+    if let Some(index) = n_targets.first_non_finite_row() {
+        return Err(SplineError::NonFinite { what: "target collocation matrix row", index });
+    }
     if n_targets.rows() != n_targets.cols() {
         return Err(SplineError::Count {
             what: "rows of the square PIA matrix",
@@ -509,7 +662,7 @@ mod tests {
         let n_deg = 3;
         let basis = SurfaceBasis::Bezier { degree: n_deg, domain };
         let params = domain_points(n_deg, &domain);
-        let n = basis.collocation(&params);
+        let n = basis.collocation(&params).unwrap();
         let targets = random_points(params.len(), 1);
         let w = 0.9;
         let out = pia(&n, &targets, &n, &targets, targets.clone(), w, &options(8)).unwrap();
@@ -540,7 +693,7 @@ mod tests {
         let domain = DomainTriangle::equilateral();
         for (degree, rate) in [(2usize, 0.5), (3, 1.0 - 6.0 / 27.0), (4, 1.0 - 24.0 / 256.0)] {
             let basis = SurfaceBasis::Bezier { degree, domain };
-            let n = basis.collocation(&domain_points(degree, &domain));
+            let n = basis.collocation(&domain_points(degree, &domain)).unwrap();
             // The computed spectral radius is the closed form.
             let rho = pia_spectral_radius(&n, 1.0).unwrap();
             assert!((rho - rate).abs() < 1e-12, "n = {degree}: {rho} vs {rate}");
@@ -567,7 +720,7 @@ mod tests {
                 domain.point([1.0 - a - b, a, b])
             })
             .collect();
-        let n = basis.collocation(&params);
+        let n = basis.collocation(&params).unwrap();
         let data = random_points(80, 6);
         let mu = default_lspia_step(&n);
         let spectrum = lspia_spectrum(&n, mu).unwrap();
@@ -596,7 +749,7 @@ mod tests {
         let (deg, fine) = (2usize, 4usize);
         let basis = SurfaceBasis::Bezier { degree: deg, domain };
         let params = domain_points(fine, &domain);
-        let n = basis.collocation(&params);
+        let n = basis.collocation(&params).unwrap();
         // Control point (j, k) sits at fine grid point (2j, 2k).
         let select = SparseMatrix::from_rows(
             params.len(),
@@ -620,7 +773,7 @@ mod tests {
     #[test]
     fn bad_options_are_rejected() {
         let domain = DomainTriangle::equilateral();
-        let n = SurfaceBasis::Bezier { degree: 1, domain }.collocation(&domain_points(1, &domain));
+        let n = SurfaceBasis::Bezier { degree: 1, domain }.collocation(&domain_points(1, &domain)).unwrap();
         let d = random_points(3, 1);
         assert!(lspia(&n, &d, d.clone(), 1.0, &options(0)).is_err());
         assert!(lspia(&n, &d, d.clone(), -1.0, &options(3)).is_err());
@@ -639,7 +792,7 @@ mod tests {
     #[test]
     fn huge_iteration_cap_is_not_preallocated() {
         // Used to panic with "capacity overflow" (and abort for 1e8) before iterating.
-        let n = SparseMatrix::identity(3);
+        let n = SparseMatrix::identity(3).unwrap();
         let d = vec![DVec3::ONE; 3];
         for max_iterations in [usize::MAX, 100_000_000] {
             let stop = IterationOptions { max_iterations, tolerance: Some(1.0), hit_tol: 0.1 };
@@ -651,10 +804,120 @@ mod tests {
         }
     }
 
+    /// A finite but far too large step used to return `Ok` with NaN control points (and
+    /// `eps_max = 0`, as `f64::max` drops NaN). Now the first non-finite iterate is an
+    /// error naming the method and the iteration.
+    #[test]
+    fn a_step_far_too_large_is_a_divergence_error_not_nan() {
+        let domain = DomainTriangle::equilateral();
+        let n = SurfaceBasis::Bezier { degree: 2, domain }.collocation(&domain_points(4, &domain)).unwrap();
+        let data = random_points(n.rows(), 3);
+        let zero = vec![DVec3::ZERO; n.cols()];
+        let lspia_out = lspia(&n, &data, zero.clone(), 1e300, &options(20));
+        assert!(
+            matches!(
+                lspia_out,
+                Err(SplineError::Diverged { method: "lspia", iteration: 3, what: "control point", .. })
+            ),
+            "{lspia_out:?}"
+        );
+        let message = lspia_out.unwrap_err().to_string();
+        assert!(message.contains("2/λ_max(NᵀN)") && message.contains("default_lspia_step"), "{message}");
+        // PIA and the seed loop share the check (here R scales by 1e200: ρ(I - R N) is huge).
+        let targets = &data[..n.cols()];
+        let n_targets = SparseMatrix::from_rows(n.cols(), (0..n.cols()).map(|i| row_of(&n, i)).collect());
+        let pia_out = pia(&n, &data, &n_targets, targets, zero, 1e300, &options(20));
+        assert!(matches!(pia_out, Err(SplineError::Diverged { method: "pia", iteration: 3, .. })), "{pia_out:?}");
+        let amplify = SparseMatrix::from_rows(n.rows(), (0..n.cols()).map(|i| vec![(i, 1e200)]).collect());
+        let seed_out = seed_iteration(&n, &data, &amplify, &options(20));
+        assert!(matches!(seed_out, Err(SplineError::Diverged { method: "seed", .. })), "{seed_out:?}");
+        // Data so large that N C overflows at once is reported at iteration 1, as such.
+        let n_sum = SparseMatrix::from_rows(2, vec![vec![(0, 1.0), (1, 1.0)]]);
+        let huge = vec![DVec3::splat(f64::MAX); 2];
+        let out = lspia(&n_sum, &[DVec3::ZERO], huge, 0.1, &options(3));
+        assert!(
+            matches!(out, Err(SplineError::Diverged { iteration: 1, what: "residual of data point", index: 0, hint, .. }) if hint.contains("scale it down")),
+            "{out:?}"
+        );
+    }
+
+    fn row_of(n: &SparseMatrix, i: usize) -> Vec<(usize, f64)> {
+        let (cols, vals) = n.row(i);
+        cols.iter().zip(vals).map(|(&c, &v)| (c as usize, v)).collect()
+    }
+
+    /// NaN in the initial control net (or a target, or a matrix entry) used to run
+    /// through every iteration and come back as `Ok` with NaN control points.
+    #[test]
+    fn non_finite_initial_nets_targets_and_matrices_are_rejected() {
+        let n = SparseMatrix::from_rows(2, vec![vec![(0, 0.5), (1, 0.5)], vec![(0, 1.0)], vec![(1, 1.0)]]);
+        let data = [DVec3::ONE, DVec3::X, DVec3::Y];
+        let nan_initial = vec![DVec3::ZERO, DVec3::new(0.0, f64::NAN, 0.0)];
+        let expected = SplineError::NonFinite { what: "initial control point", index: 1 };
+        assert_eq!(lspia(&n, &data, nan_initial.clone(), 0.5, &options(5)), Err(expected.clone()));
+        let square = SparseMatrix::identity(2).unwrap();
+        assert_eq!(pia(&n, &data, &square, &data[1..], nan_initial, 0.5, &options(5)), Err(expected));
+        let nan_target = [DVec3::X, DVec3::INFINITY];
+        assert_eq!(
+            pia(&n, &data, &square, &nan_target, vec![DVec3::ZERO; 2], 0.5, &options(5)),
+            Err(SplineError::NonFinite { what: "target", index: 1 })
+        );
+        let nan_matrix = SparseMatrix::from_rows(2, vec![vec![(0, 1.0)], vec![(0, 1.0)], vec![(1, f64::NAN)]]);
+        assert_eq!(
+            lspia(&nan_matrix, &data, vec![DVec3::ZERO; 2], 0.5, &options(5)),
+            Err(SplineError::NonFinite { what: "collocation matrix row", index: 2 })
+        );
+        // The seed loop's initial net is R D: a NaN entry of R is caught there.
+        let nan_r = SparseMatrix::from_rows(3, vec![vec![(0, f64::NAN)], vec![(1, 1.0)]]);
+        assert_eq!(
+            seed_iteration(&n, &data, &nan_r, &options(5)),
+            Err(SplineError::NonFinite { what: "initial control point", index: 0 })
+        );
+        // The spectra refuse what would make their radius NaN.
+        assert!(matches!(lspia_spectrum(&n, f64::NAN), Err(SplineError::BadOption { name: "mu", .. })));
+        assert!(matches!(pia_spectral_radius(&square, f64::INFINITY), Err(SplineError::BadOption { .. })));
+        assert!(matches!(lspia_spectrum(&nan_matrix, 1.0), Err(SplineError::NonFinite { index: 2, .. })));
+    }
+
+    /// `error_stats(&[NaN], _)` reported `eps_max = 0`, a perfect fit; finite residuals
+    /// beyond `1e154` (or below `1e-154`) had infinite (or zero) statistics.
+    #[test]
+    fn error_stats_propagate_nan_and_keep_extreme_magnitudes() {
+        let nan = error_stats(&[DVec3::new(f64::NAN, 0.0, 0.0)], 1.0);
+        assert!(nan.eps_max.is_nan() && nan.eps_avg.is_nan() && nan.norm2.is_nan());
+        assert_eq!(nan.n_eps, 0.0);
+        let mixed = error_stats(&[DVec3::X, DVec3::NAN, DVec3::Y], 1.0);
+        assert!(mixed.eps_max.is_nan(), "NaN wins wherever it is: {mixed:?}");
+        assert!((mixed.n_eps - 200.0 / 3.0).abs() < 1e-12);
+        for scale in [1e300, 1e-300, f64::MAX / 2.0] {
+            let residuals = [DVec3::new(3.0, 4.0, 0.0) * (scale / 5.0), DVec3::new(0.0, scale, 0.0)];
+            let stats = error_stats(&residuals, 0.0);
+            assert!((stats.eps_max / scale - 1.0).abs() < 1e-15, "{scale:e}: {stats:?}");
+            assert!((stats.eps_avg / scale - 1.0).abs() < 1e-15, "{scale:e}: {stats:?}");
+            assert!((stats.norm2 / scale - 2f64.sqrt()).abs() < 1e-15, "{scale:e}: {stats:?}");
+        }
+        // Unchanged to the bit in the ordinary range.
+        let plain = [DVec3::new(0.1, -0.2, 0.3), DVec3::new(1e-3, 2e-3, 0.0)];
+        let stats = error_stats(&plain, 0.01);
+        assert_eq!(stats.eps_max, plain[0].length());
+        assert_eq!(stats.norm2, (plain[0].length_squared() + plain[1].length_squared()).sqrt());
+    }
+
+    /// A sparse matrix used as an operator with a vector of the wrong length panicked in
+    /// `mul_vec`; through `apply` it is an error.
+    #[test]
+    fn operators_report_a_wrong_input_length() {
+        let r = SparseMatrix::identity(3).unwrap();
+        assert_eq!(
+            LinearOperator::apply(&r, &[DVec3::ZERO; 2]),
+            Err(SplineError::Count { what: "vector entries (columns of the matrix)", expected: 3, got: 2 })
+        );
+    }
+
     #[test]
     fn mismatched_or_empty_matrices_are_errors() {
         // Used to index out of bounds: data shorter than the rows, and an empty spectrum.
-        let n = SparseMatrix::identity(3);
+        let n = SparseMatrix::identity(3).unwrap();
         assert!(matches!(
             least_squares_fit(&n, &[DVec3::ZERO; 2], 0.1),
             Err(SplineError::Count { expected: 3, got: 2, .. })

@@ -7,9 +7,30 @@
 //! + (k/n)(t2 - t0)`: the order is that of the grid rows from edge `t0 t1` to corner `t2`.
 
 /// Number of multi-indices of degree `n`: `(n + 1)(n + 2) / 2`.
+///
+/// For the degrees of patches and grids (the count must fit in `usize`; see
+/// [`checked_tri_count`] for a size given by a caller).
 #[inline]
 pub const fn tri_count(n: usize) -> usize {
     (n + 1) * (n + 2) / 2
+}
+
+/// `(n + 1)(n + 2) / 2`, or `None` if it does not fit in `usize` (from `n` about
+/// `6.07e9` on 64-bit targets).
+///
+/// ```
+/// use tri_spline::index::checked_tri_count;
+/// assert_eq!(checked_tri_count(3), Some(10));
+/// assert_eq!(checked_tri_count(usize::MAX), None);
+/// ```
+#[inline]
+pub const fn checked_tri_count(n: usize) -> Option<usize> {
+    // One of n + 1, n + 2 is even: halve it before multiplying, so that only a count
+    // beyond `usize` overflows.
+    let (Some(a), Some(b)) = (n.checked_add(1), n.checked_add(2)) else {
+        return None;
+    };
+    if a % 2 == 0 { (a / 2).checked_mul(b) } else { a.checked_mul(b / 2) }
 }
 
 /// Number of multi-indices of all degrees `0..d` (exclusive): `d (d + 1)(d + 2) / 6`.
@@ -30,16 +51,62 @@ pub const fn beta_index(beta: [usize; 3]) -> usize {
     tri_index(beta[0] + beta[1] + beta[2], beta[1], beta[2])
 }
 
-/// The multi-indices of degree `n` in storage order.
+/// The multi-indices of degree `n` in storage order, generated one by one (nothing is
+/// allocated, so any `n` returns at once).
+///
+/// # Panics
+/// If their number `(n + 1)(n + 2) / 2` does not fit in `usize` ([`checked_tri_count`]
+/// is `None`): the iterator could not report its length.
+///
+/// ```
+/// use tri_spline::index::multi_indices;
+/// let all: Vec<[usize; 3]> = multi_indices(1).collect();
+/// assert_eq!(all, vec![[1, 0, 0], [0, 1, 0], [0, 0, 1]]);
+/// // Lazy: a huge degree costs nothing until iterated.
+/// assert_eq!(multi_indices(1 << 30).next(), Some([1 << 30, 0, 0]));
+/// ```
 pub fn multi_indices(n: usize) -> impl ExactSizeIterator<Item = [usize; 3]> + Clone {
-    let mut all = Vec::with_capacity(tri_count(n));
-    for k in 0..=n {
-        for j in 0..=n - k {
-            all.push([n - j - k, j, k]);
-        }
-    }
-    all.into_iter()
+    let Some(remaining) = checked_tri_count(n) else {
+        panic!("multi_indices: degree {n} has more multi-indices than usize can count");
+    };
+    MultiIndices { n, j: 0, k: 0, remaining }
 }
+
+/// The iterator of [`multi_indices`]: the next multi-index is `(n - j - k, j, k)`.
+#[derive(Debug, Clone)]
+struct MultiIndices {
+    n: usize,
+    j: usize,
+    k: usize,
+    remaining: usize,
+}
+
+impl Iterator for MultiIndices {
+    type Item = [usize; 3];
+
+    #[inline]
+    fn next(&mut self) -> Option<[usize; 3]> {
+        if self.remaining == 0 {
+            return None;
+        }
+        let beta = [self.n - self.j - self.k, self.j, self.k];
+        self.remaining -= 1;
+        if self.j + self.k == self.n {
+            self.j = 0;
+            self.k += 1;
+        } else {
+            self.j += 1;
+        }
+        Some(beta)
+    }
+
+    #[inline]
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        (self.remaining, Some(self.remaining))
+    }
+}
+
+impl ExactSizeIterator for MultiIndices {}
 
 /// `n! / (β0! β1! β2!)`, exactly as `f64` for the degrees used here.
 pub fn multinomial(beta: [usize; 3]) -> f64 {
@@ -95,6 +162,35 @@ mod tests {
             }
         }
         assert_eq!(tet_count(3), 1 + 3 + 6);
+    }
+
+    /// Used to allocate every multi-index up front: `multi_indices(1 << 20)` aborted the
+    /// process allocating 13 TB, `1 << 31` panicked with a capacity overflow.
+    #[test]
+    fn multi_indices_are_lazy_and_counted_without_overflow() {
+        assert_eq!(multi_indices(1 << 20).len(), ((1 << 20) + 1) * ((1 << 19) + 1));
+        let huge = 1usize << 31;
+        let mut it = multi_indices(huge);
+        assert_eq!(it.len(), checked_tri_count(huge).unwrap());
+        assert_eq!((it.next(), it.next()), (Some([huge, 0, 0]), Some([huge - 1, 1, 0])));
+        assert_eq!(it.len(), checked_tri_count(huge).unwrap() - 2);
+        // Row ends wrap to the next k (small n, all of them).
+        assert_eq!(
+            multi_indices(2).collect::<Vec<_>>(),
+            [[2, 0, 0], [1, 1, 0], [0, 2, 0], [1, 0, 1], [0, 1, 1], [0, 0, 2]]
+        );
+        for n in 0..50 {
+            assert_eq!(checked_tri_count(n), Some(tri_count(n)));
+        }
+        assert_eq!(checked_tri_count(1 << 31), Some(((1 << 31) + 1) * ((1 << 30) + 1)));
+        assert_eq!(checked_tri_count(1 << 33), None);
+        assert_eq!(checked_tri_count(usize::MAX - 1), None);
+    }
+
+    #[test]
+    #[should_panic(expected = "more multi-indices than usize can count")]
+    fn multi_indices_beyond_usize_panic_with_a_message() {
+        let _ = multi_indices(usize::MAX);
     }
 
     #[test]

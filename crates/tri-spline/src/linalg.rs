@@ -51,9 +51,30 @@ impl SparseMatrix {
         Self { rows: n_rows, cols, row_start, col_index, values }
     }
 
-    /// The identity of size `n`.
-    pub fn identity(n: usize) -> Self {
-        Self::from_rows(n, (0..n).map(|i| vec![(i, 1.0)]).collect())
+    /// The identity of size `n` (`n` from 0 to [`MAX_DIMENSION`]; about 20 bytes per row).
+    ///
+    /// # Errors
+    /// [`SplineError::TooLarge`] above [`MAX_DIMENSION`], checked before allocating (a
+    /// mistyped size used to abort the process allocating a row list per row).
+    ///
+    /// ```
+    /// use tri_spline::linalg::{MAX_DIMENSION, SparseMatrix};
+    /// assert_eq!(SparseMatrix::identity(3)?.mul_vec(&[1.0, 2.0, 3.0]), vec![1.0, 2.0, 3.0]);
+    /// assert!(SparseMatrix::identity(MAX_DIMENSION + 1).is_err());
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
+    pub fn identity(n: usize) -> Result<Self, SplineError> {
+        if n > MAX_DIMENSION {
+            return Err(SplineError::TooLarge { what: "identity matrix size", requested: n, max: MAX_DIMENSION });
+        }
+        // Built directly: the compressed form of the identity needs no sorting or merging.
+        Ok(Self {
+            rows: n,
+            cols: n,
+            row_start: (0..=n).collect(),
+            col_index: (0..n).map(|i| i as u32).collect(),
+            values: vec![1.0; n],
+        })
     }
 
     /// Number of rows.
@@ -72,14 +93,57 @@ impl SparseMatrix {
     }
 
     /// Row `i` as `(columns, values)`.
+    ///
+    /// # Panics
+    /// If `i >= self.rows()`.
     pub fn row(&self, i: usize) -> (&[u32], &[f64]) {
+        assert!(i < self.rows, "row {i} is out of range (there are {})", self.rows);
         let r = self.row_start[i]..self.row_start[i + 1];
         (&self.col_index[r.clone()], &self.values[r])
     }
 
+    /// The first row holding a NaN or infinite entry, if any.
+    pub fn first_non_finite_row(&self) -> Option<usize> {
+        let entry = self.values.iter().position(|v| !v.is_finite())?;
+        // The row whose range holds the entry: the last row starting at or before it.
+        Some(self.row_start.partition_point(|&start| start <= entry) - 1)
+    }
+
     /// `A x`, rows in parallel (each output entry from one task: deterministic).
+    ///
+    /// # Panics
+    /// Unless `x` has one entry per column; [`try_mul_vec`](Self::try_mul_vec) returns an
+    /// error instead.
     pub fn mul_vec<P: Point>(&self, x: &[P]) -> Vec<P> {
-        assert_eq!(x.len(), self.cols, "internal: dimension mismatch");
+        self.try_mul_vec(x).unwrap_or_else(|e| panic!("SparseMatrix::mul_vec: {e}"))
+    }
+
+    /// `A x` as [`mul_vec`](Self::mul_vec), for a vector built by the caller.
+    ///
+    /// # Errors
+    /// [`SplineError::Count`] unless `x` has one entry per column.
+    ///
+    /// ```
+    /// use tri_spline::SplineError;
+    /// use tri_spline::linalg::SparseMatrix;
+    /// let a = SparseMatrix::from_rows(2, vec![vec![(0, 1.0), (1, 2.0)]]);
+    /// assert_eq!(a.try_mul_vec(&[1.0, 1.0])?, vec![3.0]);
+    /// assert!(matches!(a.try_mul_vec(&[1.0]), Err(SplineError::Count { expected: 2, got: 1, .. })));
+    /// # Ok::<(), SplineError>(())
+    /// ```
+    pub fn try_mul_vec<P: Point>(&self, x: &[P]) -> Result<Vec<P>, SplineError> {
+        if x.len() != self.cols {
+            return Err(SplineError::Count {
+                what: "vector entries (columns of the matrix)",
+                expected: self.cols,
+                got: x.len(),
+            });
+        }
+        Ok(self.mul_vec_unchecked(x))
+    }
+
+    /// `A x` for `x` of the right length.
+    fn mul_vec_unchecked<P: Point>(&self, x: &[P]) -> Vec<P> {
         (0..self.rows)
             .into_par_iter()
             .with_min_len(256)
@@ -115,8 +179,16 @@ impl SparseMatrix {
     }
 
     /// The product `self * other`.
+    ///
+    /// # Panics
+    /// Unless `other` has one row per column of `self`.
     pub fn mul(&self, other: &SparseMatrix) -> Self {
-        assert_eq!(self.cols, other.rows, "internal: dimension mismatch");
+        assert!(
+            self.cols == other.rows,
+            "SparseMatrix::mul: the left factor has {} columns but the right one {} rows",
+            self.cols,
+            other.rows
+        );
         let rows = (0..self.rows)
             .into_par_iter()
             .map(|i| {
@@ -163,6 +235,9 @@ impl SparseMatrix {
         m
     }
 }
+
+/// Largest dimension of [`SparseMatrix::identity`]: column indices are stored as `u32`.
+pub const MAX_DIMENSION: usize = u32::MAX as usize;
 
 /// Most power iterations [`gram_lambda_max_bound`] runs, whatever it is asked.
 pub const MAX_POWER_ITERATIONS: usize = 1 << 16;
@@ -365,11 +440,65 @@ mod tests {
     /// [`MAX_POWER_ITERATIONS`], with the bound of the iterations asked for.
     #[test]
     fn lambda_bound_ends_for_any_iteration_count() {
-        assert_eq!(gram_lambda_max_bound(&SparseMatrix::identity(3), usize::MAX), 1.0);
+        assert_eq!(gram_lambda_max_bound(&SparseMatrix::identity(3).unwrap(), usize::MAX), 1.0);
         let a = sample();
         let capped = gram_lambda_max_bound(&a, usize::MAX);
         assert!(capped <= gram_lambda_max_bound(&a, 50));
         assert_eq!(capped, gram_lambda_max_bound(&a, MAX_POWER_ITERATIONS));
+    }
+
+    /// A vector of the wrong length panicked with "internal: dimension mismatch", which
+    /// blamed this crate rather than the caller's vector.
+    #[test]
+    fn vectors_of_the_wrong_length_are_errors_or_named_panics() {
+        let a = sample();
+        for len in [0, 2, 4] {
+            let x = vec![1.0; len];
+            assert_eq!(
+                a.try_mul_vec(&x),
+                Err(SplineError::Count { what: "vector entries (columns of the matrix)", expected: 3, got: len })
+            );
+        }
+        assert_eq!(a.try_mul_vec(&[1.0, 2.0, 4.0]).unwrap(), a.mul_vec(&[1.0, 2.0, 4.0]));
+        let caught = std::panic::catch_unwind(|| a.mul_vec(&[1.0])).unwrap_err();
+        let message = caught.downcast_ref::<String>().unwrap();
+        assert!(message.contains("vector entries (columns of the matrix): expected 3 entries, got 1"), "{message}");
+    }
+
+    /// `identity(1 << 40)` used to abort the process allocating a row list per row.
+    #[test]
+    fn identity_beyond_the_u32_columns_is_an_error_before_allocating() {
+        for n in [MAX_DIMENSION + 1, 1 << 40, usize::MAX] {
+            assert_eq!(
+                SparseMatrix::identity(n),
+                Err(SplineError::TooLarge { what: "identity matrix size", requested: n, max: MAX_DIMENSION })
+            );
+        }
+        let built = SparseMatrix::identity(4).unwrap();
+        assert_eq!(built, SparseMatrix::from_rows(4, (0..4).map(|i| vec![(i, 1.0)]).collect()));
+        assert_eq!(SparseMatrix::identity(0).unwrap().rows(), 0);
+    }
+
+    #[test]
+    fn non_finite_entries_are_found_by_row() {
+        assert_eq!(sample().first_non_finite_row(), None);
+        let m =
+            SparseMatrix::from_rows(2, vec![vec![], vec![(0, 1.0), (1, f64::NAN)], vec![], vec![(0, f64::INFINITY)]]);
+        assert_eq!(m.first_non_finite_row(), Some(1));
+        let m = SparseMatrix::from_rows(2, vec![vec![], vec![(0, 1.0)], vec![], vec![(0, f64::INFINITY)]]);
+        assert_eq!(m.first_non_finite_row(), Some(3));
+    }
+
+    #[test]
+    #[should_panic(expected = "the left factor has 3 columns but the right one 2 rows")]
+    fn products_of_mismatched_matrices_panic_with_the_sizes() {
+        let _ = sample().mul(&SparseMatrix::identity(2).unwrap());
+    }
+
+    #[test]
+    #[should_panic(expected = "row 4 is out of range (there are 4)")]
+    fn rows_beyond_the_matrix_panic_with_the_count() {
+        let _ = sample().row(4);
     }
 
     #[test]
@@ -412,7 +541,7 @@ mod tests {
     #[test]
     fn least_squares_needs_one_data_point_per_row() {
         // Used to index `data` out of bounds.
-        let n = SparseMatrix::identity(3);
+        let n = SparseMatrix::identity(3).unwrap();
         for len in [0, 2, 4] {
             let data = vec![DVec3::ZERO; len];
             assert_eq!(

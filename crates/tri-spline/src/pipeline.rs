@@ -32,6 +32,13 @@
 //!    [`SplineError::NotConvergent`] when [`FitOptions::refuse_divergent`] is set.
 //! 6. **Baseline**: the direct least-squares fit of the same control net (dense QR),
 //!    with its errors and time.
+//!
+//! **Scale.** Every step is linear in the data or invariant under scaling it, so
+//! coordinates beyond `2^±256` in magnitude (e.g. a mesh given in units of `1e300`) are
+//! first scaled by an exact power of two to unit size, fitted, and the results scaled
+//! back: the same fit, where squared distances would otherwise overflow to infinity (and
+//! the default hit tolerance with them) or underflow to zero errors. Only a result that
+//! does not fit in `f64` in the input's units is an error ([`SplineError::Overflow`]).
 
 use std::str::FromStr;
 use std::time::Instant;
@@ -310,7 +317,12 @@ pub fn bpatch_knots(domain: &DomainTriangle, degree: usize, spread: f64) -> Knot
 /// [`SplineError::ReverseLevels`] naming how many reverse-Loop levels are possible;
 /// [`SplineError::DegenerateParameterTriangle`], DMS knot errors,
 /// [`SplineError::NotConvergent`] when refusing a divergent iteration,
-/// [`SplineError::Singular`] for a failed solve.
+/// [`SplineError::Diverged`] when the iteration overflowed (e.g. an LSPIA step far too
+/// large), [`SplineError::Singular`] for a failed solve; [`SplineError::Degree`] when
+/// the grid and levels give a patch degree above the supported one;
+/// [`SplineError::Overflow`] for coordinates so close to `f64::MAX` that the result
+/// (a control point, the bounding-box diagonal) does not fit in `f64` (module docs,
+/// "Scale").
 ///
 /// ```
 /// use glam::DVec3;
@@ -341,13 +353,34 @@ pub fn fit_mesh(mesh: &HalfedgeMesh, options: &FitOptions) -> Result<FitReport, 
     let start = Instant::now();
     check_options(options)?;
     disk_boundary(mesh)?;
-    let data = mesh.positions().to_vec();
-    if let Some(index) = data.iter().position(|p| !p.is_finite()) {
+    if let Some(index) = mesh.positions().iter().position(|p| !p.is_finite()) {
         return Err(SplineError::NonFinite { what: "vertex position", index });
     }
+    // Fit at unit scale when the coordinates are extreme (module docs, "Scale"): the
+    // same fit, without squares of distances overflowing or underflowing.
+    let unit = UnitScale::of(mesh.positions());
+    let requested_hit_tol = options.hit_tol;
+    let unit_mesh;
+    let unit_options;
+    let (mesh, options) = if unit.is_identity() {
+        (mesh, options)
+    } else {
+        let mut scaled = mesh.clone();
+        for p in scaled.positions_mut() {
+            *p = unit.to_unit(*p);
+        }
+        unit_mesh = scaled;
+        unit_options = FitOptions {
+            tolerance: options.tolerance.map(|t| unit.distance_to_unit(t)),
+            hit_tol: options.hit_tol.map(|h| unit.distance_to_unit(h)),
+            ..options.clone()
+        };
+        (&unit_mesh, &unit_options)
+    };
+    let data = mesh.positions().to_vec();
     let (lo, hi) = data.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), &p| (l.min(p), h.max(p)));
-    let bbox_diag = (hi - lo).length();
-    let hit_tol = options.hit_tol.unwrap_or(DEFAULT_HIT_TOL_FRACTION * bbox_diag);
+    let mut bbox_diag = (hi - lo).length();
+    let mut hit_tol = options.hit_tol.unwrap_or(DEFAULT_HIT_TOL_FRACTION * bbox_diag);
     let mut timings = Timings::default();
     let domain = DomainTriangle::equilateral();
     let levels = options.reverse_levels;
@@ -421,14 +454,14 @@ pub fn fit_mesh(mesh: &HalfedgeMesh, options: &FitOptions) -> Result<FitReport, 
     let iteration_options =
         IterationOptions { max_iterations: options.iterations, tolerance: options.tolerance, hit_tol };
     let t = Instant::now();
-    let outcome: IterationOutcome = match options.method {
+    let mut outcome: IterationOutcome = match options.method {
         Method::Lspia => lspia(&n, &data, initial, mu.expect("internal: LSPIA step"), &iteration_options)?,
         Method::Pia => pia(&n, &data, &n_targets(), &targets, targets.clone(), options.pia_weight, &iteration_options)?,
         Method::Seed => seed_iteration(&n, &data, &r, &iteration_options)?,
     };
     timings.iterations = t.elapsed().as_secs_f64();
 
-    let least_squares = if options.least_squares {
+    let mut least_squares = if options.least_squares {
         let t = Instant::now();
         let report = least_squares_fit(&n, &data, hit_tol);
         timings.least_squares = t.elapsed().as_secs_f64();
@@ -448,10 +481,31 @@ pub fn fit_mesh(mesh: &HalfedgeMesh, options: &FitOptions) -> Result<FitReport, 
         None
     };
 
-    let control = match &lift {
+    let mut control = match &lift {
         Some(l) => l.mul_vec(&outcome.control),
         None => outcome.control.clone(),
     };
+    // Back to the input's units (exact, as the scaling was; nothing to do at unit scale).
+    if !unit.is_identity() {
+        unit.points_to_input(&mut control, "a control point of the fitted surface")?;
+        unit.points_to_input(&mut outcome.control, "a point of the control net")?;
+        bbox_diag = unit.distance_to_input(bbox_diag, "the bounding-box diagonal")?;
+        hit_tol = match requested_hit_tol {
+            Some(given) => given,
+            None => unit.distance_to_input(hit_tol, "the default hit tolerance")?,
+        };
+        for record in &mut outcome.records {
+            record.eps_max = unit.distance_to_input(record.eps_max, "the largest error")?;
+            record.eps_avg = unit.distance_to_input(record.eps_avg, "the mean error")?;
+        }
+        for norm in &mut outcome.residual_norms {
+            *norm = unit.distance_to_input(*norm, "the residual 2-norm")?;
+        }
+        if let Some(ls) = &mut least_squares {
+            ls.eps_max = unit.distance_to_input(ls.eps_max, "the least-squares largest error")?;
+            ls.eps_avg = unit.distance_to_input(ls.eps_avg, "the least-squares mean error")?;
+        }
+    }
     let surface = basis.with_control(control)?;
     timings.total = start.elapsed().as_secs_f64();
     Ok(FitReport {
@@ -475,6 +529,87 @@ pub fn fit_mesh(mesh: &HalfedgeMesh, options: &FitOptions) -> Result<FitReport, 
         control_net: (outcome.control, triangles),
         params,
     })
+}
+
+/// Coordinates of magnitude in `[1/SAFE_MAGNITUDE, SAFE_MAGNITUDE]` (`2^±256`) are fitted
+/// as given: squared distances and their sums over many points stay far inside the `f64`
+/// range. Others are fitted at unit scale.
+const SAFE_MAGNITUDE: f64 = f64::from_bits((1023 + 256) << 52);
+
+/// The exact power-of-two scaling `x ↦ x 2^exponent` that brings extreme coordinates to
+/// unit size (module docs, "Scale").
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct UnitScale {
+    exponent: i32,
+    /// The largest absolute input coordinate (for [`SplineError::Overflow`]).
+    largest_coordinate: f64,
+}
+
+impl UnitScale {
+    /// The scaling for `positions` (finite): the identity unless their largest absolute
+    /// coordinate is outside the safe range, else one that makes it about 1.
+    fn of(positions: &[DVec3]) -> Self {
+        let largest_coordinate = positions.iter().fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+        let safe = largest_coordinate == 0.0 || (1.0 / SAFE_MAGNITUDE..=SAFE_MAGNITUDE).contains(&largest_coordinate);
+        // log2 is exact enough: off by one only moves the scaled maximum into [1/2, 4).
+        let exponent = if safe { 0 } else { -(largest_coordinate.log2().floor() as i32) };
+        Self { exponent, largest_coordinate }
+    }
+
+    fn is_identity(self) -> bool {
+        self.exponent == 0
+    }
+
+    /// A position in unit scale (exact: scaling by a power of two rounds only values that
+    /// become subnormal, which are negligible next to the largest coordinate, about 1).
+    fn to_unit(self, p: DVec3) -> DVec3 {
+        p.map(|x| times_power_of_two(x, self.exponent))
+    }
+
+    /// A distance option (tolerance, hit tolerance) in unit scale; one beyond the `f64`
+    /// range there stays the largest finite distance, which compares the same way.
+    fn distance_to_unit(self, d: f64) -> f64 {
+        times_power_of_two(d, self.exponent).min(f64::MAX)
+    }
+
+    /// A distance of the unit-scale fit in the input's units.
+    ///
+    /// # Errors
+    /// [`SplineError::Overflow`] if it is beyond the `f64` range there.
+    fn distance_to_input(self, d: f64, what: &'static str) -> Result<f64, SplineError> {
+        let back = times_power_of_two(d, -self.exponent);
+        if back.is_finite() {
+            Ok(back)
+        } else {
+            Err(SplineError::Overflow { what, largest_coordinate: self.largest_coordinate })
+        }
+    }
+
+    /// Points of the unit-scale fit in the input's units, in place.
+    ///
+    /// # Errors
+    /// [`SplineError::Overflow`] if a coordinate is beyond the `f64` range there.
+    fn points_to_input(self, points: &mut [DVec3], what: &'static str) -> Result<(), SplineError> {
+        for p in points {
+            *p = p.map(|x| times_power_of_two(x, -self.exponent));
+            if !p.is_finite() {
+                return Err(SplineError::Overflow { what, largest_coordinate: self.largest_coordinate });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `x 2^exponent`, exact unless the result leaves the normal range: in factors that are
+/// themselves normal powers of two (`2^±1074` is not one).
+fn times_power_of_two(mut x: f64, exponent: i32) -> f64 {
+    let mut remaining = exponent;
+    while remaining != 0 {
+        let step = remaining.clamp(-1022, 1023);
+        x *= f64::from_bits(((step + 1023) as u64) << 52);
+        remaining -= step;
+    }
+    x
 }
 
 /// Bézier patch or B-patch over a regular triangular grid.
@@ -509,6 +644,15 @@ fn grid_problem(
         });
     }
     let degree = segments >> levels;
+    // Checked before the reversal and the collocation matrix (dense rows of
+    // (n+1)(n+2)/2 entries), which would run for minutes before the patch refused it.
+    let max_degree = match options.surface {
+        SurfaceKind::Bezier => crate::bezier::MAX_BEZIER_DEGREE,
+        _ => crate::bpatch::MAX_BPATCH_DEGREE,
+    };
+    if degree > max_degree {
+        return Err(SplineError::Degree { degree, min: 1, max: max_degree });
+    }
     let t = Instant::now();
     let coarsening = reverse_loop(
         mesh,
@@ -545,7 +689,7 @@ fn grid_problem(
     if matches!(basis, SurfaceBasis::Bpatch(_)) && degree == 0 {
         return Err(SplineError::Degree { degree, min: 1, max: crate::bpatch::MAX_BPATCH_DEGREE });
     }
-    let n = basis.collocation(&param.params);
+    let n = basis.collocation(&param.params)?;
     timings.collocation = t.elapsed().as_secs_f64();
     let triangles = crate::surface::grid_triangles(degree, true);
     Ok((Problem { basis, lift: None, n, r, own_vertex, triangles, degree }, param.params))
@@ -599,7 +743,7 @@ fn net_problem(
         .collect();
     let net = DmsNet::new(&net_params, &triangles, options.dms_degree, options.knots)?;
     let basis = SurfaceBasis::Dms(net.basis.clone());
-    let n = basis.collocation(&param.params).mul(&net.lift);
+    let n = basis.collocation(&param.params)?.mul(&net.lift);
     timings.collocation = t.elapsed().as_secs_f64();
     let problem = Problem {
         basis,
@@ -611,4 +755,104 @@ fn net_problem(
         degree: options.dms_degree,
     };
     Ok((problem, param.params))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::samples::{smooth_surface, triangle_grid};
+
+    fn grid_mesh(segments: usize, scale: f64) -> HalfedgeMesh {
+        HalfedgeMesh::from_soup(&triangle_grid(segments, |a, b| smooth_surface(a, b) * scale)).unwrap()
+    }
+
+    fn options(surface: SurfaceKind) -> FitOptions {
+        FitOptions { surface, reverse_levels: 1, ..FitOptions::default() }
+    }
+
+    fn relative_gap(a: f64, b: f64) -> f64 {
+        (a - b).abs() / a.abs().max(b.abs())
+    }
+
+    /// A grid scaled to about 1e307 used to fail with "option hit_tol = inf" (the default
+    /// hit tolerance is 2e-3 of a bounding-box diagonal whose square overflowed); at
+    /// 1e-300 every error underflowed to 0, a perfect fit. Both now give the unit grid's
+    /// fit in the input's units.
+    #[test]
+    fn extreme_coordinates_are_fitted_at_unit_scale() {
+        for surface in [SurfaceKind::Bezier, SurfaceKind::Bpatch, SurfaceKind::TriBspline] {
+            let unit = fit_mesh(&grid_mesh(8, 1.0), &options(surface)).unwrap();
+            // An exact power of two (the largest coordinate is 1): the same fit to the bit.
+            let power = 2f64.powi(1019);
+            let exact = fit_mesh(&grid_mesh(8, power), &options(surface)).unwrap();
+            assert_eq!(exact.bbox_diag, unit.bbox_diag * power);
+            for (a, b) in exact.iterations.iter().zip(&unit.iterations) {
+                assert_eq!((a.eps_max, a.eps_avg, a.n_eps), (b.eps_max * power, b.eps_avg * power, b.n_eps));
+            }
+            let scaled_net: Vec<DVec3> = unit.control_net.0.iter().map(|&p| p * power).collect();
+            assert_eq!(exact.control_net.0, scaled_net, "{surface:?}");
+            for scale in [1e307, 1e-300] {
+                let report = fit_mesh(&grid_mesh(8, scale), &options(surface)).unwrap();
+                assert!(relative_gap(report.bbox_diag / scale, unit.bbox_diag) < 1e-12, "{surface:?} {scale:e}");
+                assert!(relative_gap(report.hit_tol, DEFAULT_HIT_TOL_FRACTION * report.bbox_diag) < 1e-15);
+                for (a, b) in report.iterations.iter().zip(&unit.iterations) {
+                    assert!(relative_gap(a.eps_avg / scale, b.eps_avg) < 1e-9, "{surface:?} {scale:e}: {a:?} {b:?}");
+                    assert!(a.eps_max > 0.0 && a.eps_max.is_finite());
+                }
+                let ls = report.least_squares.unwrap();
+                assert!(relative_gap(ls.eps_avg / scale, unit.least_squares.unwrap().eps_avg) < 1e-9);
+                assert!(report.surface.eval(DVec2::new(0.3, 0.2)).is_finite());
+            }
+        }
+        // A hit tolerance given in the input's units is used and reported as given.
+        let given = FitOptions { hit_tol: Some(1e305), ..options(SurfaceKind::Bezier) };
+        let report = fit_mesh(&grid_mesh(8, 1e307), &given).unwrap();
+        assert_eq!(report.hit_tol, 1e305);
+        let unit = fit_mesh(&grid_mesh(8, 1.0), &FitOptions { hit_tol: Some(1e-2), ..given }).unwrap();
+        for (a, b) in report.iterations.iter().zip(&unit.iterations) {
+            assert_eq!(a.n_eps, b.n_eps);
+        }
+    }
+
+    /// Where the result itself does not fit in f64 (coordinates spanning ±1.75e308: the
+    /// diagonal and control points beyond f64::MAX) the error says so; the reversal used
+    /// to panic in subdiv-loop on NaN coarse positions.
+    #[test]
+    fn results_beyond_the_f64_range_are_overflow_errors() {
+        let soup = triangle_grid(8, |a, b| (smooth_surface(a, b) - DVec3::splat(0.5)) * 3.5e300 * 1e8);
+        let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+        for surface in [SurfaceKind::Bezier, SurfaceKind::TriBspline] {
+            let result = fit_mesh(&mesh, &options(surface));
+            assert!(
+                matches!(result, Err(SplineError::Overflow { largest_coordinate, .. }) if largest_coordinate > 1.7e308),
+                "{surface:?}: {result:?}"
+            );
+        }
+    }
+
+    /// An LSPIA step far beyond `2/λ_max` used to end in NaN control points, reported as
+    /// "control point 0 is not finite" by the surface constructor.
+    #[test]
+    fn a_step_far_too_large_is_reported_as_divergence() {
+        let step = FitOptions { lspia_step: Some(1e300), ..options(SurfaceKind::Bezier) };
+        let result = fit_mesh(&grid_mesh(8, 1.0), &step);
+        assert!(matches!(result, Err(SplineError::Diverged { method: "lspia", iteration: 3, .. })), "{result:?}");
+    }
+
+    /// A 65-segment grid without reverse levels asks for a degree-65 Bézier patch: it used
+    /// to build the dense 2211 x 2211 collocation matrix, iterate and solve least squares
+    /// before the patch refused the degree.
+    #[test]
+    fn a_patch_degree_beyond_the_limit_is_refused_before_fitting() {
+        let mesh = grid_mesh(65, 1.0);
+        let start = Instant::now();
+        for (surface, max) in [
+            (SurfaceKind::Bezier, crate::bezier::MAX_BEZIER_DEGREE),
+            (SurfaceKind::Bpatch, crate::bpatch::MAX_BPATCH_DEGREE),
+        ] {
+            let at_full_size = FitOptions { reverse_levels: 0, ..options(surface) };
+            assert_eq!(fit_mesh(&mesh, &at_full_size).unwrap_err(), SplineError::Degree { degree: 65, min: 1, max });
+        }
+        assert!(start.elapsed().as_secs_f64() < 1.0);
+    }
 }

@@ -14,11 +14,20 @@ pub fn smooth_surface(a: f64, b: f64) -> DVec3 {
     DVec3::new(a, b, 0.3 * (3.0 * a).sin() * (2.0 * b).cos() + 0.2 * a * b)
 }
 
+/// Most segments per side of the grids made here ([`triangle_grid`],
+/// [`resample_on_grid`]): about 8.4 million vertices and 16.8 million triangles, beyond
+/// any grid the fitting pipeline can use.
+pub const MAX_GRID_SEGMENTS: usize = 4096;
+
 /// The regular triangular grid with `n` segments per side over the unit right triangle,
 /// vertex `(j, k)` at `f(j/n, k/n)` and at position [`tri_index`]`(n, j, k)`;
-/// `(n+1)(n+2)/2` vertices, `n²` counter-clockwise triangles. Loop subdivision of a
-/// triangle `i` times gives this connectivity with `n = 2^i`, so a grid with `n`
-/// divisible by `2^i` allows `i` reverse-Loop levels.
+/// `(n+1)(n+2)/2` vertices, `n²` counter-clockwise triangles (`n = 0` gives the
+/// one-segment grid). Loop subdivision of a triangle `i` times gives this connectivity
+/// with `n = 2^i`, so a grid with `n` divisible by `2^i` allows `i` reverse-Loop levels.
+///
+/// # Panics
+/// Above [`MAX_GRID_SEGMENTS`] segments per side (a mistyped size used to abort the
+/// process allocating); [`try_triangle_grid`] returns an error instead.
 ///
 /// ```
 /// use tri_spline::samples::{smooth_surface, triangle_grid};
@@ -26,12 +35,35 @@ pub fn smooth_surface(a: f64, b: f64) -> DVec3 {
 /// assert_eq!((soup.vertex_count(), soup.face_count()), (4753, 9216));
 /// ```
 pub fn triangle_grid(n: usize, f: impl Fn(f64, f64) -> DVec3) -> PolygonSoup {
+    try_triangle_grid(n, f).unwrap_or_else(|e| panic!("triangle_grid: {e}"))
+}
+
+/// [`triangle_grid`] for a size given by a caller.
+///
+/// # Errors
+/// [`SplineError::TooLarge`](crate::SplineError::TooLarge) above [`MAX_GRID_SEGMENTS`]
+/// segments per side, checked before allocating.
+///
+/// ```
+/// use tri_spline::samples::{smooth_surface, try_triangle_grid};
+/// assert_eq!(try_triangle_grid(2, smooth_surface)?.face_count(), 4);
+/// assert!(try_triangle_grid(1 << 40, smooth_surface).is_err());
+/// # Ok::<(), tri_spline::SplineError>(())
+/// ```
+pub fn try_triangle_grid(n: usize, f: impl Fn(f64, f64) -> DVec3) -> Result<PolygonSoup, crate::SplineError> {
+    if n > MAX_GRID_SEGMENTS {
+        return Err(crate::SplineError::TooLarge {
+            what: "grid segments per side",
+            requested: n,
+            max: MAX_GRID_SEGMENTS,
+        });
+    }
     let n = n.max(1);
     let mut positions = vec![DVec3::ZERO; crate::index::tri_count(n)];
     for [_, j, k] in multi_indices(n) {
         positions[tri_index(n, j, k)] = f(j as f64 / n as f64, k as f64 / n as f64);
     }
-    PolygonSoup::from_faces(positions, grid_triangles(n, true))
+    Ok(PolygonSoup::from_faces(positions, grid_triangles(n, true)))
 }
 
 /// The closed star of the `rings`-ring of `seed_vertex`: every face with a vertex within
@@ -106,7 +138,7 @@ pub fn disk_patch(mesh: &HalfedgeMesh, seed_vertex: usize, rings: usize) -> Opti
 /// # Errors
 /// The errors of [`parameterize`](crate::param::parameterize) (not a disk, degenerate
 /// parameter triangles, ...); [`SplineError::Degree`](crate::SplineError::Degree) for
-/// `n = 0` or `n > 4096`.
+/// `n = 0` or `n >` [`MAX_GRID_SEGMENTS`].
 ///
 /// ```
 /// use mesh_topo::{HalfedgeMesh, shapes::{self, CellKind}};
@@ -121,8 +153,8 @@ pub fn disk_patch(mesh: &HalfedgeMesh, seed_vertex: usize, rings: usize) -> Opti
 pub fn resample_on_grid(mesh: &HalfedgeMesh, n: usize) -> Result<PolygonSoup, crate::SplineError> {
     use crate::domain::BaryMap;
     use crate::param::{ParamOptions, parameterize};
-    if n == 0 || n > 4096 {
-        return Err(crate::SplineError::Degree { degree: n, min: 1, max: 4096 });
+    if n == 0 || n > MAX_GRID_SEGMENTS {
+        return Err(crate::SplineError::Degree { degree: n, min: 1, max: MAX_GRID_SEGMENTS });
     }
     let param = parameterize(mesh, &ParamOptions { detect_grid: false, ..ParamOptions::default() })?;
     let domain = param.domain;
@@ -186,6 +218,25 @@ pub fn resample_on_grid(mesh: &HalfedgeMesh, n: usize) -> Result<PolygonSoup, cr
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `triangle_grid(1 << 40, ..)` used to abort the process allocating the positions.
+    #[test]
+    fn grid_sizes_beyond_the_limit_are_errors_before_allocating() {
+        for n in [MAX_GRID_SEGMENTS + 1, 1 << 40, usize::MAX] {
+            assert_eq!(
+                try_triangle_grid(n, smooth_surface),
+                Err(crate::SplineError::TooLarge {
+                    what: "grid segments per side",
+                    requested: n,
+                    max: MAX_GRID_SEGMENTS
+                })
+            );
+        }
+        assert_eq!(try_triangle_grid(0, smooth_surface).unwrap(), triangle_grid(1, smooth_surface));
+        let caught = std::panic::catch_unwind(|| triangle_grid(1 << 40, smooth_surface)).unwrap_err();
+        let message = caught.downcast_ref::<String>().unwrap();
+        assert!(message.contains("grid segments per side 1099511627776 is too large (at most 4096)"), "{message}");
+    }
 
     #[test]
     fn disk_patch_stops_when_the_mesh_is_exhausted() {

@@ -5,8 +5,8 @@ use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::bezier::bernstein_basis;
-use crate::index::tri_count;
+use crate::bezier::{MAX_BEZIER_DEGREE, bernstein_basis};
+use crate::index::{checked_tri_count, tri_count};
 use crate::linalg::SparseMatrix;
 use crate::{BPatch, BPatchBasis, DmsBasis, DmsScratch, DmsSpline, DomainTriangle, SplineError, TriBezier};
 
@@ -68,10 +68,11 @@ impl SurfaceBasis {
         }
     }
 
-    /// Number of basis functions.
+    /// Number of basis functions (`usize::MAX` for a Bézier degree whose count does not
+    /// fit in `usize`, which no basis can have).
     pub fn count(&self) -> usize {
         match self {
-            Self::Bezier { degree, .. } => tri_count(*degree),
+            Self::Bezier { degree, .. } => checked_tri_count(*degree).unwrap_or(usize::MAX),
             Self::Bpatch(b) => tri_count(b.degree()),
             Self::Dms(b) => b.basis_count(),
         }
@@ -79,15 +80,36 @@ impl SurfaceBasis {
 
     /// The collocation matrix `N_jk = N_k(u_j)` (exact zeros dropped), rows computed in
     /// parallel.
-    pub fn collocation(&self, params: &[DVec2]) -> SparseMatrix {
+    ///
+    /// # Errors
+    /// [`SplineError::Degree`] for a Bézier degree above
+    /// [`MAX_BEZIER_DEGREE`] (the variant's fields are
+    /// public, so its degree is checked here, before anything is allocated).
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::{DomainTriangle, SurfaceBasis};
+    /// let basis = SurfaceBasis::Bezier { degree: 2, domain: DomainTriangle::reference() };
+    /// let n = basis.collocation(&[DVec2::new(0.25, 0.25), DVec2::ZERO])?;
+    /// assert_eq!((n.rows(), n.cols()), (2, 6));
+    /// assert!(SurfaceBasis::Bezier { degree: 1 << 20, domain: DomainTriangle::reference() }.collocation(&[]).is_err());
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
+    pub fn collocation(&self, params: &[DVec2]) -> Result<SparseMatrix, SplineError> {
         let rows: Vec<Vec<(usize, f64)>> = match self {
-            Self::Bezier { degree, domain } => params
-                .par_iter()
-                .map_init(Vec::new, |values, &u| {
-                    bernstein_basis(*degree, domain.barycentric(u), values);
-                    values.iter().enumerate().filter(|e| *e.1 != 0.0).map(|(i, &v)| (i, v)).collect()
-                })
-                .collect(),
+            Self::Bezier { degree, domain } => {
+                if *degree > MAX_BEZIER_DEGREE {
+                    return Err(SplineError::Degree { degree: *degree, min: 0, max: MAX_BEZIER_DEGREE });
+                }
+                params
+                    .par_iter()
+                    .map_init(Vec::new, |values, &u| {
+                        bernstein_basis(*degree, domain.barycentric(u), values)
+                            .expect("internal: the degree was checked above");
+                        values.iter().enumerate().filter(|e| *e.1 != 0.0).map(|(i, &v)| (i, v)).collect()
+                    })
+                    .collect()
+            }
             Self::Bpatch(basis) => params
                 .par_iter()
                 .map_init(Vec::new, |values, &u| {
@@ -104,7 +126,7 @@ impl SurfaceBasis {
                 })
                 .collect(),
         };
-        SparseMatrix::from_rows(self.count(), rows)
+        Ok(SparseMatrix::from_rows(self.count(), rows))
     }
 
     /// The surface with these control points.
@@ -225,7 +247,7 @@ mod tests {
             SurfaceBasis::Bezier { degree: 5, domain },
             SurfaceBasis::Bpatch(BPatchBasis::new(3, crate::KnotSequences::bezier(&domain, 3)).unwrap()),
         ] {
-            let n = basis.collocation(&params);
+            let n = basis.collocation(&params).unwrap();
             assert_eq!((n.rows(), n.cols()), (20, basis.count()));
             for i in 0..20 {
                 assert!((n.row(i).1.iter().sum::<f64>() - 1.0).abs() < 1e-14);
