@@ -148,8 +148,11 @@ pub fn ifs(args: &IfsArgs) -> CliResult {
             let view = View::fit(&points, job.projection, width, height, 0.02).map_err(|e| input_error("render", e))?;
             let canvas =
                 Canvas::new(width, height, view).map_err(|e| input_error("render", e))?.with_projection(job.projection);
-            let image =
-                Density::from_points(&points, &canvas).to_image(ToneMap::Log, [0, 0, 0, 255], [255, 255, 255, 255]);
+            let image = Density::from_points(&points, &canvas).map_err(|e| input_error("render", e))?.to_image(
+                ToneMap::Log,
+                [0, 0, 0, 255],
+                [255, 255, 255, 255],
+            );
             (image, Some(points))
         }
     };
@@ -270,7 +273,7 @@ fn nonlinear_subdivision(args: &IfsArgs, mean_name: &str, width: u32, height: u3
     let mut points = control;
     if mean_name == "circle" {
         let c = parse_pair(&args.center, "--center")?;
-        let circle = CircleMean::new(Complex64::new(c[0], c[1]));
+        let circle = CircleMean::new(Complex64::new(c[0], c[1])).map_err(fail)?;
         let mut z: Vec<Complex64> = points.iter().map(|p| Complex64::new(p[0], p[1])).collect();
         for _ in 0..levels {
             z = match args.scheme.as_str() {

@@ -101,6 +101,25 @@ pub enum IfsError {
         /// Its domain.
         domain: &'static str,
     },
+    /// The iteration left the finite numbers: a rendered point is NaN or infinite although
+    /// the maps and the start states are finite. The maps are not contractive (at least not
+    /// on the states reached), so the iterates diverged, or a coordinate overflowed `f64`.
+    /// Raised at the first such point rather than returning it.
+    #[error(
+        "point {index} is not finite ({value}) after {iteration} map applications: the iteration diverged \
+         (the maps are not contractive) or overflowed"
+    )]
+    Diverged {
+        /// Index of the point in the output (chaos game: in the whole point list).
+        index: usize,
+        /// Map applications from the start state that produced the point: the level for
+        /// the deterministic algorithm; for the chaos game, the applications since the
+        /// start of the point's chunk (burn-in included), or the applications of map 0
+        /// that compute the chaos game's start state when that start already diverged.
+        iteration: u64,
+        /// The point, printed.
+        value: String,
+    },
     /// The deterministic algorithm would produce more points than the budget allows.
     #[error("{levels} deterministic levels give {needed} points, more than the budget of {budget}")]
     BudgetExceeded {

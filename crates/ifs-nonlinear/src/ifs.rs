@@ -278,7 +278,7 @@ impl AffineIfs {
             Err(IfsError::NotContractive {
                 jsr_lower: report.jsr_lower,
                 jsr_upper: report.jsr_upper,
-                detail: String::new(),
+                detail: report.capped_detail(),
             })
         }
     }
@@ -502,7 +502,10 @@ impl ComplexBezierIfs {
         } else if s >= 1.0 {
             Some(format!("; |1 - z| = {s} >= 1 (|z| < 1 alone does not suffice)"))
         } else if !report.is_contractive() {
-            Some(format!("; |z| = {r} and |1 - z| = {s} are < 1 but the joint spectral radius is not certified < 1"))
+            Some(format!(
+                "; |z| = {r} and |1 - z| = {s} are < 1 but the joint spectral radius is not certified < 1{}",
+                report.capped_detail()
+            ))
         } else {
             None
         };
@@ -603,6 +606,30 @@ mod tests {
         assert!(matches!(coplanar, Err(IfsError::SingularControl { .. })));
         let nan = AffineIfs::from_rule(&sierpinski(), &[[0.0, f64::NAN], [1.0, 0.0], [0.0, 1.0]]);
         assert!(matches!(nan, Err(IfsError::NotFinite { .. })));
+    }
+
+    /// NaN or infinite input to every IFS constructor is a `NotFinite` error naming where it
+    /// is (map and entry, or control point and coordinate), never a system that renders NaN.
+    #[test]
+    fn non_finite_maps_and_control_points_are_named() {
+        let what = |result: Result<()>| match result {
+            Err(IfsError::NotFinite { what, .. }) => what,
+            other => panic!("{other:?}"),
+        };
+        let mut maps = vec![AffineMap::planar(0.5, 0.0, 0.0, 0.5, 0.0, 0.0); 3];
+        maps[2].translation[1] = f64::INFINITY;
+        assert_eq!(what(AffineIfs::new(2, maps).map(|_| ())), "map 2, translation 1");
+        let mut maps = vec![AffineMap::planar(0.5, 0.0, 0.0, 0.5, 0.0, 0.0); 2];
+        maps[1].linear[0][1] = f64::NAN;
+        assert_eq!(what(AffineIfs::new(2, maps).map(|_| ())), "map 1, linear entry (0, 1)");
+        let rule = bezier_split(2, 0.5).unwrap();
+        let control = [[0.0, 0.0], [1.0, 2.0], [f64::NAN, 0.0]];
+        assert_eq!(what(BarycentricIfs::new(&rule, &control).map(|_| ())), "control point 2, coordinate 0");
+        let z = Complex64::new(0.5, 0.5);
+        let control = [Complex64::new(0.0, 0.0), Complex64::new(1.0, f64::NAN)];
+        assert_eq!(what(ComplexBezierIfs::new(z, &control).map(|_| ())), "control point 1, imaginary part");
+        let segment = [Complex64::new(0.0, 0.0), Complex64::new(1.0, 0.0)];
+        assert_eq!(what(ComplexBezierIfs::new(Complex64::new(f64::NAN, 0.5), &segment).map(|_| ())), "z (real part)");
     }
 
     /// Every map keeps the affine structure: the seed-form maps send the control points to

@@ -70,7 +70,10 @@
 //!   determinants for the barycentric form), floored at 1 % of the largest so that
 //!   singular maps are still visited ([`Probabilities`]).
 //! * Contractivity is certified by `max_{|w| = k} ||D_w||_2^{1/k} < 1` for some word length
-//!   k ≤ 10 (at most 1024 products per length); the lower bound uses spectral radii.
+//!   k ≤ 10 (at most 1024 products per length); the lower bound uses spectral radii. The
+//!   work is capped ([`matrices::CONTRACTIVITY_WORK_BUDGET`]), so that large patches
+//!   (degree (20, 20) and beyond) get a quick, possibly inconclusive answer
+//!   ([`ContractivityReport::capped`]) instead of minutes of matrix products.
 //! * Densities are accumulated in integers (bilinear weights in 1/256 steps) so that
 //!   parallel results are bit-identical for any thread count; see [`render`].
 //!
@@ -93,7 +96,9 @@ pub use matrices::{
     tensor_patch_split, triangle_multi_indices, triangle_patch_split, uniform_scheme_split,
 };
 pub use mean::{CircleMean, Mean, MeanMode, subdivide_with_rule, three_point_subdivide, two_point_subdivide};
-pub use nonlinear::{CoordinateTransform, ExpY, FnTransform, NonlinearIfs, Polar, SquareY, triangle_samples};
+pub use nonlinear::{
+    CoordinateTransform, ExpY, FnTransform, MAX_TRIANGLE_SAMPLES, NonlinearIfs, Polar, SquareY, triangle_samples,
+};
 /// Complex numbers (control points and parameters of complex-parameter subdivision).
 pub use num_complex::Complex64;
 pub use presets::{PRESETS, Scene, barnsley_fern, canonical_preset, preset};

@@ -11,8 +11,39 @@
 
 use num_complex::Complex64;
 
-use crate::error::{IfsError, Result};
-use crate::matrices::SubdivisionRule;
+use crate::error::{IfsError, Result, check_finite};
+use crate::matrices::{ROW_SUM_TOLERANCE, SubdivisionRule};
+
+/// Checks the weights of a weighted mean of `count` values: one finite weight per value, at
+/// least one value, and an affine combination (sum 1 within [`ROW_SUM_TOLERANCE`] relative
+/// to `Σ |w|`, as for subdivision-matrix rows). An empty list or all-zero weights used to
+/// return F(0) (0 for the arithmetic mean, 1 for the geometric) as if it were a mean.
+///
+/// # Errors
+/// [`IfsError::ParameterOutOfRange`] for a length mismatch, no values, or a sum other than
+/// 1 (zero, overflowing, ...); [`IfsError::NotFinite`] naming a NaN or infinite weight.
+fn check_weights(count: usize, weights: &[f64]) -> Result<()> {
+    if weights.len() != count || count == 0 {
+        return Err(IfsError::ParameterOutOfRange {
+            name: "weights",
+            value: format!("{} weights for {} values", weights.len(), count),
+            reason: "need one weight per value, at least one value",
+        });
+    }
+    for (j, &w) in weights.iter().enumerate() {
+        check_finite(w, || format!("weight {j}"))?;
+    }
+    let sum: f64 = weights.iter().sum();
+    let magnitude: f64 = weights.iter().map(|w| w.abs()).sum();
+    if !(magnitude.is_finite() && (sum - 1.0).abs() <= ROW_SUM_TOLERANCE * magnitude.max(1.0)) {
+        return Err(IfsError::ParameterOutOfRange {
+            name: "weights",
+            value: format!("{weights:?} (sum {sum})"),
+            reason: "the weights of a mean must sum to 1 (not 0, not overflowing)",
+        });
+    }
+    Ok(())
+}
 
 /// A quasi-arithmetic mean `M_w(y) = F(Σ w_j F^{-1}(y_j))` (weights summing to 1).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,12 +87,23 @@ impl Mean {
         }
     }
 
+    /// A NaN or infinite power-mean exponent would make every mean NaN or meaningless.
+    fn check_exponent(&self) -> Result<()> {
+        if let Mean::Power(p) = self {
+            check_finite(*p, || "power mean exponent p".into())?;
+        }
+        Ok(())
+    }
+
     /// F^{-1}: from values to the linear picture, with the domain check.
     ///
     /// # Errors
     /// [`IfsError::Domain`] naming `index` when y is outside the mean's domain (e.g. y ≤ 0
-    /// for the geometric mean) or not finite.
+    /// for the geometric mean), not finite, or so close to its edge that F^{-1}(y) is not
+    /// finite (e.g. 1/y for a subnormal y); [`IfsError::NotFinite`] for a `Power(p)` with a
+    /// NaN or infinite p.
     pub fn to_linear(&self, y: f64, index: usize) -> Result<f64> {
+        self.check_exponent()?;
         let ok = y.is_finite()
             && match self {
                 Mean::Arithmetic => true,
@@ -73,22 +115,33 @@ impl Mean {
         if !ok {
             return Err(IfsError::Domain { index, value: y.to_string(), what: self.name(), domain: self.domain() });
         }
-        Ok(match self {
+        let u = match self {
             Mean::Arithmetic => y,
             Mean::Geometric => y.ln(),
             Mean::Harmonic => 1.0 / y,
             Mean::Power(p) if *p == 0.0 => y.ln(),
             Mean::Power(p) => y.powf(*p),
             Mean::Cosine => y.acos(),
-        })
+        };
+        if !u.is_finite() {
+            return Err(IfsError::Domain {
+                index,
+                value: y.to_string(),
+                what: self.name(),
+                domain: "values whose image in the linear picture (F^{-1}) is finite",
+            });
+        }
+        Ok(u)
     }
 
     /// F: from the linear picture back to values.
     ///
     /// # Errors
     /// [`IfsError::Domain`] naming `index` when u is outside F's domain (a negative weight
-    /// can push an average outside it, e.g. below 0 for a power mean).
+    /// can push an average outside it, e.g. below 0 for a power mean) or F(u) is not finite;
+    /// [`IfsError::NotFinite`] for a `Power(p)` with a NaN or infinite p.
     pub fn from_linear(&self, u: f64, index: usize) -> Result<f64> {
+        self.check_exponent()?;
         let y = match self {
             Mean::Arithmetic => u,
             Mean::Geometric => u.exp(),
@@ -114,10 +167,12 @@ impl Mean {
         Ok(y)
     }
 
-    /// The two-point mean `M_t(a, b) = F((1-t) F^{-1}(a) + t F^{-1}(b))`.
+    /// The two-point mean `M_t(a, b) = F((1-t) F^{-1}(a) + t F^{-1}(b))`; t outside [0, 1]
+    /// extrapolates.
     ///
     /// # Errors
-    /// [`IfsError::Domain`] (index 0 for a, 1 for b).
+    /// [`IfsError::NotFinite`] for a NaN or infinite t (or power-mean exponent);
+    /// [`IfsError::Domain`] (index 0 for a, 1 for b; index 0 when the result is not finite).
     ///
     /// ```
     /// use ifs_nonlinear::Mean;
@@ -127,20 +182,35 @@ impl Mean {
     /// # Ok::<(), ifs_nonlinear::IfsError>(())
     /// ```
     pub fn mean(&self, a: f64, b: f64, t: f64) -> Result<f64> {
+        check_finite(t, || "mean parameter t".into())?;
         if let Mean::Geometric = self {
-            // Exact for the common midpoint case.
-            self.to_linear(a, 0)?;
-            self.to_linear(b, 1)?;
-            return Ok(if t == 0.5 { (a * b).sqrt() } else { a.powf(1.0 - t) * b.powf(t) });
+            let (log_a, log_b) = (self.to_linear(a, 0)?, self.to_linear(b, 1)?);
+            // Exact for the common midpoint case, unless a·b overflows or underflows.
+            let product = a * b;
+            let direct = if t == 0.5 && product.is_finite() && product > 0.0 {
+                product.sqrt()
+            } else {
+                a.powf(1.0 - t) * b.powf(t)
+            };
+            if direct.is_finite() && direct > 0.0 {
+                return Ok(direct);
+            }
+            // The powers overflowed or underflowed on their own: go through the logarithms,
+            // which either fit or give a typed error (e.g. t = -2 with a = 1e300).
+            return self.from_linear((1.0 - t) * log_a + t * log_b, 0);
         }
         let u = (1.0 - t) * self.to_linear(a, 0)? + t * self.to_linear(b, 1)?;
         self.from_linear(u, 0)
     }
 
     /// The weighted mean `F(Σ w_j F^{-1}(y_j))`. Indices in errors are positions in `values`.
+    /// The weights must form an affine combination (sum 1): F(Σ w_j u_j) with other sums
+    /// is not a mean (all-zero weights gave F(0) for any values).
     ///
     /// # Errors
-    /// [`IfsError::Domain`]; [`IfsError::ParameterOutOfRange`] when the lengths differ.
+    /// [`IfsError::Domain`]; [`IfsError::ParameterOutOfRange`] when the lengths differ, there
+    /// is no value, or the weights do not sum to 1 (e.g. all zero); [`IfsError::NotFinite`]
+    /// naming a NaN or infinite weight.
     ///
     /// ```
     /// use ifs_nonlinear::Mean;
@@ -150,13 +220,7 @@ impl Mean {
     /// # Ok::<(), ifs_nonlinear::IfsError>(())
     /// ```
     pub fn weighted(&self, values: &[f64], weights: &[f64]) -> Result<f64> {
-        if values.len() != weights.len() {
-            return Err(IfsError::ParameterOutOfRange {
-                name: "weights",
-                value: format!("{} weights for {} values", weights.len(), values.len()),
-                reason: "need one weight per value",
-            });
-        }
+        check_weights(values.len(), weights)?;
         let mut u = 0.0;
         for (j, (&y, &w)) in values.iter().zip(weights).enumerate() {
             if w != 0.0 {
@@ -320,48 +384,66 @@ pub fn subdivide_with_rule(
 /// (ALGORITHMS.md §14.3). `M_t(a, b) = c + |a-c|^{1-t} |b-c|^t e^{i(arg(a-c) + tΔθ)}` with
 /// `Δθ = arg((b-c)/(a-c)) ∈ (-π, π)`: points on a circle about c stay on it with linearly
 /// interpolated angle; different radii give logarithmic spirals.
+///
+/// The centre is private and checked by [`CircleMean::new`]: a NaN centre made every mean
+/// NaN.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CircleMean {
-    /// The centre c.
-    pub center: Complex64,
+    center: Complex64,
 }
 
 impl CircleMean {
     /// Mean about `center`.
-    pub fn new(center: Complex64) -> Self {
-        Self { center }
+    ///
+    /// # Errors
+    /// [`IfsError::NotFinite`] for a NaN or infinite centre coordinate.
+    ///
+    /// ```
+    /// use ifs_nonlinear::{CircleMean, IfsError};
+    /// use num_complex::Complex64;
+    /// assert_eq!(CircleMean::new(Complex64::new(1.0, 2.0))?.center(), Complex64::new(1.0, 2.0));
+    /// assert!(matches!(CircleMean::new(Complex64::new(f64::NAN, 0.0)), Err(IfsError::NotFinite { .. })));
+    /// # Ok::<(), IfsError>(())
+    /// ```
+    pub fn new(center: Complex64) -> Result<Self> {
+        check_finite(center.re, || "circle-mean centre, real part".into())?;
+        check_finite(center.im, || "circle-mean centre, imaginary part".into())?;
+        Ok(Self { center })
+    }
+
+    /// The centre c.
+    pub fn center(&self) -> Complex64 {
+        self.center
     }
 
     /// Weighted mean `c + exp(Σ w_j log_j(p_j - c))` where each logarithm takes the branch
     /// nearest to the first point's (so that the two-point case is the formula above).
     ///
+    /// The weights must sum to 1, as for [`Mean::weighted`].
+    ///
     /// # Errors
     /// [`IfsError::Domain`] naming the point that coincides with the centre, or whose angle
-    /// from the first point is ±π (the mean is then undefined); lengths differ:
-    /// [`IfsError::ParameterOutOfRange`].
+    /// from the first point is ±π (the mean is then undefined), and (index 0) when the mean
+    /// is not finite (extreme weights); [`IfsError::NotFinite`] for a NaN or infinite point
+    /// or weight; [`IfsError::ParameterOutOfRange`] when the lengths differ, there is no
+    /// point, or the weights do not sum to 1.
     ///
     /// ```
     /// use ifs_nonlinear::CircleMean;
     /// use num_complex::Complex64;
-    /// let mean = CircleMean::new(Complex64::new(0.0, 0.0));
+    /// let mean = CircleMean::new(Complex64::new(0.0, 0.0))?;
     /// let m = mean.weighted(&[Complex64::new(1.0, 0.0), Complex64::new(0.0, 1.0)], &[0.5, 0.5])?;
     /// let expected = Complex64::from_polar(1.0, std::f64::consts::FRAC_PI_4);
     /// assert!((m - expected).norm() < 1e-15);
     /// # Ok::<(), ifs_nonlinear::IfsError>(())
     /// ```
     pub fn weighted(&self, points: &[Complex64], weights: &[f64]) -> Result<Complex64> {
-        if points.len() != weights.len() || points.is_empty() {
-            return Err(IfsError::ParameterOutOfRange {
-                name: "weights",
-                value: format!("{} weights for {} points", weights.len(), points.len()),
-                reason: "need one weight per point, at least one point",
-            });
-        }
+        check_weights(points.len(), weights)?;
         let reference = self.relative(points[0], 0)?;
         let mut log_sum = Complex64::new(0.0, 0.0);
         for (j, (&p, &w)) in points.iter().zip(weights).enumerate() {
             let q = self.relative(p, j)?;
-            let delta = (q / reference).arg();
+            let delta = angle_between(q, reference);
             if delta.abs() >= std::f64::consts::PI - 1e-12 {
                 return Err(IfsError::Domain {
                     index: j,
@@ -372,7 +454,16 @@ impl CircleMean {
             }
             log_sum += w * Complex64::new(q.norm().ln(), reference.arg() + delta);
         }
-        Ok(self.center + log_sum.exp())
+        let mean = self.center + log_sum.exp();
+        if !(mean.re.is_finite() && mean.im.is_finite()) {
+            return Err(IfsError::Domain {
+                index: 0,
+                value: format!("{log_sum} (averaged logarithm)"),
+                what: "circle-preserving mean".into(),
+                domain: "averages whose exponential is finite",
+            });
+        }
+        Ok(mean)
     }
 
     /// Two-point mean with parameter t.
@@ -397,6 +488,15 @@ impl CircleMean {
                 value: format!("{p}"),
                 what: "circle-preserving mean".into(),
                 domain: "points other than the centre",
+            });
+        }
+        // Finite point and centre, but an offset beyond f64 (e.g. 1e308 about -1e308).
+        if !q.norm().is_finite() {
+            return Err(IfsError::Domain {
+                index,
+                value: format!("{p}"),
+                what: "circle-preserving mean".into(),
+                domain: "points whose offset from the centre is finite",
             });
         }
         Ok(q)
@@ -433,7 +533,7 @@ impl CircleMean {
     /// ```
     /// use ifs_nonlinear::CircleMean;
     /// use num_complex::Complex64;
-    /// let mean = CircleMean::new(Complex64::new(0.0, 0.0));
+    /// let mean = CircleMean::new(Complex64::new(0.0, 0.0))?;
     /// let arc: Vec<Complex64> = [0.0, 0.5, 1.0].iter().map(|&a| Complex64::from_polar(2.0, a)).collect();
     /// let fine = mean.three_point_subdivide(&arc)?;
     /// assert!(fine.iter().all(|p| (p.norm() - 2.0).abs() < 1e-14));
@@ -461,6 +561,18 @@ impl CircleMean {
         }
         out.push(points[points.len() - 1]);
         Ok(out)
+    }
+}
+
+/// `arg(q / reference)`. The quotient is formed directly, as always, unless it overflows or
+/// underflows (`Complex64` division squares the divisor, so points near 1e160 from the
+/// centre gave NaN); then from the unit vectors, which cannot.
+fn angle_between(q: Complex64, reference: Complex64) -> f64 {
+    let quotient = q / reference;
+    if quotient.re.is_finite() && quotient.im.is_finite() && quotient != Complex64::new(0.0, 0.0) {
+        quotient.arg()
+    } else {
+        (q.unscale(q.norm()) / reference.unscale(reference.norm())).arg()
     }
 }
 
@@ -562,6 +674,66 @@ mod tests {
         assert!(matches!(err, IfsError::Domain { index: 1, .. }));
     }
 
+    /// Every mean used to "average" an empty list or all-zero weights to F(0) (`Ok(0)` for
+    /// the arithmetic mean, `Ok(1)` for the geometric); NaN weights came back as a domain
+    /// error about the average.
+    #[test]
+    fn weights_must_be_finite_and_sum_to_one() {
+        let means =
+            [Mean::Arithmetic, Mean::Geometric, Mean::Harmonic, Mean::Power(2.0), Mean::Power(-0.5), Mean::Cosine];
+        for mean in means {
+            let out_of_range = |result: Result<f64>| matches!(result, Err(IfsError::ParameterOutOfRange { .. }));
+            assert!(out_of_range(mean.weighted(&[], &[])), "{mean:?}");
+            assert!(out_of_range(mean.weighted(&[0.5, 0.25], &[0.0, 0.0])), "{mean:?}");
+            assert!(out_of_range(mean.weighted(&[0.5, 0.25], &[1.0, 1.0])), "{mean:?}");
+            assert!(out_of_range(mean.weighted(&[0.5], &[0.5, 0.5])), "{mean:?}");
+            let nan_weight = mean.weighted(&[0.5, 0.25], &[0.5, f64::NAN]);
+            assert!(matches!(&nan_weight, Err(IfsError::NotFinite { what, .. }) if what == "weight 1"), "{mean:?}");
+            let t_nan = mean.mean(0.5, 0.25, f64::NAN);
+            assert!(matches!(&t_nan, Err(IfsError::NotFinite { what, .. }) if what == "mean parameter t"));
+            // Affine weights (negative ones included) still work.
+            assert!(mean.weighted(&[0.5, 0.25, 0.5], &[-0.25, 1.0, 0.25]).is_ok(), "{mean:?}");
+        }
+        assert_eq!(Mean::Arithmetic.weighted(&[2.0, 4.0], &[0.25, 0.75]).unwrap(), 3.5);
+        for p in [f64::NAN, f64::INFINITY] {
+            let exponent = |result: Result<f64>| matches!(result, Err(IfsError::NotFinite { .. }));
+            assert!(exponent(Mean::Power(p).to_linear(1.0, 0)), "{p}"); // 1^NaN = 1 used to pass
+            assert!(exponent(Mean::Power(p).weighted(&[1.0, 0.5], &[0.5, 0.5])), "{p}");
+        }
+    }
+
+    /// The geometric midpoint sqrt(a b) overflowed for a = b = 1e200 (`Ok(inf)`), and
+    /// extrapolation gave `Ok(inf)`; the harmonic 1/y of a subnormal y was infinite.
+    #[test]
+    fn means_of_finite_values_are_finite_or_errors() {
+        assert_eq!(Mean::Geometric.mean(1e200, 1e200, 0.5).unwrap(), 1e200);
+        assert_eq!(Mean::Geometric.mean(1e-200, 1e-200, 0.5).unwrap(), 1e-200);
+        assert!(matches!(Mean::Geometric.mean(1e300, 1e-300, -2.0), Err(IfsError::Domain { index: 0, .. })));
+        assert!(matches!(Mean::Harmonic.to_linear(5e-324, 3), Err(IfsError::Domain { index: 3, .. })));
+        assert_eq!(Mean::Geometric.mean(2.0, 8.0, 0.5).unwrap(), 4.0);
+    }
+
+    /// `CircleMean::new` accepted a NaN centre (every mean NaN); zero weights gave the
+    /// centre + 1; points 1e300 from the centre gave NaN (complex division overflow).
+    #[test]
+    fn circle_mean_checks_centre_weights_and_range() {
+        let nan_centre = CircleMean::new(Complex64::new(0.0, f64::NAN));
+        assert!(matches!(&nan_centre, Err(IfsError::NotFinite { what, .. }) if what.contains("imaginary")));
+        let mean = CircleMean::new(Complex64::new(0.0, 0.0)).unwrap();
+        let (a, b) = (Complex64::new(1.0, 0.0), Complex64::new(0.0, 1.0));
+        assert!(matches!(mean.weighted(&[a, b], &[0.0, 0.0]), Err(IfsError::ParameterOutOfRange { .. })));
+        assert!(matches!(mean.weighted(&[a, b], &[f64::NAN, 1.0]), Err(IfsError::NotFinite { .. })));
+        assert!(matches!(mean.weighted(&[], &[]), Err(IfsError::ParameterOutOfRange { .. })));
+        let far = mean.mean(Complex64::new(1e300, 0.0), Complex64::new(0.0, 1e300), 0.5).unwrap();
+        let expected = Complex64::from_polar(1e300, std::f64::consts::FRAC_PI_4);
+        assert!((far - expected).norm() <= 1e-12 * 1e300, "{far}"); // exp(690.8): ~1e-13 relative
+        // Extrapolating far beyond f64: an error, not infinity.
+        let overflow = mean.mean(Complex64::new(1e300, 0.0), Complex64::new(1e-300, 0.0), -2.0);
+        assert!(matches!(overflow, Err(IfsError::Domain { index: 0, .. })), "{overflow:?}");
+        let offset = CircleMean::new(Complex64::new(-1e308, 0.0)).unwrap().mean(Complex64::new(1e308, 0.0), b, 0.5);
+        assert!(matches!(offset, Err(IfsError::Domain { index: 0, .. })), "{offset:?}");
+    }
+
     #[test]
     fn power_means_interpolate_between_the_classical_ones() {
         let (a, b) = (1.0, 9.0);
@@ -580,7 +752,7 @@ mod tests {
     #[test]
     fn circle_mean_reproduces_arcs_and_spirals() {
         let c = Complex64::new(1.0, -2.0);
-        let mean = CircleMean::new(c);
+        let mean = CircleMean::new(c).unwrap();
         let radius = 1.7;
         let angles = [0.1, 1.3, 2.9, 4.0];
         let mut points: Vec<Complex64> = angles.iter().map(|&a| c + Complex64::from_polar(radius, a)).collect();
@@ -614,7 +786,7 @@ mod tests {
     #[test]
     fn circle_mean_three_point_scheme_keeps_arcs() {
         let c = Complex64::new(-0.5, 2.0);
-        let mean = CircleMean::new(c);
+        let mean = CircleMean::new(c).unwrap();
         let angles = [0.2, 0.9, 1.3, 2.0, 2.4];
         let mut points: Vec<Complex64> = angles.iter().map(|&a| c + Complex64::from_polar(3.0, a)).collect();
         let mut linear: Vec<[f64; 2]> = angles.iter().map(|&a| [a, a]).collect();

@@ -3,11 +3,11 @@
 //!
 //! The maps are applied literally, one conjugated map at a time (F^{-1}, then the affine
 //! `T_i`, then F), as in the seed; when the state leaves the domain of F^{-1} the renderer
-//! reports [`IfsError::Domain`](crate::IfsError::Domain) with the point index. On the
+//! reports [`IfsError::Domain`] with the point index. On the
 //! attractor (the image under F of the linear attractor, when F^{-1} ∘ F is the identity
 //! there) the conjugation telescopes: `f_{w_1} ∘ … ∘ f_{w_k} = F ∘ T_{w_1} ∘ … ∘ T_{w_k} ∘ F^{-1}`.
 
-use crate::error::Result;
+use crate::error::{IfsError, Result, check_finite};
 use crate::ifs::{AffineIfs, Ifs};
 
 /// A locally invertible map F of R^3 (2D IFS use the first two coordinates; z passes through).
@@ -166,9 +166,40 @@ impl<F: CoordinateTransform> NonlinearIfs<F> {
     /// Maps linear-picture points through F (e.g. a start set given before the transform).
     ///
     /// # Errors
-    /// Never at present; kept fallible for transforms with a restricted forward domain.
+    /// [`IfsError::NotFinite`] naming the point and coordinate of a NaN or infinite input;
+    /// [`IfsError::Domain`] naming the point whose image under F is not finite (e.g. y = 1000
+    /// under [`ExpY`], whose e^1000 overflows), rather than an infinite start point.
+    ///
+    /// ```
+    /// use ifs_nonlinear::{AffineIfs, ExpY, IfsError, NonlinearIfs, bezier_split};
+    /// let linear = AffineIfs::from_rule(&bezier_split(2, 0.5)?, &[[-1.0, 0.0], [0.0, 1.0], [1.0, 0.0]])?;
+    /// let ifs = NonlinearIfs::new(linear, ExpY);
+    /// assert_eq!(ifs.forward_points(&[[0.0, 0.0, 0.0]])?, vec![[0.0, 1.0, 0.0]]);
+    /// let overflow = ifs.forward_points(&[[0.0, 0.0, 0.0], [0.0, 1000.0, 0.0]]);
+    /// assert!(matches!(overflow, Err(IfsError::Domain { index: 1, .. })));
+    /// # Ok::<(), IfsError>(())
+    /// ```
     pub fn forward_points(&self, points: &[[f64; 3]]) -> Result<Vec<[f64; 3]>> {
-        Ok(points.iter().map(|p| self.transform.forward(*p)).collect())
+        points
+            .iter()
+            .enumerate()
+            .map(|(index, p)| {
+                for (k, &v) in p.iter().enumerate() {
+                    check_finite(v, || format!("point {index}, coordinate {k}"))?;
+                }
+                let image = self.transform.forward(*p);
+                if image.iter().all(|v| v.is_finite()) {
+                    Ok(image)
+                } else {
+                    Err(IfsError::Domain {
+                        index,
+                        value: format!("{p:?} (image {image:?})"),
+                        what: "coordinate transform F".into(),
+                        domain: "points whose image under F is finite",
+                    })
+                }
+            })
+            .collect()
     }
 }
 
@@ -210,13 +241,36 @@ impl<F: CoordinateTransform> Ifs for NonlinearIfs<F> {
     }
 }
 
-/// Samples of a filled triangle: `n + 1` points per side, all lattice points
-/// `(i a + j b + k c)/n`, i + j + k = n (the deterministic start set "from a triangle").
+/// Most intervals per side of [`triangle_samples`]: 4096 gives about 8.4 million points
+/// (134 MB), far beyond what a start set needs, and keeps the count from overflowing.
+pub const MAX_TRIANGLE_SAMPLES: usize = 4096;
+
+/// Samples of a filled triangle: `n + 1` points per side (`n = 0` counts as 1), all lattice
+/// points `(i a + j b + k c)/n`, i + j + k = n, as concatenated `x, y` states (the
+/// deterministic start set "from a triangle").
+///
+/// # Errors
+/// [`IfsError::NotFinite`] naming a NaN or infinite corner coordinate (a start set is not
+/// allowed to smuggle NaN into the renderers); [`IfsError::ParameterOutOfRange`] for `n`
+/// above [`MAX_TRIANGLE_SAMPLES`] (`usize::MAX` used to overflow the point count and abort).
 ///
 /// ```
-/// assert_eq!(ifs_nonlinear::triangle_samples([0.0, 0.0], [1.0, 0.0], [0.0, 1.0], 4).len(), 15 * 2);
+/// assert_eq!(ifs_nonlinear::triangle_samples([0.0, 0.0], [1.0, 0.0], [0.0, 1.0], 4)?.len(), 15 * 2);
+/// # Ok::<(), ifs_nonlinear::IfsError>(())
 /// ```
-pub fn triangle_samples(a: [f64; 2], b: [f64; 2], c: [f64; 2], n: usize) -> Vec<f64> {
+pub fn triangle_samples(a: [f64; 2], b: [f64; 2], c: [f64; 2], n: usize) -> Result<Vec<f64>> {
+    for (corner, point) in [a, b, c].iter().enumerate() {
+        for (k, &v) in point.iter().enumerate() {
+            check_finite(v, || format!("triangle corner {corner}, coordinate {k}"))?;
+        }
+    }
+    if n > MAX_TRIANGLE_SAMPLES {
+        return Err(IfsError::ParameterOutOfRange {
+            name: "n",
+            value: n.to_string(),
+            reason: "at most MAX_TRIANGLE_SAMPLES = 4096 intervals per side",
+        });
+    }
     let n = n.max(1);
     let mut out = Vec::with_capacity((n + 1) * (n + 2));
     for i in (0..=n).rev() {
@@ -227,13 +281,12 @@ pub fn triangle_samples(a: [f64; 2], b: [f64; 2], c: [f64; 2], n: usize) -> Vec<
             out.push(w[0] * a[1] + w[1] * b[1] + w[2] * c[1]);
         }
     }
-    out
+    Ok(out)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::error::IfsError;
     use crate::matrices::{bezier_split, sierpinski};
     use crate::render::deterministic_points;
 
@@ -308,6 +361,30 @@ mod tests {
         for (p, q) in bent.iter().zip(&straight) {
             assert!((p[0] - q[0]).abs() < 1e-12 && (p[1] - q[1].exp()).abs() < 1e-12 * q[1].exp().max(1.0));
         }
+    }
+
+    /// `forward_points` used to return `Ok([0, inf, 0])` for y = 1000 under exp, and pass
+    /// NaN through.
+    #[test]
+    fn forward_points_name_overflowing_and_non_finite_points() {
+        let linear = AffineIfs::from_rule(&sierpinski(), &[[0.0, -1.0], [1.0, 0.5], [0.0, 1.0]]).unwrap();
+        let ifs = NonlinearIfs::new(linear, ExpY);
+        let err = ifs.forward_points(&[[0.0, 1.0, 0.0], [0.0, 1000.0, 0.0]]).unwrap_err();
+        assert!(matches!(err, IfsError::Domain { index: 1, .. }), "{err:?}");
+        let err = ifs.forward_points(&[[f64::NAN, 1.0, 0.0]]).unwrap_err();
+        assert!(matches!(&err, IfsError::NotFinite { what, .. } if what == "point 0, coordinate 0"), "{err:?}");
+        assert_eq!(ifs.forward_points(&[[2.0, 0.0, 0.0]]).unwrap(), vec![[2.0, 1.0, 0.0]]);
+    }
+
+    /// `usize::MAX` samples per side overflowed the point count (abort); NaN corners went
+    /// into the start set.
+    #[test]
+    fn triangle_samples_check_their_input() {
+        let (a, b, c) = ([0.0, 0.0], [1.0, 0.0], [0.0, 1.0]);
+        assert!(matches!(triangle_samples(a, b, c, usize::MAX), Err(IfsError::ParameterOutOfRange { name: "n", .. })));
+        let err = triangle_samples(a, [1.0, f64::NAN], c, 4).unwrap_err();
+        assert!(matches!(&err, IfsError::NotFinite { what, .. } if what == "triangle corner 1, coordinate 1"));
+        assert_eq!(triangle_samples(a, b, c, 1).unwrap(), vec![0.0, 0.0, 1.0, 0.0, 0.0, 1.0]);
     }
 
     #[test]

@@ -149,7 +149,7 @@ pub fn preset(name: &str) -> Result<Scene> {
         "quartic-bump" => {
             let linear = AffineIfs::from_rule(&bezier_split(2, 0.5)?, &[[-1.0, 0.0], [0.0, 5.0], [1.0, 0.0]])?;
             let mut s = scene(Box::new(NonlinearIfs::new(linear, SquareY)), 6);
-            s.start = Some(triangle_samples([-1.0, 0.0], [0.0, 25.0], [1.0, 0.0], 64));
+            s.start = Some(triangle_samples([-1.0, 0.0], [0.0, 25.0], [1.0, 0.0], 64)?);
             s
         }
         "exp-gaussian" => {

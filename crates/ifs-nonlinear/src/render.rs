@@ -19,7 +19,7 @@ use rand::{RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
-use crate::error::{IfsError, Result};
+use crate::error::{IfsError, Result, check_finite};
 use crate::ifs::Ifs;
 
 /// Points per chaos-game chunk (each chunk has its own random stream and burn-in).
@@ -127,6 +127,34 @@ fn domain_error<I: Ifs + ?Sized>(ifs: &I, index: usize, map: usize, state: &[f64
     }
 }
 
+/// True when the three coordinates are finite. One branch instead of three: `x - x` is 0
+/// for every finite x and NaN for NaN and ±inf, and NaN spreads through the sum. Called
+/// once per rendered point, in the renderers' inner loops.
+#[inline(always)]
+#[allow(clippy::eq_op)] // x - x is the point: it is not 0 for NaN and ±inf
+fn is_finite_point(p: &[f64; 3]) -> bool {
+    (p[0] - p[0]) + (p[1] - p[1]) + (p[2] - p[2]) == 0.0
+}
+
+/// The error for a rendered point that is not finite (kept out of line: the inner loops
+/// only pay for the test).
+#[cold]
+#[inline(never)]
+fn diverged(index: usize, iteration: u64, point: [f64; 3]) -> IfsError {
+    IfsError::Diverged { index, iteration, value: format!("{point:?}") }
+}
+
+/// Resizes `points` to `count` entries, as an error rather than an abort when the list
+/// does not fit in memory (a generous budget or point count is not memory).
+fn resize_points(points: &mut Vec<[f64; 3]>, count: usize) -> Result<()> {
+    points.clear();
+    points
+        .try_reserve_exact(count)
+        .map_err(|_| IfsError::TooManyPoints { points: count, bytes: count as u128 * size_of::<[f64; 3]>() as u128 })?;
+    points.resize(count, [0.0; 3]);
+    Ok(())
+}
+
 /// Number of points of `levels` deterministic levels from `starts` start states (saturating).
 fn deterministic_count(starts: usize, maps: usize, levels: u32) -> u128 {
     let mut n = starts as u128;
@@ -152,8 +180,13 @@ fn deterministic_count(starts: usize, maps: usize, levels: u32) -> u128 {
 /// [`IfsError::BudgetExceeded`] when `starts · K^levels > budget`;
 /// [`IfsError::ParameterOutOfRange`] when `start` is empty or not a whole number of states,
 /// or for more than [`MAX_LEVELS`] levels;
+/// [`IfsError::NotFinite`] for a NaN or infinite start entry (also when the IFS's default
+/// start is not finite, e.g. a nonlinear transform that overflows);
 /// [`IfsError::TooManyPoints`] when the points within the budget cannot be allocated;
-/// [`IfsError::Domain`] when a nonlinear map leaves its domain.
+/// [`IfsError::Domain`] when a nonlinear map leaves its domain;
+/// [`IfsError::Diverged`] at the first output point that is not finite (maps that are not
+/// contractive, e.g. an affine map scaling by 10 iterated for hundreds of levels), instead of
+/// returning NaN or infinite points.
 ///
 /// ```
 /// use ifs_nonlinear::{BarycentricIfs, bezier_split, deterministic_points};
@@ -188,6 +221,7 @@ pub fn deterministic_into<I: Ifs + ?Sized>(
     let n = ifs.state_len();
     let k = ifs.map_count();
     let default_start;
+    let given = start.is_some();
     let start = match start {
         Some(s) => s,
         None => {
@@ -200,6 +234,14 @@ pub fn deterministic_into<I: Ifs + ?Sized>(
             name: "start",
             value: format!("{} numbers", start.len()),
             reason: "the start set must be a non-empty list of whole states",
+        });
+    }
+    // A NaN start state would come out as NaN points: name it instead.
+    if let Some(position) = start.iter().position(|v| !v.is_finite()) {
+        let which = if given { "start state" } else { "default start state (from the IFS)" };
+        return Err(IfsError::NotFinite {
+            what: format!("{which} {}, entry {}", position / n, position % n),
+            value: start[position],
         });
     }
     let starts = start.len() / n;
@@ -224,13 +266,7 @@ pub fn deterministic_into<I: Ifs + ?Sized>(
     let leaves = k.pow(rest);
     // Every entry is overwritten below: a reused buffer of the right length is not re-zeroed.
     if points.len() != total {
-        points.clear();
-        // A generous budget is not memory: a count the allocator refuses is an error.
-        points.try_reserve_exact(total).map_err(|_| IfsError::TooManyPoints {
-            points: total,
-            bytes: total as u128 * size_of::<[f64; 3]>() as u128,
-        })?;
-        points.resize(total, [0.0; 3]);
+        resize_points(points, total)?;
     }
     let prefixes = k.pow(split);
     let results: Vec<Result<u64>> = points
@@ -259,7 +295,11 @@ pub fn deterministic_into<I: Ifs + ?Sized>(
                 applications += 1;
             }
             if rest == 0 {
-                out[0] = ifs.point(&current);
+                let point = ifs.point(&current);
+                if !is_finite_point(&point) {
+                    return Err(diverged(first_index, u64::from(levels), point));
+                }
+                out[0] = point;
                 return Ok(applications);
             }
             // The remaining levels breadth first: level l holds its k^l states in word order
@@ -287,7 +327,11 @@ pub fn deterministic_into<I: Ifs + ?Sized>(
                     if !ifs.apply(map, parent, &mut scratch) {
                         return Err(domain_error(ifs, first_index + i * k + map, map, parent));
                     }
-                    *slot = ifs.point(&scratch);
+                    let point = ifs.point(&scratch);
+                    if !is_finite_point(&point) {
+                        return Err(diverged(first_index + i * k + map, u64::from(levels), point));
+                    }
+                    *slot = point;
                 }
             }
             applications += out.len() as u64;
@@ -324,23 +368,40 @@ fn chaos_chunk<I: Ifs + ?Sized>(
         }
         std::mem::swap(&mut a, &mut b);
         if step >= game.burn_in as usize {
-            sink(ifs.point(&a));
+            let point = ifs.point(&a);
+            // Diverging maps (not contractive) would otherwise fill the list with inf/NaN
+            // or, in a density, silently drop every point.
+            if !is_finite_point(&point) {
+                return Err(diverged(first + step - game.burn_in as usize, step as u64 + 1, point));
+            }
+            sink(point);
         }
     }
     Ok(())
 }
 
+/// Applications of map 0 that move the chaos game's start state onto the attractor.
+const CHAOS_START_STEPS: u32 = 128;
+
 /// Chaos-game start state: the default start's first state moved towards the fixed point
 /// of map 0 (which lies on the attractor).
+///
+/// # Errors
+/// [`IfsError::Domain`]; [`IfsError::Diverged`] (point 0) when map 0 drives the start state
+/// out of the finite numbers (it is not contractive).
 fn chaos_start<I: Ifs + ?Sized>(ifs: &I) -> Result<Vec<f64>> {
     let n = ifs.state_len();
     let mut a = ifs.default_start()[..n].to_vec();
     let mut b = vec![0.0; n];
-    for _ in 0..128 {
+    for _ in 0..CHAOS_START_STEPS {
         if !ifs.apply(0, &a, &mut b) {
             return Err(domain_error(ifs, 0, 0, &a));
         }
         std::mem::swap(&mut a, &mut b);
+    }
+    let point = ifs.point(&a);
+    if !is_finite_point(&point) {
+        return Err(diverged(0, u64::from(CHAOS_START_STEPS), point));
     }
     Ok(a)
 }
@@ -371,7 +432,9 @@ fn check_game(game: &ChaosGame) -> Result<()> {
 /// [`IfsError::ParameterOutOfRange`] for zero points or bad probabilities;
 /// [`IfsError::TooManyPoints`] when the list of `game.points` points cannot be allocated
 /// (before any iteration);
-/// [`IfsError::Domain`] when a nonlinear map leaves its domain.
+/// [`IfsError::Domain`] when a nonlinear map leaves its domain;
+/// [`IfsError::Diverged`] at the first point that is not finite: the maps are not
+/// contractive (e.g. affine maps scaling by 10), so the iterates run off to infinity.
 ///
 /// ```
 /// use ifs_nonlinear::{AffineIfs, ChaosGame, chaos_points, sierpinski};
@@ -386,11 +449,7 @@ pub fn chaos_points<I: Ifs + ?Sized>(ifs: &I, game: &ChaosGame) -> Result<Vec<[f
     let start = chaos_start(ifs)?;
     // Asked for, not given: a count beyond memory is an error, not an abort.
     let mut points = Vec::new();
-    points.try_reserve_exact(game.points).map_err(|_| IfsError::TooManyPoints {
-        points: game.points,
-        bytes: game.points as u128 * size_of::<[f64; 3]>() as u128,
-    })?;
-    points.resize(game.points, [0.0; 3]);
+    resize_points(&mut points, game.points)?;
     points
         .par_chunks_mut(CHAOS_CHUNK)
         .enumerate()
@@ -410,7 +469,8 @@ pub fn chaos_points<I: Ifs + ?Sized>(ifs: &I, game: &ChaosGame) -> Result<Vec<[f
 /// The chaos game straight into a density image (no point list is kept).
 ///
 /// # Errors
-/// As [`chaos_points`].
+/// As [`chaos_points`] (a diverging game is an error, not an empty image), and as
+/// [`Density::from_points`] for a hand-built `canvas` that [`Canvas::new`] would refuse.
 ///
 /// ```
 /// use ifs_nonlinear::{AffineIfs, Canvas, ChaosGame, View, chaos_density, sierpinski};
@@ -436,12 +496,16 @@ pub fn chaos_density<I: Ifs + ?Sized>(ifs: &I, game: &ChaosGame, canvas: &Canvas
 /// thread, each group with its own accumulation buffer, then adds the buffers. Integer
 /// sums make the result independent of the grouping (and so of the thread count), and one
 /// buffer per thread (not per chunk) keeps the zeroing and merging cost small.
+///
+/// # Errors
+/// The canvas check of [`Canvas::pixel_count`] (before any allocation), then the first
+/// error of `work` in chunk order.
 fn accumulate_in_groups(
     canvas: &Canvas,
     chunks: usize,
     work: impl Fn(usize, &mut [u64]) -> Result<()> + Sync,
 ) -> Result<Vec<u64>> {
-    let pixels = canvas.width as usize * canvas.height as usize;
+    let pixels = canvas.pixel_count()?;
     let groups = rayon::current_num_threads().clamp(1, chunks.max(1));
     let buffers: Vec<Result<Vec<u64>>> = (0..groups)
         .into_par_iter()
@@ -489,8 +553,10 @@ impl View {
     /// points with a relative `margin` on each side (degenerate extents are widened).
     ///
     /// # Errors
-    /// [`IfsError::Render`] when there is no finite point.
+    /// [`IfsError::Render`] when there is no finite point; [`IfsError::NotFinite`] for a NaN
+    /// or infinite projection angle (it would make every point NaN).
     pub fn fit(points: &[[f64; 3]], projection: Projection, width: u32, height: u32, margin: f64) -> Result<Self> {
+        projection.check()?;
         let mut min = [f64::INFINITY; 2];
         let mut max = [f64::NEG_INFINITY; 2];
         for p in points {
@@ -538,6 +604,19 @@ pub enum Projection {
 }
 
 impl Projection {
+    /// Checks the angles of [`Projection::Orbit`]: a NaN or infinite angle projects every
+    /// point to NaN, which would leave an image silently empty.
+    ///
+    /// # Errors
+    /// [`IfsError::NotFinite`] naming the angle.
+    pub fn check(&self) -> Result<()> {
+        if let Projection::Orbit { azimuth, elevation } = *self {
+            check_finite(azimuth, || "projection azimuth".into())?;
+            check_finite(elevation, || "projection elevation".into())?;
+        }
+        Ok(())
+    }
+
     /// Projects a point to the image plane.
     #[inline]
     pub fn project(&self, p: [f64; 3]) -> [f64; 2] {
@@ -555,6 +634,10 @@ impl Projection {
 }
 
 /// Image size, view and projection.
+///
+/// The fields are public, so a canvas can be built without [`Canvas::new`]; the renderers
+/// ([`Density::from_points`], [`chaos_density`]) check such a canvas as `new` would before
+/// allocating anything (a hand-built `u32::MAX × u32::MAX` canvas is an error, not an abort).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Canvas {
     /// Width in pixels.
@@ -570,16 +653,48 @@ pub struct Canvas {
 /// Largest image side accepted.
 pub const MAX_IMAGE_SIDE: u32 = 16_384;
 
+/// The image-size rule shared by [`Canvas::new`] and [`Canvas::pixel_count`].
+fn check_image_size(width: u32, height: u32) -> Result<()> {
+    if !(1..=MAX_IMAGE_SIDE).contains(&width) || !(1..=MAX_IMAGE_SIDE).contains(&height) {
+        return Err(IfsError::Render(format!("image size {width}x{height} is not in 1..={MAX_IMAGE_SIDE}")));
+    }
+    Ok(())
+}
+
+/// Checks that every point is finite, naming the first that is not: NaN input is an error,
+/// not a point silently left out of the image.
+fn check_finite_points(points: &[[f64; 3]]) -> Result<()> {
+    match points.iter().position(|p| !is_finite_point(p)) {
+        None => Ok(()),
+        Some(i) => {
+            let k = points[i].iter().position(|v| !v.is_finite()).unwrap_or(0);
+            Err(IfsError::NotFinite { what: format!("point {i}, coordinate {k}"), value: points[i][k] })
+        }
+    }
+}
+
 impl Canvas {
     /// A canvas of `width × height` pixels showing `view` (projection [`Projection::Xy`]).
     ///
     /// # Errors
     /// [`IfsError::Render`] for a zero side or one above [`MAX_IMAGE_SIDE`].
     pub fn new(width: u32, height: u32, view: View) -> Result<Self> {
-        if !(1..=MAX_IMAGE_SIDE).contains(&width) || !(1..=MAX_IMAGE_SIDE).contains(&height) {
-            return Err(IfsError::Render(format!("image size {width}x{height} is not in 1..={MAX_IMAGE_SIDE}")));
-        }
+        check_image_size(width, height)?;
         Ok(Self { width, height, view, projection: Projection::Xy })
+    }
+
+    /// Number of pixels, after the checks of [`Canvas::new`], [`View::new`] and
+    /// [`Projection::check`]: the fields are public, and the renderers allocate one counter
+    /// per pixel (per thread), so a hand-built canvas is checked before that allocation.
+    ///
+    /// # Errors
+    /// [`IfsError::Render`] for a side of 0 or above [`MAX_IMAGE_SIDE`], or an empty or
+    /// non-finite view; [`IfsError::NotFinite`] for a non-finite projection angle.
+    pub fn pixel_count(&self) -> Result<usize> {
+        check_image_size(self.width, self.height)?;
+        View::new(self.view.min, self.view.max)?;
+        self.projection.check()?;
+        Ok(self.width as usize * self.height as usize)
     }
 
     /// The same canvas with another projection.
@@ -627,16 +742,35 @@ pub struct Density {
 
 impl Density {
     /// Splats points into a new density image, in parallel (bit-identical for any thread
-    /// count: integer accumulation).
-    pub fn from_points(points: &[[f64; 3]], canvas: &Canvas) -> Self {
+    /// count: integer accumulation). Points outside the view are left out.
+    ///
+    /// # Errors
+    /// [`IfsError::NotFinite`] naming the first NaN or infinite point; as
+    /// [`Canvas::pixel_count`] for a hand-built canvas that [`Canvas::new`] would refuse
+    /// (e.g. `u32::MAX` sides, which used to abort allocating).
+    ///
+    /// ```
+    /// use ifs_nonlinear::{Canvas, Density, View};
+    /// let canvas = Canvas::new(4, 4, View::new([0.0, 0.0], [1.0, 1.0])?)?;
+    /// assert_eq!(Density::from_points(&[[0.5, 0.5, 0.0]], &canvas)?.total_points(), 1.0);
+    /// let huge = Canvas { width: u32::MAX, height: u32::MAX, ..canvas };
+    /// assert!(Density::from_points(&[[0.5, 0.5, 0.0]], &huge).is_err());
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
+    pub fn from_points(points: &[[f64; 3]], canvas: &Canvas) -> Result<Self> {
+        check_finite_points(points)?;
+        Self::splat_finite_points(points, canvas)
+    }
+
+    /// [`from_points`](Self::from_points) for points already checked to be finite.
+    fn splat_finite_points(points: &[[f64; 3]], canvas: &Canvas) -> Result<Self> {
         let chunks = points.len().div_ceil(CHAOS_CHUNK);
         let counts = accumulate_in_groups(canvas, chunks, |chunk, counts| {
             let end = ((chunk + 1) * CHAOS_CHUNK).min(points.len());
             points[chunk * CHAOS_CHUNK..end].iter().for_each(|p| canvas.splat(counts, *p));
             Ok(())
-        })
-        .expect("internal: splatting points cannot fail");
-        Self { width: canvas.width, height: canvas.height, counts }
+        })?;
+        Ok(Self { width: canvas.width, height: canvas.height, counts })
     }
 
     /// Width in pixels.
@@ -745,7 +879,8 @@ impl Image {
 /// (black ink on white).
 ///
 /// # Errors
-/// [`IfsError::Render`] for a bad size or no finite point.
+/// [`IfsError::Render`] for a bad size or no point; [`IfsError::NotFinite`] naming the
+/// first NaN or infinite point, or a non-finite projection angle.
 ///
 /// ```
 /// use ifs_nonlinear::{AffineIfs, Projection, ToneMap, deterministic_points, render_points, sierpinski};
@@ -762,9 +897,10 @@ pub fn render_points(
     projection: Projection,
     tone: ToneMap,
 ) -> Result<Image> {
+    check_finite_points(points)?;
     let view = View::fit(points, projection, width, height, 0.02)?;
     let canvas = Canvas::new(width, height, view)?.with_projection(projection);
-    Ok(Density::from_points(points, &canvas).to_image(tone, [0, 0, 0, 255], [255, 255, 255, 255]))
+    Ok(Density::splat_finite_points(points, &canvas)?.to_image(tone, [0, 0, 0, 255], [255, 255, 255, 255]))
 }
 
 /// Summary statistics of a point set, for golden tests that compare with a tolerance.
@@ -885,7 +1021,7 @@ mod tests {
         let e = one.install(|| chaos_density(&ifs, &game, &canvas).unwrap());
         let f = three.install(|| chaos_density(&ifs, &game, &canvas).unwrap());
         assert_eq!(e, f);
-        assert_eq!(e, Density::from_points(&c, &canvas));
+        assert_eq!(e, Density::from_points(&c, &canvas).unwrap());
     }
 
     #[test]
@@ -938,6 +1074,95 @@ mod tests {
         assert!(matches!(chaos_points(&ifs, &game), Err(IfsError::ParameterOutOfRange { name: "probabilities", .. })));
     }
 
+    /// Two maps scaling by 10: not contractive. The chaos game used to return `Ok` with
+    /// 867 of 1000 points infinite or NaN (and `chaos_density` an empty image); a single
+    /// expanding map iterated 400 levels gave `Ok([NaN, NaN])`.
+    #[test]
+    fn diverging_iterations_are_errors_not_infinite_points() {
+        let expanding = AffineIfs::new(
+            2,
+            vec![AffineMap::planar(10.0, 0.0, 0.0, 10.0, 1.0, 0.0), AffineMap::planar(10.0, 0.0, 0.0, 10.0, 0.0, 1.0)],
+        )
+        .unwrap();
+        let game = ChaosGame { points: 1000, seed: 3, ..ChaosGame::default() };
+        let err = chaos_points(&expanding, &game).unwrap_err();
+        let IfsError::Diverged { index, iteration, .. } = err.clone() else { panic!("{err:?}") };
+        // The error names the first non-finite point; burn-in counts in the iterations.
+        assert!(index < 1000 && iteration == u64::from(game.burn_in) + index as u64 + 1, "{err}");
+        assert!(err.to_string().contains("not contractive"), "{err}");
+        // The same first point whatever the thread count, and for the density too.
+        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        assert_eq!(one.install(|| chaos_points(&expanding, &game)), Err(err.clone()));
+        let canvas = Canvas::new(8, 8, View::new([0.0, 0.0], [1.0, 1.0]).unwrap()).unwrap();
+        assert_eq!(chaos_density(&expanding, &game, &canvas), Err(err));
+
+        let single = AffineIfs::new(2, vec![AffineMap::planar(10.0, 0.0, 0.0, 10.0, 1.0, 0.0)]).unwrap();
+        assert!(matches!(
+            deterministic_points(&single, Some(&[1.0, 1.0]), 400, 10),
+            Err(IfsError::Diverged { index: 0, iteration: 400, .. })
+        ));
+        // Many levels that stay finite are still fine.
+        assert!(deterministic_points(&single, Some(&[1.0, 1.0]), 300, 10).unwrap()[0][0].is_finite());
+    }
+
+    #[test]
+    fn finiteness_test_of_points_agrees_with_is_finite() {
+        for v in [0.0, -0.0, 1.0, f64::MAX, f64::MIN_POSITIVE, 5e-324, f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+            for position in 0..3 {
+                let mut p = [1.0; 3];
+                p[position] = v;
+                assert_eq!(is_finite_point(&p), v.is_finite(), "{p:?}");
+            }
+        }
+    }
+
+    /// A NaN start state used to come out as NaN points (`Ok`).
+    #[test]
+    fn non_finite_start_states_are_named() {
+        let ifs = sierpinski();
+        let err = deterministic_points(&ifs, Some(&[0.5, f64::NAN]), 2, 100).unwrap_err();
+        assert!(
+            matches!(&err, IfsError::NotFinite { what, value } if what == "start state 0, entry 1" && value.is_nan()),
+            "{err:?}"
+        );
+        let err = deterministic_points(&ifs, Some(&[0.0, 0.0, f64::INFINITY, 0.0]), 1, 100).unwrap_err();
+        assert_eq!(err, IfsError::NotFinite { what: "start state 1, entry 0".into(), value: f64::INFINITY });
+    }
+
+    /// The fields of `Canvas` are public: a hand-built `u32::MAX × u32::MAX` canvas made
+    /// `Density::from_points` abort allocating; now it is the size error of `Canvas::new`.
+    #[test]
+    fn hand_built_canvases_are_checked_before_allocating() {
+        let good = Canvas::new(4, 4, View::new([0.0, 0.0], [1.0, 1.0]).unwrap()).unwrap();
+        let point = [[0.5, 0.5, 0.0]];
+        for canvas in [
+            Canvas { width: u32::MAX, height: u32::MAX, ..good },
+            Canvas { width: 0, ..good },
+            Canvas { height: MAX_IMAGE_SIDE + 1, ..good },
+        ] {
+            assert!(matches!(Density::from_points(&point, &canvas), Err(IfsError::Render(_))), "{canvas:?}");
+            let game = ChaosGame { points: 10, ..ChaosGame::default() };
+            assert!(matches!(chaos_density(&sierpinski(), &game, &canvas), Err(IfsError::Render(_))));
+        }
+        let empty_view = Canvas { view: View { min: [0.0, 0.0], max: [0.0, f64::NAN] }, ..good };
+        assert!(matches!(Density::from_points(&point, &empty_view), Err(IfsError::Render(_))));
+        let nan_angle = good.with_projection(Projection::Orbit { azimuth: f64::NAN, elevation: 0.0 });
+        assert!(matches!(Density::from_points(&point, &nan_angle), Err(IfsError::NotFinite { .. })));
+        assert_eq!(Density::from_points(&point, &good).unwrap().total_points(), 1.0);
+    }
+
+    /// NaN points used to be dropped from the image without a word.
+    #[test]
+    fn non_finite_points_are_named_when_rendering() {
+        let canvas = Canvas::new(4, 4, View::new([0.0, 0.0], [1.0, 1.0]).unwrap()).unwrap();
+        let points = [[0.5, 0.5, 0.0], [0.1, 0.2, f64::NAN]];
+        let names_point_1 = |result: Result<_>| matches!(result, Err(IfsError::NotFinite { what, value }) if what == "point 1, coordinate 2" && value.is_nan());
+        assert!(names_point_1(Density::from_points(&points, &canvas).map(|_| ())));
+        assert!(names_point_1(render_points(&points, 4, 4, Projection::Xy, ToneMap::Log).map(|_| ())));
+        let orbit = Projection::Orbit { azimuth: 0.0, elevation: f64::INFINITY };
+        assert!(matches!(render_points(&points[..1], 4, 4, orbit, ToneMap::Log), Err(IfsError::NotFinite { .. })));
+    }
+
     #[test]
     fn probabilities_follow_determinants_with_a_floor() {
         let fern = AffineIfs::new(
@@ -961,10 +1186,10 @@ mod tests {
     fn splat_weights_sum_to_one_point() {
         let canvas = Canvas::new(10, 10, View::new([0.0, 0.0], [1.0, 1.0]).unwrap()).unwrap();
         let points = [[0.33, 0.71, 0.0], [0.5, 0.5, 0.0], [0.999, 0.001, 0.0]];
-        let density = Density::from_points(&points, &canvas);
+        let density = Density::from_points(&points, &canvas).unwrap();
         // The last point's bilinear footprint partly falls outside the image.
         assert!(density.total_points() <= 3.0 && density.total_points() > 2.0);
-        let inside = Density::from_points(&points[..2], &canvas);
+        let inside = Density::from_points(&points[..2], &canvas).unwrap();
         assert_eq!(inside.total_points(), 2.0);
         let png = inside.to_image(ToneMap::Log, [0, 0, 0, 255], [255; 4]).encode_png().unwrap();
         assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
