@@ -251,7 +251,13 @@ fn reverse_canonical_with(
     // The detail energy of the lowest face read as F_F (for the automatic choice): the
     // general path sums its groups (the F_V faces, in face order: the coarse vertices) as
     // the result sums its vertices.
-    let detail_energy = vertex_energy.iter().sum();
+    let detail_energy: f64 = vertex_energy.iter().sum();
+    // A finite energy bounds every offset below 2^512, so their prefix sums, the details,
+    // are finite; else (huge coordinates) they are read. An overflow is the general
+    // path's to report.
+    if !detail_energy.is_finite() && !details.iter().all(|d| d.is_finite()) {
+        return None;
+    }
     let (mut choice, stats) = match seed {
         Some(seed) => {
             let stats =

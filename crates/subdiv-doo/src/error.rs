@@ -90,6 +90,20 @@ pub enum DooError {
         /// The largest coordinate magnitude of the input.
         largest: f64,
     },
+    /// Finite input whose reversal leaves the `f64` range: coordinates so large that a
+    /// sum of the inverse rules overflows. `index` is the first value that is not
+    /// finite among the coarse positions followed by the details (the coarse vertex
+    /// count plus the detail's index for a detail).
+    #[error(
+        "value {index} of the reversal (coarse positions, then details) is not finite: the input's coordinates \
+         (up to {largest:e} in magnitude) overflow the f64 range when the inverse rules sum them; scale the mesh down"
+    )]
+    ReversalOverflow {
+        /// The first coarse position or detail that is not finite.
+        index: usize,
+        /// The largest coordinate magnitude of the reversed mesh.
+        largest: f64,
+    },
     /// A mesh has more elements than `u32` indices can address.
     #[error("too many {what}: {count} (at most {max} are supported)")]
     TooLarge {

@@ -247,8 +247,11 @@ pub use crate::forward::MAX_LEVELS;
 ///
 /// # Errors
 /// The errors of [`crate::reverse`](mod@crate::reverse) for the first level; for [`Depth::Levels`], also
-/// for any further level (the error says which level failed), and
-/// [`DooError::InvalidParameter`] for no level or more than [`MAX_LEVELS`].
+/// for any further level (the error says which level failed; with [`Depth::Max`] a
+/// further level that cannot be reversed, an overflow included, ends the pyramid and
+/// says why), and [`DooError::InvalidParameter`] for no level or more than
+/// [`MAX_LEVELS`]. Coordinates so large that a reversal overflows are
+/// [`DooError::ReversalOverflow`].
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
     if options.depth == Depth::Levels(0) {
         check_finite(mesh.positions())?;
@@ -1476,5 +1479,47 @@ mod tests {
         pyramid.levels[0].details[0] = DVec3::splat(f64::MAX);
         let rebuilt = pyramid.reconstruct(2, None).unwrap();
         assert!(rebuilt.positions.iter().any(|p| !p.is_finite()));
+    }
+
+    /// Finite coordinates so large that the inverse rules' sums overflow are
+    /// [`DooError::ReversalOverflow`] on every path (canonical and renumbered meshes, both
+    /// boundary rules, `reverse`, `decompose`, `decompose_soup`); they were returned as
+    /// infinite and NaN coarse positions. Up to 1e300 the reversal is the scaled one.
+    #[test]
+    fn overflowing_reversals_are_errors() {
+        use mesh_topo::shapes::CellKind;
+        let scaled = |soup: &PolygonSoup, largest: f64| {
+            let unit = soup.positions.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+            let positions = soup.positions.iter().enumerate();
+            // Moved a little (non-zero details), then scaled.
+            let positions = positions.map(|(i, p)| *p * (1.0 - 1e-3 * (i % 7) as f64) / unit * largest).collect();
+            PolygonSoup { positions, ..soup.clone() }
+        };
+        for boundary in [BoundaryRule::Shrink, BoundaryRule::Chaikin] {
+            for coarse in [shapes::icosahedron(), shapes::grid(3, 3, CellKind::Quads).unwrap()] {
+                let forward = DooOptions::new(FaceRule::DooSabin, 1).with_boundary(boundary);
+                let canonical = subdivide(&HalfedgeMesh::from_soup(&coarse).unwrap(), &forward).unwrap().to_soup();
+                let options = DecomposeOptions::levels(FaceRule::DooSabin, 1).with_boundary(boundary);
+                for fine in [canonical.clone(), mesh_topo::testing::scramble(canonical.clone(), 5, 0.0)] {
+                    let base = |largest: f64| {
+                        decompose_soup(&scaled(&fine, largest), &options).map(|d| d.pyramid.base.positions)
+                    };
+                    let (unit, large) = (base(1.0).unwrap(), base(1e300).unwrap());
+                    assert!(unit.iter().zip(&large).all(|(p, q)| (*q / 1e300).distance(*p) < 1e-12), "{boundary:?}");
+                    let huge = scaled(&fine, 1.7e308);
+                    let mesh = HalfedgeMesh::from_soup(&huge).unwrap();
+                    let reverse_options =
+                        crate::ReverseOptions { boundary, ..crate::ReverseOptions::auto(FaceRule::DooSabin) };
+                    for result in [
+                        decompose_soup(&huge, &options).map(drop),
+                        decompose(&mesh, &options).map(drop),
+                        decompose(&mesh, &DecomposeOptions { depth: Depth::Max, ..options.clone() }).map(drop),
+                        crate::reverse(&mesh, &reverse_options).map(drop),
+                    ] {
+                        assert!(matches!(result, Err(DooError::ReversalOverflow { .. })), "{boundary:?}: {result:?}");
+                    }
+                }
+            }
+        }
     }
 }

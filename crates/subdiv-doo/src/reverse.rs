@@ -620,7 +620,9 @@ impl DooReversal {
 /// automatic mode: the error of the first seed tried in the first component that has no
 /// valid interpretation); [`DooError::IsolatedVertex`]; [`DooError::EmptyMesh`] for a
 /// mesh without faces; [`DooError::NonFinite`]; [`DooError::SeedOutOfRange`] and [`DooError::DuplicateSeed`] for bad seeds;
-/// [`DooError::InvalidParameter`] for a bad centroid parameter.
+/// [`DooError::InvalidParameter`] for a bad centroid parameter;
+/// [`DooError::ReversalOverflow`] for finite coordinates so large (near `f64::MAX`) that
+/// the coarse positions or details are not.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
     // `None` also when a position is not finite, so that the check below names it.
     let canonical = match options.boundary {
@@ -635,6 +637,21 @@ pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooRever
     match options.boundary {
         BoundaryRule::Shrink => reverse_corner_mesh(&corners, fine.positions(), options),
         BoundaryRule::Chaikin => crate::boundary::reverse_chaikin_corner_mesh(&corners, fine.positions(), options),
+    }
+}
+
+/// [`DooError::ReversalOverflow`] if the coarse positions or details of `reversal` are
+/// not all finite: its input (`positions`, finite) is so large that the inverse rules'
+/// sums overflow. One pass over the result, on the general path only (the canonical
+/// path leaves such a mesh to it).
+pub(crate) fn check_reversal_finite(reversal: &DooReversal, positions: &[DVec3]) -> Result<(), DooError> {
+    let values = || reversal.coarse_positions.iter().chain(&reversal.details);
+    match values().position(|p| !p.is_finite()) {
+        None => Ok(()),
+        Some(index) => {
+            let largest = positions.iter().fold(0.0f64, |largest, p| largest.max(p.abs().max_element()));
+            Err(DooError::ReversalOverflow { index, largest })
+        }
     }
 }
 
@@ -910,6 +927,7 @@ impl<'a> Session<'a> {
             };
             match result {
                 Ok((mut reversal, energies)) => {
+                    check_reversal_finite(&reversal, search.positions)?;
                     for (k, choice) in choices.iter_mut().enumerate() {
                         let (seed, _) = self.readings[k][pick[k]];
                         choice.detail_energy = energies[k];

@@ -931,10 +931,7 @@ mod tests {
         }
         let mut huge = mesh(&canonical);
         huge.positions_mut()[0] = DVec3::splat(f64::MAX);
-        assert!(matches!(
-            decompose(&huge, &max_levels(rules)),
-            Err(LoopError::Overflow { largest: f64::MAX, .. })
-        ));
+        assert!(matches!(decompose(&huge, &max_levels(rules)), Err(LoopError::Overflow { largest: f64::MAX, .. })));
     }
 
     #[test]
