@@ -205,7 +205,8 @@ impl Topology {
             edges_before += edges;
         }
         debug_assert_eq!(edges_before as usize, mesh.edge_count(), "internal: edge numbering");
-        let pieces: Vec<_> = links.chunks_mut(REBUILD_CHUNK).zip(offsets).filter(|(_, offset)| *offset > 0).collect();
+        let pieces: Vec<_> =
+            links.chunks_mut(rebuild_chunk(face_count)).zip(offsets).filter(|(_, offset)| *offset > 0).collect();
         map_chunks(parallel, pieces, |(piece, offset)| {
             for link in piece {
                 link[3] += offset;
@@ -280,9 +281,16 @@ impl Topology {
 /// Faces (and vertices) per chunk of [`Topology::rebuild`].
 const REBUILD_CHUNK: usize = 8192;
 
-/// `0..len` in runs of [`REBUILD_CHUNK`].
+/// `0..len` in runs of [`REBUILD_CHUNK`], or of half of `len` (at least 1024) when that
+/// is shorter, so that a small level still makes a chunk per thread of two.
 fn chunk_ranges(len: usize) -> Vec<Range<usize>> {
-    (0..len).step_by(REBUILD_CHUNK).map(|start| start..(start + REBUILD_CHUNK).min(len)).collect()
+    let chunk = rebuild_chunk(len);
+    (0..len).step_by(chunk).map(|start| start..(start + chunk).min(len)).collect()
+}
+
+/// The chunk length of [`chunk_ranges`]`(len)`.
+fn rebuild_chunk(len: usize) -> usize {
+    REBUILD_CHUNK.min(len.div_ceil(2).max(1024))
 }
 
 /// One piece of `slots` per range (consecutive ranges from the front), with its range.
