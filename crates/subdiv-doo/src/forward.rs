@@ -386,7 +386,7 @@ pub(crate) fn check_finite(positions: &[DVec3]) -> Result<(), DooError> {
 const OVERFLOW_FREE: f64 = f64::MAX / 4_294_967_296.0;
 
 /// [`check_finite`], and the largest coordinate magnitude (in the same pass).
-fn check_finite_largest(positions: &[DVec3]) -> Result<f64, DooError> {
+pub(crate) fn check_finite_largest(positions: &[DVec3]) -> Result<f64, DooError> {
     let mut largest = 0.0f64;
     for (vertex, p) in positions.iter().enumerate() {
         if !p.is_finite() {

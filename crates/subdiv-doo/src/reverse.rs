@@ -648,9 +648,9 @@ pub(crate) fn check_reversal_finite(reversal: &DooReversal, positions: &[DVec3])
     let values = || reversal.coarse_positions.iter().chain(&reversal.details);
     match values().position(|p| !p.is_finite()) {
         None => Ok(()),
+        // (The input is finite here: its error, if any, comes first.)
         Some(index) => {
-            let largest = positions.iter().fold(0.0f64, |largest, p| largest.max(p.abs().max_element()));
-            Err(DooError::ReversalOverflow { index, largest })
+            Err(DooError::ReversalOverflow { index, largest: crate::forward::check_finite_largest(positions)? })
         }
     }
 }

@@ -431,6 +431,11 @@ pub(crate) fn triangle_offsets(faces: usize) -> Vec<u32> {
     buffer::par_fill(faces + 1, |f| (3 * f) as u32)
 }
 
+/// The largest coordinate magnitude of `positions` (0 for none).
+pub(crate) fn largest_magnitude(positions: &[DVec3]) -> f64 {
+    positions.iter().fold(0.0f64, |largest, p| largest.max(p.abs().max_element()))
+}
+
 /// Rejects NaN and infinite coordinates, naming the vertex; else the largest coordinate
 /// magnitude (in the same pass), for [`check_no_overflow`].
 pub(crate) fn check_finite_largest(positions: &[DVec3]) -> Result<f64, LoopError> {

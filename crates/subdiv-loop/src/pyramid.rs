@@ -38,7 +38,7 @@ use crate::detect::{FineOrder, reverse_canonical_soup};
 use crate::forward::LoopOptions;
 use crate::reverse::{
     CanonicalLevel, FineLevel, LevelParts, all_valences_regular, canonical_reading_is_settled, check_level,
-    non_finite_bits, reconstruct_levels, reverse_level,
+    energy_scale, non_finite_bits, reconstruct_levels, reverse_level,
 };
 
 /// Magic number of a Loop pyramid file.
@@ -202,8 +202,10 @@ pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<
         // A mesh of regular valences only (so is the fine mesh, then: edge points are
         // regular, vertex points keep their valence) reads several ways, which
         // `decompose` compares (see `reverse_level`), unless this reading is settled.
-        && (!all_valences_regular(&level.coarse)
-            || canonical_reading_is_settled(&level.coarse, &level.details, &soup.positions))
+        && (!all_valences_regular(&level.coarse) || {
+            let scale = energy_scale(&soup.positions);
+            canonical_reading_is_settled(&level.coarse, &level.details, &soup.positions, scale)
+        })
     {
         let CanonicalLevel { coarse, positions, details, .. } = level;
         return decompose_below(
@@ -1067,8 +1069,18 @@ mod tests {
                     // not (it goes through the mesh, whose readings are compared).
                     let exact = reverse_canonical_soup(&refined, &[], &rules).expect(name);
                     assert!(all_valences_regular(&exact.coarse));
-                    assert!(canonical_reading_is_settled(&exact.coarse, &exact.details, &refined.positions));
-                    assert!(!canonical_reading_is_settled(&read.coarse, &read.details, &fine.positions));
+                    assert!(canonical_reading_is_settled(
+                        &exact.coarse,
+                        &exact.details,
+                        &refined.positions,
+                        energy_scale(&refined.positions)
+                    ));
+                    assert!(!canonical_reading_is_settled(
+                        &read.coarse,
+                        &read.details,
+                        &fine.positions,
+                        energy_scale(&fine.positions)
+                    ));
                 }
                 canonical += 1;
             }

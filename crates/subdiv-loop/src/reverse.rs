@@ -500,11 +500,15 @@ pub(crate) fn reverse_level(
         Some(level) if !level.several_readings => return Ok(level),
         first => first,
     };
+    // Energies and zero thresholds on scaled values (see `energy_scale`), the scale found
+    // once, when first needed.
+    let scale_cell = std::cell::OnceCell::new();
+    let scale = || *scale_cell.get_or_init(|| energy_scale(positions));
     // A canonical reading of a connected mesh with zero details is settled (see below)
     // without the fine connectivity that comparing readings needs.
     if let Some(level) = &first
         && level.order.is_none()
-        && canonical_reading_is_settled(&level.coarse, &level.details, positions)
+        && canonical_reading_is_settled(&level.coarse, &level.details, positions, scale())
     {
         return Ok(first.expect("checked above"));
     }
@@ -526,15 +530,13 @@ pub(crate) fn reverse_level(
     // Per component: the smallest energy so far, and the seed of its reading (`None`: the
     // first reading's, or none found yet). Without a first reading, the first candidate
     // that gives a valid reading sets it, as detection would pick it.
-    // Energies and zero thresholds on scaled values (see `energy_scale`).
-    let scale = energy_scale(positions);
     let mut best: Vec<(f64, Option<u32>)> = match &first {
-        Some(first) => readings.energies(first, scale).into_iter().map(|energy| (energy, None)).collect(),
+        Some(first) => readings.energies(first, scale()).into_iter().map(|energy| (energy, None)).collect(),
         None => vec![(f64::INFINITY, None); readings.energies_len()],
     };
     // A component whose best reading so far has zero details is an exact refinement in
     // that reading: no other can do better than round-off, so none is tried.
-    let zero = readings.zero_energies(positions, scale);
+    let zero = readings.zero_energies(positions, scale());
     // The vertex points of the readings found so far: the labeling from a vertex point is
     // forced, so a candidate that is one gives a reading already compared (on a torus,
     // the six neighbours of a vertex point give three readings, two each).
@@ -578,7 +580,7 @@ pub(crate) fn reverse_level(
         };
         // Whether a component's best changed.
         let mut take = |level: &LevelParts, tried: &[(usize, u32)], covered: &mut [bool]| {
-            let energies = readings.energies(level, scale);
+            let energies = readings.energies(level, scale());
             let mut changed = false;
             for &(c, seed) in tried {
                 if energies[c] < best[c].0 {
@@ -640,7 +642,7 @@ pub(crate) fn reverse_level(
 /// unscaled values; inside the range nothing changes, to the bit.
 pub(crate) fn energy_scale(positions: &[DVec3]) -> f64 {
     const SAFE_EXPONENT: i32 = 256;
-    let largest = positions.iter().fold(0.0f64, |largest, p| largest.max(p.abs().max_element()));
+    let largest = crate::forward::largest_magnitude(positions);
     if largest == 0.0 || !largest.is_finite() {
         return 1.0;
     }
@@ -688,9 +690,13 @@ pub(crate) fn all_valences_regular(table: &CornerTable) -> bool {
 /// and details `details`, settles the choice among its readings without comparing them
 /// (see [`reverse_level`]): its details are zero at the scale of the mesh
 /// ([`zero_energy`]), and the coarse mesh is one component with no isolated vertex, so
-/// that the mesh's scale is its component's.
-pub(crate) fn canonical_reading_is_settled(coarse: &CornerTable, details: &[DVec3], positions: &[DVec3]) -> bool {
-    let scale = energy_scale(positions);
+/// that the mesh's scale is its component's. `scale`: [`energy_scale`] of `positions`.
+pub(crate) fn canonical_reading_is_settled(
+    coarse: &CornerTable,
+    details: &[DVec3],
+    positions: &[DVec3],
+    scale: f64,
+) -> bool {
     let energy = details.iter().map(|d| (*d * scale).length_squared()).sum();
     let (lo, hi) = positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
     let diagonal = if positions.is_empty() { 0.0 } else { (lo * scale).distance(hi * scale) };
@@ -919,8 +925,7 @@ fn reverse_level_fast(
 /// `e` as `v_count + e` (its edge point).
 fn reversal_overflow(positions: &[DVec3], details: &[DVec3], input: &[DVec3]) -> LoopError {
     let vertex = positions.iter().chain(details).position(|p| !p.is_finite()).unwrap_or(0);
-    let largest = input.iter().fold(0.0f64, |largest, p| largest.max(p.abs().max_element()));
-    LoopError::Overflow { vertex, largest }
+    LoopError::Overflow { vertex, largest: crate::forward::largest_magnitude(input) }
 }
 
 /// The corners of a fine level as the search of [`renumber_to_canonical`] reads them,
