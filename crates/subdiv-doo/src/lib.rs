@@ -40,6 +40,7 @@ pub mod forward;
 pub mod pyramid;
 pub mod reverse;
 pub mod rule;
+mod scale;
 
 pub use boundary::BoundaryRule;
 pub use corner::{FaceKind, FaceOrigin};

@@ -46,6 +46,7 @@ use crate::reverse::{
     level_from_candidates, reconstruct_level_with,
 };
 use crate::rule::FaceRule;
+use crate::scale::UnitScale;
 
 /// Magic number of a Doo-Sabin `.mres` pyramid.
 pub const PYRAMID_MAGIC: [u8; 8] = *b"MRSDOO\0\0";
@@ -253,6 +254,31 @@ pub use crate::forward::MAX_LEVELS;
 /// [`MAX_LEVELS`]. Coordinates so large that a reversal overflows are
 /// [`DooError::ReversalOverflow`].
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
+    // Coordinates far from 1: decomposed at unit scale (see `crate::scale`). Its errors
+    // and overflows are left to the mesh as given, which reports them as before.
+    if let Some(scale) = UnitScale::of(mesh.positions()) {
+        let mut scaled = mesh.clone();
+        scale.scale_down(scaled.positions_mut());
+        if let Some(decomposition) = decompose_as_given(&scaled, options).ok().and_then(|d| scaled_up(d, scale)) {
+            return Ok(decomposition);
+        }
+    }
+    decompose_as_given(mesh, options)
+}
+
+/// A decomposition made at unit scale brought back to the input's scale, if it fits.
+fn scaled_up(mut decomposition: Decomposition, scale: UnitScale) -> Option<Decomposition> {
+    let pyramid = &mut decomposition.pyramid;
+    let mut finite = scale.scale_up(&mut pyramid.base.positions);
+    for level in &mut pyramid.levels {
+        finite = finite && scale.scale_up(&mut level.details);
+    }
+    decomposition.choices.iter_mut().for_each(|choices| scale.scale_up_choices(choices));
+    finite.then_some(decomposition)
+}
+
+/// [`decompose`] without the change of scale.
+fn decompose_as_given(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
     if options.depth == Depth::Levels(0) {
         check_finite(mesh.positions())?;
         return Err(DooError::InvalidParameter { name: "levels", value: 0.0, reason: "decompose at least one level" });
@@ -317,6 +343,18 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
 /// # Errors
 /// Those of [`HalfedgeMesh::from_soup`] (as [`DooError::Mesh`]) and of [`decompose`].
 pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
+    if let Some(scale) = UnitScale::of(&soup.positions) {
+        let mut scaled = soup.clone();
+        scale.scale_down(&mut scaled.positions);
+        if let Some(decomposition) = decompose_soup_as_given(&scaled, options).ok().and_then(|d| scaled_up(d, scale)) {
+            return Ok(decomposition);
+        }
+    }
+    decompose_soup_as_given(soup, options)
+}
+
+/// [`decompose_soup`] without the change of scale.
+fn decompose_soup_as_given(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
     if !matches!(options.depth, Depth::Levels(levels) if levels == 0 || levels > MAX_LEVELS)
         && options.boundary == BoundaryRule::Shrink
         && canonical_enabled()
@@ -328,7 +366,7 @@ pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<
     {
         return Ok(decomposition);
     }
-    decompose(&HalfedgeMesh::from_soup(soup)?, options)
+    decompose_as_given(&HalfedgeMesh::from_soup(soup)?, options)
 }
 
 /// The levels of [`decompose`] once its first level has been tried by the canonical path
@@ -678,8 +716,25 @@ impl DooPyramid {
     /// [`DooError::InvalidPyramid`] if `level` is out of range, `keep` is not in `[0, 1]`,
     /// or the pyramid is inconsistent (wrong array lengths, bad permutations).
     pub fn reconstruct(&self, level: usize, keep: Option<f64>) -> Result<PolygonSoup, DooError> {
+        if let Some(scale) = self.unit_scale() {
+            return self.scaled_down(scale).reconstruct(level, keep).map(|soup| scaled_up_soup(soup, scale));
+        }
         let kept = self.check_request(level, keep)?;
         self.prepare()?.reconstruct_checked(level, kept)
+    }
+
+    /// The change of scale of a pyramid whose base coordinates and details are far from
+    /// 1, under which it is reconstructed (see `crate::scale`).
+    fn unit_scale(&self) -> Option<UnitScale> {
+        UnitScale::of_values(self.base.positions.iter().chain(self.levels.iter().flat_map(|level| &level.details)))
+    }
+
+    /// The pyramid brought to unit scale by `scale`.
+    fn scaled_down(&self, scale: UnitScale) -> DooPyramid {
+        let mut scaled = self.clone();
+        scale.scale_down(&mut scaled.base.positions);
+        scaled.levels.iter_mut().for_each(|level| scale.scale_down(&mut level.details));
+        scaled
     }
 
     /// Builds and checks the base mesh's connectivity once, for any number of
@@ -712,7 +767,8 @@ impl DooPyramid {
         check_finite(&self.base.positions)?;
         let (base, grouping) = CornerMesh::from_soup_grouped(&self.base)
             .map_err(|e| DooError::InvalidPyramid(format!("base mesh: {e}")))?;
-        Ok(PreparedDooPyramid { pyramid: self, base, base_corners: CornersByVertex::from_parts(grouping) })
+        let base_corners = CornersByVertex::from_parts(grouping);
+        Ok(PreparedDooPyramid { pyramid: self, base, base_corners, unit_scale: self.unit_scale() })
     }
 
     /// Checks a reconstruction request; for a `keep` fraction, which details it keeps.
@@ -801,6 +857,10 @@ impl DooPyramid {
     /// # Errors
     /// As [`reconstruct`](Self::reconstruct).
     pub fn rate_distortion(&self, fractions: &[f64]) -> Result<Vec<RateDistortion>, DooError> {
+        // Errors relative to the diagonal do not depend on the scale.
+        if let Some(scale) = self.unit_scale() {
+            return self.scaled_down(scale).rate_distortion(fractions);
+        }
         let finest = self.levels.len();
         // The base connectivity is built once for all the reconstructions.
         let prepared = self.prepare()?;
@@ -904,6 +964,15 @@ pub struct PreparedDooPyramid<'a> {
     base: CornerMesh,
     /// The base's corners by vertex, which its check computes anyway.
     base_corners: CornersByVertex,
+    /// The pyramid's change of scale, if it is reconstructed at unit scale.
+    unit_scale: Option<UnitScale>,
+}
+
+/// A soup rebuilt at unit scale brought back by `scale` (what the arithmetic gives: a
+/// position beyond `f64` is infinite, as it would be at any scale).
+fn scaled_up_soup(mut soup: PolygonSoup, scale: UnitScale) -> PolygonSoup {
+    scale.scale_up(&mut soup.positions);
+    soup
 }
 
 impl PreparedDooPyramid<'_> {
@@ -914,6 +983,10 @@ impl PreparedDooPyramid<'_> {
     /// As [`DooPyramid::reconstruct`], except the base mesh's errors, which
     /// [`DooPyramid::prepare`] reported.
     pub fn reconstruct(&self, level: usize, keep: Option<f64>) -> Result<PolygonSoup, DooError> {
+        if let Some(scale) = self.unit_scale {
+            let scaled = self.pyramid.scaled_down(scale);
+            return scaled.prepare()?.reconstruct(level, keep).map(|soup| scaled_up_soup(soup, scale));
+        }
         let kept = self.pyramid.check_request(level, keep)?;
         self.reconstruct_checked(level, kept)
     }
@@ -1473,10 +1546,11 @@ mod tests {
     #[test]
     fn overflowing_finite_details_are_not_an_error() {
         // Finite details whose sum overflows: the inputs are valid, the result is what
-        // the arithmetic gives (no detail to name).
+        // the arithmetic gives (no detail to name). (Rebuilt at unit scale, a single
+        // detail of `f64::MAX` beside a base vertex there fits: every detail is.)
         let mut pyramid = cube_pyramid();
         pyramid.base.positions[0] = DVec3::splat(f64::MAX);
-        pyramid.levels[0].details[0] = DVec3::splat(f64::MAX);
+        pyramid.levels[0].details.fill(DVec3::splat(f64::MAX));
         let rebuilt = pyramid.reconstruct(2, None).unwrap();
         assert!(rebuilt.positions.iter().any(|p| !p.is_finite()));
     }
@@ -1495,6 +1569,7 @@ mod tests {
             let positions = positions.map(|(i, p)| *p * (1.0 - 1e-3 * (i % 7) as f64) / unit * largest).collect();
             PolygonSoup { positions, ..soup.clone() }
         };
+        let mut overflows = 0;
         for boundary in [BoundaryRule::Shrink, BoundaryRule::Chaikin] {
             for coarse in [shapes::icosahedron(), shapes::grid(3, 3, CellKind::Quads).unwrap()] {
                 let forward = DooOptions::new(FaceRule::DooSabin, 1).with_boundary(boundary);
@@ -1510,16 +1585,155 @@ mod tests {
                     let mesh = HalfedgeMesh::from_soup(&huge).unwrap();
                     let reverse_options =
                         crate::ReverseOptions { boundary, ..crate::ReverseOptions::auto(FaceRule::DooSabin) };
+                    // Each is an overflow, or (reversed at unit scale, where the inverse
+                    // rules' partial sums do not overflow) a result that fits in f64 and
+                    // rebuilds the input.
+                    let max = DecomposeOptions { depth: Depth::Max, ..options.clone() };
+                    let rebuilt = |d: Decomposition| d.pyramid.reconstruct(d.pyramid.level_count(), None);
                     for result in [
-                        decompose_soup(&huge, &options).map(drop),
-                        decompose(&mesh, &options).map(drop),
-                        decompose(&mesh, &DecomposeOptions { depth: Depth::Max, ..options.clone() }).map(drop),
-                        crate::reverse(&mesh, &reverse_options).map(drop),
+                        decompose_soup(&huge, &options).and_then(rebuilt),
+                        decompose(&mesh, &options).and_then(rebuilt),
+                        decompose(&mesh, &max).and_then(rebuilt),
+                        crate::reverse(&mesh, &reverse_options).map(|r| r.reconstruct()),
                     ] {
-                        assert!(matches!(result, Err(DooError::ReversalOverflow { .. })), "{boundary:?}: {result:?}");
+                        match result {
+                            Err(DooError::ReversalOverflow { .. }) => overflows += 1,
+                            Ok(rebuilt) => {
+                                let error = rebuilt
+                                    .positions
+                                    .iter()
+                                    .zip(&huge.positions)
+                                    .map(|(p, q)| (*p / 1.7e308 - *q / 1.7e308).abs().max_element());
+                                let error = error.fold(0.0, f64::max);
+                                assert!(error < 1e-12, "{boundary:?} {error} {:?}", &rebuilt.positions[..4]);
+                                assert_eq!(rebuilt.indices, huge.indices);
+                            }
+                            Err(error) => panic!("{boundary:?}: {error}"),
+                        }
                     }
                 }
             }
+        }
+        assert!(overflows >= 8, "{overflows}");
+    }
+}
+
+#[cfg(test)]
+mod scale_tests {
+    use super::*;
+    use crate::{DooOptions, ReverseOptions, reverse, subdivide};
+    use mesh_topo::shapes::{self, CellKind};
+
+    fn scaled_mesh(mesh: &HalfedgeMesh, factor: f64) -> HalfedgeMesh {
+        let mut scaled = mesh.clone();
+        scaled.positions_mut().iter_mut().for_each(|p| *p *= factor);
+        scaled
+    }
+
+    fn bits(values: &[DVec3]) -> Vec<[u64; 3]> {
+        values.iter().map(|p| p.to_array().map(f64::to_bits)).collect()
+    }
+
+    /// Reversing a mesh scaled by a power of two far from 1 gives the reversal of the
+    /// unscaled mesh scaled by it, bit for bit, the same readings chosen: the ranking of
+    /// the readings squared details of 2^900 into infinities (and of 2^-600 into zeros),
+    /// so that every reading looked alike and the first one tried was kept. Likewise the
+    /// reconstructions (all details, or the largest kept) and the rate-distortion rows.
+    #[test]
+    fn reversals_commute_with_powers_of_two() {
+        let mut ranking_mattered = 0;
+        let cases = [
+            (shapes::cube(), BoundaryRule::Shrink),
+            (shapes::icosahedron(), BoundaryRule::Shrink),
+            (shapes::grid(3, 3, CellKind::Quads).unwrap(), BoundaryRule::Shrink),
+            (shapes::grid(3, 3, CellKind::Quads).unwrap(), BoundaryRule::Chaikin),
+        ];
+        for (coarse, boundary) in cases {
+            let coarse = HalfedgeMesh::from_soup(&coarse).unwrap();
+            let forward = DooOptions::new(FaceRule::DooSabin, 2).with_boundary(boundary);
+            let mut soup = subdivide(&coarse, &forward).unwrap().to_soup();
+            // The last face (an F_V face) first, so that the first reading tried (face 0
+            // as F_F) is not the best; every vertex moved a little.
+            let faces = soup.face_count();
+            let order: Vec<usize> = std::iter::once(faces - 1).chain(0..faces - 1).collect();
+            soup = PolygonSoup::from_faces(soup.positions.clone(), order.iter().map(|&f| soup.face(f).to_vec()));
+            for (i, p) in soup.positions.iter_mut().enumerate() {
+                let t = i as f64;
+                *p += 1e-2 * DVec3::new((1.3 * t).sin(), (2.1 * t).cos(), (0.7 * t).sin());
+            }
+            let fine = HalfedgeMesh::from_soup(&soup).unwrap();
+            let options = ReverseOptions { boundary, ..ReverseOptions::auto(FaceRule::DooSabin) };
+            let levels = DecomposeOptions::max(FaceRule::DooSabin).with_boundary(boundary);
+            let unit = reverse(&fine, &options).unwrap();
+            let unit_pyramid = decompose(&fine, &levels).unwrap().pyramid;
+            let choice = &unit.choices()[0];
+            if choice.trials.first().is_some_and(|first| first.seed_face != choice.seed_face) {
+                ranking_mattered += 1;
+            }
+            for exponent in [-900, -600, 600, 900] {
+                let factor = 2f64.powi(exponent);
+                let mesh = scaled_mesh(&fine, factor);
+                let scale = |values: &[DVec3]| values.iter().map(|p| *p * factor).collect::<Vec<_>>();
+                let reversal = reverse(&mesh, &options).unwrap();
+                let seeds = |r: &crate::DooReversal| r.choices().iter().map(|c| c.seed_face).collect::<Vec<_>>();
+                assert_eq!(seeds(&reversal), seeds(&unit), "{boundary:?} 2^{exponent}");
+                assert_eq!(bits(reversal.coarse_positions()), bits(&scale(unit.coarse_positions())));
+                assert_eq!(bits(reversal.details()), bits(&scale(unit.details())));
+                assert_eq!(
+                    reversal.coarse(),
+                    PolygonSoup { positions: scale(&unit.coarse().positions), ..unit.coarse() }
+                );
+                let pyramid = decompose(&mesh, &levels).unwrap().pyramid;
+                assert_eq!(pyramid.levels.len(), unit_pyramid.levels.len());
+                assert_eq!(bits(&pyramid.base.positions), bits(&scale(&unit_pyramid.base.positions)));
+                for (level, unit_level) in pyramid.levels.iter().zip(&unit_pyramid.levels) {
+                    assert_eq!(bits(&level.details), bits(&scale(&unit_level.details)));
+                    assert_eq!(level.order, unit_level.order);
+                }
+                let soup = decompose_soup(&mesh.to_soup(), &levels).unwrap().pyramid;
+                assert_eq!(soup, pyramid);
+                // Rebuilt at unit scale too: the same details kept, the same errors.
+                let rebuilt = reversal.reconstruct().positions;
+                assert_eq!(bits(&rebuilt), bits(&scale(&unit.reconstruct().positions)));
+                let finest = pyramid.level_count();
+                for keep in [None, Some(0.3)] {
+                    let rebuilt = pyramid.reconstruct(finest, keep).unwrap().positions;
+                    assert_eq!(
+                        bits(&rebuilt),
+                        bits(&scale(&unit_pyramid.reconstruct(finest, keep).unwrap().positions))
+                    );
+                    let prepared = pyramid.prepare().unwrap().reconstruct(finest, keep).unwrap().positions;
+                    assert_eq!(bits(&prepared), bits(&rebuilt));
+                }
+                let fractions = [0.0, 0.3, 1.0];
+                assert_eq!(
+                    pyramid.rate_distortion(&fractions).unwrap(),
+                    unit_pyramid.rate_distortion(&fractions).unwrap()
+                );
+            }
+        }
+        assert!(ranking_mattered >= 2, "the meshes exercise the ranking: {ranking_mattered}");
+    }
+
+    /// A NaN among coordinates far from 1 is named as at unit scale.
+    #[test]
+    fn a_nan_among_large_coordinates_is_named() {
+        let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
+        let fine = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 1)).unwrap().to_mesh().unwrap();
+        let options = DecomposeOptions::levels(FaceRule::DooSabin, 1);
+        let errors = |factor: f64| {
+            let mut mesh = scaled_mesh(&fine, factor);
+            mesh.positions_mut()[3].y = f64::NAN;
+            let soup = mesh.to_soup();
+            let errors = [
+                reverse(&mesh, &ReverseOptions::default()).map(drop),
+                decompose(&mesh, &options).map(drop),
+                decompose_soup(&soup, &options).map(drop),
+            ];
+            errors.map(|e| e.unwrap_err().to_string().contains("vertex 3"))
+        };
+        for factor in [1.0, 2f64.powi(900), 2f64.powi(-900)] {
+            assert_eq!(errors(factor), [true; 3], "{factor:e}");
         }
     }
 }

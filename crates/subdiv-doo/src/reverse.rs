@@ -61,6 +61,16 @@
 //! result's [`SeedChoice::detail_energy`] is that reading's total.
 //! [`DooReversal::choices`] reports what was tried and why the winner won.
 //!
+//! Squares overflow beyond about `1e154` and underflow below `1e-154`, where every
+//! reading would look alike. A mesh whose largest coordinate magnitude lies outside
+//! `2^±256` is therefore reversed as a copy scaled by an exact power of two to unit
+//! size, and the result scaled back: the reversal of the mesh as given, bit for bit,
+//! with the choice it would make if its squares could not overflow (and its inverse
+//! rules' partial sums neither, near `f64::MAX`); the energies reported are scaled back
+//! too (so they may be infinite or zero), the reason says in what units its figures are.
+//! Reconstructions ([`DooReversal::reconstruct`], the pyramid's) of values that far
+//! from 1 run at unit scale the same way.
+//!
 //! # Cost
 //! Linear in the size of the fine mesh: the search visits each F_F face once and looks
 //! across each of its edges once; the candidate graph has two edges per F_E quad, at
@@ -137,6 +147,7 @@ use crate::corner::{
 };
 use crate::forward::check_finite;
 use crate::rule::{FaceMaps, FaceRule};
+use crate::scale::UnitScale;
 
 /// Options of [`reverse`].
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -587,9 +598,26 @@ impl DooReversal {
     /// # Ok::<(), subdiv_doo::DooError>(())
     /// ```
     pub fn reconstruct(&self) -> PolygonSoup {
-        let level = Level { details: &self.details, order: &self.order, rule: self.rule, boundary: self.boundary };
-        let (mesh, positions) = reconstruct_level_with(&self.coarse, &self.coarse_positions, &level, false)
+        // Values far from 1 are rebuilt at unit scale, where the forward sums do not
+        // overflow when their results fit (see `crate::scale`).
+        let scale = UnitScale::of_values(self.coarse_positions.iter().chain(&self.details));
+        let scaled;
+        let (coarse_positions, details) = match scale {
+            None => (&self.coarse_positions, &self.details),
+            Some(scale) => {
+                let (mut positions, mut details) = (self.coarse_positions.clone(), self.details.clone());
+                scale.scale_down(&mut positions);
+                scale.scale_down(&mut details);
+                scaled = (positions, details);
+                (&scaled.0, &scaled.1)
+            }
+        };
+        let level = Level { details, order: &self.order, rule: self.rule, boundary: self.boundary };
+        let (mesh, mut positions) = reconstruct_level_with(&self.coarse, coarse_positions, &level, false)
             .expect("internal: a reversal reconstructs");
+        if let Some(scale) = scale {
+            scale.scale_up(&mut positions);
+        }
         PolygonSoup { positions, offsets: mesh.offsets, indices: mesh.corner_vertex }
     }
 
@@ -624,6 +652,24 @@ impl DooReversal {
 /// [`DooError::ReversalOverflow`] for finite coordinates so large (near `f64::MAX`) that
 /// the coarse positions or details are not.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
+    // Coordinates far from 1: reversed at unit scale (see `crate::scale`). Its errors
+    // and overflows are left to the mesh as given, which reports them as before.
+    if let Some(scale) = UnitScale::of(fine.positions()) {
+        let mut scaled = fine.clone();
+        scale.scale_down(scaled.positions_mut());
+        if let Ok(mut reversal) = reverse_as_given(&scaled, options)
+            && scale.scale_up(&mut reversal.coarse_positions)
+            && scale.scale_up(&mut reversal.details)
+        {
+            scale.scale_up_choices(&mut reversal.choices);
+            return Ok(reversal);
+        }
+    }
+    reverse_as_given(fine, options)
+}
+
+/// [`reverse`] without the change of scale.
+fn reverse_as_given(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
     // `None` also when a position is not finite, so that the check below names it.
     let canonical = match options.boundary {
         BoundaryRule::Shrink => crate::canonical::reverse_canonical(fine, options),

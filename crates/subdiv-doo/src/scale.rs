@@ -1,0 +1,175 @@
+//! Reversal of meshes whose coordinates are far from 1, at unit scale.
+//!
+//! The automatic choice ranks the readings of a mesh by their detail energies, sums of
+//! squared detail lengths, and tests them against a zero threshold `(1e-12 d)^2` per
+//! face (`d` the bounding-box diagonal). Squares overflow from about `1e154` and
+//! underflow below about `1e-154`: a mesh scaled to `2^900` gave every reading an
+//! infinite energy and one scaled to `2^-600` a zero one, so that all looked alike and
+//! the first reading tried was kept, not the best (the reversal was still exact, of
+//! another coarse mesh than the unscaled mesh's).
+//!
+//! Such a mesh is reversed as a copy scaled by the power of two that brings its largest
+//! coordinate magnitude into `[1, 2)`, and the result is scaled back. Scaling by a power
+//! of two is exact and commutes with every operation of the reversal (sums, products by
+//! rule weights, comparisons) unless a value leaves the normal range, so the result is
+//! the unscaled reversal as if its energies could not overflow, bit for bit (a value of
+//! the copy below `2^-1022`, `2^-1023` times the largest coordinate and far below the
+//! reconstruction tolerance, loses bits as a subnormal). Inside `2^±256` nothing is
+//! copied and nothing changes. When the scaled-back result does not fit in `f64` (input
+//! near `f64::MAX`), the mesh is reversed as it is, which reports the overflow as before.
+//!
+//! A pyramid whose base coordinates and details lie that far from 1 is reconstructed
+//! (and its rate-distortion measured, and its details ranked for `keep`) the same way:
+//! at unit scale the sums of the forward rules do not overflow where their result fits
+//! (a reversal at unit scale may return coordinates near `f64::MAX` whose unscaled
+//! reconstruction overflowed on the way); a result beyond `f64` is what the arithmetic
+//! gives, as at any scale.
+//!
+//! Energies reported in [`SeedChoice`] are scaled back too, so they may be infinite or
+//! zero where the true value is outside the `f64` range; the reason of the choice says
+//! the ranking was made at unit scale and in what units its figures are.
+
+use glam::DVec3;
+
+use crate::reverse::SeedChoice;
+
+/// Meshes whose largest coordinate magnitude lies in `[2^-256, 2^257)` are reversed as
+/// they are: their squared details stay well inside the `f64` range (details are at most
+/// a few times the largest coordinate, at least its round-off `2^-52` times it).
+const SAFE_EXPONENT: i32 = 256;
+
+/// An exact power-of-two change of scale: `down` brings the largest coordinate into
+/// `[1, 2)`, `up` undoes it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct UnitScale {
+    /// `log2` of `up`.
+    exponent: i32,
+    down: f64,
+    up: f64,
+}
+
+impl UnitScale {
+    /// The change of scale of `positions`, or `None` when they need none: their largest
+    /// coordinate magnitude is within `2^±256`, or zero, or infinite, or they are empty
+    /// (a NaN coordinate is passed over: the reversal of the scaled copy fails on it).
+    pub(crate) fn of(positions: &[DVec3]) -> Option<Self> {
+        Self::of_values(positions)
+    }
+
+    /// [`Self::of`] for values in several arrays (a pyramid's base and details).
+    pub(crate) fn of_values<'a>(values: impl IntoIterator<Item = &'a DVec3>) -> Option<Self> {
+        // A comparison that compiles to a vector maximum (`f64::max` handles NaN and does
+        // not); NaN is skipped here, and reported by the reversal of the mesh as given
+        // once the scaled copy fails on it.
+        let larger = |a: f64, b: f64| if a > b { a } else { b };
+        let largest = values.into_iter().fold(DVec3::ZERO, |largest, p| {
+            let p = p.abs();
+            DVec3::new(larger(p.x, largest.x), larger(p.y, largest.y), larger(p.z, largest.z))
+        });
+        let largest = larger(largest.x, larger(largest.y, largest.z));
+        if largest == 0.0 || !largest.is_finite() {
+            return None;
+        }
+        let exponent = largest.log2().floor() as i32;
+        if (-SAFE_EXPONENT..=SAFE_EXPONENT).contains(&exponent) {
+            return None;
+        }
+        // Both factors normal numbers (the exponent of a subnormal largest value is
+        // below -1022: it is brought to 2^-41 or so, still far inside the safe range).
+        let exponent = exponent.clamp(-1022, 1022);
+        Some(Self { exponent, down: power_of_two(-exponent), up: power_of_two(exponent) })
+    }
+
+    /// `positions` brought to unit scale.
+    pub(crate) fn scale_down(&self, positions: &mut [DVec3]) {
+        positions.iter_mut().for_each(|p| *p *= self.down);
+    }
+
+    /// `values` of a reversal at unit scale brought back to the input's scale; whether
+    /// they are all finite then.
+    pub(crate) fn scale_up(&self, values: &mut [DVec3]) -> bool {
+        let mut finite = true;
+        for value in values {
+            *value *= self.up;
+            finite &= value.is_finite();
+        }
+        finite
+    }
+
+    /// The energies of `choices`, made at unit scale, brought back to the input's scale
+    /// (squares: twice the factor), and a note of it in each reason.
+    pub(crate) fn scale_up_choices(&self, choices: &mut [SeedChoice]) {
+        // Two products, not one by `up * up`, which overflows for exponents above 511
+        // (and `0 * inf` would be NaN).
+        let energy = |e: f64| e * self.up * self.up;
+        for choice in choices {
+            choice.detail_energy = energy(choice.detail_energy);
+            for trial in &mut choice.trials {
+                if let Ok(e) = &mut trial.outcome {
+                    *e = energy(*e);
+                }
+            }
+            if !choice.given {
+                choice.reason.push_str(&format!(
+                    " (ranked on the mesh scaled by 2^{}, exactly, to keep the squares in range: the figures in \
+                     this reason are in those units, the energies of the choice and its trials in the input's)",
+                    -self.exponent
+                ));
+            }
+        }
+    }
+}
+
+/// `2^exponent` for an exponent of a normal number (`-1022..=1023`).
+fn power_of_two(exponent: i32) -> f64 {
+    debug_assert!((-1022..=1023).contains(&exponent));
+    f64::from_bits(((1023 + exponent) as u64) << 52)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scales_are_exact_powers_of_two_outside_the_safe_range() {
+        let at = |x: f64| UnitScale::of(&[DVec3::new(0.5 * x, -x, 0.0)]);
+        assert_eq!(at(1.0), None);
+        assert_eq!(at(2f64.powi(256) * 1.9), None);
+        assert_eq!(at(2f64.powi(-256)), None);
+        assert_eq!(at(0.0), None);
+        assert_eq!(UnitScale::of(&[]), None);
+        assert_eq!(UnitScale::of(&[DVec3::new(1e-300, f64::NAN, 0.0)]).unwrap().exponent, -997);
+        assert_eq!(UnitScale::of(&[DVec3::new(1e300, f64::INFINITY, 0.0)]), None);
+        let large = at(1e300).unwrap();
+        assert_eq!((large.exponent, large.up, large.down), (996, 2f64.powi(996), 2f64.powi(-996)));
+        assert_eq!(at(f64::MAX).unwrap().exponent, 1022);
+        assert_eq!(at(2f64.powi(-300)).unwrap().exponent, -300);
+        // A subnormal largest value: clamped, the factors still normal and exact.
+        let tiny = UnitScale::of(&[DVec3::new(0.0, 0.0, 1e-320)]).unwrap();
+        assert_eq!(tiny.exponent, -1022);
+        assert_eq!(tiny.up * tiny.down, 1.0);
+        let mut values = [DVec3::new(1e300, -3e299, 1.0)];
+        large.scale_down(&mut values);
+        assert!(large.scale_up(&mut values));
+        assert_eq!(values, [DVec3::new(1e300, -3e299, 1.0)]);
+        let mut overflowing = [DVec3::new(4.0, 0.0, 0.0)];
+        assert!(!at(f64::MAX).unwrap().scale_up(&mut overflowing));
+    }
+
+    #[test]
+    fn energies_are_scaled_back_by_the_square() {
+        let scale = UnitScale::of(&[DVec3::splat(2f64.powi(600))]).unwrap();
+        let mut choices = vec![SeedChoice {
+            component: 0,
+            seed_face: 3,
+            given: false,
+            trials: vec![crate::reverse::SeedTrial::valid(3, "F_F", 0.0, false)],
+            detail_energy: 2f64.powi(-1000),
+            reason: "smallest".into(),
+        }];
+        scale.scale_up_choices(&mut choices);
+        assert_eq!(choices[0].detail_energy, 2f64.powi(200));
+        assert_eq!(choices[0].trials[0].outcome, Ok(0.0));
+        assert!(choices[0].reason.starts_with("smallest (ranked on the mesh scaled by 2^-600"));
+    }
+}
