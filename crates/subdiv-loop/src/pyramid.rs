@@ -35,10 +35,10 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
 use crate::LoopError;
 use crate::corner_table::CornerTable;
 use crate::detect::{FineOrder, reverse_canonical_soup};
-use crate::forward::LoopOptions;
+use crate::forward::{LoopOptions, largest_magnitude};
 use crate::reverse::{
     CanonicalLevel, FineLevel, LevelParts, all_valences_regular, canonical_reading_is_settled, check_level,
-    energy_scale, non_finite_bits, reconstruct_levels, reverse_level,
+    energy_scale, energy_scale_of, non_finite_bits, reconstruct_levels, reverse_level,
 };
 
 /// Magic number of a Loop pyramid file.
@@ -501,9 +501,15 @@ impl LoopPyramid {
             return Ok(out);
         }
         // (squared norm, level, index): a total order, so the selection is deterministic.
+        // Norms of details far from 1 are squared at unit scale (an exact power of two,
+        // 1 inside 2^±256): squares of 1e300 were all infinite, of 1e-300 all zero, and
+        // the details kept were then the first ones, not the largest.
+        let largest = self.levels.iter().map(|level| largest_magnitude(&level.details)).fold(0.0, f64::max);
+        let scale = energy_scale_of(largest);
         let mut ranked: Vec<(f64, u32, u32)> = Vec::with_capacity(total);
         for (l, level) in self.levels.iter().enumerate() {
-            ranked.extend(level.details.iter().enumerate().map(|(i, d)| (d.length_squared(), l as u32, i as u32)));
+            let norms = level.details.iter().map(|d| (*d * scale).length_squared());
+            ranked.extend(norms.enumerate().map(|(i, norm)| (norm, l as u32, i as u32)));
         }
         let larger_first =
             |a: &(f64, u32, u32), b: &(f64, u32, u32)| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2));
@@ -539,7 +545,10 @@ impl LoopPyramid {
         // The base is built once for all the reconstructions (a compressed copy keeps it).
         let prepared = self.prepare()?;
         let exact = prepared.reconstruct(finest)?;
-        let diagonal = bounding_box_diagonal(&exact.positions);
+        // Distances measured at unit scale (see `compressed`), relative to the diagonal
+        // at that scale.
+        let unit = energy_scale(&exact.positions);
+        let diagonal = scaled_diagonal(&exact.positions, unit);
         let scale = if diagonal > 0.0 { 1.0 / diagonal } else { 1.0 };
         let total = self.detail_count();
         fractions
@@ -549,7 +558,7 @@ impl LoopPyramid {
                 let approx = compressed.reconstruct_on(&prepared.base, finest)?;
                 let (mut max, mut sum) = (0.0f64, 0.0f64);
                 for (p, q) in approx.positions.iter().zip(&exact.positions) {
-                    let d = p.distance_squared(*q);
+                    let d = (*p * unit).distance_squared(*q * unit);
                     max = max.max(d);
                     sum += d;
                 }
@@ -684,9 +693,17 @@ fn next_table(table: &CornerTable, order: Option<&FineOrder>) -> CornerTable {
 /// assert_eq!(bounding_box_diagonal(&[]), 0.0);
 /// ```
 pub fn bounding_box_diagonal(points: &[DVec3]) -> f64 {
+    // Measured at unit scale, so that the squares of coordinates far from 1 neither
+    // overflow (1e300 gave an infinite diagonal) nor underflow (1e-300 gave 0).
+    let unit = energy_scale(points);
+    scaled_diagonal(points, unit) / unit
+}
+
+/// [`bounding_box_diagonal`] of `points` scaled by `scale` (a power of two: exact).
+fn scaled_diagonal(points: &[DVec3], scale: f64) -> f64 {
     let Some(first) = points.first() else { return 0.0 };
     let (lo, hi) = points.iter().fold((*first, *first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
-    lo.distance(hi)
+    (lo * scale).distance(hi * scale)
 }
 
 #[cfg(test)]
@@ -946,6 +963,41 @@ mod tests {
                     assert!(error < 1e-12, "{rules:?} level {k}: {error}");
                 }
             }
+        }
+    }
+
+    /// Details far from 1 are ranked, and errors measured, as at unit scale: squares of
+    /// 2^900 were all infinite (of 2^-900 all zero), so the details kept were the first
+    /// ones, the diagonal infinite and every error zero.
+    #[test]
+    fn compression_and_its_errors_do_not_depend_on_the_scale() {
+        let rules = LoopOptions::default();
+        let fine = perturb(&loop_steps(&shapes::octahedron(), &rules, 3), 0.02, 1);
+        let pyramid = decompose(&mesh(&fine), &max_levels(rules)).unwrap();
+        let fractions = [1.0, 0.5, 0.1, 0.0];
+        let rows = pyramid.rate_distortion(&fractions).unwrap();
+        for exponent in [-900, 900] {
+            let factor = 2f64.powi(exponent);
+            let mut scaled = pyramid.clone();
+            scaled.base.positions.iter_mut().for_each(|p| *p *= factor);
+            scaled.levels.iter_mut().flat_map(|level| &mut level.details).for_each(|d| *d *= factor);
+            for fraction in fractions {
+                let kept = |p: &LoopPyramid| {
+                    let compressed = p.compressed(fraction).unwrap();
+                    compressed
+                        .levels
+                        .iter()
+                        .flat_map(|level| level.details.clone())
+                        .map(|d| d != DVec3::ZERO)
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(kept(&scaled), kept(&pyramid), "2^{exponent}, keep {fraction}");
+            }
+            assert_eq!(scaled.rate_distortion(&fractions).unwrap(), rows, "2^{exponent}");
+            let rebuilt = pyramid.reconstruct(3).unwrap().positions;
+            let diagonal = bounding_box_diagonal(&rebuilt);
+            let scaled_points: Vec<DVec3> = rebuilt.iter().map(|p| *p * factor).collect();
+            assert_eq!(bounding_box_diagonal(&scaled_points), diagonal * factor);
         }
     }
 

@@ -641,8 +641,12 @@ pub(crate) fn reverse_level(
 /// arbitrary. A power of two scales exactly, so every comparison is that of the
 /// unscaled values; inside the range nothing changes, to the bit.
 pub(crate) fn energy_scale(positions: &[DVec3]) -> f64 {
+    energy_scale_of(crate::forward::largest_magnitude(positions))
+}
+
+/// [`energy_scale`] of values whose largest coordinate magnitude is `largest`.
+pub(crate) fn energy_scale_of(largest: f64) -> f64 {
     const SAFE_EXPONENT: i32 = 256;
-    let largest = crate::forward::largest_magnitude(positions);
     if largest == 0.0 || !largest.is_finite() {
         return 1.0;
     }
