@@ -17,7 +17,7 @@ fn render_and_summarise(file: &str, points: &[[f64; 3]]) -> String {
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("golden-ifs");
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join(file), bytes).unwrap();
-    PointStats::of(points, 16).to_text()
+    PointStats::of(points, 16).unwrap().to_text()
 }
 
 fn preset_points(name: &str, levels: u32) -> Vec<[f64; 3]> {

@@ -92,8 +92,9 @@ pub mod render;
 pub use error::{IfsError, Result};
 pub use ifs::{AffineIfs, AffineMap, BarycentricIfs, ComplexBezierIfs, Ifs};
 pub use matrices::{
-    ContractivityReport, SubdivisionRule, bezier_split, complex_bezier_split, curve_scheme_split, sierpinski,
-    tensor_patch_split, triangle_multi_indices, triangle_patch_split, uniform_scheme_split,
+    ContractivityReport, MAX_MULTI_INDEX_DEGREE, SubdivisionRule, bezier_split, complex_bezier_split,
+    curve_scheme_split, sierpinski, tensor_patch_split, triangle_multi_indices, triangle_patch_split,
+    uniform_scheme_split,
 };
 pub use mean::{CircleMean, Mean, MeanMode, subdivide_with_rule, three_point_subdivide, two_point_subdivide};
 pub use nonlinear::{
@@ -103,6 +104,7 @@ pub use nonlinear::{
 pub use num_complex::Complex64;
 pub use presets::{PRESETS, Scene, barnsley_fern, canonical_preset, preset};
 pub use render::{
-    CHAOS_CHUNK, Canvas, ChaosGame, Density, Image, MAX_BURN_IN, MAX_LEVELS, PointStats, Probabilities, Projection,
-    ToneMap, View, chaos_density, chaos_points, deterministic_into, deterministic_points, render_points,
+    CHAOS_CHUNK, Canvas, ChaosGame, Density, Image, MAX_BURN_IN, MAX_LEVELS, MAX_OCCUPANCY_GRID, PointStats,
+    Probabilities, Projection, ToneMap, View, chaos_density, chaos_points, deterministic_into, deterministic_points,
+    render_points,
 };

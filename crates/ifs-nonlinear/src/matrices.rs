@@ -571,9 +571,29 @@ pub fn tensor_patch_split(degree_u: usize, degree_v: usize) -> Result<Subdivisio
 /// β0 descending, then β1 descending.
 ///
 /// ```
-/// assert_eq!(ifs_nonlinear::triangle_multi_indices(1), vec![[1, 0, 0], [0, 1, 0], [0, 0, 1]]);
+/// assert_eq!(ifs_nonlinear::triangle_multi_indices(1)?, vec![[1, 0, 0], [0, 1, 0], [0, 0, 1]]);
+/// # Ok::<(), ifs_nonlinear::IfsError>(())
 /// ```
-pub fn triangle_multi_indices(n: usize) -> Vec<[usize; 3]> {
+///
+/// # Errors
+/// [`IfsError::ParameterOutOfRange`] above [`MAX_MULTI_INDEX_DEGREE`], checked before
+/// allocating (a mistyped degree used to abort the process, or overflow the count).
+pub fn triangle_multi_indices(n: usize) -> Result<Vec<[usize; 3]>> {
+    if n > MAX_MULTI_INDEX_DEGREE {
+        return Err(IfsError::ParameterOutOfRange {
+            name: "n",
+            value: n.to_string(),
+            reason: "triangle multi-indices: at most degree 1024 (525 825 indices)",
+        });
+    }
+    Ok(multi_indices(n))
+}
+
+/// The largest degree of [`triangle_multi_indices`].
+pub const MAX_MULTI_INDEX_DEGREE: usize = 1024;
+
+/// [`triangle_multi_indices`] of a degree known to be small.
+fn multi_indices(n: usize) -> Vec<[usize; 3]> {
     let mut out = Vec::with_capacity((n + 1) * (n + 2) / 2);
     for b0 in (0..=n).rev() {
         for b1 in (0..=n - b0).rev() {
@@ -607,7 +627,7 @@ fn blossom_weights(n: usize, arguments: &[[f64; 3]]) -> Vec<f64> {
         .collect();
     for (r, u) in arguments.iter().enumerate() {
         let degree = n - r - 1;
-        level = triangle_multi_indices(degree)
+        level = multi_indices(degree)
             .into_iter()
             .map(|beta| {
                 let mut acc = vec![0.0; m];
@@ -653,7 +673,7 @@ pub fn triangle_patch_split(degree: usize) -> Result<SubdivisionRule<f64>> {
     let mid = |a: usize, b: usize| -> [f64; 3] { std::array::from_fn(|k| 0.5 * (t[a][k] + t[b][k])) };
     let (m01, m02, m12) = (mid(0, 1), mid(0, 2), mid(1, 2));
     let triangles = [[t[0], m01, m02], [m01, t[1], m12], [m02, m12, t[2]], [m12, m02, m01]];
-    let betas = triangle_multi_indices(degree);
+    let betas = multi_indices(degree);
     let m = betas.len();
     let matrices = triangles
         .iter()
@@ -739,9 +759,17 @@ mod tests {
     }
 
     #[test]
+    fn oversized_multi_index_degrees_are_errors() {
+        assert_eq!(triangle_multi_indices(MAX_MULTI_INDEX_DEGREE).unwrap().len(), 1025 * 1026 / 2);
+        for n in [MAX_MULTI_INDEX_DEGREE + 1, usize::MAX] {
+            assert!(matches!(triangle_multi_indices(n), Err(IfsError::ParameterOutOfRange { name: "n", .. })));
+        }
+    }
+
+    #[test]
     fn triangle_indices_round_trip() {
         for n in 0..6 {
-            for (i, beta) in triangle_multi_indices(n).into_iter().enumerate() {
+            for (i, beta) in triangle_multi_indices(n).unwrap().into_iter().enumerate() {
                 assert_eq!(triangle_index(beta), i);
             }
         }
@@ -753,7 +781,7 @@ mod tests {
     #[test]
     fn triangle_sub_patches_lie_on_the_patch() {
         let n = 3;
-        let betas = triangle_multi_indices(n);
+        let betas = triangle_multi_indices(n).unwrap();
         // Scalar control values (any), evaluated with the blossom at the diagonal.
         let values: Vec<f64> = (0..betas.len()).map(|i| ((i * 7 + 3) % 11) as f64 - 4.0).collect();
         let eval = |lambda: [f64; 3], vals: &[f64]| -> f64 {

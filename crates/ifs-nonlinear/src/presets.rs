@@ -117,7 +117,7 @@ pub fn preset(name: &str) -> Result<Scene> {
             s
         }
         "triangle-patch" => {
-            let control: Vec<[f64; 3]> = crate::matrices::triangle_multi_indices(3)
+            let control: Vec<[f64; 3]> = crate::matrices::triangle_multi_indices(3)?
                 .into_iter()
                 .map(|b| {
                     let (x, y) = (b[1] as f64 + 0.5 * b[2] as f64, 0.866 * b[2] as f64);

@@ -919,15 +919,37 @@ pub struct PointStats {
     pub occupancy: Vec<Vec<bool>>,
 }
 
+/// Most cells per side of a [`PointStats`] occupancy map (16.8 million cells).
+pub const MAX_OCCUPANCY_GRID: usize = 4096;
+
 impl PointStats {
     /// Computes the statistics; `grid` cells per side for the occupancy map.
     ///
     /// ```
-    /// let stats = ifs_nonlinear::PointStats::of(&[[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]], 2);
+    /// let stats = ifs_nonlinear::PointStats::of(&[[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]], 2)?;
     /// assert_eq!(stats.centroid, [0.5, 0.5, 0.0]);
     /// assert_eq!(stats.occupied_cells(), 2);
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
     /// ```
-    pub fn of(points: &[[f64; 3]], grid: usize) -> Self {
+    ///
+    /// # Errors
+    /// [`IfsError::NotFinite`] naming the first point with a NaN or infinite coordinate
+    /// (its box, centroid and cell would mean nothing); [`IfsError::ParameterOutOfRange`]
+    /// for more than [`MAX_OCCUPANCY_GRID`] cells per side (checked before allocating:
+    /// a mistyped size used to abort the process).
+    pub fn of(points: &[[f64; 3]], grid: usize) -> Result<Self> {
+        if grid > MAX_OCCUPANCY_GRID {
+            return Err(IfsError::ParameterOutOfRange {
+                name: "grid",
+                value: grid.to_string(),
+                reason: "at most 4096 occupancy cells per side",
+            });
+        }
+        for (index, p) in points.iter().enumerate() {
+            for (axis, &x) in p.iter().enumerate() {
+                check_finite(x, || format!("point {index}, coordinate {axis}"))?;
+            }
+        }
         let mut min = [f64::INFINITY; 3];
         let mut max = [f64::NEG_INFINITY; 3];
         let mut sum = [0.0; 3];
@@ -954,7 +976,7 @@ impl PointStats {
                 occupancy[grid - 1 - cy][cx] = true;
             }
         }
-        Self { count, min, max, centroid, occupancy }
+        Ok(Self { count, min, max, centroid, occupancy })
     }
 
     /// Number of occupied cells.
@@ -989,6 +1011,23 @@ mod tests {
 
     fn sierpinski() -> AffineIfs {
         AffineIfs::from_rule(&crate::matrices::sierpinski(), &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap()
+    }
+
+    /// Non-finite points and oversized occupancy maps are errors: a NaN point was counted
+    /// in cell 0 and left the box alone, a mistyped grid aborted the process allocating.
+    #[test]
+    fn point_statistics_check_their_input() {
+        let points = [[0.0, 0.0, 0.0], [1.0, 2.0, 0.5]];
+        let stats = PointStats::of(&points, MAX_OCCUPANCY_GRID).unwrap();
+        assert_eq!((stats.count, stats.max, stats.occupied_cells()), (2, [1.0, 2.0, 0.5], 2));
+        for bad in [f64::NAN, f64::INFINITY] {
+            let points = [[0.0, 0.0, 0.0], [1.0, 2.0, 0.5], [0.5, bad, 0.0]];
+            let error = PointStats::of(&points, 4).unwrap_err();
+            assert!(matches!(&error, IfsError::NotFinite { what, .. } if what == "point 2, coordinate 1"), "{error}");
+        }
+        for grid in [MAX_OCCUPANCY_GRID + 1, usize::MAX] {
+            assert!(matches!(PointStats::of(&points, grid), Err(IfsError::ParameterOutOfRange { name: "grid", .. })));
+        }
     }
 
     #[test]

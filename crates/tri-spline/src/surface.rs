@@ -174,8 +174,29 @@ impl FittedSurface {
 
     /// A triangulated sampling over `domain`: the regular grid with `samples` segments
     /// per side (`(s+1)(s+2)/2` points in the storage order of [`crate::index`], `s²`
-    /// counter-clockwise triangles). Points are evaluated in parallel.
+    /// counter-clockwise triangles; 0 gives the one-segment grid). Points are evaluated
+    /// in parallel.
+    ///
+    /// # Panics
+    /// Above [`MAX_GRID_SEGMENTS`](crate::samples::MAX_GRID_SEGMENTS) segments per side
+    /// (a mistyped size used to abort the process allocating); [`Self::try_sample`]
+    /// returns an error instead.
     pub fn sample(&self, domain: &DomainTriangle, samples: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+        self.try_sample(domain, samples).unwrap_or_else(|e| panic!("sample: {e}"))
+    }
+
+    /// [`Self::sample`] for a size given by a caller.
+    ///
+    /// # Errors
+    /// [`SplineError::TooLarge`] above
+    /// [`MAX_GRID_SEGMENTS`](crate::samples::MAX_GRID_SEGMENTS) segments per side, checked
+    /// before allocating.
+    pub fn try_sample(
+        &self,
+        domain: &DomainTriangle,
+        samples: usize,
+    ) -> Result<(Vec<DVec3>, Vec<[u32; 3]>), SplineError> {
+        check_grid_segments(samples)?;
         let s = samples.max(1);
         let params: Vec<DVec2> = crate::index::multi_indices(s)
             .map(|[i, j, k]| domain.point([i as f64 / s as f64, j as f64 / s as f64, k as f64 / s as f64]))
@@ -190,14 +211,29 @@ impl FittedSurface {
                 .collect(),
             _ => params.par_iter().map(|&u| self.eval(u)).collect(),
         };
-        (positions, grid_triangles(s, domain.det() > 0.0))
+        Ok((positions, grid_triangles(s, domain.det() > 0.0)))
     }
+}
+
+/// [`SplineError::TooLarge`] above [`MAX_GRID_SEGMENTS`](crate::samples::MAX_GRID_SEGMENTS)
+/// segments per side.
+fn check_grid_segments(s: usize) -> Result<(), SplineError> {
+    let max = crate::samples::MAX_GRID_SEGMENTS;
+    if s > max {
+        return Err(SplineError::TooLarge { what: "grid segments per side", requested: s, max });
+    }
+    Ok(())
 }
 
 /// The `s²` triangles of the regular triangular grid with `s` segments per side, vertex
 /// `(j, k)` at position [`tri_index`](crate::index::tri_index)`(s, j, k)`; counter-clockwise
 /// in the domain when `ccw`, else flipped.
+///
+/// # Panics
+/// Above [`MAX_GRID_SEGMENTS`](crate::samples::MAX_GRID_SEGMENTS) segments per side (a
+/// mistyped size used to abort the process allocating).
 pub fn grid_triangles(s: usize, ccw: bool) -> Vec<[u32; 3]> {
+    check_grid_segments(s).unwrap_or_else(|e| panic!("grid_triangles: {e}"));
     use crate::index::tri_index;
     let mut faces = Vec::with_capacity(s * s);
     let id = |j: usize, k: usize| tri_index(s, j, k) as u32;
@@ -236,6 +272,21 @@ mod tests {
                 .inspect(|&a| assert!(a > 0.0))
                 .sum();
             assert!((area - domain.det()).abs() < 1e-12);
+        }
+    }
+
+    /// A sampling size beyond the limit is an error (it aborted the process allocating).
+    #[test]
+    fn oversized_samplings_are_errors() {
+        let domain = DomainTriangle::reference();
+        let plane = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
+        let surface = FittedSurface::Bezier(TriBezier::new(1, domain, plane).unwrap());
+        let (points, faces) = surface.try_sample(&domain, 2).unwrap();
+        assert_eq!((points.len(), faces.len()), (6, 4));
+        assert_eq!(surface.try_sample(&domain, 0).unwrap(), surface.sample(&domain, 1));
+        for samples in [crate::samples::MAX_GRID_SEGMENTS + 1, 1 << 40, usize::MAX] {
+            let error = surface.try_sample(&domain, samples).unwrap_err();
+            assert!(matches!(error, SplineError::TooLarge { requested, .. } if requested == samples), "{error}");
         }
     }
 
