@@ -161,6 +161,39 @@ fn compare_known_offsets() {
     assert_eq!(result["b"]["faces"], 6);
 }
 
+/// Coordinates far from 1 are compared at unit scale: at 2^-600 the squared distances
+/// underflowed (two different meshes compared as equal, each box "a point"), beyond 1e150
+/// the comparison was refused. Near `f64::MAX`, a distance beyond the range is an error.
+#[test]
+fn compare_far_from_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let original = std::fs::read_to_string(common::data("cube_quad.off")).unwrap();
+    let write = |name: &str, factor: f64, dz: f64| {
+        let mut lines: Vec<String> = original.lines().map(str::to_string).collect();
+        for line in &mut lines[2..10] {
+            let p: Vec<f64> = line.split_whitespace().map(|t| t.parse().unwrap()).collect();
+            *line = format!("{:e} {:e} {:e}", p[0] * factor, p[1] * factor, (p[2] + dz) * factor);
+        }
+        let path = dir.path().join(name);
+        std::fs::write(&path, lines.join("\n")).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    for exponent in [-600, 600] {
+        let factor = 2f64.powi(exponent);
+        let (a, b) = (write("a.off", factor, 0.0), write("b.off", factor, 0.5));
+        let result = json(&["compare", &a, &b, "--json"]);
+        assert_eq!(result["max_dist"], 0.5 * factor, "{result}");
+        assert_eq!(result["mean_dist"], 0.5 * factor);
+        // (serde_json reads long decimals to within an ulp.)
+        let diagonal = result["bbox_diagonal_a"].as_f64().unwrap();
+        assert!((diagonal / (12f64.sqrt() * factor) - 1.0).abs() < 1e-15, "{result}");
+        assert!((result["rel_max"].as_f64().unwrap() - 0.5 / (2.0 * 3f64.sqrt())).abs() < 1e-15, "{result}");
+    }
+    let (a, b) = (write("a.off", 1e308, 0.0), write("b.off", 1e308, 0.5));
+    let error = fails(&["compare", &a, &b]);
+    assert!(error.contains("beyond the f64 range"), "{error}");
+}
+
 #[test]
 fn compare_point_clouds_and_a_degenerate_reference() {
     // A is one point repeated (its bounding box has no diagonal); B three points on a line.

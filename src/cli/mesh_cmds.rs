@@ -1,5 +1,6 @@
 //! Commands on plain meshes: `info`, `compare`, `convert`, `render`, and the demo.
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -313,8 +314,24 @@ pub fn info(args: &InfoArgs) -> CliResult {
 // ---------------------------------------------------------------------------------------
 // compare
 
-/// Coordinates beyond this magnitude would overflow squared distances.
-const MAX_COMPARE_COORDINATE: f64 = 1e150;
+/// The power of two by which both meshes are compared: 1 when their largest coordinate
+/// magnitude lies within `2^±256`, else the one that brings it into `[1, 2)`. Squared
+/// distances of coordinates beyond about 1e154 overflow and below 1e-154 underflow (two
+/// meshes at 1e-181 compared as equal, each box "a point"); scaling by a power of two
+/// is exact, so the distances are those of the meshes as given.
+fn compare_scale(a: &[DVec3], b: &[DVec3]) -> f64 {
+    const SAFE_EXPONENT: i32 = 256;
+    let largest = a.iter().chain(b).fold(0.0f64, |largest, p| largest.max(p.abs().max_element()));
+    if largest == 0.0 || !largest.is_finite() {
+        return 1.0;
+    }
+    let exponent = largest.log2().floor() as i32;
+    if (-SAFE_EXPONENT..=SAFE_EXPONENT).contains(&exponent) {
+        return 1.0;
+    }
+    // 2^-exponent, a normal number for every exponent kept.
+    f64::from_bits(((1023 - exponent.clamp(-1022, 1022)) as u64) << 52)
+}
 
 /// Nearest-vertex distances from every point of `from` to the set `to`, in `from` order.
 fn nearest_distances(from: &[DVec3], to: &[DVec3]) -> CliResult<Vec<f64>> {
@@ -339,6 +356,11 @@ fn bbox_diagonal(points: &[DVec3]) -> f64 {
     (hi - lo).length()
 }
 
+/// The positions of `soup` times `scale` (borrowed when it is 1).
+fn scaled_points(soup: &PolygonSoup, scale: f64) -> Cow<'_, [DVec3]> {
+    if scale == 1.0 { Cow::Borrowed(&soup.positions) } else { soup.positions.iter().map(|p| *p * scale).collect() }
+}
+
 /// The comparison of two meshes' vertex sets, as `compare --json` prints it: for each
 /// vertex of one mesh the distance to the nearest vertex of the other (a k-d tree,
 /// `kiddo`), both ways; `max_dist` is the larger one-sided maximum (Hausdorff distance
@@ -349,14 +371,13 @@ pub fn compare_meshes(a_name: &str, a: &PolygonSoup, b_name: &str, b: &PolygonSo
         if soup.positions.is_empty() {
             return Err(CliError::Input(format!("{name}: the mesh has no vertices to compare")));
         }
-        if let Some(i) = soup.positions.iter().position(|p| p.abs().max_element() > MAX_COMPARE_COORDINATE) {
-            return Err(CliError::Input(format!(
-                "{name}: vertex {i} has a coordinate beyond {MAX_COMPARE_COORDINATE:e}; distances would overflow"
-            )));
-        }
     }
-    let a_to_b = nearest_distances(&a.positions, &b.positions)?;
-    let b_to_a = nearest_distances(&b.positions, &a.positions)?;
+    // Measured at unit scale (see `compare_scale`), reported in the meshes' units.
+    let scale = compare_scale(&a.positions, &b.positions);
+    let scaled = |soup| scaled_points(soup, scale);
+    let (a_points, b_points) = (scaled(a), scaled(b));
+    let a_to_b = nearest_distances(&a_points, &b_points)?;
+    let b_to_a = nearest_distances(&b_points, &a_points)?;
     let (max_ab, sum_ab) = max_and_sum(&a_to_b);
     let (max_ba, sum_ba) = max_and_sum(&b_to_a);
     let (mean_ab, mean_ba) = (sum_ab / a_to_b.len() as f64, sum_ba / b_to_a.len() as f64);
@@ -365,14 +386,22 @@ pub fn compare_meshes(a_name: &str, a: &PolygonSoup, b_name: &str, b: &PolygonSo
     // vertex count weighs more).
     let max_dist = max_ab.max(max_ba);
     let mean_dist = 0.5 * (mean_ab + mean_ba);
-    let diagonal = bbox_diagonal(&a.positions);
+    let diagonal = bbox_diagonal(&a_points);
     let relative = |d: f64| if diagonal > 0.0 { json!(d / diagonal) } else { Value::Null };
+    let unscaled = |d: f64| d / scale;
+    let (max_ab, mean_ab, max_ba, mean_ba) = (unscaled(max_ab), unscaled(mean_ab), unscaled(max_ba), unscaled(mean_ba));
+    if let Some(too_far) = [max_ab, max_ba, diagonal / scale].into_iter().find(|d| !d.is_finite()) {
+        return Err(CliError::Input(format!(
+            "{a_name} and {b_name}: a distance between their vertices is {too_far}, beyond the f64 range \
+             (coordinates near f64::MAX); scale both meshes down"
+        )));
+    }
     Ok(json!({
         "a": { "file": a_name, "vertices": a.vertex_count(), "faces": a.face_count() },
         "b": { "file": b_name, "vertices": b.vertex_count(), "faces": b.face_count() },
-        "bbox_diagonal_a": diagonal,
-        "max_dist": max_dist,
-        "mean_dist": mean_dist,
+        "bbox_diagonal_a": unscaled(diagonal),
+        "max_dist": unscaled(max_dist),
+        "mean_dist": unscaled(mean_dist),
         "rel_max": relative(max_dist),
         "rel_mean": relative(mean_dist),
         "a_to_b": { "max": max_ab, "mean": mean_ab },
