@@ -55,6 +55,51 @@ fn a_known_mesh_renders_deterministically() {
     assert_eq!(std::fs::read(&out).unwrap(), bytes, "same input, same bytes");
 }
 
+/// The picture does not depend on the mesh's scale: a subdivided cube scaled by 2^-600,
+/// 2^600 or to near `f64::MAX` gives the bytes of the unit one (at 2^-600 the normals
+/// underflowed and the mesh was drawn flat).
+#[test]
+fn the_picture_does_not_depend_on_the_scale() {
+    let dir = tempfile::tempdir().unwrap();
+    let fine = dir.path().join("fine.off");
+    let subdivide = ["subdivide", "tests/data/cube_quad.off", fine.to_str().unwrap(), "--scheme", "doo-sabin"];
+    assert!(multires(&subdivide).status.success());
+    let text = std::fs::read_to_string(&fine).unwrap();
+    let scaled = |factor: f64| -> String {
+        let mut vertices = None;
+        let mut out = Vec::new();
+        for line in text.lines() {
+            let words: Vec<&str> = line.split_whitespace().collect();
+            match vertices {
+                _ if words.is_empty() || line.starts_with('#') || line == "OFF" => out.push(line.to_string()),
+                None => {
+                    vertices = Some(words[0].parse::<usize>().unwrap());
+                    out.push(line.to_string());
+                }
+                Some(0) => out.push(line.to_string()),
+                Some(left) => {
+                    let p: Vec<f64> = words.iter().map(|w| w.parse::<f64>().unwrap() * factor).collect();
+                    out.push(format!("{:e} {:e} {:e}", p[0], p[1], p[2]));
+                    vertices = Some(left - 1);
+                }
+            }
+        }
+        let path = dir.path().join(format!("scaled-{factor:e}.off"));
+        std::fs::write(&path, out.join("\n")).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let render = |mesh: &str| {
+        let out = dir.path().join("out.png");
+        let result = multires(&["render", mesh, out.to_str().unwrap(), "--size", "120x90"]);
+        assert!(result.status.success(), "{}", String::from_utf8_lossy(&result.stderr));
+        std::fs::read(&out).unwrap()
+    };
+    let unit = render(&scaled(1.0));
+    for factor in [2f64.powi(-600), 2f64.powi(600), 2f64.powi(1020)] {
+        assert!(render(&scaled(factor)) == unit, "scaled by {factor:e}");
+    }
+}
+
 #[test]
 fn side_by_side_panels_share_the_height() {
     let dir = tempfile::tempdir().unwrap();

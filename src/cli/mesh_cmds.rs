@@ -314,25 +314,6 @@ pub fn info(args: &InfoArgs) -> CliResult {
 // ---------------------------------------------------------------------------------------
 // compare
 
-/// The power of two by which both meshes are compared: 1 when their largest coordinate
-/// magnitude lies within `2^±256`, else the one that brings it into `[1, 2)`. Squared
-/// distances of coordinates beyond about 1e154 overflow and below 1e-154 underflow (two
-/// meshes at 1e-181 compared as equal, each box "a point"); scaling by a power of two
-/// is exact, so the distances are those of the meshes as given.
-fn compare_scale(a: &[DVec3], b: &[DVec3]) -> f64 {
-    const SAFE_EXPONENT: i32 = 256;
-    let largest = a.iter().chain(b).fold(0.0f64, |largest, p| largest.max(p.abs().max_element()));
-    if largest == 0.0 || !largest.is_finite() {
-        return 1.0;
-    }
-    let exponent = largest.log2().floor() as i32;
-    if (-SAFE_EXPONENT..=SAFE_EXPONENT).contains(&exponent) {
-        return 1.0;
-    }
-    // 2^-exponent, a normal number for every exponent kept.
-    f64::from_bits(((1023 - exponent.clamp(-1022, 1022)) as u64) << 52)
-}
-
 /// Nearest-vertex distances from every point of `from` to the set `to`, in `from` order.
 fn nearest_distances(from: &[DVec3], to: &[DVec3]) -> CliResult<Vec<f64>> {
     let points: Vec<[f64; 3]> = to.iter().map(|p| p.to_array()).collect();
@@ -372,8 +353,9 @@ pub fn compare_meshes(a_name: &str, a: &PolygonSoup, b_name: &str, b: &PolygonSo
             return Err(CliError::Input(format!("{name}: the mesh has no vertices to compare")));
         }
     }
-    // Measured at unit scale (see `compare_scale`), reported in the meshes' units.
-    let scale = compare_scale(&a.positions, &b.positions);
+    // Measured at unit scale (see `common::unit_scale`: two meshes at 1e-181 compared
+    // as equal, each box "a point"), reported in the meshes' units.
+    let scale = super::common::unit_scale(a.positions.iter().chain(&b.positions));
     let scaled = |soup| scaled_points(soup, scale);
     let (a_points, b_points) = (scaled(a), scaled(b));
     let a_to_b = nearest_distances(&a_points, &b_points)?;
