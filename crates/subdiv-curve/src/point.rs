@@ -182,16 +182,37 @@ pub(crate) fn check_result_finite<P: CurvePoint>(what: &'static str, points: &[P
 }
 
 /// Diagonal of the bounding box (0 for empty input): the length scale of tolerances.
+/// Extents far from 1 are squared at unit scale (see [`unit_scale`]): their squares
+/// overflowed beyond about 1e154 (an infinite tolerance accepted the first sweep of an
+/// iteration) and underflowed below 1e-154.
 pub(crate) fn bbox_diagonal<P: CurvePoint>(points: &[P]) -> f64 {
-    let mut squared = 0.0;
-    for axis in 0..P::DIM {
-        let (lo, hi) = points
-            .iter()
-            .map(|p| p.coord(axis))
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
-        if lo <= hi {
-            squared += (hi - lo) * (hi - lo);
-        }
+    let extents: Vec<f64> = (0..P::DIM)
+        .map(|axis| {
+            let (lo, hi) = points
+                .iter()
+                .map(|p| p.coord(axis))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+            if lo <= hi { hi - lo } else { 0.0 }
+        })
+        .collect();
+    let scale = unit_scale(extents.iter().copied());
+    extents.iter().map(|e| (e * scale) * (e * scale)).sum::<f64>().sqrt() / scale
+}
+
+/// The power of two that brings the largest magnitude of `values` into `[1, 2)` when it
+/// lies outside `2^±256`, else 1 (also for none, zero or non-finite values). Scaling by
+/// a power of two is exact, so quantities measured at that scale are those of the values
+/// as given, without the squares' overflow or underflow; inside the range nothing changes.
+pub(crate) fn unit_scale(values: impl IntoIterator<Item = f64>) -> f64 {
+    const SAFE_EXPONENT: i32 = 256;
+    let largest = values.into_iter().fold(0.0f64, |largest, x| largest.max(x.abs()));
+    if largest == 0.0 || !largest.is_finite() {
+        return 1.0;
     }
-    squared.sqrt()
+    let exponent = largest.log2().floor() as i32;
+    if (-SAFE_EXPONENT..=SAFE_EXPONENT).contains(&exponent) {
+        return 1.0;
+    }
+    // 2^-exponent, a normal number for every exponent kept.
+    f64::from_bits(((1023 - exponent.clamp(-1022, 1022)) as u64) << 52)
 }

@@ -145,8 +145,13 @@ pub fn select_interpolation_points<P: CurvePoint>(
         });
     }
     crate::point::check_finite(points)?;
-    let p: Vec<DVec3> = points.iter().map(|q| q.to_dvec3()).collect();
-    let scale = crate::point::bbox_diagonal(points);
+    // Measured at unit scale (an exact power of two; 1 inside 2^±256): cubed speeds and
+    // cross products of points far from 1 overflowed or underflowed, and every point
+    // lost its curvature. The choice does not depend on the scale; curvatures are
+    // reported in the points' units.
+    let unit = crate::point::unit_scale(points.iter().flat_map(|q| q.to_dvec3().to_array()));
+    let p: Vec<DVec3> = points.iter().map(|q| q.to_dvec3() * unit).collect();
+    let scale = crate::point::bbox_diagonal(&p);
     let at = |i: i64| -> DVec3 {
         let n = n as i64;
         match topology {
@@ -238,6 +243,8 @@ pub fn select_interpolation_points<P: CurvePoint>(
             chosen.push((i, class));
         }
     }
+    // Curvature is an inverse length: back to the points' units.
+    let curvature = curvature.into_iter().map(|k| k.map(|k| k * unit)).collect();
     Ok(Selection { flags, points: chosen, curvature })
 }
 

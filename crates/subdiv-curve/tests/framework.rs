@@ -368,3 +368,21 @@ proptest! {
         prop_assert!(max_difference(&moved_fine, &expected) < 1e-11);
     }
 }
+
+/// The joint solve of the virtual points converges as at unit scale: its tolerance, a
+/// multiple of the bounding-box diagonal, was infinite for points of 2^600 (the first
+/// sweep was accepted, far from the solution) and for 2^-600 the diagonal was zero.
+#[test]
+fn the_exact_global_solve_does_not_depend_on_the_scale() {
+    let framework = Framework::published().with_mode(VirtualPoints::ExactGlobal);
+    let polygon = wobbly(12);
+    let flags: Vec<bool> = (0..polygon.len()).map(|i| i % 3 != 1).collect();
+    let unit = framework.virtual_polygon(&polygon, &flags, Topology::Closed).unwrap();
+    for exponent in [-600, 600] {
+        let factor = 2f64.powi(exponent);
+        let scaled: Vec<[f64; 2]> = polygon.iter().map(|p| [p[0] * factor, p[1] * factor]).collect();
+        let solved = framework.virtual_polygon(&scaled, &flags, Topology::Closed).unwrap();
+        let expected: Vec<[f64; 2]> = unit.iter().map(|p| [p[0] * factor, p[1] * factor]).collect();
+        assert_eq!(solved, expected, "2^{exponent}");
+    }
+}

@@ -115,3 +115,28 @@ fn bad_input() {
         .unwrap_err();
     assert!(matches!(err, CurveError::Dimension { dim: 1, .. }), "{err}");
 }
+
+/// Points far from 1 are chosen as at unit scale (an exact power of two): cubed speeds
+/// of 2^600 overflowed and of 2^-600 underflowed, and no point had a curvature. The
+/// curvatures are reported in the points' units (an inverse length).
+#[test]
+fn the_choice_does_not_depend_on_the_scale() {
+    let ellipse: Vec<[f64; 2]> = (0..24)
+        .map(|k| {
+            let t = k as f64 * std::f64::consts::TAU / 24.0;
+            [3.0 * t.cos(), t.sin() + 0.2 * (3.0 * t).sin()]
+        })
+        .collect();
+    let options = SelectionOptions::default();
+    let unit = select_interpolation_points(&ellipse, Topology::Closed, &options).unwrap();
+    assert!(unit.curvature.iter().all(Option::is_some) && !unit.points.is_empty());
+    for exponent in [-600, 600] {
+        let factor = 2f64.powi(exponent);
+        let scaled: Vec<[f64; 2]> = ellipse.iter().map(|p| [p[0] * factor, p[1] * factor]).collect();
+        let chosen = select_interpolation_points(&scaled, Topology::Closed, &options).unwrap();
+        assert_eq!(chosen.points, unit.points, "2^{exponent}");
+        assert_eq!(chosen.flags, unit.flags);
+        let expected: Vec<Option<f64>> = unit.curvature.iter().map(|k| k.map(|k| k / factor)).collect();
+        assert_eq!(chosen.curvature, expected, "2^{exponent}");
+    }
+}
