@@ -90,22 +90,3 @@ pub fn print_out(text: &str) -> CliResult {
         _ => Ok(()),
     }
 }
-
-/// The power of two by which points are measured at unit scale: 1 when their largest
-/// coordinate magnitude lies within `2^±256` (or is zero or not finite), else the one
-/// that brings it into `[1, 2)`. Squares of coordinates beyond about 1e154 overflow and
-/// below 1e-154 underflow (distances, cross products, normals); scaling by a power of
-/// two is exact, so what is measured is that of the points as given.
-pub fn unit_scale<'a>(points: impl IntoIterator<Item = &'a mesh_topo::DVec3>) -> f64 {
-    const SAFE_EXPONENT: i32 = 256;
-    let largest = points.into_iter().fold(0.0f64, |largest, p| largest.max(p.abs().max_element()));
-    if largest == 0.0 || !largest.is_finite() {
-        return 1.0;
-    }
-    let exponent = largest.log2().floor() as i32;
-    if (-SAFE_EXPONENT..=SAFE_EXPONENT).contains(&exponent) {
-        return 1.0;
-    }
-    // 2^-exponent, a normal number for every exponent kept.
-    f64::from_bits(((1023 - exponent.clamp(-1022, 1022)) as u64) << 52)
-}

@@ -353,9 +353,9 @@ pub fn compare_meshes(a_name: &str, a: &PolygonSoup, b_name: &str, b: &PolygonSo
             return Err(CliError::Input(format!("{name}: the mesh has no vertices to compare")));
         }
     }
-    // Measured at unit scale (see `common::unit_scale`: two meshes at 1e-181 compared
+    // Measured at unit scale (see `mesh_topo::scale`: two meshes at 1e-181 compared
     // as equal, each box "a point"), reported in the meshes' units.
-    let scale = super::common::unit_scale(a.positions.iter().chain(&b.positions));
+    let scale = mesh_topo::scale::unit_scale(a.positions.iter().chain(&b.positions));
     let scaled = |soup| scaled_points(soup, scale);
     let (a_points, b_points) = (scaled(a), scaled(b));
     let a_to_b = nearest_distances(&a_points, &b_points)?;

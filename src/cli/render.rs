@@ -422,7 +422,7 @@ pub fn run(args: &super::mesh_cmds::RenderArgs) -> CliResult {
     // The picture does not depend on the scale (the camera frames the bounding box):
     // meshes far from 1 are drawn at unit scale, whose normals neither underflow nor
     // overflow (a mesh at 1e-181 was drawn flat, without shading).
-    let scale = super::common::unit_scale(soups.iter().flat_map(|soup| &soup.positions));
+    let scale = mesh_topo::scale::unit_scale(soups.iter().flat_map(|soup| &soup.positions));
     if scale != 1.0 {
         soups.iter_mut().flat_map(|soup| &mut soup.positions).for_each(|p| *p *= scale);
     }

@@ -62,6 +62,7 @@ pub mod binary;
 pub mod graph;
 pub mod io;
 pub mod memory;
+pub mod scale;
 pub mod shapes;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;

@@ -33,11 +33,6 @@ use glam::DVec3;
 
 use crate::reverse::SeedChoice;
 
-/// Meshes whose largest coordinate magnitude lies in `[2^-256, 2^257)` are reversed as
-/// they are: their squared details stay well inside the `f64` range (details are at most
-/// a few times the largest coordinate, at least its round-off `2^-52` times it).
-const SAFE_EXPONENT: i32 = 256;
-
 /// An exact power-of-two change of scale: `down` brings the largest coordinate into
 /// `[1, 2)`, `up` undoes it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -49,35 +44,20 @@ pub(crate) struct UnitScale {
 }
 
 impl UnitScale {
-    /// The change of scale of `positions`, or `None` when they need none: their largest
-    /// coordinate magnitude is within `2^±256`, or zero, or infinite, or they are empty
-    /// (a NaN coordinate is passed over: the reversal of the scaled copy fails on it).
+    /// The change of scale of `positions` ([`mesh_topo::scale::unit_scale`]), or `None`
+    /// when they need none: their largest coordinate magnitude is within `2^±256` (where
+    /// squared details stay well inside the `f64` range), or zero, or infinite, or they
+    /// are empty (a NaN coordinate is passed over: the reversal of the scaled copy fails
+    /// on it, and the mesh as given then reports it).
     pub(crate) fn of(positions: &[DVec3]) -> Option<Self> {
         Self::of_values(positions)
     }
 
     /// [`Self::of`] for values in several arrays (a pyramid's base and details).
     pub(crate) fn of_values<'a>(values: impl IntoIterator<Item = &'a DVec3>) -> Option<Self> {
-        // A comparison that compiles to a vector maximum (`f64::max` handles NaN and does
-        // not); NaN is skipped here, and reported by the reversal of the mesh as given
-        // once the scaled copy fails on it.
-        let larger = |a: f64, b: f64| if a > b { a } else { b };
-        let largest = values.into_iter().fold(DVec3::ZERO, |largest, p| {
-            let p = p.abs();
-            DVec3::new(larger(p.x, largest.x), larger(p.y, largest.y), larger(p.z, largest.z))
-        });
-        let largest = larger(largest.x, larger(largest.y, largest.z));
-        if largest == 0.0 || !largest.is_finite() {
-            return None;
-        }
-        let exponent = largest.log2().floor() as i32;
-        if (-SAFE_EXPONENT..=SAFE_EXPONENT).contains(&exponent) {
-            return None;
-        }
-        // Both factors normal numbers (the exponent of a subnormal largest value is
-        // below -1022: it is brought to 2^-41 or so, still far inside the safe range).
-        let exponent = exponent.clamp(-1022, 1022);
-        Some(Self { exponent, down: power_of_two(-exponent), up: power_of_two(exponent) })
+        let down = mesh_topo::scale::unit_scale(values);
+        // (Both factors are normal powers of two: `up` is exact.)
+        (down != 1.0).then(|| Self { exponent: -(down.log2() as i32), down, up: 1.0 / down })
     }
 
     /// `positions` brought to unit scale.
@@ -118,12 +98,6 @@ impl UnitScale {
             }
         }
     }
-}
-
-/// `2^exponent` for an exponent of a normal number (`-1022..=1023`).
-fn power_of_two(exponent: i32) -> f64 {
-    debug_assert!((-1022..=1023).contains(&exponent));
-    f64::from_bits(((1023 + exponent) as u64) << 52)
 }
 
 #[cfg(test)]

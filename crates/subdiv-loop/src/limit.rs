@@ -90,7 +90,10 @@ pub fn limit_positions(mesh: &HalfedgeMesh, options: &LoopOptions) -> Result<Vec
 /// As [`limit_positions`].
 pub fn limit_normals(mesh: &HalfedgeMesh, options: &LoopOptions) -> Result<Vec<DVec3>, LoopError> {
     let frames = limit_tangents(mesh, options)?;
-    Ok(frames.iter().map(|(_, [t1, t2])| t1.cross(*t2).normalize_or_zero()).collect())
+    // (At unit scale: the product of tangents far from 1 underflowed to zero, 2^-600,
+    // or overflowed, 2^600, and every normal was zero.)
+    let normal = |[t1, t2]: [DVec3; 2]| mesh_topo::scale::unit_normal(t1, t2).unwrap_or(DVec3::ZERO);
+    Ok(frames.iter().map(|&(_, tangents)| normal(tangents)).collect())
 }
 
 /// Limit positions and the two (unnormalized) limit tangents of every vertex: for
@@ -210,6 +213,26 @@ mod tests {
 
     use super::*;
     use crate::forward::subdivide;
+
+    /// Normals do not depend on the scale: at 2^-600 the tangents' cross products
+    /// underflowed and at 2^600 overflowed, and every normal was zero.
+    #[test]
+    fn normals_do_not_depend_on_the_scale() {
+        let options = LoopOptions::default();
+        let mut soup = shapes::icosahedron();
+        for (i, p) in soup.positions.iter_mut().enumerate() {
+            p.x += 0.1 * (i as f64).sin();
+        }
+        let unit = limit_normals(&HalfedgeMesh::from_soup(&soup).unwrap(), &options).unwrap();
+        assert!(unit.iter().all(|n| (n.length() - 1.0).abs() < 1e-15));
+        for exponent in [-600, 600] {
+            let factor = 2f64.powi(exponent);
+            let scaled =
+                PolygonSoup { positions: soup.positions.iter().map(|p| *p * factor).collect(), ..soup.clone() };
+            let normals = limit_normals(&HalfedgeMesh::from_soup(&scaled).unwrap(), &options).unwrap();
+            assert_eq!(normals, unit, "2^{exponent}");
+        }
+    }
 
     /// The disk of the `rings`-ring around `v`: the faces touching a vertex closer than
     /// `rings` edges to `v`, renumbered; returns the soup and the new index of `v`.

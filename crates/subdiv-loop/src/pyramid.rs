@@ -35,10 +35,10 @@ use mesh_topo::{HalfedgeMesh, PolygonSoup, binary};
 use crate::LoopError;
 use crate::corner_table::CornerTable;
 use crate::detect::{FineOrder, reverse_canonical_soup};
-use crate::forward::{LoopOptions, largest_magnitude};
+use crate::forward::LoopOptions;
 use crate::reverse::{
     CanonicalLevel, FineLevel, LevelParts, all_valences_regular, canonical_reading_is_settled, check_level,
-    energy_scale, energy_scale_of, non_finite_bits, reconstruct_levels, reverse_level,
+    energy_scale, non_finite_bits, reconstruct_levels, reverse_level,
 };
 
 /// Magic number of a Loop pyramid file.
@@ -504,8 +504,7 @@ impl LoopPyramid {
         // Norms of details far from 1 are squared at unit scale (an exact power of two,
         // 1 inside 2^±256): squares of 1e300 were all infinite, of 1e-300 all zero, and
         // the details kept were then the first ones, not the largest.
-        let largest = self.levels.iter().map(|level| largest_magnitude(&level.details)).fold(0.0, f64::max);
-        let scale = energy_scale_of(largest);
+        let scale = mesh_topo::scale::unit_scale(self.levels.iter().flat_map(|level| &level.details));
         let mut ranked: Vec<(f64, u32, u32)> = Vec::with_capacity(total);
         for (l, level) in self.levels.iter().enumerate() {
             let norms = level.details.iter().map(|d| (*d * scale).length_squared());

@@ -641,21 +641,7 @@ pub(crate) fn reverse_level(
 /// arbitrary. A power of two scales exactly, so every comparison is that of the
 /// unscaled values; inside the range nothing changes, to the bit.
 pub(crate) fn energy_scale(positions: &[DVec3]) -> f64 {
-    energy_scale_of(crate::forward::largest_magnitude(positions))
-}
-
-/// [`energy_scale`] of values whose largest coordinate magnitude is `largest`.
-pub(crate) fn energy_scale_of(largest: f64) -> f64 {
-    const SAFE_EXPONENT: i32 = 256;
-    if largest == 0.0 || !largest.is_finite() {
-        return 1.0;
-    }
-    let exponent = largest.log2().floor() as i32;
-    if (-SAFE_EXPONENT..=SAFE_EXPONENT).contains(&exponent) {
-        return 1.0;
-    }
-    // 2^-exponent, a normal number for every exponent kept.
-    f64::from_bits(((1023 - exponent.clamp(-1022, 1022)) as u64) << 52)
+    mesh_topo::scale::unit_scale(positions)
 }
 
 /// The largest sum of squared details of `count` vertices that counts as zero at the

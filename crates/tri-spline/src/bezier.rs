@@ -358,7 +358,8 @@ impl TriBezier<DVec3> {
     /// axes); `None` where the patch is singular.
     pub fn normal(&self, u: DVec2) -> Option<DVec3> {
         let (_, [du, dv]) = self.eval_with_gradient(u);
-        du.cross(dv).try_normalize()
+        // (At unit scale: the product of tangents far from 1 underflows or overflows.)
+        mesh_topo::scale::unit_normal(du, dv)
     }
 }
 
@@ -366,6 +367,21 @@ impl TriBezier<DVec3> {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    /// Normals do not depend on the scale (the tangents' cross product underflowed at
+    /// 2^-600 and overflowed at 2^600: no normal anywhere).
+    #[test]
+    fn normals_do_not_depend_on_the_scale() {
+        let unit = patch(3, 7);
+        let u = DVec2::new(0.5, 0.4);
+        let normal = unit.normal(u).unwrap();
+        for exponent in [-600, 600] {
+            let factor = 2f64.powi(exponent);
+            let control = unit.control_points().iter().map(|p| *p * factor).collect();
+            let scaled = TriBezier::new(3, *unit.domain(), control).unwrap();
+            assert_eq!(scaled.normal(u), Some(normal), "2^{exponent}");
+        }
+    }
 
     fn patch(n: usize, seed: u64) -> TriBezier<DVec3> {
         // Deterministic pseudo-random control points.

@@ -356,7 +356,8 @@ impl BPatch<DVec3> {
     /// The unit normal `P_x × P_y / |P_x × P_y|`; `None` where the patch is singular.
     pub fn normal(&self, u: DVec2) -> Option<DVec3> {
         let (_, [du, dv]) = self.eval_with_gradient(u);
-        du.cross(dv).try_normalize()
+        // (At unit scale: the product of tangents far from 1 underflows or overflows.)
+        mesh_topo::scale::unit_normal(du, dv)
     }
 }
 

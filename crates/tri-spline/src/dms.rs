@@ -711,7 +711,8 @@ impl DmsSpline<DVec3> {
     /// The unit normal; `None` where the surface is singular.
     pub fn normal(&self, u: DVec2) -> Option<DVec3> {
         let (_, [du, dv]) = self.eval_with_gradient(u);
-        du.cross(dv).try_normalize()
+        // (At unit scale: the product of tangents far from 1 underflows or overflows.)
+        mesh_topo::scale::unit_normal(du, dv)
     }
 }
 
