@@ -11,7 +11,8 @@
 //! must reverse; whenever reversal succeeds, coarse vertices plus details are exactly as
 //! many as the fine vertices and reconstruction gives the input back. For every input,
 //! `decompose_soup` (which reads a closed canonical soup without building its mesh) must
-//! give exactly what building the mesh and decomposing it gives, result or error.
+//! give exactly what building the mesh and decomposing it gives, result or error. The
+//! meshes are scaled by 1, 2^-600, 2^600 or 2^1000 last (reversed at unit scale).
 
 #![no_main]
 
@@ -84,11 +85,14 @@ fn damage(soup: &PolygonSoup, u: &mut Unstructured<'_>) -> arbitrary::Result<Pol
 /// Largest distance of a rebuilt vertex from its input, relative to the input's size: its
 /// bounding-box diagonal, or the largest coordinate if larger (rounding is relative to the
 /// coordinates, and a mesh may be flat or even one point).
+/// (Measured at unit scale: the meshes may be scaled far from 1.)
 fn distance_to(fine: &PolygonSoup, rebuilt: &PolygonSoup) -> f64 {
+    let unit = mesh_topo::scale::unit_scale(&fine.positions);
     let (lo, hi) = fine.positions.iter().fold((DVec3::MAX, DVec3::MIN), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
     let largest = fine.positions.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
-    let scale = (hi - lo).length().max(largest).max(1e-300);
-    rebuilt.positions.iter().zip(&fine.positions).map(|(p, q)| p.distance(*q)).fold(0.0, f64::max) / scale
+    let scale = ((hi * unit) - (lo * unit)).length().max(largest * unit).max(1e-300);
+    let distance = |(p, q): (&DVec3, &DVec3)| (*p * unit).distance(*q * unit);
+    rebuilt.positions.iter().zip(&fine.positions).map(distance).fold(0.0, f64::max) / scale
 }
 
 /// `decompose_soup` against building the mesh and decomposing it (Debug text, so that
@@ -160,6 +164,9 @@ fuzz_target!(|data: &[u8]| {
             soup = damage(&soup, u)?;
         }
         let seed = if bool::arbitrary(u)? { Some(u.int_in_range(0..=soup.face_count() + 2)?) } else { None };
+        // Far from 1 too (reversed and rebuilt at unit scale, the same result scaled).
+        let factor = *u.choose(&[1.0, 2f64.powi(-600), 2f64.powi(600), 2f64.powi(1000)]).unwrap_or(&1.0);
+        soup.positions.iter_mut().for_each(|p| *p *= factor);
         check(&soup, rule, boundary, seed, doo_mesh && !damaged);
         Ok(())
     };

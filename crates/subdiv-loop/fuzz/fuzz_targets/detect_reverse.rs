@@ -9,7 +9,8 @@
 //! (any index, out of range included). Whatever
 //! comes out, `reverse` and `decompose` must not panic; when they succeed,
 //! reconstruction must give the input back; and `decompose_soup` must give exactly
-//! what `decompose` of the soup's half-edge mesh gives, result or error.
+//! what `decompose` of the soup's half-edge mesh gives, result or error. The meshes are
+//! scaled by 1, 2^-600, 2^600 or 2^1000 last (energies measured at unit scale).
 
 #![no_main]
 
@@ -128,8 +129,12 @@ fn check(fine: &PolygonSoup, rules: LoopOptions, seeds: &[u32], must_succeed: bo
     let rebuilt = reconstruct(&level.coarse, &level.details, level.order.as_ref(), &rules).expect("valid level");
     let rebuilt = rebuilt.to_soup();
     assert_eq!(rebuilt.indices, fine.indices);
-    let scale = bounding_box_diagonal(&fine.positions).max(1e-300);
-    for (p, q) in rebuilt.positions.iter().zip(&fine.positions) {
+    // (Measured at unit scale: the meshes may be scaled far from 1.)
+    let unit = mesh_topo::scale::unit_scale(&fine.positions);
+    let scaled = |points: &[DVec3]| points.iter().map(|p| *p * unit).collect::<Vec<_>>();
+    let (rebuilt_unit, fine_unit) = (scaled(&rebuilt.positions), scaled(&fine.positions));
+    let scale = bounding_box_diagonal(&fine_unit).max(1e-300);
+    for (p, q) in rebuilt_unit.iter().zip(&fine_unit) {
         assert!(p.distance(*q) <= 1e-9 * scale, "reconstruction error {}", p.distance(*q) / scale);
     }
     let pyramid = decompose(&mesh, &DecomposeOptions { rules, levels: Levels::Max, seed_vertices: seeds.to_vec() })
@@ -179,6 +184,9 @@ fuzz_target!(|data: &[u8]| {
         let seeds = (0..u.int_in_range(0..=2)?)
             .map(|_| u.int_in_range(0..=vertices))
             .collect::<arbitrary::Result<Vec<u32>>>()?;
+        // Far from 1 too (energies and thresholds at unit scale).
+        let factor = *u.choose(&[1.0, 2f64.powi(-600), 2f64.powi(600), 2f64.powi(1000)]).unwrap_or(&1.0);
+        soup.positions.iter_mut().for_each(|p| *p *= factor);
         check(&soup, rules, &seeds, loop_mesh && !broken && seeds.is_empty());
         Ok(())
     };
