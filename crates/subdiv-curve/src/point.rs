@@ -203,6 +203,8 @@ pub(crate) fn bbox_diagonal<P: CurvePoint>(points: &[P]) -> f64 {
 /// lies outside `2^±256`, else 1 (also for none, zero or non-finite values). Scaling by
 /// a power of two is exact, so quantities measured at that scale are those of the values
 /// as given, without the squares' overflow or underflow; inside the range nothing changes.
+/// (The rule of `mesh_topo::scale::unit_scale_of`, kept here: curves do not depend on
+/// the mesh crate.)
 pub(crate) fn unit_scale(values: impl IntoIterator<Item = f64>) -> f64 {
     const SAFE_EXPONENT: i32 = 256;
     let largest = values.into_iter().fold(0.0f64, |largest, x| largest.max(x.abs()));
