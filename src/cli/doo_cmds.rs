@@ -101,7 +101,7 @@ fn choice_lines(level: usize, choices: &[SeedChoice]) -> String {
             choice.component,
             choice.seed_face,
             choice.trials.len(),
-            choice.detail_energy.sqrt(),
+            choice.detail_norm,
             choice.reason
         );
     }

@@ -282,6 +282,7 @@ fn reverse_canonical_with(
         }
     };
     choice.detail_energy = detail_energy;
+    choice.detail_norm = detail_energy.sqrt();
     let reversal = DooReversal::shrink(options.rule, coarse, coarse_positions, details, FineOrder::default(), stats);
     Some(DooReversal { choices: vec![choice], ..reversal })
 }
@@ -1365,7 +1366,15 @@ fn automatic(
     if details_are_zero(energy, scale, faces) {
         let reason = zero_details_reason(0);
         return Some((
-            SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason },
+            SeedChoice {
+                component: 0,
+                seed_face: 0,
+                given: false,
+                trials,
+                detail_energy: energy,
+                detail_norm: energy.sqrt(),
+                reason,
+            },
             0,
         ));
     }
@@ -1403,7 +1412,15 @@ fn automatic(
     trials.push(SeedTrial::invalid(quad, "F_E", &quad_error));
     let reason = ranking_reason(energy, &[(fv_seed, dual_energy, true)]);
     Some((
-        SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason },
+        SeedChoice {
+            component: 0,
+            seed_face: 0,
+            given: false,
+            trials,
+            detail_energy: energy,
+            detail_norm: energy.sqrt(),
+            reason,
+        },
         quad_crossings,
     ))
 }
@@ -1445,7 +1462,18 @@ fn automatic_open(
         }
         only_valid_reason(0)
     };
-    Some((SeedChoice { component: 0, seed_face: 0, given: false, trials, detail_energy: energy, reason }, stats))
+    Some((
+        SeedChoice {
+            component: 0,
+            seed_face: 0,
+            given: false,
+            trials,
+            detail_energy: energy,
+            detail_norm: energy.sqrt(),
+            reason,
+        },
+        stats,
+    ))
 }
 
 /// The breadth-first search of the general path from `seed` as an F_F face, replayed on

@@ -1667,6 +1667,7 @@ mod scale_tests {
             let unit = reverse(&fine, &options).unwrap();
             let unit_pyramid = decompose(&fine, &levels).unwrap().pyramid;
             let choice = &unit.choices()[0];
+            assert!(choice.detail_norm > 0.0 && choice.detail_norm == choice.detail_energy.sqrt());
             if choice.trials.first().is_some_and(|first| first.seed_face != choice.seed_face) {
                 ranking_mattered += 1;
             }
@@ -1677,6 +1678,11 @@ mod scale_tests {
                 let reversal = reverse(&mesh, &options).unwrap();
                 let seeds = |r: &crate::DooReversal| r.choices().iter().map(|c| c.seed_face).collect::<Vec<_>>();
                 assert_eq!(seeds(&reversal), seeds(&unit), "{boundary:?} 2^{exponent}");
+                // The detail norm is the unit one scaled (its energy overflows at 2^900
+                // and underflows at 2^-600).
+                let norms = |r: &crate::DooReversal| r.choices().iter().map(|c| c.detail_norm).collect::<Vec<_>>();
+                let unit_norms: Vec<f64> = norms(&unit).iter().map(|n| n * factor).collect();
+                assert_eq!(norms(&reversal), unit_norms);
                 assert_eq!(bits(reversal.coarse_positions()), bits(&scale(unit.coarse_positions())));
                 assert_eq!(bits(reversal.details()), bits(&scale(unit.details())));
                 assert_eq!(

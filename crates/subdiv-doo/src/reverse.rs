@@ -362,8 +362,19 @@ pub struct SeedChoice {
     pub trials: Vec<SeedTrial>,
     /// The total squared detail norm of the chosen interpretation.
     pub detail_energy: f64,
+    /// Its square root, the detail norm, taken before the energy of a mesh reversed at
+    /// unit scale is brought back to the input's units (see the [module docs](self)):
+    /// finite where `detail_energy` is infinite or zero only because the squares of
+    /// coordinates far from 1 do not fit in `f64`.
+    #[serde(default = "unknown_norm")]
+    pub detail_norm: f64,
     /// Why this one, in words.
     pub reason: String,
+}
+
+/// The detail norm of a choice read without one.
+fn unknown_norm() -> f64 {
+    f64::NAN
 }
 
 impl SeedChoice {
@@ -374,6 +385,7 @@ impl SeedChoice {
             given: true,
             trials: Vec::new(),
             detail_energy: f64::NAN,
+            detail_norm: f64::NAN,
             reason: "seed face given".into(),
         }
     }
@@ -977,6 +989,7 @@ impl<'a> Session<'a> {
                     for (k, choice) in choices.iter_mut().enumerate() {
                         let (seed, _) = self.readings[k][pick[k]];
                         choice.detail_energy = energies[k];
+                        choice.detail_norm = energies[k].sqrt();
                         if seed != choice.seed_face && !choice.given {
                             choice.reason = format!(
                                 "face {seed} as F_F, reading number {} by detail norm (the better ones were rejected \
@@ -1807,7 +1820,16 @@ impl<'a> Search<'a> {
         let ranked: Vec<(usize, f64)> = rank.iter().map(|&i| (found[i].seed, found[i].energy)).collect();
         let best_ff_faces = std::mem::take(&mut found[rank[0]].ff_faces);
         let best_candidates = std::mem::take(&mut found[rank[0]].kept);
-        let choice = SeedChoice { component: k, seed_face: seed, given: false, trials, detail_energy: energy, reason };
+        let detail_norm = energy.sqrt();
+        let choice = SeedChoice {
+            component: k,
+            seed_face: seed,
+            given: false,
+            trials,
+            detail_energy: energy,
+            detail_norm,
+            reason,
+        };
         Ok((choice, ranked, best_ff_faces, best_candidates))
     }
 

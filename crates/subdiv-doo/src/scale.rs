@@ -77,12 +77,16 @@ impl UnitScale {
     }
 
     /// The energies of `choices`, made at unit scale, brought back to the input's scale
-    /// (squares: twice the factor), and a note of it in each reason.
+    /// (squares: twice the factor), their detail norms set (from the energies at unit
+    /// scale: finite where the energies in the input's units are not), and a note of it
+    /// in each reason.
     pub(crate) fn scale_up_choices(&self, choices: &mut [SeedChoice]) {
         // Two products, not one by `up * up`, which overflows for exponents above 511
         // (and `0 * inf` would be NaN).
         let energy = |e: f64| e * self.up * self.up;
         for choice in choices {
+            // The norm from the energy at unit scale: finite where the energy is not.
+            choice.detail_norm = choice.detail_energy.sqrt() * self.up;
             choice.detail_energy = energy(choice.detail_energy);
             for trial in &mut choice.trials {
                 if let Ok(e) = &mut trial.outcome {
@@ -139,10 +143,12 @@ mod tests {
             given: false,
             trials: vec![crate::reverse::SeedTrial::valid(3, "F_F", 0.0, false)],
             detail_energy: 2f64.powi(-1000),
+            detail_norm: f64::NAN,
             reason: "smallest".into(),
         }];
         scale.scale_up_choices(&mut choices);
         assert_eq!(choices[0].detail_energy, 2f64.powi(200));
+        assert_eq!(choices[0].detail_norm, 2f64.powi(100));
         assert_eq!(choices[0].trials[0].outcome, Ok(0.0));
         assert!(choices[0].reason.starts_with("smallest (ranked on the mesh scaled by 2^-600"));
     }
