@@ -47,6 +47,11 @@
 //! [`memory`] holds the memory hints the crates of the workspace share for arrays of many
 //! megabytes: transparent huge pages and mapping pages up front (Linux; nothing elsewhere).
 //!
+//! # Coordinates far from 1
+//! [`scale`] measures geometry whose coordinates lie beyond `2^±256` (distances, normals,
+//! squared-norm rankings) at an exact power-of-two scale, so that squares neither
+//! overflow nor underflow; the crates of the workspace share it.
+//!
 //! # Errors
 //! Building reports bad input as a [`MeshError`] naming the face, vertex or edge at fault;
 //! [`HalfedgeMesh::validate`] reports broken internal invariants (bugs) as
