@@ -1365,18 +1365,7 @@ fn automatic(
     let mut trials = vec![SeedTrial::valid(0, "F_F", energy, false)];
     if details_are_zero(energy, scale, faces) {
         let reason = zero_details_reason(0);
-        return Some((
-            SeedChoice {
-                component: 0,
-                seed_face: 0,
-                given: false,
-                trials,
-                detail_energy: energy,
-                detail_norm: energy.sqrt(),
-                reason,
-            },
-            0,
-        ));
+        return Some((SeedChoice::automatic(0, 0, trials, energy, reason), 0));
     }
     // The lowest F_E quad as F_F: rejected by its own edges, or left to the general path.
     let quad = ff_count;
@@ -1411,18 +1400,7 @@ fn automatic(
     trials.push(SeedTrial::valid(fv_seed, "F_V", dual_energy, true));
     trials.push(SeedTrial::invalid(quad, "F_E", &quad_error));
     let reason = ranking_reason(energy, &[(fv_seed, dual_energy, true)]);
-    Some((
-        SeedChoice {
-            component: 0,
-            seed_face: 0,
-            given: false,
-            trials,
-            detail_energy: energy,
-            detail_norm: energy.sqrt(),
-            reason,
-        },
-        quad_crossings,
-    ))
+    Some((SeedChoice::automatic(0, 0, trials, energy, reason), quad_crossings))
 }
 
 /// The automatic choice of the general path on an open canonical mesh (one with F_E
@@ -1462,18 +1440,7 @@ fn automatic_open(
         }
         only_valid_reason(0)
     };
-    Some((
-        SeedChoice {
-            component: 0,
-            seed_face: 0,
-            given: false,
-            trials,
-            detail_energy: energy,
-            detail_norm: energy.sqrt(),
-            reason,
-        },
-        stats,
-    ))
+    Some((SeedChoice::automatic(0, 0, trials, energy, reason), stats))
 }
 
 /// The breadth-first search of the general path from `seed` as an F_F face, replayed on

@@ -378,6 +378,19 @@ fn unknown_norm() -> f64 {
 }
 
 impl SeedChoice {
+    /// The choice of the automatic mode for `component`: `seed_face` after `trials`, of
+    /// total squared detail norm `detail_energy`, for `reason`.
+    pub(crate) fn automatic(
+        component: usize,
+        seed_face: usize,
+        trials: Vec<SeedTrial>,
+        detail_energy: f64,
+        reason: String,
+    ) -> Self {
+        let detail_norm = detail_energy.sqrt();
+        SeedChoice { component, seed_face, given: false, trials, detail_energy, detail_norm, reason }
+    }
+
     pub(crate) fn given(component: usize, seed_face: usize) -> Self {
         SeedChoice {
             component,
@@ -1820,16 +1833,7 @@ impl<'a> Search<'a> {
         let ranked: Vec<(usize, f64)> = rank.iter().map(|&i| (found[i].seed, found[i].energy)).collect();
         let best_ff_faces = std::mem::take(&mut found[rank[0]].ff_faces);
         let best_candidates = std::mem::take(&mut found[rank[0]].kept);
-        let detail_norm = energy.sqrt();
-        let choice = SeedChoice {
-            component: k,
-            seed_face: seed,
-            given: false,
-            trials,
-            detail_energy: energy,
-            detail_norm,
-            reason,
-        };
+        let choice = SeedChoice::automatic(k, seed, trials, energy, reason);
         Ok((choice, ranked, best_ff_faces, best_candidates))
     }
 
