@@ -572,7 +572,15 @@ impl View {
             return Err(IfsError::Render("no finite point to fit the view to".into()));
         }
         let mut size = [max[0] - min[0], max[1] - min[1]];
-        let extent = size[0].max(size[1]).max(1e-9 * (1.0 + min[0].abs().max(min[1].abs())));
+        // Degenerate extents (one point, a segment) are widened relative to the points'
+        // magnitude, so that the view does not depend on the scale (an absolute floor
+        // of 1e-9 drew a cloud of extent 1e-12 as one dot); points all at the origin
+        // get a unit view.
+        let magnitude = min.iter().chain(&max).fold(0.0f64, |m, v| m.max(v.abs()));
+        let extent = match size[0].max(size[1]).max(1e-9 * magnitude) {
+            0.0 => 1.0,
+            extent => extent,
+        };
         let aspect = f64::from(width.max(1)) / f64::from(height.max(1));
         size = [size[0].max(extent * 1e-3), size[1].max(extent * 1e-3)];
         let grow = 1.0 + 2.0 * margin.max(0.0);
@@ -1027,6 +1035,24 @@ mod tests {
         }
         for grid in [MAX_OCCUPANCY_GRID + 1, usize::MAX] {
             assert!(matches!(PointStats::of(&points, grid), Err(IfsError::ParameterOutOfRange { name: "grid", .. })));
+        }
+    }
+
+    /// A point cloud draws the same at any power-of-two scale: an absolute floor of 1e-9
+    /// on the view's extent drew the Sierpinski triangle at 2^-40 (extent 1e-12) as one
+    /// dot. One point, or points all at the origin, still get a view.
+    #[test]
+    fn the_picture_does_not_depend_on_the_scale() {
+        let points = deterministic_points(&sierpinski(), None, 6, 1 << 12).unwrap();
+        let draw = |points: &[[f64; 3]]| render_points(points, 64, 48, Projection::Xy, ToneMap::Log).unwrap();
+        let unit = draw(&points);
+        for exponent in [-40, -600, 600] {
+            let factor = 2f64.powi(exponent);
+            let scaled: Vec<[f64; 3]> = points.iter().map(|p| p.map(|x| x * factor)).collect();
+            assert!(draw(&scaled) == unit, "2^{exponent}");
+        }
+        for degenerate in [[[0.0; 3]; 3], [[1e-300, -2e-300, 0.0]; 3], [[3.0, 4.0, 0.0]; 3]] {
+            assert_eq!(draw(&degenerate).rgba.len(), 64 * 48 * 4);
         }
     }
 
