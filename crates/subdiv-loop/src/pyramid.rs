@@ -147,6 +147,20 @@ pub struct RateDistortion {
 /// connectivity, and [`LoopError::Overflow`] for finite coordinates so large (near
 /// `f64::MAX`) that a level's coarse positions or details are not.
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
+    // Coordinates far from 1: decomposed at unit scale (see `reverse`).
+    let scale = mesh_topo::scale::unit_scale(mesh.positions());
+    if scale != 1.0 {
+        let mut scaled = mesh.clone();
+        scaled.positions_mut().iter_mut().for_each(|p| *p *= scale);
+        if let Some(pyramid) = decompose_as_given(&scaled, options).ok().and_then(|p| p.scaled_up(scale)) {
+            return Ok(pyramid);
+        }
+    }
+    decompose_as_given(mesh, options)
+}
+
+/// [`decompose`] without the change of scale.
+fn decompose_as_given(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
     if wanted_levels(options) == 0 {
         // No reversal reads the input: check it here, seeds included (a seed that does
         // not exist is an error at any level count, as detection reports it).
@@ -195,6 +209,18 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Loop
 /// # Errors
 /// Those of [`HalfedgeMesh::from_soup`] (as [`LoopError::Mesh`]) and of [`decompose`].
 pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
+    let scale = mesh_topo::scale::unit_scale(&soup.positions);
+    if scale != 1.0 {
+        let scaled = PolygonSoup { positions: soup.positions.iter().map(|p| *p * scale).collect(), ..soup.clone() };
+        if let Some(pyramid) = decompose_soup_as_given(&scaled, options).ok().and_then(|p| p.scaled_up(scale)) {
+            return Ok(pyramid);
+        }
+    }
+    decompose_soup_as_given(soup, options)
+}
+
+/// [`decompose_soup`] without the change of scale.
+fn decompose_soup_as_given(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
     if wanted_levels(options) > 0
         && let Some(level) = reverse_canonical_soup(soup, &options.seed_vertices, &options.rules)
         && level.finite
@@ -213,7 +239,7 @@ pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<
             options,
         );
     }
-    decompose(&HalfedgeMesh::from_soup(soup)?, options)
+    decompose_as_given(&HalfedgeMesh::from_soup(soup)?, options)
 }
 
 /// The number of levels `options` asks for (`usize::MAX` for as many as there are).
@@ -456,6 +482,15 @@ impl LoopPyramid {
             });
         }
         Ok(())
+    }
+
+    /// A pyramid made at unit scale (`scale` times the input) brought back, if it fits.
+    fn scaled_up(mut self, scale: f64) -> Option<Self> {
+        let mut finite = crate::reverse::scaled_up(&mut self.base.positions, scale);
+        for level in &mut self.levels {
+            finite = finite && crate::reverse::scaled_up(&mut level.details, scale);
+        }
+        finite.then_some(self)
     }
 
     /// Level `level` from `base`, this pyramid's base mesh already built.

@@ -159,8 +159,46 @@ pub struct ReverseOptions {
 /// [`LoopError::Mesh`] for a non-finite position, and [`LoopError::NotTriangle`],
 /// [`LoopError::SeedOutOfRange`], [`LoopError::SeedConflict`] and
 /// [`LoopError::NotLoopConnectivity`] from detection; [`LoopError::Overflow`] for
-/// finite coordinates so large (near `f64::MAX`) that the inverse rules' sums are not.
+/// finite coordinates so large (near `f64::MAX`) that the coarse positions or details
+/// are not.
+///
+/// Coordinates beyond `2^±256` are reversed at unit scale, as a copy scaled by an exact
+/// power of two, and the result scaled back (see [`mesh_topo::scale`]): the same
+/// result as the mesh as given, without squares (of the automatic choice) or partial
+/// sums that overflow or underflow.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<ReversedLevel, LoopError> {
+    // Coordinates far from 1: reversed at unit scale (see `mesh_topo::scale`), so that no
+    // partial sum overflows where the result fits. Errors, and results beyond `f64`,
+    // are left to the mesh as given, which reports them as before.
+    let scale = mesh_topo::scale::unit_scale(fine.positions());
+    if scale != 1.0 {
+        let mut scaled = fine.clone();
+        scaled.positions_mut().iter_mut().for_each(|p| *p *= scale);
+        if let Ok(mut level) = reverse_as_given(&scaled, options)
+            && scaled_up(level.coarse.positions_mut(), scale)
+            && scaled_up(&mut level.details, scale)
+        {
+            return Ok(level);
+        }
+    }
+    reverse_as_given(fine, options)
+}
+
+/// `values` computed at unit scale (`scale` times the input) brought back; whether they
+/// are all finite then.
+pub(crate) fn scaled_up(values: &mut [DVec3], scale: f64) -> bool {
+    // (A power of two: its inverse is exact.)
+    let up = 1.0 / scale;
+    let mut finite = true;
+    for value in values {
+        *value *= up;
+        finite &= value.is_finite();
+    }
+    finite
+}
+
+/// [`reverse`] without the change of scale.
+fn reverse_as_given(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<ReversedLevel, LoopError> {
     let LevelParts { coarse, order, positions, details, .. } =
         reverse_level(FineLevel::Mesh(fine), fine.positions(), &options.seed_vertices, &options.rules)?;
     let coarse =
@@ -216,6 +254,33 @@ pub fn reconstruct(
 /// `η/μ = −8β/5`), `(D_− + D_+)/4` on the boundary, nothing at a fixed corner. A step
 /// with an order goes through the corner table and is renumbered.
 pub(crate) fn reconstruct_levels<'a>(
+    coarse: &HalfedgeMesh,
+    levels: impl ExactSizeIterator<Item = (&'a [DVec3], Option<&'a FineOrder>)>,
+    rules: &LoopOptions,
+) -> Result<PolygonSoup, LoopError> {
+    let levels: Vec<_> = levels.collect();
+    // Values far from 1: rebuilt at unit scale (see `reverse`), so that no partial sum
+    // overflows where the result fits; errors and results beyond `f64` are left to the
+    // values as given.
+    let details = levels.iter().flat_map(|&(details, _)| details);
+    let scale = mesh_topo::scale::unit_scale(coarse.positions().iter().chain(details));
+    if scale != 1.0 {
+        let mut scaled = coarse.clone();
+        scaled.positions_mut().iter_mut().for_each(|p| *p *= scale);
+        let details: Vec<Vec<DVec3>> =
+            levels.iter().map(|&(details, _)| details.iter().map(|d| *d * scale).collect()).collect();
+        let steps = details.iter().zip(&levels).map(|(details, &(_, order))| (&details[..], order));
+        if let Ok(mut soup) = reconstruct_levels_as_given(&scaled, steps, rules)
+            && scaled_up(&mut soup.positions, scale)
+        {
+            return Ok(soup);
+        }
+    }
+    reconstruct_levels_as_given(coarse, levels.into_iter(), rules)
+}
+
+/// [`reconstruct_levels`] without the change of scale.
+fn reconstruct_levels_as_given<'a>(
     coarse: &HalfedgeMesh,
     levels: impl ExactSizeIterator<Item = (&'a [DVec3], Option<&'a FineOrder>)>,
     rules: &LoopOptions,
@@ -1923,10 +1988,16 @@ mod tests {
         let mut nan = vec![DVec3::ZERO; coarse.edge_count()];
         nan[3].y = f64::NAN;
         assert!(matches!(reconstruct(&coarse, &nan, None, &rules), Err(LoopError::InvalidDetails { .. })));
-        let mut huge = vec![DVec3::ZERO; coarse.edge_count()];
-        huge[0] = DVec3::splat(f64::MAX);
-        huge[1] = DVec3::splat(f64::MAX);
-        assert!(matches!(reconstruct(&coarse, &huge, None, &rules), Err(LoopError::NonFiniteResult { .. })));
+        // Details whose result is beyond `f64` (a vertex at `f64::MAX`, every detail
+        // `f64::MAX`: its edge points are about 1.4 times that). Two such details beside
+        // vertices near 1 fit, rebuilt at unit scale.
+        let huge = vec![DVec3::splat(f64::MAX); coarse.edge_count()];
+        let mut far = coarse.clone();
+        far.positions_mut()[0] = DVec3::splat(f64::MAX);
+        assert!(matches!(reconstruct(&far, &huge, None, &rules), Err(LoopError::NonFiniteResult { .. })));
+        let mut two = vec![DVec3::ZERO; coarse.edge_count()];
+        two[..2].fill(DVec3::splat(f64::MAX));
+        assert!(reconstruct(&coarse, &two, None, &rules).unwrap().positions().iter().all(|p| p.is_finite()));
         let bad_order =
             FineOrder { vertex_of_canonical: vec![0; 18], face_of_canonical: (0..32).map(|k| 3 * k).collect() };
         let zeros = vec![DVec3::ZERO; coarse.edge_count()];
@@ -2199,6 +2270,39 @@ mod tests {
     /// `decompose_soup`); `reverse` panicked building the coarse mesh from NaN
     /// positions, and `decompose` returned them. Coordinates up to 1e300 reverse to the
     /// scaled unit result.
+    /// Far from 1 a mesh is reversed, decomposed and rebuilt at unit scale: the results
+    /// are the unit ones scaled, to the bit (the regular torus reads several ways, so
+    /// its choice is exercised too; the rebuilt mesh is the unit rebuild scaled).
+    #[test]
+    fn reversals_commute_with_powers_of_two() {
+        use crate::pyramid::{DecomposeOptions, Levels, decompose, decompose_soup};
+        let rules = LoopOptions::default();
+        let options = DecomposeOptions { rules, levels: Levels::Max, seed_vertices: Vec::new() };
+        for coarse in [shapes::icosahedron(), shapes::torus(6, 4, CellKind::Triangles).unwrap()] {
+            let fine = perturb(&crate::forward::subdivide(&mesh(&coarse), 2, &rules).unwrap().into_soup(), 1e-2, 3);
+            let unit = reverse(&mesh(&fine), &ReverseOptions::default()).unwrap();
+            let unit_pyramid = decompose(&mesh(&fine), &options).unwrap();
+            for exponent in [-900, 900] {
+                let factor = 2f64.powi(exponent);
+                let scale = |points: &[DVec3]| points.iter().map(|p| *p * factor).collect::<Vec<_>>();
+                let scaled = PolygonSoup { positions: scale(&fine.positions), ..fine.clone() };
+                let level = reverse(&mesh(&scaled), &ReverseOptions::default()).unwrap();
+                assert_eq!(level.coarse.positions(), &scale(unit.coarse.positions())[..], "2^{exponent}");
+                assert_eq!(level.details, scale(&unit.details));
+                let pyramid = decompose(&mesh(&scaled), &options).unwrap();
+                assert_eq!(pyramid, decompose_soup(&scaled, &options).unwrap());
+                assert_eq!(pyramid.base.positions, scale(&unit_pyramid.base.positions));
+                for (a, b) in pyramid.levels.iter().zip(&unit_pyramid.levels) {
+                    assert_eq!(a.details, scale(&b.details));
+                }
+                // Rebuilt as the unit pyramid rebuilds (exact to round-off), scaled.
+                let levels = pyramid.level_count();
+                let rebuilt = pyramid.reconstruct(levels).unwrap().positions;
+                assert_eq!(rebuilt, scale(&unit_pyramid.reconstruct(levels).unwrap().positions));
+            }
+        }
+    }
+
     #[test]
     fn overflowing_coordinates_are_an_error() {
         use crate::pyramid::{DecomposeOptions, Levels, decompose, decompose_soup};
@@ -2209,6 +2313,7 @@ mod tests {
             PolygonSoup { positions: soup.positions.iter().map(|p| *p / unit * largest).collect(), ..soup.clone() }
         };
         let options = DecomposeOptions { rules, levels: Levels::Count(1), seed_vertices: Vec::new() };
+        let mut overflows = 0;
         for (name, coarse) in [
             ("icosahedron", shapes::icosahedron()),
             ("open grid", shapes::grid(3, 3, CellKind::Triangles).unwrap()),
@@ -2221,18 +2326,35 @@ mod tests {
                 for (p, q) in large.coarse.positions().iter().zip(unit.coarse.positions()) {
                     assert!((*p / 1e300).distance(*q) < 1e-12, "{name}");
                 }
+                // Near `f64::MAX`: an overflow, or (reversed at unit scale, where no
+                // partial sum overflows) a result that fits and rebuilds the input.
                 let huge = scaled(&fine, 1.7e308);
+                let rebuilt_level =
+                    |level: ReversedLevel| reconstruct(&level.coarse, &level.details, level.order.as_ref(), &rules);
                 for result in [
-                    reverse(&mesh(&huge), &ReverseOptions::default()).map(drop),
-                    decompose(&mesh(&huge), &options).map(drop),
-                    decompose_soup(&huge, &options).map(drop),
+                    reverse(&mesh(&huge), &ReverseOptions::default()).and_then(rebuilt_level).map(|m| m.to_soup()),
+                    decompose(&mesh(&huge), &options).and_then(|pyramid| pyramid.reconstruct(1)),
+                    decompose_soup(&huge, &options).and_then(|pyramid| pyramid.reconstruct(1)),
                 ] {
                     match result {
-                        Err(LoopError::Overflow { largest, .. }) => assert_eq!(largest, 1.7e308, "{name}"),
+                        Err(LoopError::Overflow { largest, .. }) => {
+                            assert_eq!(largest, 1.7e308, "{name}");
+                            overflows += 1;
+                        }
+                        Ok(rebuilt) => {
+                            assert_eq!(rebuilt.indices, huge.indices, "{name}");
+                            let error = rebuilt
+                                .positions
+                                .iter()
+                                .zip(&huge.positions)
+                                .map(|(p, q)| (*p / 1.7e308 - *q / 1.7e308).abs().max_element());
+                            assert!(error.fold(0.0, f64::max) < 1e-12, "{name}");
+                        }
                         other => panic!("{name}: {other:?}"),
                     }
                 }
             }
         }
+        assert!(overflows >= 6, "{overflows}");
     }
 }
