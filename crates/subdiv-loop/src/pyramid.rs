@@ -38,7 +38,7 @@ use crate::detect::{FineOrder, reverse_canonical_soup};
 use crate::forward::LoopOptions;
 use crate::reverse::{
     CanonicalLevel, FineLevel, LevelParts, all_valences_regular, canonical_reading_is_settled, check_level,
-    energy_scale, non_finite_bits, reconstruct_levels, reverse_level,
+    non_finite_bits, reconstruct_levels, reverse_level,
 };
 
 /// Magic number of a Loop pyramid file.
@@ -228,10 +228,8 @@ fn decompose_soup_as_given(soup: &PolygonSoup, options: &DecomposeOptions) -> Re
         // A mesh of regular valences only (so is the fine mesh, then: edge points are
         // regular, vertex points keep their valence) reads several ways, which
         // `decompose` compares (see `reverse_level`), unless this reading is settled.
-        && (!all_valences_regular(&level.coarse) || {
-            let scale = energy_scale(&soup.positions);
-            canonical_reading_is_settled(&level.coarse, &level.details, &soup.positions, scale)
-        })
+        && (!all_valences_regular(&level.coarse)
+            || canonical_reading_is_settled(&level.coarse, &level.details, &soup.positions))
     {
         let CanonicalLevel { coarse, positions, details, .. } = level;
         return decompose_below(
@@ -581,7 +579,7 @@ impl LoopPyramid {
         let exact = prepared.reconstruct(finest)?;
         // Distances measured at unit scale (see `compressed`), relative to the diagonal
         // at that scale.
-        let unit = energy_scale(&exact.positions);
+        let unit = mesh_topo::scale::unit_scale(&exact.positions);
         let diagonal = scaled_diagonal(&exact.positions, unit);
         let scale = if diagonal > 0.0 { 1.0 / diagonal } else { 1.0 };
         let total = self.detail_count();
@@ -729,7 +727,7 @@ fn next_table(table: &CornerTable, order: Option<&FineOrder>) -> CornerTable {
 pub fn bounding_box_diagonal(points: &[DVec3]) -> f64 {
     // Measured at unit scale, so that the squares of coordinates far from 1 neither
     // overflow (1e300 gave an infinite diagonal) nor underflow (1e-300 gave 0).
-    let unit = energy_scale(points);
+    let unit = mesh_topo::scale::unit_scale(points);
     scaled_diagonal(points, unit) / unit
 }
 
@@ -1155,18 +1153,8 @@ mod tests {
                     // not (it goes through the mesh, whose readings are compared).
                     let exact = reverse_canonical_soup(&refined, &[], &rules).expect(name);
                     assert!(all_valences_regular(&exact.coarse));
-                    assert!(canonical_reading_is_settled(
-                        &exact.coarse,
-                        &exact.details,
-                        &refined.positions,
-                        energy_scale(&refined.positions)
-                    ));
-                    assert!(!canonical_reading_is_settled(
-                        &read.coarse,
-                        &read.details,
-                        &fine.positions,
-                        energy_scale(&fine.positions)
-                    ));
+                    assert!(canonical_reading_is_settled(&exact.coarse, &exact.details, &refined.positions));
+                    assert!(!canonical_reading_is_settled(&read.coarse, &read.details, &fine.positions));
                 }
                 canonical += 1;
             }

@@ -565,15 +565,14 @@ pub(crate) fn reverse_level(
         Some(level) if !level.several_readings => return Ok(level),
         first => first,
     };
-    // Energies and zero thresholds on scaled values (see `energy_scale`), the scale found
-    // once, when first needed.
-    let scale_cell = std::cell::OnceCell::new();
-    let scale = || *scale_cell.get_or_init(|| energy_scale(positions));
+    // (Energies and zero thresholds are squares: `reverse` and `decompose` hand this
+    // function meshes far from 1 at unit scale, where they neither overflow nor
+    // underflow.)
     // A canonical reading of a connected mesh with zero details is settled (see below)
     // without the fine connectivity that comparing readings needs.
     if let Some(level) = &first
         && level.order.is_none()
-        && canonical_reading_is_settled(&level.coarse, &level.details, positions, scale())
+        && canonical_reading_is_settled(&level.coarse, &level.details, positions)
     {
         return Ok(first.expect("checked above"));
     }
@@ -596,12 +595,12 @@ pub(crate) fn reverse_level(
     // first reading's, or none found yet). Without a first reading, the first candidate
     // that gives a valid reading sets it, as detection would pick it.
     let mut best: Vec<(f64, Option<u32>)> = match &first {
-        Some(first) => readings.energies(first, scale()).into_iter().map(|energy| (energy, None)).collect(),
+        Some(first) => readings.energies(first).into_iter().map(|energy| (energy, None)).collect(),
         None => vec![(f64::INFINITY, None); readings.energies_len()],
     };
     // A component whose best reading so far has zero details is an exact refinement in
     // that reading: no other can do better than round-off, so none is tried.
-    let zero = readings.zero_energies(positions, scale());
+    let zero = readings.zero_energies(positions);
     // The vertex points of the readings found so far: the labeling from a vertex point is
     // forced, so a candidate that is one gives a reading already compared (on a torus,
     // the six neighbours of a vertex point give three readings, two each).
@@ -645,7 +644,7 @@ pub(crate) fn reverse_level(
         };
         // Whether a component's best changed.
         let mut take = |level: &LevelParts, tried: &[(usize, u32)], covered: &mut [bool]| {
-            let energies = readings.energies(level, scale());
+            let energies = readings.energies(level);
             let mut changed = false;
             for &(c, seed) in tried {
                 if energies[c] < best[c].0 {
@@ -698,17 +697,6 @@ pub(crate) fn reverse_level(
     }
 }
 
-/// A power of two that brings the largest coordinate magnitude of `positions` to about
-/// 1 when it lies outside `2^±256` (1 otherwise, and for no or non-finite positions).
-/// The energies of the readings (sums of squared details) and their zero thresholds are
-/// computed on values scaled by it, so that the squares neither overflow nor underflow:
-/// coordinates near 1e300 made every energy infinite, and the choice among readings
-/// arbitrary. A power of two scales exactly, so every comparison is that of the
-/// unscaled values; inside the range nothing changes, to the bit.
-pub(crate) fn energy_scale(positions: &[DVec3]) -> f64 {
-    mesh_topo::scale::unit_scale(positions)
-}
-
 /// The largest sum of squared details of `count` vertices that counts as zero at the
 /// scale `diagonal` (a bounding-box diagonal): `(1e-12 diagonal)^2` per vertex, the
 /// round-off of an exact Loop refinement (the zero test of the Doo-Sabin automatic
@@ -745,16 +733,11 @@ pub(crate) fn all_valences_regular(table: &CornerTable) -> bool {
 /// and details `details`, settles the choice among its readings without comparing them
 /// (see [`reverse_level`]): its details are zero at the scale of the mesh
 /// ([`zero_energy`]), and the coarse mesh is one component with no isolated vertex, so
-/// that the mesh's scale is its component's. `scale`: [`energy_scale`] of `positions`.
-pub(crate) fn canonical_reading_is_settled(
-    coarse: &CornerTable,
-    details: &[DVec3],
-    positions: &[DVec3],
-    scale: f64,
-) -> bool {
-    let energy = details.iter().map(|d| (*d * scale).length_squared()).sum();
+/// that the mesh's scale is its component's.
+pub(crate) fn canonical_reading_is_settled(coarse: &CornerTable, details: &[DVec3], positions: &[DVec3]) -> bool {
+    let energy = details.iter().map(|d| d.length_squared()).sum();
     let (lo, hi) = positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-    let diagonal = if positions.is_empty() { 0.0 } else { (lo * scale).distance(hi * scale) };
+    let diagonal = if positions.is_empty() { 0.0 } else { lo.distance(hi) };
     settled(energy, zero_energy(diagonal, positions.len())) && spans_one_component(coarse)
 }
 
@@ -884,14 +867,14 @@ impl RegularReadings {
     /// Per component, the largest sum of squared details that is still zero at its scale
     /// ([`details_are_zero`] with the bounding-box diagonal of its vertices and their
     /// number).
-    fn zero_energies(&self, positions: &[DVec3], scale: f64) -> Vec<f64> {
+    fn zero_energies(&self, positions: &[DVec3]) -> Vec<f64> {
         let components = self.energies_len();
         let mut boxes = vec![(DVec3::INFINITY, DVec3::NEG_INFINITY, 0usize); components];
         for (&c, &p) in self.component.iter().zip(positions) {
             let (lo, hi, count) = &mut boxes[c as usize];
             (*lo, *hi, *count) = (lo.min(p), hi.max(p), *count + 1);
         }
-        boxes.into_iter().map(|(lo, hi, count)| zero_energy((lo * scale).distance(hi * scale), count)).collect()
+        boxes.into_iter().map(|(lo, hi, count)| zero_energy(lo.distance(hi), count)).collect()
     }
 
     /// The number of components (the length of [`energies`](Self::energies)).
@@ -901,13 +884,13 @@ impl RegularReadings {
 
     /// The sum of squared details of every component in `level` (a reading of the mesh):
     /// detail `e` is that of canonical fine vertex `V + e`.
-    fn energies(&self, level: &LevelParts, scale: f64) -> Vec<f64> {
+    fn energies(&self, level: &LevelParts) -> Vec<f64> {
         let mut energies = vec![0.0; self.energies_len()];
         let first_odd = level.coarse.vertex_count();
         for (e, detail) in level.details.iter().enumerate() {
             let canonical = first_odd + e;
             let v = level.order.as_ref().map_or(canonical as u32, |order| order.vertex_of_canonical[canonical]);
-            energies[self.component[v as usize] as usize] += (*detail * scale).length_squared();
+            energies[self.component[v as usize] as usize] += detail.length_squared();
         }
         energies
     }
