@@ -424,7 +424,7 @@ pub fn run(args: &super::mesh_cmds::RenderArgs) -> CliResult {
     // overflow (a mesh at 1e-181 was drawn flat, without shading).
     let scale = mesh_topo::scale::unit_scale(soups.iter().flat_map(|soup| &soup.positions));
     if scale != 1.0 {
-        soups.iter_mut().flat_map(|soup| &mut soup.positions).for_each(|p| *p *= scale);
+        soups.iter_mut().for_each(|soup| _ = mesh_topo::scale::rescale(&mut soup.positions, scale));
     }
     let image = if soups.len() == 1 {
         render(&soups[0], &options)?

@@ -58,6 +58,17 @@ pub fn unit_scale<'a>(points: impl IntoIterator<Item = &'a DVec3>) -> f64 {
     unit_scale_of(larger(largest.x, larger(largest.y, largest.z)))
 }
 
+/// Multiplies every one of `values` by `factor` (for a change of scale, a power of two:
+/// exact unless a value leaves the range); whether they are all finite then.
+pub fn rescale(values: &mut [DVec3], factor: f64) -> bool {
+    let mut finite = true;
+    for value in values {
+        *value *= factor;
+        finite &= value.is_finite();
+    }
+    finite
+}
+
 /// The unit vector along `a × b`, measured at unit scale so that the product neither
 /// overflows nor underflows (see the [module docs](self)); `None` when `a` and `b` are
 /// parallel, one is zero, or a coordinate is not finite.
@@ -83,6 +94,11 @@ mod tests {
         }
         assert_eq!(unit_scale(&[]), 1.0);
         assert_eq!(unit_scale(&[DVec3::new(f64::NAN, 1e300, 0.0)]), 2f64.powi(-996));
+        let mut values = [DVec3::new(1e300, -2.0, 0.0)];
+        assert!(rescale(&mut values, 2f64.powi(-996)));
+        assert!(rescale(&mut values, 2f64.powi(996)));
+        assert_eq!(values, [DVec3::new(1e300, -2.0, 0.0)]);
+        assert!(!rescale(&mut values, 2f64.powi(100)));
     }
 
     #[test]

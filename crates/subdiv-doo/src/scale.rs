@@ -34,13 +34,10 @@ use glam::DVec3;
 use crate::reverse::SeedChoice;
 
 /// An exact power-of-two change of scale: `down` brings the largest coordinate into
-/// `[1, 2)`, `up` undoes it.
+/// `[1, 2)`, [`up`](Self::up) undoes it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct UnitScale {
-    /// `log2` of `up`.
-    exponent: i32,
     down: f64,
-    up: f64,
 }
 
 impl UnitScale {
@@ -56,24 +53,28 @@ impl UnitScale {
     /// [`Self::of`] for values in several arrays (a pyramid's base and details).
     pub(crate) fn of_values<'a>(values: impl IntoIterator<Item = &'a DVec3>) -> Option<Self> {
         let down = mesh_topo::scale::unit_scale(values);
-        // (Both factors are normal powers of two: `up` is exact.)
-        (down != 1.0).then(|| Self { exponent: -(down.log2() as i32), down, up: 1.0 / down })
+        (down != 1.0).then_some(Self { down })
+    }
+
+    /// The inverse factor (exact: both are normal powers of two).
+    fn up(&self) -> f64 {
+        1.0 / self.down
+    }
+
+    /// `log2` of [`Self::up`].
+    fn exponent(&self) -> i32 {
+        self.up().log2() as i32
     }
 
     /// `positions` brought to unit scale.
     pub(crate) fn scale_down(&self, positions: &mut [DVec3]) {
-        positions.iter_mut().for_each(|p| *p *= self.down);
+        mesh_topo::scale::rescale(positions, self.down);
     }
 
     /// `values` of a reversal at unit scale brought back to the input's scale; whether
     /// they are all finite then.
     pub(crate) fn scale_up(&self, values: &mut [DVec3]) -> bool {
-        let mut finite = true;
-        for value in values {
-            *value *= self.up;
-            finite &= value.is_finite();
-        }
-        finite
+        mesh_topo::scale::rescale(values, self.up())
     }
 
     /// The energies of `choices`, made at unit scale, brought back to the input's scale
@@ -83,10 +84,11 @@ impl UnitScale {
     pub(crate) fn scale_up_choices(&self, choices: &mut [SeedChoice]) {
         // Two products, not one by `up * up`, which overflows for exponents above 511
         // (and `0 * inf` would be NaN).
-        let energy = |e: f64| e * self.up * self.up;
+        let up = self.up();
+        let energy = |e: f64| e * up * up;
         for choice in choices {
             // The norm from the energy at unit scale: finite where the energy is not.
-            choice.detail_norm = choice.detail_energy.sqrt() * self.up;
+            choice.detail_norm = choice.detail_energy.sqrt() * up;
             choice.detail_energy = energy(choice.detail_energy);
             for trial in &mut choice.trials {
                 if let Ok(e) = &mut trial.outcome {
@@ -97,7 +99,7 @@ impl UnitScale {
                 choice.reason.push_str(&format!(
                     " (ranked on the mesh scaled by 2^{}, exactly, to keep the squares in range: the figures in \
                      this reason are in those units, the energies of the choice and its trials in the input's)",
-                    -self.exponent
+                    -self.exponent()
                 ));
             }
         }
@@ -116,16 +118,16 @@ mod tests {
         assert_eq!(at(2f64.powi(-256)), None);
         assert_eq!(at(0.0), None);
         assert_eq!(UnitScale::of(&[]), None);
-        assert_eq!(UnitScale::of(&[DVec3::new(1e-300, f64::NAN, 0.0)]).unwrap().exponent, -997);
+        assert_eq!(UnitScale::of(&[DVec3::new(1e-300, f64::NAN, 0.0)]).unwrap().exponent(), -997);
         assert_eq!(UnitScale::of(&[DVec3::new(1e300, f64::INFINITY, 0.0)]), None);
         let large = at(1e300).unwrap();
-        assert_eq!((large.exponent, large.up, large.down), (996, 2f64.powi(996), 2f64.powi(-996)));
-        assert_eq!(at(f64::MAX).unwrap().exponent, 1022);
-        assert_eq!(at(2f64.powi(-300)).unwrap().exponent, -300);
+        assert_eq!((large.exponent(), large.up(), large.down), (996, 2f64.powi(996), 2f64.powi(-996)));
+        assert_eq!(at(f64::MAX).unwrap().exponent(), 1022);
+        assert_eq!(at(2f64.powi(-300)).unwrap().exponent(), -300);
         // A subnormal largest value: clamped, the factors still normal and exact.
         let tiny = UnitScale::of(&[DVec3::new(0.0, 0.0, 1e-320)]).unwrap();
-        assert_eq!(tiny.exponent, -1022);
-        assert_eq!(tiny.up * tiny.down, 1.0);
+        assert_eq!(tiny.exponent(), -1022);
+        assert_eq!(tiny.up() * tiny.down, 1.0);
         let mut values = [DVec3::new(1e300, -3e299, 1.0)];
         large.scale_down(&mut values);
         assert!(large.scale_up(&mut values));

@@ -151,7 +151,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Loop
     let scale = mesh_topo::scale::unit_scale(mesh.positions());
     if scale != 1.0 {
         let mut scaled = mesh.clone();
-        scaled.positions_mut().iter_mut().for_each(|p| *p *= scale);
+        mesh_topo::scale::rescale(scaled.positions_mut(), scale);
         if let Some(pyramid) = decompose_as_given(&scaled, options).ok().and_then(|p| p.scaled_up(scale)) {
             return Ok(pyramid);
         }
@@ -211,7 +211,8 @@ fn decompose_as_given(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result
 pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<LoopPyramid, LoopError> {
     let scale = mesh_topo::scale::unit_scale(&soup.positions);
     if scale != 1.0 {
-        let scaled = PolygonSoup { positions: soup.positions.iter().map(|p| *p * scale).collect(), ..soup.clone() };
+        let mut scaled = soup.clone();
+        mesh_topo::scale::rescale(&mut scaled.positions, scale);
         if let Some(pyramid) = decompose_soup_as_given(&scaled, options).ok().and_then(|p| p.scaled_up(scale)) {
             return Ok(pyramid);
         }
@@ -484,9 +485,11 @@ impl LoopPyramid {
 
     /// A pyramid made at unit scale (`scale` times the input) brought back, if it fits.
     fn scaled_up(mut self, scale: f64) -> Option<Self> {
-        let mut finite = crate::reverse::scaled_up(&mut self.base.positions, scale);
+        // (A power of two: its inverse is exact.)
+        let up = 1.0 / scale;
+        let mut finite = mesh_topo::scale::rescale(&mut self.base.positions, up);
         for level in &mut self.levels {
-            finite = finite && crate::reverse::scaled_up(&mut level.details, scale);
+            finite = finite && mesh_topo::scale::rescale(&mut level.details, up);
         }
         finite.then_some(self)
     }

@@ -173,28 +173,15 @@ pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<Reversed
     let scale = mesh_topo::scale::unit_scale(fine.positions());
     if scale != 1.0 {
         let mut scaled = fine.clone();
-        scaled.positions_mut().iter_mut().for_each(|p| *p *= scale);
+        mesh_topo::scale::rescale(scaled.positions_mut(), scale);
         if let Ok(mut level) = reverse_as_given(&scaled, options)
-            && scaled_up(level.coarse.positions_mut(), scale)
-            && scaled_up(&mut level.details, scale)
+            && mesh_topo::scale::rescale(level.coarse.positions_mut(), 1.0 / scale)
+            && mesh_topo::scale::rescale(&mut level.details, 1.0 / scale)
         {
             return Ok(level);
         }
     }
     reverse_as_given(fine, options)
-}
-
-/// `values` computed at unit scale (`scale` times the input) brought back; whether they
-/// are all finite then.
-pub(crate) fn scaled_up(values: &mut [DVec3], scale: f64) -> bool {
-    // (A power of two: its inverse is exact.)
-    let up = 1.0 / scale;
-    let mut finite = true;
-    for value in values {
-        *value *= up;
-        finite &= value.is_finite();
-    }
-    finite
 }
 
 /// [`reverse`] without the change of scale.
@@ -266,12 +253,12 @@ pub(crate) fn reconstruct_levels<'a>(
     let scale = mesh_topo::scale::unit_scale(coarse.positions().iter().chain(details));
     if scale != 1.0 {
         let mut scaled = coarse.clone();
-        scaled.positions_mut().iter_mut().for_each(|p| *p *= scale);
+        mesh_topo::scale::rescale(scaled.positions_mut(), scale);
         let details: Vec<Vec<DVec3>> =
             levels.iter().map(|&(details, _)| details.iter().map(|d| *d * scale).collect()).collect();
         let steps = details.iter().zip(&levels).map(|(details, &(_, order))| (&details[..], order));
         if let Ok(mut soup) = reconstruct_levels_as_given(&scaled, steps, rules)
-            && scaled_up(&mut soup.positions, scale)
+            && mesh_topo::scale::rescale(&mut soup.positions, 1.0 / scale)
         {
             return Ok(soup);
         }
