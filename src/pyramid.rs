@@ -19,6 +19,20 @@ pub enum Depth {
 }
 
 /// A multiresolution pyramid of either family.
+///
+/// ```
+/// use multires::prelude::*;
+///
+/// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+/// let fine = HalfedgeMesh::from_soup(&SurfaceScheme::LoopWarren.subdivide(&octahedron, 2)?)?;
+/// let pyramid = decompose(&fine, SurfaceScheme::LoopWarren, Depth::Max)?;
+/// assert!(matches!(pyramid, Pyramid::Loop(_)));
+/// assert_eq!(pyramid.scheme(), SurfaceScheme::LoopWarren);
+/// assert_eq!((pyramid.level_count(), pyramid.base().face_count()), (2, 8));
+/// // The base mesh plus the details: as many vectors as the fine mesh has vertices.
+/// assert_eq!(pyramid.base().vertex_count() + pyramid.detail_count(), fine.vertex_count());
+/// # Ok::<(), multires::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub enum Pyramid {
     /// From reverse Loop.
@@ -219,6 +233,21 @@ impl Pyramid {
 
     /// Rebuilds level `level` (0 = the base mesh) with every detail: exact.
     ///
+    /// ```
+    /// use multires::prelude::*;
+    ///
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let fine = SurfaceScheme::Loop.subdivide(&octahedron, 2)?;
+    /// let pyramid = decompose_soup(&fine, SurfaceScheme::Loop, Depth::Max, &Boundaries::default())?;
+    /// assert_eq!(pyramid.reconstruct(0)?, *pyramid.base());
+    /// // All details are zero (a Loop surface): level 1 is one Loop step of the base.
+    /// let (level1, once) = (pyramid.reconstruct(1)?, SurfaceScheme::Loop.subdivide(&octahedron, 1)?);
+    /// assert_eq!((level1.face_count(), &level1.indices), (8 * 4, &once.indices));
+    /// assert!(level1.positions.iter().zip(&once.positions).all(|(p, q)| p.distance(*q) < 1e-12));
+    /// assert!(pyramid.reconstruct(3).is_err()); // two levels only
+    /// # Ok::<(), multires::Error>(())
+    /// ```
+    ///
     /// # Errors
     /// The member crate's error if `level` is beyond [`level_count`](Self::level_count) or
     /// the pyramid is inconsistent (e.g. read from a damaged file).
@@ -232,6 +261,23 @@ impl Pyramid {
     /// Rebuilds level `level` keeping only the largest `fraction` of the details: the
     /// compression use.
     ///
+    /// ```
+    /// use multires::prelude::*;
+    ///
+    /// // A Doo-Sabin surface with one vertex moved: non-zero details.
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let mut fine = HalfedgeMesh::from_soup(&SurfaceScheme::DooSabin.subdivide(&cube, 2)?)?;
+    /// fine.positions_mut()[10].x += 0.2;
+    /// let pyramid = decompose(&fine, SurfaceScheme::DooSabin, Depth::Levels(2))?;
+    /// // Keeping every detail is the exact reconstruction; keeping none loses the bump.
+    /// assert_eq!(pyramid.reconstruct_keeping(2, 1.0)?, pyramid.reconstruct(2)?);
+    /// let smooth = pyramid.reconstruct_keeping(2, 0.0)?;
+    /// assert!(smooth.positions[10].distance(fine.positions()[10]) > 0.01);
+    /// assert_eq!(smooth.indices, fine.to_soup().indices);
+    /// assert!(pyramid.reconstruct_keeping(2, 1.5).is_err());
+    /// # Ok::<(), multires::Error>(())
+    /// ```
+    ///
     /// # Errors
     /// As [`reconstruct`](Self::reconstruct), and when `fraction` is not in `[0, 1]`.
     pub fn reconstruct_keeping(&self, level: usize, fraction: f64) -> Result<PolygonSoup, Error> {
@@ -243,6 +289,22 @@ impl Pyramid {
 
     /// Errors of [`reconstruct_keeping`](Self::reconstruct_keeping) at the finest level
     /// for each fraction.
+    ///
+    /// ```
+    /// use multires::prelude::*;
+    ///
+    /// // A Loop surface with one vertex moved: non-zero details.
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let mut fine = HalfedgeMesh::from_soup(&SurfaceScheme::Loop.subdivide(&octahedron, 2)?)?;
+    /// fine.positions_mut()[20].z += 0.3;
+    /// let pyramid = decompose(&fine, SurfaceScheme::Loop, Depth::Max)?;
+    /// let rows = pyramid.rate_distortion(&[0.0, 1.0])?;
+    /// assert_eq!((rows[0].kept, rows[1].kept), (0, pyramid.detail_count()));
+    /// // No detail: the bump is smoothed away. Every detail: exact.
+    /// assert!(rows[0].max_error > 0.0 && rows[0].rms_error < rows[0].max_error);
+    /// assert!(rows[1].max_error < 1e-12);
+    /// # Ok::<(), multires::Error>(())
+    /// ```
     ///
     /// # Errors
     /// As [`reconstruct_keeping`](Self::reconstruct_keeping).
@@ -272,6 +334,24 @@ impl Pyramid {
     }
 
     /// The `.mres` file contents (the member crate's versioned encoding).
+    ///
+    /// ```
+    /// use multires::doo::is_doo_pyramid;
+    /// use multires::loop_subdiv::pyramid::LoopPyramid;
+    /// use multires::prelude::*;
+    ///
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// for scheme in [SurfaceScheme::Loop, SurfaceScheme::DooSabin] {
+    ///     let fine = HalfedgeMesh::from_soup(&scheme.subdivide(&octahedron, 1)?)?;
+    ///     let pyramid = decompose(&fine, scheme, Depth::Levels(1))?;
+    ///     let bytes = pyramid.to_bytes()?;
+    ///     // Each family writes its own format, told apart by the magic number.
+    ///     let loop_file = scheme == SurfaceScheme::Loop;
+    ///     assert_eq!((LoopPyramid::is_loop_pyramid(&bytes), is_doo_pyramid(&bytes)), (loop_file, !loop_file));
+    ///     assert_eq!(Pyramid::from_bytes(&bytes)?, pyramid);
+    /// }
+    /// # Ok::<(), multires::Error>(())
+    /// ```
     ///
     /// # Errors
     /// The member crate's encoding error.

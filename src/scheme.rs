@@ -77,6 +77,21 @@ impl SurfaceScheme {
 
     /// True if [`decompose`](crate::decompose) can reverse this scheme (Loop with either
     /// weights and the three Doo-Sabin rules; M-band Loop has no reverse yet).
+    ///
+    /// ```
+    /// use multires::prelude::*;
+    ///
+    /// // A mesh with Loop connectivity: `decompose` succeeds exactly for the reversible schemes.
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let fine = HalfedgeMesh::from_soup(&SurfaceScheme::Loop.subdivide(&octahedron, 1)?)?;
+    /// for scheme in SurfaceScheme::ALL.into_iter().filter(|s| !s.accepts_polygons()) {
+    ///     let result = decompose(&fine, scheme, Depth::Levels(1));
+    ///     assert_eq!(result.is_ok(), scheme.is_reversible(), "{scheme}");
+    /// }
+    /// let error = decompose(&fine, SurfaceScheme::TernaryLoop, Depth::Max).unwrap_err();
+    /// assert!(matches!(error, Error::NotReversible { scheme: SurfaceScheme::TernaryLoop }));
+    /// # Ok::<(), multires::Error>(())
+    /// ```
     pub fn is_reversible(self) -> bool {
         !matches!(self, SurfaceScheme::TernaryLoop | SurfaceScheme::QuaternaryLoop)
     }
@@ -85,6 +100,22 @@ impl SurfaceScheme {
     /// `edges` and `faces`: `4^k F`, `9^k F`, `16^k F` for the Loop family; for
     /// Doo-Sabin one face per face, edge and vertex at each step (`F' = F + E + V`,
     /// `V' = 2E`, `E' = 4E`), so benchmarks can state throughput before running.
+    ///
+    /// ```
+    /// use multires::prelude::*;
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let (v, e, f) = (cube.vertex_count(), cube.edge_count(), cube.face_count());
+    /// // Doo-Sabin: 6 -> 6 + 12 + 8 = 26 -> 26 + 48 + 24 = 98 faces, as subdivision makes them.
+    /// assert_eq!(SurfaceScheme::DooSabin.closed_face_count(v, e, f, 2), 98);
+    /// assert_eq!(SurfaceScheme::DooSabin.subdivide(&cube, 2)?.face_count(), 98);
+    /// // The Loop family on the octahedron (8 faces): M^2 faces per face, M = 2, 3, 4.
+    /// let schemes = [SurfaceScheme::Loop, SurfaceScheme::TernaryLoop, SurfaceScheme::QuaternaryLoop];
+    /// assert_eq!(schemes.map(|s| s.closed_face_count(6, 12, 8, 1)), [32, 72, 128]);
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// assert_eq!(SurfaceScheme::TernaryLoop.subdivide(&octahedron, 1)?.face_count(), 72);
+    /// # Ok::<(), multires::Error>(())
+    /// ```
     pub fn closed_face_count(self, vertices: usize, edges: usize, faces: usize, levels: u32) -> usize {
         match self {
             SurfaceScheme::Loop | SurfaceScheme::LoopWarren => faces * 4usize.pow(levels),
@@ -103,6 +134,22 @@ impl SurfaceScheme {
     }
 
     /// `levels` steps of this scheme on `mesh`, with default parameters.
+    ///
+    /// ```
+    /// use multires::prelude::*;
+    ///
+    /// // One Loop step: every triangle into four, one new vertex per edge.
+    /// let tetrahedron = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+    /// let fine = SurfaceScheme::Loop.subdivide(&tetrahedron, 1)?;
+    /// assert_eq!((fine.face_count(), fine.vertex_count()), (16, 4 + 6));
+    /// assert_eq!(fine.indices.len(), 3 * 16); // all triangles
+    /// // The Loop family takes triangles only; Doo-Sabin takes the cube's quads.
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// assert!(!SurfaceScheme::Loop.accepts_polygons());
+    /// assert!(matches!(SurfaceScheme::Loop.subdivide(&cube, 1), Err(Error::Loop(_))));
+    /// assert_eq!(SurfaceScheme::DooSabin.subdivide(&cube, 1)?.face_count(), 6 + 12 + 8);
+    /// # Ok::<(), multires::Error>(())
+    /// ```
     ///
     /// # Errors
     /// The member crate's error ([`Error::Loop`] or [`Error::Doo`]): a non-triangle face
@@ -161,6 +208,20 @@ impl SurfaceScheme {
     }
 
     /// The per-face rule of a Doo-Sabin-family scheme, `None` for the Loop family.
+    ///
+    /// ```
+    /// use multires::doo::{DooOptions, FaceRule, subdivide};
+    /// use multires::prelude::*;
+    ///
+    /// assert_eq!(SurfaceScheme::DooCentroid.doo_rule(), Some(FaceRule::CENTROID_HALF));
+    /// assert_eq!(SurfaceScheme::Loop.doo_rule(), None);
+    /// // A Doo-Sabin scheme is the member crate's subdivision with this rule.
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let rule = SurfaceScheme::DooSimple.doo_rule().expect("a Doo-Sabin scheme");
+    /// let direct = subdivide(&cube, &DooOptions::new(rule, 2))?.into_soup();
+    /// assert_eq!(SurfaceScheme::DooSimple.subdivide(&cube, 2)?, direct);
+    /// # Ok::<(), multires::Error>(())
+    /// ```
     pub fn doo_rule(self) -> Option<FaceRule> {
         match self {
             SurfaceScheme::DooSabin => Some(FaceRule::DooSabin),
@@ -171,6 +232,21 @@ impl SurfaceScheme {
     }
 
     /// The Loop rules of a reversible Loop-family scheme, `None` otherwise.
+    ///
+    /// ```
+    /// use multires::loop_subdiv::forward::{VertexWeights, subdivide};
+    /// use multires::prelude::*;
+    ///
+    /// let options = SurfaceScheme::LoopWarren.loop_options().expect("a reversible Loop scheme");
+    /// assert_eq!((options.weights, options.keep_corners), (VertexWeights::Warren, false));
+    /// assert_eq!(SurfaceScheme::TernaryLoop.loop_options(), None);
+    /// assert_eq!(SurfaceScheme::DooSabin.loop_options(), None);
+    /// // A Loop scheme is the member crate's subdivision with these options.
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let direct = subdivide(&octahedron, 2, &options)?.into_soup();
+    /// assert_eq!(SurfaceScheme::LoopWarren.subdivide(&octahedron, 2)?, direct);
+    /// # Ok::<(), multires::Error>(())
+    /// ```
     pub fn loop_options(self) -> Option<LoopOptions> {
         self.loop_options_with(&Boundaries::default())
     }

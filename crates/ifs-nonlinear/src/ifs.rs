@@ -99,11 +99,28 @@ pub struct AffineMap {
 impl AffineMap {
     /// A planar map `(x, y) ↦ (a x + b y + e, c x + d y + f)` (the usual IFS-code order
     /// `a b c d e f`).
+    ///
+    /// ```
+    /// use ifs_nonlinear::AffineMap;
+    /// // x' = 2x + 3y + 5, y' = 7x + 11y + 13.
+    /// let map = AffineMap::planar(2.0, 3.0, 7.0, 11.0, 5.0, 13.0);
+    /// assert_eq!((map.linear, map.translation), ([[2.0, 3.0, 0.0], [7.0, 11.0, 0.0], [0.0; 3]], [5.0, 13.0, 0.0]));
+    /// assert_eq!(map.apply(2, [1.0, 1.0, 0.0]), [10.0, 31.0, 0.0]);
+    /// ```
     pub fn planar(a: f64, b: f64, c: f64, d: f64, e: f64, f: f64) -> Self {
         Self { linear: [[a, b, 0.0], [c, d, 0.0], [0.0; 3]], translation: [e, f, 0.0] }
     }
 
     /// Applies the map to the first `dim` coordinates of `p`.
+    ///
+    /// ```
+    /// use ifs_nonlinear::AffineMap;
+    /// // A quarter turn about the z axis, then a shift by (0, 0, 1).
+    /// let linear = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+    /// let map = AffineMap { linear, translation: [0.0, 0.0, 1.0] };
+    /// assert_eq!(map.apply(3, [1.0, 2.0, 3.0]), [-2.0, 1.0, 4.0]);
+    /// assert_eq!(map.apply(2, [1.0, 2.0, 3.0]), [-2.0, 1.0, 0.0]); // in 2D, z is ignored and comes out 0
+    /// ```
     #[inline]
     pub fn apply(&self, dim: usize, p: [f64; 3]) -> [f64; 3] {
         let m = &self.linear;
@@ -270,6 +287,17 @@ impl AffineIfs {
     ///
     /// # Errors
     /// [`IfsError::NotContractive`].
+    ///
+    /// ```
+    /// use ifs_nonlinear::{AffineIfs, AffineMap, IfsError};
+    /// let half = |e| AffineMap::planar(0.5, 0.0, 0.0, 0.5, e, 0.0);
+    /// let report = AffineIfs::new(2, vec![half(0.0), half(0.5)])?.require_contractive()?;
+    /// assert!((report.max_singular_value - 0.5).abs() < 1e-12 && report.jsr_upper < 1.0);
+    /// // A map that doubles lengths has no attractor.
+    /// let expanding = AffineIfs::new(2, vec![AffineMap::planar(2.0, 0.0, 0.0, 2.0, 0.0, 0.0)])?;
+    /// assert!(matches!(expanding.require_contractive(), Err(IfsError::NotContractive { .. })));
+    /// # Ok::<(), IfsError>(())
+    /// ```
     pub fn require_contractive(&self) -> Result<ContractivityReport> {
         let report = self.contractivity();
         if report.is_contractive() {

@@ -101,6 +101,16 @@ impl<T: ComplexField<RealField = f64>> SubdivisionRule<T> {
     /// The restrictions `D_i` of the maps `b ↦ b S_i` to the difference space
     /// `{b : Σ b = 0}`, in the basis `e_j - e_{j+1}` ((m-1)×(m-1), row-vector convention).
     /// Their joint spectral radius decides convergence (ALGORITHMS.md §13, §15.1).
+    ///
+    /// ```
+    /// use ifs_nonlinear::bezier_split;
+    /// use nalgebra::dmatrix;
+    /// // Quadratic de Casteljau at t = 1/2: triangular, spectra {1/2, 1/4} on the difference space.
+    /// let d = bezier_split(2, 0.5)?.difference_matrices();
+    /// assert_eq!(d[0], dmatrix![0.5, 0.0; 0.25, 0.25]);
+    /// assert_eq!(d[1], dmatrix![0.25, 0.25; 0.0, 0.5]);
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
     pub fn difference_matrices(&self) -> Vec<DMatrix<T>> {
         self.matrices.iter().map(difference_restriction).collect()
     }
@@ -126,6 +136,16 @@ impl<T: ComplexField<RealField = f64>> SubdivisionRule<T> {
     /// # Errors
     /// [`IfsError::NotContractive`] with the bounds found (the detail says when the search
     /// was capped by [`CONTRACTIVITY_WORK_BUDGET`], i.e. the verdict may be inconclusive).
+    ///
+    /// ```
+    /// use ifs_nonlinear::{IfsError, SubdivisionRule, bezier_split};
+    /// use nalgebra::dmatrix;
+    /// assert!(bezier_split(3, 0.5)?.require_contractive()?.jsr_upper < 1.0);
+    /// // The identity "subdivision" never shrinks anything.
+    /// let identity = SubdivisionRule::new(vec![dmatrix![1.0, 0.0; 0.0, 1.0]])?;
+    /// assert!(matches!(identity.require_contractive(), Err(IfsError::NotContractive { .. })));
+    /// # Ok::<(), IfsError>(())
+    /// ```
     pub fn require_contractive(&self) -> Result<ContractivityReport> {
         let report = self.contractivity();
         if report.is_contractive() {
@@ -141,6 +161,14 @@ impl<T: ComplexField<RealField = f64>> SubdivisionRule<T> {
 
     /// |det D_i| for each map: the volume factor on the difference space, used for the
     /// default chaos-game probabilities.
+    ///
+    /// ```
+    /// use ifs_nonlinear::bezier_split;
+    /// // Splitting a quadratic at t: det D_0 = t · t², det D_1 = (1-t)³.
+    /// let dets = bezier_split(2, 0.25)?.difference_determinants();
+    /// assert!((dets[0] - 1.0 / 64.0).abs() < 1e-15 && (dets[1] - 27.0 / 64.0).abs() < 1e-15);
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
     pub fn difference_determinants(&self) -> Vec<f64> {
         self.difference_matrices()
             .into_iter()

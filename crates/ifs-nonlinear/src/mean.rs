@@ -102,6 +102,15 @@ impl Mean {
     /// for the geometric mean), not finite, or so close to its edge that F^{-1}(y) is not
     /// finite (e.g. 1/y for a subnormal y); [`IfsError::NotFinite`] for a `Power(p)` with a
     /// NaN or infinite p.
+    ///
+    /// ```
+    /// use ifs_nonlinear::{IfsError, Mean};
+    /// assert_eq!(Mean::Geometric.to_linear(1.0, 0)?, 0.0); // ln 1
+    /// assert_eq!(Mean::Harmonic.to_linear(4.0, 0)?, 0.25); // 1/4
+    /// assert_eq!(Mean::Power(2.0).to_linear(3.0, 0)?, 9.0); // 3²
+    /// assert!(matches!(Mean::Geometric.to_linear(-2.0, 7), Err(IfsError::Domain { index: 7, .. })));
+    /// # Ok::<(), IfsError>(())
+    /// ```
     pub fn to_linear(&self, y: f64, index: usize) -> Result<f64> {
         self.check_exponent()?;
         let ok = y.is_finite()
@@ -140,6 +149,18 @@ impl Mean {
     /// [`IfsError::Domain`] naming `index` when u is outside F's domain (a negative weight
     /// can push an average outside it, e.g. below 0 for a power mean) or F(u) is not finite;
     /// [`IfsError::NotFinite`] for a `Power(p)` with a NaN or infinite p.
+    ///
+    /// ```
+    /// use ifs_nonlinear::{IfsError, Mean};
+    /// // F undoes F^{-1}: a round trip through the linear picture.
+    /// for mean in [Mean::Geometric, Mean::Harmonic, Mean::Power(2.0), Mean::Cosine] {
+    ///     let u = mean.to_linear(0.5, 0)?;
+    ///     assert!((mean.from_linear(u, 0)? - 0.5).abs() < 1e-15, "{}", mean.name());
+    /// }
+    /// // An average pushed below 0 has no image under F(u) = u^{1/2} (p = 2).
+    /// assert!(matches!(Mean::Power(2.0).from_linear(-0.1, 3), Err(IfsError::Domain { index: 3, .. })));
+    /// # Ok::<(), IfsError>(())
+    /// ```
     pub fn from_linear(&self, u: f64, index: usize) -> Result<f64> {
         self.check_exponent()?;
         let y = match self {
@@ -470,6 +491,18 @@ impl CircleMean {
     ///
     /// # Errors
     /// As [`weighted`](Self::weighted).
+    ///
+    /// ```
+    /// use ifs_nonlinear::{CircleMean, IfsError};
+    /// use num_complex::Complex64;
+    /// // About c = 1 + i: radii 1 and 4, a quarter turn apart; the midpoint has radius 2 at 45°.
+    /// let c = Complex64::new(1.0, 1.0);
+    /// let mean = CircleMean::new(c)?;
+    /// let m = mean.mean(c + 1.0, c + Complex64::new(0.0, 4.0), 0.5)?;
+    /// assert!((m - (c + Complex64::from_polar(2.0, std::f64::consts::FRAC_PI_4))).norm() < 1e-14);
+    /// assert!(matches!(mean.mean(c, c + 1.0, 0.5), Err(IfsError::Domain { index: 0, .. }))); // the centre itself
+    /// # Ok::<(), IfsError>(())
+    /// ```
     pub fn mean(&self, a: Complex64, b: Complex64, t: f64) -> Result<Complex64> {
         self.weighted(&[a, b], &[1.0 - t, t])
     }
@@ -508,6 +541,19 @@ impl CircleMean {
     /// # Errors
     /// [`IfsError::TooFewPoints`] below 2 points, and as [`weighted`](Self::weighted)
     /// (indices are input positions).
+    ///
+    /// ```
+    /// use ifs_nonlinear::CircleMean;
+    /// use num_complex::Complex64;
+    /// // Points on the unit circle at angles 0, 1, 2: the new points bisect the angles.
+    /// let mean = CircleMean::new(Complex64::new(0.0, 0.0))?;
+    /// let coarse: Vec<Complex64> = (0..3).map(|k| Complex64::from_polar(1.0, k as f64)).collect();
+    /// let fine = mean.two_point_subdivide(&coarse)?;
+    /// assert_eq!(fine.len(), 5);
+    /// assert!(fine.iter().enumerate().all(|(k, p)| (p - Complex64::from_polar(1.0, k as f64 / 2.0)).norm() < 1e-15));
+    /// assert!(mean.two_point_subdivide(&coarse[..1]).is_err());
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
     pub fn two_point_subdivide(&self, points: &[Complex64]) -> Result<Vec<Complex64>> {
         if points.len() < 2 {
             return Err(IfsError::TooFewPoints { what: "the two-point scheme", needed: 2, got: points.len() });

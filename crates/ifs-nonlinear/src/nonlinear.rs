@@ -140,6 +140,17 @@ pub struct NonlinearIfs<F> {
 impl<F: CoordinateTransform> NonlinearIfs<F> {
     /// Conjugates `linear` by `transform`. The default start set is F of the linear IFS's
     /// default start set.
+    ///
+    /// ```
+    /// use ifs_nonlinear::{AffineIfs, ExpY, Ifs, NonlinearIfs, bezier_split};
+    /// let linear = AffineIfs::from_rule(&bezier_split(2, 0.5)?, &[[-1.0, 0.0], [0.0, 1.0], [1.0, 0.0]])?;
+    /// let ifs = NonlinearIfs::new(linear.clone(), ExpY);
+    /// assert_eq!((ifs.linear(), ifs.transform()), (&linear, &ExpY));
+    /// // The linear start set is the curve's end points (-1, 0) and (1, 0); F = exp on y makes y = 1.
+    /// let start = ifs.default_start();
+    /// assert!(start.iter().zip([-1.0, 1.0, 1.0, 1.0]).all(|(s, e)| (s - e).abs() < 1e-12), "{start:?}");
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
     pub fn new(linear: AffineIfs, transform: F) -> Self {
         let d = linear.dim();
         let start = linear

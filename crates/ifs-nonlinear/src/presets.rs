@@ -57,6 +57,15 @@ pub const PRESETS: &[PresetInfo] = &[
 ///
 /// # Errors
 /// [`IfsError::UnknownPreset`] listing the known names.
+///
+/// ```
+/// use ifs_nonlinear::{IfsError, canonical_preset};
+/// assert_eq!(canonical_preset("fern")?, "barnsley-fern"); // an alias
+/// assert_eq!(canonical_preset("levy")?, "levy"); // a canonical name
+/// let unknown = canonical_preset("mandelbrot").unwrap_err();
+/// assert!(matches!(unknown, IfsError::UnknownPreset { .. }) && unknown.to_string().contains("sierpinski-polar"));
+/// # Ok::<(), IfsError>(())
+/// ```
 pub fn canonical_preset(name: &str) -> Result<&'static str> {
     PRESETS
         .iter()

@@ -211,6 +211,21 @@ pub fn deterministic_points<I: Ifs + ?Sized>(
 ///
 /// # Errors
 /// As [`deterministic_points`].
+///
+/// ```
+/// use ifs_nonlinear::{AffineIfs, IfsError, deterministic_into, deterministic_points, sierpinski};
+/// let ifs = AffineIfs::from_rule(&sierpinski(), &[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])?;
+/// let mut buffer = Vec::new();
+/// for levels in [5, 3] {
+///     let applications = deterministic_into(&ifs, None, levels, 1 << 12, &mut buffer)?;
+///     assert_eq!(buffer, deterministic_points(&ifs, None, levels, 1 << 12)?);
+///     assert!(applications >= buffer.len() as u64); // each point is at least one map application
+/// }
+/// // 3 start points · 3^8 words = 19683 points do not fit a budget of 1000.
+/// let too_many = deterministic_into(&ifs, None, 8, 1000, &mut buffer);
+/// assert!(matches!(too_many, Err(IfsError::BudgetExceeded { needed: 19683, .. })));
+/// # Ok::<(), IfsError>(())
+/// ```
 pub fn deterministic_into<I: Ifs + ?Sized>(
     ifs: &I,
     start: Option<&[f64]>,
@@ -542,6 +557,15 @@ impl View {
     ///
     /// # Errors
     /// [`IfsError::Render`] for an empty or non-finite rectangle.
+    ///
+    /// ```
+    /// use ifs_nonlinear::View;
+    /// let view = View::new([-1.0, 0.0], [1.0, 2.0])?;
+    /// assert_eq!((view.min, view.max), ([-1.0, 0.0], [1.0, 2.0]));
+    /// assert!(View::new([0.0, 0.0], [0.0, 1.0]).is_err()); // zero width
+    /// assert!(View::new([0.0, 0.0], [1.0, f64::NAN]).is_err());
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
     pub fn new(min: [f64; 2], max: [f64; 2]) -> Result<Self> {
         if !(min.iter().chain(&max).all(|v| v.is_finite()) && max[0] > min[0] && max[1] > min[1]) {
             return Err(IfsError::Render(format!("empty or non-finite view {min:?}..{max:?}")));
@@ -555,6 +579,15 @@ impl View {
     /// # Errors
     /// [`IfsError::Render`] when there is no finite point; [`IfsError::NotFinite`] for a NaN
     /// or infinite projection angle (it would make every point NaN).
+    ///
+    /// ```
+    /// use ifs_nonlinear::{Projection, View};
+    /// // The unit square in a 2:1 image without margin: widened about its centre to [-0.5, 1.5] × [0, 1].
+    /// let square = [[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]];
+    /// assert_eq!(View::fit(&square, Projection::Xy, 200, 100, 0.0)?, View::new([-0.5, 0.0], [1.5, 1.0])?);
+    /// assert!(View::fit(&[], Projection::Xy, 200, 100, 0.0).is_err()); // nothing to fit
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
     pub fn fit(points: &[[f64; 3]], projection: Projection, width: u32, height: u32, margin: f64) -> Result<Self> {
         projection.check()?;
         let mut min = [f64::INFINITY; 2];
@@ -617,6 +650,13 @@ impl Projection {
     ///
     /// # Errors
     /// [`IfsError::NotFinite`] naming the angle.
+    ///
+    /// ```
+    /// use ifs_nonlinear::{IfsError, Projection};
+    /// assert!(Projection::Orbit { azimuth: 0.6, elevation: 0.45 }.check().is_ok());
+    /// let err = Projection::Orbit { azimuth: f64::NAN, elevation: 0.0 }.check().unwrap_err();
+    /// assert!(matches!(err, IfsError::NotFinite { .. }) && err.to_string().contains("azimuth"));
+    /// ```
     pub fn check(&self) -> Result<()> {
         if let Projection::Orbit { azimuth, elevation } = *self {
             check_finite(azimuth, || "projection azimuth".into())?;
@@ -626,6 +666,13 @@ impl Projection {
     }
 
     /// Projects a point to the image plane.
+    ///
+    /// ```
+    /// use ifs_nonlinear::Projection;
+    /// assert_eq!(Projection::Xy.project([1.0, 2.0, 3.0]), [1.0, 2.0]);
+    /// // Seen from the front (azimuth 0, elevation 0), the image plane is (x, z).
+    /// assert_eq!(Projection::Orbit { azimuth: 0.0, elevation: 0.0 }.project([1.0, 2.0, 3.0]), [1.0, 3.0]);
+    /// ```
     #[inline]
     pub fn project(&self, p: [f64; 3]) -> [f64; 2] {
         match *self {
@@ -686,6 +733,14 @@ impl Canvas {
     ///
     /// # Errors
     /// [`IfsError::Render`] for a zero side or one above [`MAX_IMAGE_SIDE`].
+    ///
+    /// ```
+    /// use ifs_nonlinear::{Canvas, Projection, View};
+    /// let canvas = Canvas::new(320, 200, View::new([0.0, 0.0], [1.6, 1.0])?)?;
+    /// assert_eq!((canvas.width, canvas.height, canvas.projection), (320, 200, Projection::Xy));
+    /// assert!(Canvas::new(0, 200, canvas.view).is_err());
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
     pub fn new(width: u32, height: u32, view: View) -> Result<Self> {
         check_image_size(width, height)?;
         Ok(Self { width, height, view, projection: Projection::Xy })
@@ -698,6 +753,15 @@ impl Canvas {
     /// # Errors
     /// [`IfsError::Render`] for a side of 0 or above [`MAX_IMAGE_SIDE`], or an empty or
     /// non-finite view; [`IfsError::NotFinite`] for a non-finite projection angle.
+    ///
+    /// ```
+    /// use ifs_nonlinear::{Canvas, View};
+    /// let canvas = Canvas::new(320, 200, View::new([0.0, 0.0], [1.6, 1.0])?)?;
+    /// assert_eq!(canvas.pixel_count()?, 64_000);
+    /// // A hand-built canvas that `Canvas::new` would refuse.
+    /// assert!(Canvas { width: 100_000, ..canvas }.pixel_count().is_err());
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
     pub fn pixel_count(&self) -> Result<usize> {
         check_image_size(self.width, self.height)?;
         View::new(self.view.min, self.view.max)?;
@@ -706,6 +770,16 @@ impl Canvas {
     }
 
     /// The same canvas with another projection.
+    ///
+    /// ```
+    /// use ifs_nonlinear::{Canvas, Density, Projection, View};
+    /// let canvas = Canvas::new(8, 8, View::new([0.0, 0.0], [1.0, 1.0])?)?;
+    /// let front = canvas.with_projection(Projection::Orbit { azimuth: 0.0, elevation: 0.0 }); // image plane (x, z)
+    /// let point = [[0.5, 7.0, 0.5]];
+    /// assert_eq!(Density::from_points(&point, &front)?.total_points(), 1.0);
+    /// assert_eq!(Density::from_points(&point, &canvas)?.total_points(), 0.0); // (x, y) = (0.5, 7) is off the view
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
     pub fn with_projection(mut self, projection: Projection) -> Self {
         self.projection = projection;
         self
@@ -792,6 +866,16 @@ impl Density {
     }
 
     /// Raw counts in units of 1/256 point.
+    ///
+    /// ```
+    /// use ifs_nonlinear::{Canvas, Density, View};
+    /// let canvas = Canvas::new(4, 4, View::new([0.0, 0.0], [1.0, 1.0])?)?;
+    /// // A point at the centre of the top-left pixel puts all 256 units there...
+    /// assert_eq!(Density::from_points(&[[0.125, 0.875, 0.0]], &canvas)?.counts()[..2], [256, 0]);
+    /// // ...one on the border of two pixels, half in each.
+    /// assert_eq!(Density::from_points(&[[0.25, 0.875, 0.0]], &canvas)?.counts()[..2], [128, 128]);
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
     pub fn counts(&self) -> &[u64] {
         &self.counts
     }
@@ -803,6 +887,16 @@ impl Density {
 
     /// Tone-maps the density to an RGBA image: intensity `i ∈ [0, 1]` blends `background`
     /// (i = 0) into `ink` (i = 1).
+    ///
+    /// ```
+    /// use ifs_nonlinear::{Canvas, Density, ToneMap, View};
+    /// let canvas = Canvas::new(2, 1, View::new([0.0, 0.0], [2.0, 1.0])?)?;
+    /// let density = Density::from_points(&[[0.5, 0.5, 0.0]], &canvas)?; // centre of the left pixel
+    /// let (ink, paper) = ([200, 0, 0, 255], [255, 255, 255, 255]);
+    /// let image = density.to_image(ToneMap::Coverage, ink, paper);
+    /// assert_eq!((image.width, image.height, image.rgba), (2, 1, [ink, paper].concat()));
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
     pub fn to_image(&self, tone: ToneMap, ink: [u8; 4], background: [u8; 4]) -> Image {
         let max = self.counts.iter().copied().max().unwrap_or(0) as f64 / 256.0;
         let mut rgba = Vec::with_capacity(self.counts.len() * 4);
@@ -877,6 +971,17 @@ impl Image {
     ///
     /// # Errors
     /// [`IfsError::Png`] if encoding or writing fails (the message names the path).
+    ///
+    /// ```
+    /// let image = ifs_nonlinear::Image { width: 1, height: 1, rgba: vec![255, 0, 0, 255] };
+    /// let dir = std::env::temp_dir();
+    /// let path = dir.join(format!("ifs-nonlinear-write-png-{}.png", std::process::id()));
+    /// image.write_png(&path)?;
+    /// assert_eq!(std::fs::read(&path).unwrap(), image.encode_png()?);
+    /// # std::fs::remove_file(&path).unwrap();
+    /// assert!(image.write_png(&dir.join("no-such-directory-ifs-nonlinear").join("x.png")).is_err());
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
     pub fn write_png(&self, path: &Path) -> Result<()> {
         let bytes = self.encode_png()?;
         std::fs::write(path, bytes).map_err(|e| IfsError::Png(format!("{}: {e}", path.display())))
@@ -994,6 +1099,14 @@ impl PointStats {
 
     /// A text summary: counts, box and centroid (9 decimals), then the occupancy rows as
     /// `#`/`.` strings.
+    ///
+    /// ```
+    /// let stats = ifs_nonlinear::PointStats::of(&[[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]], 2)?;
+    /// let text = stats.to_text();
+    /// assert!(text.starts_with("points 2\nmin 0.000000000 0.000000000 0.000000000\n"));
+    /// assert!(text.ends_with("occupied 2\n.#\n#.\n")); // top row first: (1, 1) is top right
+    /// # Ok::<(), ifs_nonlinear::IfsError>(())
+    /// ```
     pub fn to_text(&self) -> String {
         let f = |v: [f64; 3]| format!("{:.9} {:.9} {:.9}", v[0], v[1], v[2]);
         let mut s = format!(

@@ -79,6 +79,17 @@ fn config() -> impl bincode::config::Config {
 
 /// Encodes `value` behind a header with `magic` and `version`.
 ///
+/// ```
+/// use mesh_topo::binary::{self, BinaryError};
+///
+/// let bytes = binary::encode(*b"EXAMPLE\0", 3, &vec![1.5f64, -2.0])?;
+/// assert_eq!(bytes[..8], *b"EXAMPLE\0");
+/// assert_eq!(bytes[8..12], 3u32.to_le_bytes());
+/// let back: Vec<f64> = binary::decode(&bytes, *b"EXAMPLE\0", 3, "example")?;
+/// assert_eq!(back, [1.5, -2.0]);
+/// # Ok::<(), BinaryError>(())
+/// ```
+///
 /// # Errors
 /// [`BinaryError::Encode`] if the value cannot be serialized.
 pub fn encode<T: Serialize>(magic: [u8; 8], version: u32, value: &T) -> Result<Vec<u8>, BinaryError> {
@@ -92,6 +103,20 @@ pub fn encode<T: Serialize>(magic: [u8; 8], version: u32, value: &T) -> Result<V
 
 /// Decodes a value written by [`encode`] with the same `magic` and `version`.
 /// `what` names the file kind in error messages.
+///
+/// ```
+/// use mesh_topo::binary::{self, BinaryError};
+///
+/// const MAGIC: [u8; 8] = *b"EXAMPLE\0";
+/// let bytes = binary::encode(MAGIC, 1, &(7u32, "seven".to_string()))?;
+/// assert_eq!(binary::decode::<(u32, String)>(&bytes, MAGIC, 1, "example")?, (7, "seven".to_string()));
+/// let newer = binary::decode::<(u32, String)>(&bytes, MAGIC, 2, "example");
+/// assert!(matches!(newer, Err(BinaryError::UnsupportedVersion { found: 1, supported: 2 })));
+/// let cut = binary::decode::<(u32, String)>(&bytes[..bytes.len() - 1], MAGIC, 1, "example");
+/// assert!(matches!(cut, Err(BinaryError::Corrupted { .. })));
+/// assert!(matches!(binary::decode::<u32>(b"MRS", MAGIC, 1, "example"), Err(BinaryError::TruncatedHeader { len: 3 })));
+/// # Ok::<(), BinaryError>(())
+/// ```
 ///
 /// # Errors
 /// Header, version, corruption and trailing-byte errors as [`BinaryError`].
@@ -119,6 +144,18 @@ pub fn decode<T: DeserializeOwned>(bytes: &[u8], magic: [u8; 8], version: u32, w
 }
 
 /// Encodes a mesh (as its polygon soup: positions and faces in order).
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, PolygonSoup, binary, shapes};
+///
+/// let mesh = HalfedgeMesh::from_soup(&shapes::cube())?;
+/// let bytes = binary::encode_mesh(&mesh)?;
+/// assert_eq!(bytes[..8], binary::MESH_MAGIC);
+/// // The payload is the mesh's soup, exactly as it was built from.
+/// let soup: PolygonSoup = binary::decode(&bytes, binary::MESH_MAGIC, binary::MESH_VERSION, "mesh")?;
+/// assert_eq!(soup, shapes::cube());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 ///
 /// # Errors
 /// See [`encode`].

@@ -10,6 +10,7 @@
 /// ```
 /// use mesh_topo::graph::Graph;
 /// let g = Graph::from_edges(5, &[(0, 1), (1, 2), (3, 4)]);
+/// assert_eq!((g.node_count(), g.edge_count()), (5, 3));
 /// assert_eq!(g.neighbors(1), &[0, 2]);
 /// let (labels, count) = g.connected_components();
 /// assert_eq!(count, 2);
@@ -25,6 +26,16 @@ pub struct Graph {
 impl Graph {
     /// Builds the graph from undirected edges. Each edge is stored in both directions;
     /// a node's neighbours keep the order in which its edges were given.
+    ///
+    /// ```
+    /// use mesh_topo::graph::Graph;
+    ///
+    /// let g = Graph::from_edges(4, &[(0, 1), (2, 0), (1, 2)]);
+    /// assert_eq!((g.node_count(), g.edge_count()), (4, 3));
+    /// assert_eq!(g.neighbors(0), &[1, 2]); // in the order the edges were given
+    /// assert_eq!(g.neighbors(2), &[0, 1]);
+    /// assert!(g.neighbors(3).is_empty());
+    /// ```
     ///
     /// # Panics
     /// If an edge names a node `>= node_count` (the caller builds edges from its own
@@ -73,6 +84,16 @@ impl Graph {
 
     /// Nodes reachable from `start` in breadth-first order.
     ///
+    /// ```
+    /// use mesh_topo::graph::Graph;
+    ///
+    /// // A tree 0 - {1, 2}, 1 - 3, 2 - 4, and node 5 on its own.
+    /// let g = Graph::from_edges(6, &[(0, 1), (0, 2), (1, 3), (2, 4)]);
+    /// assert_eq!(g.bfs_order(0), [0, 1, 2, 3, 4]);
+    /// assert_eq!(g.bfs_order(3), [3, 1, 0, 2, 4]);
+    /// assert_eq!(g.bfs_order(5), [5]);
+    /// ```
+    ///
     /// # Panics
     /// If `start >= self.node_count()`.
     pub fn bfs_order(&self, start: u32) -> Vec<u32> {
@@ -84,6 +105,15 @@ impl Graph {
 
     /// Nodes reachable from `start` in depth-first (preorder) order, neighbours visited
     /// in insertion order.
+    ///
+    /// ```
+    /// use mesh_topo::graph::Graph;
+    ///
+    /// // A tree 0 - {1, 2}, 1 - 3, 2 - 4, and node 5 on its own.
+    /// let g = Graph::from_edges(6, &[(0, 1), (0, 2), (1, 3), (2, 4)]);
+    /// assert_eq!(g.dfs_order(0), [0, 1, 3, 2, 4]); // breadth-first: [0, 1, 2, 3, 4]
+    /// assert_eq!(g.dfs_order(5), [5]);
+    /// ```
     ///
     /// # Panics
     /// If `start >= self.node_count()`.
@@ -103,6 +133,15 @@ impl Graph {
 
     /// Component label per node (labels `0..count` in order of each component's
     /// smallest node) and the number of components.
+    ///
+    /// ```
+    /// use mesh_topo::graph::Graph;
+    ///
+    /// let g = Graph::from_edges(6, &[(4, 5), (2, 0)]);
+    /// let (labels, count) = g.connected_components();
+    /// assert_eq!(count, 4);
+    /// assert_eq!(labels, [0, 1, 0, 2, 3, 3]); // numbered by smallest node: {0, 2}, {1}, {3}, {4, 5}
+    /// ```
     pub fn connected_components(&self) -> (Vec<u32>, usize) {
         let n = self.node_count();
         let mut label = vec![u32::MAX; n];
@@ -172,6 +211,14 @@ pub struct UnionFind {
 impl UnionFind {
     /// `n` singleton sets.
     ///
+    /// ```
+    /// use mesh_topo::graph::UnionFind;
+    ///
+    /// let mut sets = UnionFind::new(3);
+    /// assert_eq!(sets.set_count(), 3);
+    /// assert!((0..3).all(|x| sets.find(x) == x));
+    /// ```
+    ///
     /// # Panics
     /// If `n > u32::MAX` (elements are `u32`).
     pub fn new(n: usize) -> Self {
@@ -180,6 +227,16 @@ impl UnionFind {
     }
 
     /// Representative of `x`'s set.
+    ///
+    /// ```
+    /// use mesh_topo::graph::UnionFind;
+    ///
+    /// let mut sets = UnionFind::new(4);
+    /// sets.union(0, 1);
+    /// sets.union(1, 2);
+    /// assert_eq!(sets.find(2), sets.find(0));
+    /// assert_eq!(sets.find(3), 3);
+    /// ```
     ///
     /// # Panics
     /// If `x` is not an element (`x >= n`): the caller's own index, a programming error
@@ -194,6 +251,16 @@ impl UnionFind {
     }
 
     /// Merges the sets of `a` and `b`; returns false if they were already one set.
+    ///
+    /// ```
+    /// use mesh_topo::graph::UnionFind;
+    ///
+    /// let mut sets = UnionFind::new(3);
+    /// assert!(sets.union(0, 1));
+    /// assert!(sets.union(2, 1));
+    /// assert!(!sets.union(0, 2)); // already one set
+    /// assert_eq!(sets.set_count(), 1);
+    /// ```
     ///
     /// # Panics
     /// If `a` or `b` is not an element.
@@ -213,6 +280,15 @@ impl UnionFind {
 
     /// True if `a` and `b` are in the same set.
     ///
+    /// ```
+    /// use mesh_topo::graph::UnionFind;
+    ///
+    /// let mut sets = UnionFind::new(3);
+    /// sets.union(0, 2);
+    /// assert!(sets.same(2, 0));
+    /// assert!(!sets.same(0, 1));
+    /// ```
+    ///
     /// # Panics
     /// If `a` or `b` is not an element.
     pub fn same(&mut self, a: u32, b: u32) -> bool {
@@ -220,11 +296,30 @@ impl UnionFind {
     }
 
     /// Number of disjoint sets.
+    ///
+    /// ```
+    /// use mesh_topo::graph::UnionFind;
+    ///
+    /// let mut sets = UnionFind::new(5);
+    /// assert_eq!(sets.set_count(), 5);
+    /// sets.union(0, 1);
+    /// sets.union(3, 4);
+    /// sets.union(1, 0);
+    /// assert_eq!(sets.set_count(), 3);
+    /// ```
     pub fn set_count(&self) -> usize {
         self.sets
     }
 
     /// Dense labels `0..count`, numbered in order of each set's smallest element.
+    ///
+    /// ```
+    /// use mesh_topo::graph::UnionFind;
+    ///
+    /// let mut sets = UnionFind::new(4);
+    /// sets.union(3, 1);
+    /// assert_eq!(sets.labels(), (vec![0, 1, 2, 1], 3));
+    /// ```
     pub fn labels(&mut self) -> (Vec<u32>, usize) {
         let n = self.parent.len();
         let mut label_of_root = vec![u32::MAX; n];

@@ -79,12 +79,31 @@ define_id!(
 
 impl HalfedgeId {
     /// The twin (opposite) half-edge: same edge, other direction. Pure index arithmetic.
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+    /// let h = mesh.halfedge(4).unwrap(); // 2 -> 0
+    /// assert_eq!((h.twin().raw(), h.twin().twin()), (5, h));
+    /// assert_eq!(mesh.origin(h.twin()), mesh.target(h));
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     #[inline]
     pub fn twin(self) -> HalfedgeId {
         HalfedgeId::new(self.raw() ^ 1)
     }
 
     /// The undirected edge this half-edge belongs to.
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+    /// let h = mesh.halfedge(5).unwrap();
+    /// assert_eq!((h.edge().raw(), h.twin().edge()), (2, h.edge()));
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     #[inline]
     pub fn edge(self) -> EdgeId {
         EdgeId::new(self.raw() >> 1)
@@ -94,6 +113,18 @@ impl HalfedgeId {
 impl EdgeId {
     /// One of the two half-edges of this edge: `side` 0 is the half-edge created first
     /// (it always lies in a face), `side` 1 its twin (in a face, or on the boundary).
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+    /// let e = mesh.edge(1).unwrap();
+    /// assert_eq!((e.halfedge(0).raw(), e.halfedge(1)), (2, e.halfedge(0).twin()));
+    /// assert_eq!(e.halfedge(1).edge(), e);
+    /// assert!(mesh.halfedge_face(e.halfedge(0)).is_some());
+    /// assert!(mesh.is_boundary_halfedge(e.halfedge(1))); // a lone triangle: the hole
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     #[inline]
     pub fn halfedge(self, side: u32) -> HalfedgeId {
         debug_assert!(side < 2);

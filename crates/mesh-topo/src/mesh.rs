@@ -52,7 +52,10 @@ pub(crate) const INVALID: u32 = u32::MAX;
 /// );
 /// let mesh = HalfedgeMesh::from_soup(&soup)?;
 /// assert_eq!((mesh.vertex_count(), mesh.edge_count(), mesh.face_count()), (4, 5, 2));
+/// assert_eq!(mesh.halfedge_count(), 2 * mesh.edge_count());
+/// assert_eq!(mesh.vertex(4), None); // handles are checked against the mesh
 /// let v0 = mesh.vertex(0).unwrap();
+/// assert_eq!(mesh.position(v0), DVec3::ZERO);
 /// assert!(mesh.is_boundary_vertex(v0));
 /// assert_eq!(mesh.valence(v0), 3);
 /// assert_eq!(mesh.to_soup(), soup);
@@ -90,6 +93,19 @@ impl TryFrom<PolygonSoup> for HalfedgeMesh {
 impl HalfedgeMesh {
     /// Builds a mesh from positions and per-face vertex index lists.
     ///
+    /// ```
+    /// use glam::DVec3;
+    /// use mesh_topo::{HalfedgeMesh, MeshError};
+    ///
+    /// let positions = vec![DVec3::ZERO, DVec3::X, DVec3::Y];
+    /// let mesh = HalfedgeMesh::from_faces(positions.clone(), [[0u32, 1, 2]])?;
+    /// assert_eq!((mesh.vertex_count(), mesh.edge_count(), mesh.face_count()), (3, 3, 1));
+    /// // Vertex 3 does not exist: the error names the face and the corner.
+    /// let err = HalfedgeMesh::from_faces(positions, [[0u32, 1, 3]]).unwrap_err();
+    /// assert_eq!(err, MeshError::IndexOutOfRange { face: 0, corner: 2, index: 3, vertex_count: 3 });
+    /// # Ok::<(), MeshError>(())
+    /// ```
+    ///
     /// # Errors
     /// See [`from_soup`](Self::from_soup).
     pub fn from_faces<F, I>(positions: Vec<DVec3>, faces: F) -> Result<Self, MeshError>
@@ -103,6 +119,21 @@ impl HalfedgeMesh {
     /// Builds the half-edge structure of a polygon soup, checking every condition for a
     /// manifold, consistently oriented mesh. Runs in time linear in the number of face
     /// corners (plus a sort of each vertex's outgoing edges by target).
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh, MeshError, PolygonSoup, shapes};
+    ///
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// assert_eq!((mesh.vertex_count(), mesh.edge_count(), mesh.face_count()), (8, 12, 6));
+    /// // Both triangles run along 0 -> 1: no consistent orientation exists.
+    /// let positions = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::NEG_Y];
+    /// let soup = PolygonSoup::from_faces(positions, [[0u32, 1, 2], [0, 1, 3]]);
+    /// assert_eq!(
+    ///     HalfedgeMesh::from_soup(&soup).unwrap_err(),
+    ///     MeshError::InconsistentOrientation { from: 0, to: 1, first_face: 0, second_face: 1 }
+    /// );
+    /// # Ok::<(), MeshError>(())
+    /// ```
     ///
     /// # Performance
     /// A few passes over flat arrays (see the private `Builder` docs): about 5 million
@@ -221,6 +252,20 @@ impl HalfedgeMesh {
 
     /// Replaces all positions (same count). Returns the old ones.
     ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh, PositionsError, shapes};
+    ///
+    /// let mut mesh = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+    /// let doubled: Vec<DVec3> = mesh.positions().iter().map(|&p| 2.0 * p).collect();
+    /// let old = mesh.replace_positions(doubled)?;
+    /// assert_eq!(mesh.positions()[0], 2.0 * old[0]);
+    /// let err = mesh.replace_positions(vec![DVec3::ZERO; 3]).unwrap_err();
+    /// assert_eq!(err, PositionsError::CountMismatch { expected: 4, found: 3 });
+    /// assert!(mesh.replace_positions(vec![DVec3::NAN; 4]).is_err());
+    /// assert_eq!(mesh.positions()[0], 2.0 * old[0]); // unchanged by the failed calls
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
     /// # Errors
     /// [`MeshError::TooLarge`] is never returned; a count mismatch or a non-finite value
     /// gives the corresponding error and leaves the mesh unchanged.
@@ -237,6 +282,17 @@ impl HalfedgeMesh {
 
     /// The half-edge after `h` in its face (or boundary loop).
     ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+    /// let h = mesh.face_halfedge(mesh.face(0).unwrap()); // 0 -> 1
+    /// let n = mesh.next(h);
+    /// assert_eq!((mesh.origin(n).raw(), mesh.target(n).raw()), (1, 2));
+    /// assert_eq!(mesh.next(mesh.next(n)), h); // three steps round the triangle
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    ///
     /// # Panics
     /// If `h` is not a half-edge of this mesh (see [Handles](Self#handles)).
     #[inline]
@@ -246,6 +302,18 @@ impl HalfedgeMesh {
 
     /// The half-edge before `h` in its face (or boundary loop).
     ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+    /// let h = mesh.face_halfedge(mesh.face(0).unwrap()); // 0 -> 1
+    /// let p = mesh.prev(h);
+    /// assert_eq!((mesh.origin(p).raw(), mesh.target(p).raw()), (2, 0));
+    /// // `prev` undoes `next`, on faces and boundary loops alike.
+    /// assert!(mesh.halfedges().all(|h| mesh.prev(mesh.next(h)) == h));
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    ///
     /// # Panics
     /// If `h` is not a half-edge of this mesh (see [Handles](Self#handles)).
     #[inline]
@@ -254,12 +322,33 @@ impl HalfedgeMesh {
     }
 
     /// The twin (opposite) half-edge. Same as [`HalfedgeId::twin`].
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+    /// let h = mesh.face_halfedge(mesh.face(0).unwrap()); // 0 -> 1
+    /// let t = mesh.twin(h);
+    /// assert_eq!((mesh.origin(t).raw(), mesh.target(t).raw()), (1, 0));
+    /// assert!(mesh.is_boundary_halfedge(t)); // a single triangle: the other side is the hole
+    /// assert_eq!((mesh.twin(t), t.edge()), (h, h.edge()));
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     #[inline]
     pub fn twin(&self, h: HalfedgeId) -> HalfedgeId {
         h.twin()
     }
 
     /// The vertex `h` points to.
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+    /// let targets: Vec<u32> = mesh.face_halfedges(mesh.face(0).unwrap()).map(|h| mesh.target(h).raw()).collect();
+    /// assert_eq!(targets, [1, 2, 0]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     ///
     /// # Panics
     /// If `h` is not a half-edge of this mesh (see [Handles](Self#handles)).
@@ -270,6 +359,17 @@ impl HalfedgeMesh {
 
     /// The vertex `h` starts from.
     ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+    /// let h = mesh.face_halfedge(mesh.face(0).unwrap());
+    /// assert_eq!((mesh.origin(h).raw(), mesh.target(h).raw()), (0, 1));
+    /// // The origin of a half-edge is the target of its twin.
+    /// assert!(mesh.halfedges().all(|h| mesh.origin(h) == mesh.target(h.twin())));
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    ///
     /// # Panics
     /// If `h` is not a half-edge of this mesh (see [Handles](Self#handles)).
     #[inline]
@@ -278,6 +378,20 @@ impl HalfedgeMesh {
     }
 
     /// The face on the left of `h`, or `None` for a boundary half-edge.
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// // A square split along the diagonal 0 - 2.
+    /// let positions = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+    /// let mesh = HalfedgeMesh::from_faces(positions, [[0u32, 1, 2], [0, 2, 3]])?;
+    /// let v = |i| mesh.vertex(i).unwrap();
+    /// let diagonal = mesh.find_halfedge(v(0), v(2)).unwrap();
+    /// assert_eq!(mesh.halfedge_face(diagonal), mesh.face(1));
+    /// assert_eq!(mesh.halfedge_face(diagonal.twin()), mesh.face(0));
+    /// assert_eq!(mesh.halfedge_face(mesh.find_halfedge(v(1), v(0)).unwrap()), None);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     ///
     /// # Panics
     /// If `h` is not a half-edge of this mesh (see [Handles](Self#handles)).
@@ -289,6 +403,17 @@ impl HalfedgeMesh {
 
     /// True if `h` has no face (it runs along a hole).
     ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+    /// for h in mesh.face_halfedges(mesh.face(0).unwrap()) {
+    ///     assert!(!mesh.is_boundary_halfedge(h));
+    ///     assert!(mesh.is_boundary_halfedge(h.twin()));
+    /// }
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    ///
     /// # Panics
     /// If `h` is not a half-edge of this mesh (see [Handles](Self#handles)).
     #[inline]
@@ -297,6 +422,18 @@ impl HalfedgeMesh {
     }
 
     /// True if one side of the edge has no face.
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// // A square split along the diagonal 0 - 2: only the diagonal is interior.
+    /// let positions = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+    /// let mesh = HalfedgeMesh::from_faces(positions, [[0u32, 1, 2], [0, 2, 3]])?;
+    /// let (v0, v2) = (mesh.vertex(0).unwrap(), mesh.vertex(2).unwrap());
+    /// assert!(!mesh.is_boundary_edge(mesh.find_halfedge(v0, v2).unwrap().edge()));
+    /// assert_eq!(mesh.edges().filter(|&e| mesh.is_boundary_edge(e)).count(), 4);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     ///
     /// # Panics
     /// If `e` is not an edge of this mesh (see [Handles](Self#handles)).
@@ -308,6 +445,19 @@ impl HalfedgeMesh {
     /// An outgoing half-edge of `v` (the boundary one if `v` is on the boundary), or
     /// `None` for an isolated vertex.
     ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// // A triangle and an unused vertex 3.
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z], [[0u32, 1, 2]])?;
+    /// let h = mesh.vertex_halfedge(mesh.vertex(0).unwrap()).unwrap();
+    /// assert!(mesh.is_boundary_halfedge(h));
+    /// // The boundary runs 0 -> 2 -> 1, the hole on its left.
+    /// assert_eq!((mesh.origin(h).raw(), mesh.target(h).raw()), (0, 2));
+    /// assert_eq!(mesh.vertex_halfedge(mesh.vertex(3).unwrap()), None);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    ///
     /// # Panics
     /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
     #[inline]
@@ -318,6 +468,17 @@ impl HalfedgeMesh {
 
     /// The half-edge leaving the first corner of face `f`.
     ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    ///
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let f = mesh.face(1).unwrap(); // the cube's face [4, 5, 7, 6]
+    /// let h = mesh.face_halfedge(f);
+    /// assert_eq!((mesh.origin(h).raw(), mesh.target(h).raw()), (4, 5));
+    /// assert_eq!(mesh.halfedge_face(h), Some(f));
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    ///
     /// # Panics
     /// If `f` is not a face of this mesh (see [Handles](Self#handles)).
     #[inline]
@@ -326,6 +487,16 @@ impl HalfedgeMesh {
     }
 
     /// The two end vertices of an edge, in the direction of its half-edge 0.
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+    /// // Edges are numbered in order of first appearance, in the direction of the face.
+    /// let ends: Vec<[u32; 2]> = mesh.edges().map(|e| mesh.edge_vertices(e).map(|v| v.raw())).collect();
+    /// assert_eq!(ends, [[0, 1], [1, 2], [2, 0]]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     ///
     /// # Panics
     /// If `e` is not an edge of this mesh (see [Handles](Self#handles)).
@@ -337,6 +508,16 @@ impl HalfedgeMesh {
 
     /// True if `v` has no incident edge.
     ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// // Vertex 3 is kept but no face uses it.
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z], [[0u32, 1, 2]])?;
+    /// let isolated: Vec<u32> = mesh.vertices().filter(|&v| mesh.is_isolated(v)).map(|v| v.raw()).collect();
+    /// assert_eq!(isolated, [3]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    ///
     /// # Panics
     /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
     #[inline]
@@ -345,6 +526,19 @@ impl HalfedgeMesh {
     }
 
     /// True if `v` lies on a boundary loop.
+    ///
+    /// ```
+    /// use mesh_topo::HalfedgeMesh;
+    /// use mesh_topo::shapes::{self, CellKind};
+    ///
+    /// // A 2 x 2 grid of quads: only the centre vertex is interior.
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads)?)?;
+    /// let interior: Vec<u32> = mesh.vertices().filter(|&v| !mesh.is_boundary_vertex(v)).map(|v| v.raw()).collect();
+    /// assert_eq!(interior, [4]);
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// assert!(cube.vertices().all(|v| !cube.is_boundary_vertex(v)));
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     ///
     /// # Panics
     /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
@@ -356,6 +550,18 @@ impl HalfedgeMesh {
     /// Number of edges at `v`. For an interior vertex this is also its number of faces;
     /// a boundary vertex has one face fewer than its valence.
     ///
+    /// ```
+    /// use mesh_topo::HalfedgeMesh;
+    /// use mesh_topo::shapes::{self, CellKind};
+    ///
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads)?)?;
+    /// let valences: Vec<usize> = mesh.vertices().map(|v| mesh.valence(v)).collect();
+    /// assert_eq!(valences, [2, 3, 2, 3, 4, 3, 2, 3, 2]);
+    /// // Every edge has two ends.
+    /// assert_eq!(valences.iter().sum::<usize>(), 2 * mesh.edge_count());
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    ///
     /// # Panics
     /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
     #[inline]
@@ -365,6 +571,17 @@ impl HalfedgeMesh {
 
     /// Number of corners of face `f`.
     ///
+    /// ```
+    /// use mesh_topo::HalfedgeMesh;
+    /// use mesh_topo::shapes::{self, CellKind};
+    ///
+    /// // Quads and pairs of triangles in a checkerboard.
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Mixed)?)?;
+    /// let degrees: Vec<usize> = mesh.faces().map(|f| mesh.face_degree(f)).collect();
+    /// assert_eq!(degrees, [4, 3, 3, 3, 3, 4]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    ///
     /// # Panics
     /// If `f` is not a face of this mesh (see [Handles](Self#handles)).
     #[inline]
@@ -373,6 +590,20 @@ impl HalfedgeMesh {
     }
 
     /// The half-edge from `from` to `to`, if that edge exists.
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// // A square split along the diagonal 0 - 2.
+    /// let positions = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+    /// let mesh = HalfedgeMesh::from_faces(positions, [[0u32, 1, 2], [0, 2, 3]])?;
+    /// let v = |i| mesh.vertex(i).unwrap();
+    /// let h = mesh.find_halfedge(v(0), v(2)).unwrap();
+    /// assert_eq!((mesh.origin(h), mesh.target(h)), (v(0), v(2)));
+    /// assert_eq!(mesh.find_halfedge(v(2), v(0)), Some(h.twin()));
+    /// assert_eq!(mesh.find_halfedge(v(1), v(3)), None); // the other diagonal is no edge
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     ///
     /// # Panics
     /// If `from` or `to` is not a vertex of this mesh (see [Handles](Self#handles)).
@@ -387,6 +618,21 @@ impl HalfedgeMesh {
     /// [`vertex_halfedge`](Self::vertex_halfedge) (the boundary half-edge for a boundary
     /// vertex). Empty for an isolated vertex.
     ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// // A square split along the diagonal 0 - 2; vertex 0 is on the boundary.
+    /// let positions = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+    /// let mesh = HalfedgeMesh::from_faces(positions, [[0u32, 1, 2], [0, 2, 3]])?;
+    /// let v0 = mesh.vertex(0).unwrap();
+    /// let out: Vec<_> = mesh.outgoing_halfedges(v0).collect();
+    /// // From the boundary half-edge 0 -> 3, counter-clockwise across the hole to 1, then 2.
+    /// assert!(mesh.is_boundary_halfedge(out[0]));
+    /// assert_eq!(out.iter().map(|&h| mesh.target(h).raw()).collect::<Vec<_>>(), [3, 1, 2]);
+    /// assert!(out.iter().all(|&h| mesh.origin(h) == v0));
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    ///
     /// # Panics
     /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
     #[inline]
@@ -396,6 +642,17 @@ impl HalfedgeMesh {
     }
 
     /// The neighbours of `v` (targets of its outgoing half-edges), counter-clockwise.
+    ///
+    /// ```
+    /// use mesh_topo::HalfedgeMesh;
+    /// use mesh_topo::shapes::{self, CellKind};
+    ///
+    /// // The centre (1, 1) of a 2 x 2 grid: neighbours 3 = (0, 1), 1 = (1, 0), 5 = (2, 1), 7 = (1, 2).
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads)?)?;
+    /// let ring: Vec<u32> = mesh.vertex_neighbors(mesh.vertex(4).unwrap()).map(|v| v.raw()).collect();
+    /// assert_eq!(ring, [3, 1, 5, 7]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     ///
     /// # Panics
     /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
@@ -407,6 +664,19 @@ impl HalfedgeMesh {
     /// The faces around `v`, counter-clockwise (for a boundary vertex from the face after
     /// the boundary to the face before it).
     ///
+    /// ```
+    /// use mesh_topo::HalfedgeMesh;
+    /// use mesh_topo::shapes::{self, CellKind};
+    ///
+    /// // A 2 x 2 grid: cells 0 and 1 at the bottom, 2 and 3 at the top.
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads)?)?;
+    /// let around = |v| mesh.vertex_faces(mesh.vertex(v).unwrap()).map(|f| f.raw()).collect::<Vec<_>>();
+    /// assert_eq!(around(4), [0, 1, 3, 2]); // the centre, counter-clockwise
+    /// assert_eq!(around(1), [1, 0]); // bottom middle: from after the hole to before it
+    /// assert_eq!(around(0), [0]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    ///
     /// # Panics
     /// If `v` is not a vertex of this mesh (see [Handles](Self#handles)).
     #[inline]
@@ -415,6 +685,21 @@ impl HalfedgeMesh {
     }
 
     /// The half-edges of face `f` in order, starting at its first corner.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    ///
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let f = mesh.face(1).unwrap();
+    /// let loop_: Vec<_> = mesh.face_halfedges(f).collect();
+    /// assert_eq!(loop_.len(), 4);
+    /// assert_eq!(loop_[0], mesh.face_halfedge(f));
+    /// for (k, &h) in loop_.iter().enumerate() {
+    ///     assert_eq!(mesh.next(h), loop_[(k + 1) % 4]);
+    ///     assert_eq!(mesh.halfedge_face(h), Some(f));
+    /// }
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     ///
     /// # Panics
     /// If `f` is not a face of this mesh (see [Handles](Self#handles)).
@@ -426,6 +711,17 @@ impl HalfedgeMesh {
 
     /// The half-edges of the loop through `h` (a face or a boundary loop), starting at `h`.
     ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+    /// let outside = mesh.face_halfedge(mesh.face(0).unwrap()).twin(); // 1 -> 0
+    /// let hole: Vec<u32> = mesh.halfedge_loop(outside).map(|h| mesh.origin(h).raw()).collect();
+    /// assert_eq!(hole, [1, 0, 2]); // clockwise seen from +z: the hole is on the left
+    /// assert!(mesh.halfedge_loop(outside).all(|h| mesh.is_boundary_halfedge(h)));
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    ///
     /// # Panics
     /// When iterated, if `h` is not a half-edge of this mesh (see [Handles](Self#handles)).
     #[inline]
@@ -434,6 +730,15 @@ impl HalfedgeMesh {
     }
 
     /// The corners of face `f` in order, as given when the mesh was built.
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[1u32, 2, 0]])?;
+    /// let corners: Vec<u32> = mesh.face_vertices(mesh.face(0).unwrap()).map(|v| v.raw()).collect();
+    /// assert_eq!(corners, [1, 2, 0]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     ///
     /// # Panics
     /// If `f` is not a face of this mesh (see [Handles](Self#handles)).
@@ -444,6 +749,16 @@ impl HalfedgeMesh {
 
     /// The faces sharing an edge with `f`, in the order of `f`'s half-edges (boundary
     /// edges skipped).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    ///
+    /// // Cube face 0 is [0, 2, 3, 1]; across its sides lie faces 4, 3, 5 and 2.
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let around: Vec<u32> = mesh.face_neighbors(mesh.face(0).unwrap()).map(|f| f.raw()).collect();
+    /// assert_eq!(around, [4, 3, 5, 2]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     ///
     /// # Panics
     /// If `f` is not a face of this mesh (see [Handles](Self#handles)).
@@ -457,6 +772,16 @@ impl HalfedgeMesh {
 
     /// The mesh as a polygon soup: positions and faces exactly as given to
     /// [`from_soup`](Self::from_soup).
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh, PolygonSoup};
+    ///
+    /// // Corner order and the unused vertex 3 come back as given.
+    /// let soup = PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z], [[2u32, 0, 1]]);
+    /// let mesh = HalfedgeMesh::from_soup(&soup)?;
+    /// assert_eq!(mesh.to_soup(), soup);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     pub fn to_soup(&self) -> PolygonSoup {
         let mut soup = PolygonSoup::with_capacity(self.vertex_count(), self.face_count(), self.halfedge_count());
         soup.positions.extend_from_slice(&self.positions);
@@ -471,6 +796,16 @@ impl HalfedgeMesh {
     /// cycles, face and vertex references, boundary conventions, manifold fans, finite
     /// positions). Building from a soup always gives a valid mesh; this exists for tests
     /// and for code that edits meshes.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    ///
+    /// let mut mesh = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// assert_eq!(mesh.validate(), Ok(()));
+    /// mesh.positions_mut()[3].x = f64::NAN;
+    /// assert!(mesh.validate().is_err());
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     ///
     /// # Errors
     /// The first broken invariant, described in words.
@@ -568,18 +903,44 @@ impl HalfedgeMesh {
 
     /// Raw target-vertex array, one entry per half-edge (for algorithms that want flat
     /// arrays; see the type docs for the layout).
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// // Half-edges 0, 2, 4 run 0 -> 1 -> 2 -> 0 in the face; 1, 3, 5 are their twins.
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+    /// assert_eq!(mesh.raw_halfedge_targets(), &[1, 0, 2, 1, 0, 2]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     #[inline]
     pub fn raw_halfedge_targets(&self) -> &[u32] {
         &self.halfedge_to
     }
 
     /// Raw next array, one entry per half-edge.
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+    /// // The face loop 0 -> 2 -> 4 and the boundary loop 1 -> 5 -> 3.
+    /// assert_eq!(mesh.raw_halfedge_next(), &[2, 5, 4, 1, 0, 3]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     #[inline]
     pub fn raw_halfedge_next(&self) -> &[u32] {
         &self.halfedge_next
     }
 
     /// Raw face array, one entry per half-edge (`u32::MAX` on the boundary).
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y], [[0u32, 1, 2]])?;
+    /// assert_eq!(mesh.raw_halfedge_faces(), &[0, u32::MAX, 0, u32::MAX, 0, u32::MAX]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     #[inline]
     pub fn raw_halfedge_faces(&self) -> &[u32] {
         &self.halfedge_face
@@ -587,6 +948,16 @@ impl HalfedgeMesh {
 
     /// Raw array of the half-edge leaving each face's first corner, one entry per face
     /// (see [`face_halfedge`](Self::face_halfedge)).
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// // A square split along the diagonal: face 1 starts with the diagonal's twin, 0 -> 2.
+    /// let positions = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+    /// let mesh = HalfedgeMesh::from_faces(positions, [[0u32, 1, 2], [0, 2, 3]])?;
+    /// assert_eq!(mesh.raw_face_halfedges(), &[0, 5]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     #[inline]
     pub fn raw_face_halfedges(&self) -> &[u32] {
         &self.face_halfedge

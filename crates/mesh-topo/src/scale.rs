@@ -32,6 +32,15 @@ pub const SAFE_EXPONENT: i32 = 256;
 /// binary exponent lies outside `±`[`SAFE_EXPONENT`], else 1 (also for zero and
 /// non-finite values). Always a normal number: a subnormal `largest` is brought near
 /// `2^-41`, still far inside the safe range.
+///
+/// ```
+/// use mesh_topo::scale::unit_scale_of;
+///
+/// assert_eq!(unit_scale_of(1e10), 1.0); // inside 2^±256: left alone
+/// assert_eq!(unit_scale_of(-1e300), 2f64.powi(-996)); // 1e300 lies in [2^996, 2^997)
+/// assert!((1.0..2.0).contains(&(1e300 * unit_scale_of(1e300))));
+/// assert_eq!(unit_scale_of(f64::INFINITY), 1.0);
+/// ```
 pub fn unit_scale_of(largest: f64) -> f64 {
     let largest = largest.abs();
     if largest == 0.0 || !largest.is_finite() {
@@ -60,6 +69,20 @@ pub fn unit_scale<'a>(points: impl IntoIterator<Item = &'a DVec3>) -> f64 {
 
 /// Multiplies every one of `values` by `factor` (for a change of scale, a power of two:
 /// exact unless a value leaves the range); whether they are all finite then.
+///
+/// ```
+/// use mesh_topo::DVec3;
+/// use mesh_topo::scale::{rescale, unit_scale};
+///
+/// let original = [DVec3::new(1e300, -2.0, 0.0)];
+/// let mut values = original;
+/// let scale = unit_scale(&values);
+/// assert!(rescale(&mut values, scale));
+/// assert!((1.0..2.0).contains(&values[0].x));
+/// assert!(rescale(&mut values, 1.0 / scale));
+/// assert_eq!(values, original); // powers of two: exact both ways
+/// assert!(!rescale(&mut values, 2f64.powi(100))); // 1e300 * 2^100 overflows
+/// ```
 pub fn rescale(values: &mut [DVec3], factor: f64) -> bool {
     let mut finite = true;
     for value in values {
@@ -72,6 +95,17 @@ pub fn rescale(values: &mut [DVec3], factor: f64) -> bool {
 /// The unit vector along `a × b`, measured at unit scale so that the product neither
 /// overflows nor underflows (see the [module docs](self)); `None` when `a` and `b` are
 /// parallel, one is zero, or a coordinate is not finite.
+///
+/// ```
+/// use mesh_topo::DVec3;
+/// use mesh_topo::scale::unit_normal;
+///
+/// let (a, b) = (DVec3::new(1e200, 0.0, 0.0), DVec3::new(0.0, 3e200, 0.0));
+/// assert_eq!(a.cross(b).z, f64::INFINITY); // the plain product overflows
+/// assert_eq!(unit_normal(a, b), Some(DVec3::Z));
+/// assert_eq!(unit_normal(a, -2.0 * a), None); // parallel
+/// assert_eq!(unit_normal(DVec3::ZERO, b), None);
+/// ```
 pub fn unit_normal(a: DVec3, b: DVec3) -> Option<DVec3> {
     let scale = unit_scale_of(a.abs().max_element().max(b.abs().max_element()));
     (a * scale).cross(b * scale).try_normalize()

@@ -21,6 +21,16 @@ pub enum CellKind {
 }
 
 /// A regular tetrahedron (4 triangles).
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes};
+///
+/// let mesh = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+/// assert_eq!((mesh.vertex_count(), mesh.edge_count(), mesh.face_count()), (4, 6, 4));
+/// assert!(mesh.vertices().all(|v| mesh.valence(v) == 3));
+/// assert_eq!(mesh.euler_characteristic(), 2);
+/// # Ok::<(), mesh_topo::MeshError>(())
+/// ```
 pub fn tetrahedron() -> PolygonSoup {
     PolygonSoup::from_faces(
         vec![
@@ -34,6 +44,18 @@ pub fn tetrahedron() -> PolygonSoup {
 }
 
 /// The unit cube `[0,1]^3` (6 quads).
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes};
+///
+/// let soup = shapes::cube();
+/// assert!(soup.positions.iter().all(|p| p.min_element() >= 0.0 && p.max_element() <= 1.0));
+/// let mesh = HalfedgeMesh::from_soup(&soup)?;
+/// assert_eq!((mesh.vertex_count(), mesh.edge_count(), mesh.face_count()), (8, 12, 6));
+/// assert!(mesh.faces().all(|f| mesh.face_degree(f) == 4));
+/// assert_eq!(mesh.euler_characteristic(), 2);
+/// # Ok::<(), mesh_topo::MeshError>(())
+/// ```
 pub fn cube() -> PolygonSoup {
     let positions = (0..8).map(|i| DVec3::new((i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64)).collect();
     PolygonSoup::from_faces(
@@ -43,6 +65,16 @@ pub fn cube() -> PolygonSoup {
 }
 
 /// A regular octahedron (8 triangles, all valence 4).
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes};
+///
+/// let mesh = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+/// assert_eq!((mesh.vertex_count(), mesh.edge_count(), mesh.face_count()), (6, 12, 8));
+/// assert!(mesh.vertices().all(|v| mesh.valence(v) == 4));
+/// assert_eq!(mesh.euler_characteristic(), 2);
+/// # Ok::<(), mesh_topo::MeshError>(())
+/// ```
 pub fn octahedron() -> PolygonSoup {
     PolygonSoup::from_faces(
         vec![DVec3::X, DVec3::NEG_X, DVec3::Y, DVec3::NEG_Y, DVec3::Z, DVec3::NEG_Z],
@@ -51,6 +83,16 @@ pub fn octahedron() -> PolygonSoup {
 }
 
 /// A regular icosahedron (20 triangles, all valence 5) on the unit sphere.
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes};
+///
+/// let mesh = HalfedgeMesh::from_soup(&shapes::icosahedron())?;
+/// assert_eq!((mesh.vertex_count(), mesh.edge_count(), mesh.face_count()), (12, 30, 20));
+/// assert!(mesh.vertices().all(|v| mesh.valence(v) == 5));
+/// assert!(mesh.positions().iter().all(|p| (p.length() - 1.0).abs() < 1e-15));
+/// # Ok::<(), mesh_topo::MeshError>(())
+/// ```
 pub fn icosahedron() -> PolygonSoup {
     let phi = (1.0 + 5f64.sqrt()) / 2.0;
     let raw = [

@@ -38,6 +38,15 @@ impl PartialEq for PolygonSoup {
 impl PolygonSoup {
     /// An empty soup with room for `vertices` positions, `faces` faces and `corners`
     /// face corners in total.
+    ///
+    /// ```
+    /// use mesh_topo::PolygonSoup;
+    ///
+    /// let soup = PolygonSoup::with_capacity(4, 2, 6);
+    /// assert!(soup.positions.capacity() >= 4 && soup.indices.capacity() >= 6);
+    /// assert_eq!((soup.vertex_count(), soup.face_count()), (0, 0));
+    /// assert_eq!(soup, PolygonSoup::default()); // empty, whatever the room reserved
+    /// ```
     pub fn with_capacity(vertices: usize, faces: usize, corners: usize) -> Self {
         let mut offsets = Vec::with_capacity(faces + 1);
         offsets.push(0);
@@ -69,6 +78,17 @@ impl PolygonSoup {
     }
 
     /// Appends a face.
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, PolygonSoup};
+    ///
+    /// let mut soup = PolygonSoup::default();
+    /// soup.positions.extend([DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y]);
+    /// soup.push_face(&[0, 1, 2, 3]);
+    /// soup.push_face(&[2, 1, 3]);
+    /// assert_eq!(soup.face(1), &[2, 1, 3]);
+    /// assert_eq!((soup.offsets, soup.indices), (vec![0, 4, 7], vec![0, 1, 2, 3, 2, 1, 3]));
+    /// ```
     pub fn push_face(&mut self, face: &[u32]) {
         if self.offsets.is_empty() {
             self.offsets.push(0);
@@ -97,6 +117,14 @@ impl PolygonSoup {
 
     /// Iterator over the faces as index slices.
     ///
+    /// ```
+    /// use mesh_topo::shapes;
+    ///
+    /// let sizes: Vec<usize> = shapes::cube().faces().map(<[u32]>::len).collect();
+    /// assert_eq!(sizes, [4; 6]);
+    /// assert_eq!(shapes::tetrahedron().faces().last(), Some(&[1, 3, 2][..]));
+    /// ```
+    ///
     /// # Panics
     /// On malformed offsets (decreasing, or past the end of the indices): only a soup
     /// built by hand has them, and [`HalfedgeMesh::from_soup`] reports them.
@@ -108,6 +136,13 @@ impl PolygonSoup {
 
     /// True if every face has exactly three corners (false for decreasing offsets,
     /// which a soup built by hand may have).
+    ///
+    /// ```
+    /// use mesh_topo::shapes;
+    ///
+    /// assert!(shapes::icosahedron().is_triangle_soup());
+    /// assert!(!shapes::cube().is_triangle_soup());
+    /// ```
     pub fn is_triangle_soup(&self) -> bool {
         self.offsets.windows(2).all(|w| w[1].checked_sub(w[0]) == Some(3))
     }

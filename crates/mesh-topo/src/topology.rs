@@ -69,6 +69,20 @@ pub struct Components {
 impl HalfedgeMesh {
     /// The boundary loops, each as its half-edges in order (the hole on their left).
     /// Loops are listed in order of their smallest half-edge index and start there.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, PolygonSoup, shapes};
+    ///
+    /// let cube = shapes::cube();
+    /// assert!(HalfedgeMesh::from_soup(&cube)?.boundary_loops().is_empty());
+    /// // Without its last face, the cube is an open box with one square hole.
+    /// let open_box = HalfedgeMesh::from_soup(&PolygonSoup::from_faces(cube.positions.clone(), cube.faces().take(5)))?;
+    /// let loops = open_box.boundary_loops();
+    /// assert_eq!((loops.len(), loops[0].len()), (1, 4));
+    /// assert!(loops[0].iter().all(|&h| open_box.is_boundary_halfedge(h)));
+    /// assert_eq!(open_box.next(loops[0][3]), loops[0][0]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     pub fn boundary_loops(&self) -> Vec<Vec<HalfedgeId>> {
         let mut seen = vec![false; self.halfedge_count()];
         let mut loops = Vec::new();
@@ -86,6 +100,18 @@ impl HalfedgeMesh {
     }
 
     /// Connected components through edges. Isolated vertices belong to none.
+    ///
+    /// ```
+    /// use mesh_topo::{DVec3, HalfedgeMesh};
+    ///
+    /// // Two separate triangles and an unused vertex 3 (only the connectivity matters here).
+    /// let mesh = HalfedgeMesh::from_faces(vec![DVec3::ZERO; 7], [[0u32, 1, 2], [4, 5, 6]])?;
+    /// let components = mesh.connected_components();
+    /// assert_eq!(components.count, 2);
+    /// assert_eq!(components.vertex_component, [0, 0, 0, u32::MAX, 1, 1, 1]);
+    /// assert_eq!(components.face_component, [0, 1]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     pub fn connected_components(&self) -> Components {
         let mut sets = UnionFind::new(self.vertex_count());
         for e in self.edges() {
@@ -112,11 +138,37 @@ impl HalfedgeMesh {
     }
 
     /// `V - E + F`, isolated vertices included.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
+    /// use mesh_topo::shapes::{self, CellKind};
+    ///
+    /// let euler = |soup: PolygonSoup| Ok::<_, MeshError>(HalfedgeMesh::from_soup(&soup)?.euler_characteristic());
+    /// assert_eq!(euler(shapes::icosahedron())?, 2); // a sphere
+    /// assert_eq!(euler(shapes::grid(3, 2, CellKind::Mixed)?)?, 1); // a disk
+    /// assert_eq!(euler(shapes::torus(5, 4, CellKind::Triangles)?)?, 0); // a torus
+    /// # Ok::<(), MeshError>(())
+    /// ```
     pub fn euler_characteristic(&self) -> i64 {
         self.vertex_count() as i64 - self.edge_count() as i64 + self.face_count() as i64
     }
 
     /// The full topological summary (counts, histograms, loops, components, genus).
+    ///
+    /// ```
+    /// use std::collections::BTreeMap;
+    /// use mesh_topo::HalfedgeMesh;
+    /// use mesh_topo::shapes::{self, CellKind};
+    ///
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::torus(4, 3, CellKind::Quads)?)?;
+    /// let stats = mesh.topology_stats();
+    /// assert_eq!((stats.vertices, stats.edges, stats.faces), (12, 24, 12));
+    /// assert_eq!((stats.euler, stats.genus, stats.components, stats.boundary_loops), (0, 1, 1, 0));
+    /// assert_eq!(stats.valences, BTreeMap::from([(4, 12)]));
+    /// assert_eq!(stats.face_sizes, BTreeMap::from([(4, 12)]));
+    /// assert!(stats.isolated_vertices.is_empty());
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     pub fn topology_stats(&self) -> TopologyStats {
         let components = self.connected_components();
         let loops = self.boundary_loops();
@@ -172,6 +224,20 @@ impl HalfedgeMesh {
     }
 
     /// The dual graph: one node per face, one edge per interior edge (in edge order).
+    ///
+    /// ```
+    /// use mesh_topo::HalfedgeMesh;
+    /// use mesh_topo::shapes::{self, CellKind};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let dual = cube.face_adjacency_graph();
+    /// assert_eq!((dual.node_count(), dual.edge_count()), (6, 12));
+    /// assert!((0..6).all(|f| dual.neighbors(f).len() == 4));
+    /// // A row of three quads: boundary edges give no dual edge, so the dual is a path.
+    /// let row = HalfedgeMesh::from_soup(&shapes::grid(3, 1, CellKind::Quads)?)?.face_adjacency_graph();
+    /// assert_eq!((row.edge_count(), row.neighbors(1)), (2, &[0, 2][..]));
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     pub fn face_adjacency_graph(&self) -> Graph {
         let edges: Vec<(u32, u32)> = self
             .edges()
@@ -186,6 +252,17 @@ impl HalfedgeMesh {
 
     /// Faces reachable from `start` across interior edges, breadth-first. Neighbours are
     /// visited in the order of each face's half-edges, so the order is deterministic.
+    ///
+    /// ```
+    /// use mesh_topo::HalfedgeMesh;
+    /// use mesh_topo::shapes::{self, CellKind};
+    ///
+    /// // A 2 x 2 grid: cells 0 and 1 at the bottom, 2 and 3 at the top.
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads)?)?;
+    /// let order: Vec<u32> = mesh.face_bfs(mesh.face(0).unwrap()).iter().map(|f| f.raw()).collect();
+    /// assert_eq!(order, [0, 1, 2, 3]); // 1 and 2 first, then 3, two steps away
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     ///
     /// # Panics
     /// If `start` is not a face of this mesh (see [Handles](HalfedgeMesh#handles)).
@@ -208,6 +285,17 @@ impl HalfedgeMesh {
 
     /// Faces reachable from `start` across interior edges, depth-first preorder.
     ///
+    /// ```
+    /// use mesh_topo::HalfedgeMesh;
+    /// use mesh_topo::shapes::{self, CellKind};
+    ///
+    /// // A 2 x 2 grid: cells 0 and 1 at the bottom, 2 and 3 at the top.
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads)?)?;
+    /// let order: Vec<u32> = mesh.face_dfs(mesh.face(0).unwrap()).iter().map(|f| f.raw()).collect();
+    /// assert_eq!(order, [0, 1, 3, 2]); // 0's right neighbour 1 first, then on from there
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    ///
     /// # Panics
     /// If `start` is not a face of this mesh (see [Handles](HalfedgeMesh#handles)).
     pub fn face_dfs(&self, start: FaceId) -> Vec<FaceId> {
@@ -227,6 +315,19 @@ impl HalfedgeMesh {
 
     /// Vertices reachable from `start` along edges, breadth-first, neighbours in
     /// counter-clockwise circulation order.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, VertexId, shapes};
+    ///
+    /// // Octahedron: from the top vertex 4, its ring of four, then the bottom vertex 5.
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let top = mesh.vertex(4).unwrap();
+    /// let order = mesh.vertex_bfs(top);
+    /// let ring: Vec<VertexId> = mesh.vertex_neighbors(top).collect();
+    /// assert_eq!((order.len(), order[0], order[5].raw()), (6, top, 5));
+    /// assert_eq!(order[1..5], ring[..]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
     ///
     /// # Panics
     /// If `start` is not a vertex of this mesh (see [Handles](HalfedgeMesh#handles)).

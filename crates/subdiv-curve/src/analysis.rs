@@ -117,12 +117,28 @@ impl Symbol {
     }
 
     /// Coefficient of `z^power` (0 outside the support).
+    ///
+    /// ```
+    /// use subdiv_curve::CurveScheme;
+    /// // Cubic B-spline: a(z) = (z^-2 + 4 z^-1 + 6 + 4 z + z^2) / 8.
+    /// let cubic = CurveScheme::cubic_bspline().symbol();
+    /// assert_eq!((cubic.coefficient(-1), cubic.coefficient(0), cubic.coefficient(2)), (0.5, 0.75, 0.125));
+    /// assert_eq!((cubic.coefficient(-3), cubic.coefficient(3)), (0.0, 0.0)); // outside the support
+    /// ```
     pub fn coefficient(&self, power: i32) -> f64 {
         let k = power - self.lowest_power;
         if k < 0 { 0.0 } else { self.coefficients.get(k as usize).copied().unwrap_or(0.0) }
     }
 
     /// `a(z)` at a real `z != 0`.
+    ///
+    /// ```
+    /// use subdiv_curve::CurveScheme;
+    /// // Chaikin: a(z) = (1+z)^3 / (4 z^2). Every convergent scheme has a(1) = 2 and a(-1) = 0.
+    /// let chaikin = CurveScheme::chaikin().symbol();
+    /// assert_eq!((chaikin.eval(1.0), chaikin.eval(-1.0)), (2.0, 0.0));
+    /// assert_eq!(chaikin.eval(2.0), 27.0 / 16.0);
+    /// ```
     pub fn eval(&self, z: f64) -> f64 {
         self.terms().map(|(m, a)| a * z.powi(m)).sum()
     }
@@ -150,6 +166,15 @@ impl Symbol {
 
     /// Number of factors `(1+z)` of the symbol (derivatives at `z = -1` vanish to
     /// `1e-10` relative).
+    ///
+    /// ```
+    /// use subdiv_curve::CurveScheme;
+    /// assert_eq!(CurveScheme::chaikin().symbol().one_plus_z_factors(), 3); // (1+z)^3 / 4
+    /// assert_eq!(CurveScheme::cubic_bspline().symbol().one_plus_z_factors(), 4); // (1+z)^4 / 8
+    /// assert_eq!(CurveScheme::four_point(1.0 / 16.0)?.symbol().one_plus_z_factors(), 4); // generates cubics
+    /// assert_eq!(CurveScheme::four_point(0.1)?.symbol().one_plus_z_factors(), 2);
+    /// # Ok::<(), subdiv_curve::CurveError>(())
+    /// ```
     pub fn one_plus_z_factors(&self) -> usize {
         let mut count = 0;
         while count < self.coefficients.len()
@@ -162,6 +187,17 @@ impl Symbol {
 
     /// `self / (1+z)`, or `None` when `(1+z)` is not a factor (remainder above `1e-10`
     /// relative).
+    ///
+    /// ```
+    /// use subdiv_curve::{CurveScheme, analysis::Symbol};
+    /// // Chaikin's symbol (1+z)^3 / (4 z^2) divides by (1+z) exactly three times.
+    /// let chaikin = CurveScheme::chaikin().symbol();
+    /// let once = chaikin.divide_by_one_plus_z().expect("(1+z)^3 has the factor");
+    /// assert_eq!(once, Symbol::new(-2, vec![0.25, 0.5, 0.25]));
+    /// let thrice = once.divide_by_one_plus_z().and_then(|s| s.divide_by_one_plus_z()).expect("two factors left");
+    /// assert_eq!(thrice, Symbol::new(-2, vec![0.25]));
+    /// assert_eq!(thrice.divide_by_one_plus_z(), None);
+    /// ```
     pub fn divide_by_one_plus_z(&self) -> Option<Symbol> {
         let c = &self.coefficients;
         if c.len() < 2 {
@@ -180,6 +216,14 @@ impl Symbol {
     }
 
     /// `factor * self`.
+    ///
+    /// ```
+    /// use subdiv_curve::{CurveScheme, analysis::Symbol};
+    /// // Chaikin's first difference scheme b = 2 a / (1+z)^2 = (1+z) / (2 z^2): norm 1/2 < 1, so C1.
+    /// let chaikin = CurveScheme::chaikin().symbol();
+    /// let twice = chaikin.divide_by_one_plus_z().and_then(|s| s.divide_by_one_plus_z()).expect("(1+z)^2 divides");
+    /// assert_eq!(twice.scaled(2.0), Symbol::new(-2, vec![0.5, 0.5]));
+    /// ```
     pub fn scaled(&self, factor: f64) -> Symbol {
         Symbol { lowest_power: self.lowest_power, coefficients: self.coefficients.iter().map(|a| a * factor).collect() }
     }
@@ -284,6 +328,13 @@ impl Contractivity {
     }
 
     /// Established, refuted or undecided.
+    ///
+    /// ```
+    /// use subdiv_curve::{CurveScheme, analysis::{Status, contractivity}};
+    /// let cubic = CurveScheme::cubic_bspline().symbol();
+    /// assert_eq!(contractivity(&cubic, 2, 6).status(), Status::Established); // C2
+    /// assert_eq!(contractivity(&cubic, 3, 6).status(), Status::Refuted); // but not C3
+    /// ```
     pub fn status(&self) -> Status {
         if self.established() {
             Status::Established

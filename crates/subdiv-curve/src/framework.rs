@@ -196,6 +196,16 @@ impl Framework {
     }
 
     /// The approximating scheme `A` (rule (6), seed formula (4) with `(omega2, gamma)`).
+    ///
+    /// ```
+    /// use subdiv_curve::{CurveScheme, Framework};
+    /// // On the C2 line omega2 = gamma/2 - 1/16 the approximating rule has the factor (1+z)^4.
+    /// let (omega2, gamma) = (0.05 - 1.0 / 16.0, 0.1);
+    /// let a = Framework::new(-1.0 / 16.0, omega2, gamma)?.approximating_scheme().symbol();
+    /// assert_eq!(a, CurveScheme::combined(omega2, gamma)?.symbol());
+    /// assert_eq!(a.one_plus_z_factors(), 4);
+    /// # Ok::<(), subdiv_curve::CurveError>(())
+    /// ```
     pub fn approximating_scheme(&self) -> &CurveScheme {
         &self.approximating
     }
@@ -218,6 +228,15 @@ impl Framework {
     }
 
     /// The limit stencil `ℓ` of `A`: `(offset of the first weight, weights)`.
+    ///
+    /// ```
+    /// use subdiv_curve::Framework;
+    /// // The cubic B-spline's limit stencil (1, 4, 1)/6, starting one point to the left.
+    /// let framework = Framework::published();
+    /// let (offset, weights) = framework.limit_stencil();
+    /// assert_eq!((offset, weights.len()), (-1, 3));
+    /// assert!(weights.iter().zip([1.0, 4.0, 1.0]).all(|(w, e)| (w - e / 6.0).abs() < 1e-14));
+    /// ```
     pub fn limit_stencil(&self) -> (i32, &[f64]) {
         (self.limit_offset, &self.limit_weights)
     }

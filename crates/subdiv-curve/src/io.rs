@@ -15,6 +15,13 @@ use glam::{DVec2, DVec3};
 use crate::{CurveError, CurvePoint};
 
 /// The points of a file, 2D or 3D (all lines must agree).
+///
+/// ```
+/// use subdiv_curve::io::parse_points;
+/// let points = parse_points("0 0 1\n1 2 3\n")?;
+/// assert_eq!((points.dimension(), points.len(), points.is_empty()), (3, 2, false));
+/// # Ok::<(), subdiv_curve::CurveError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub enum PointSet {
     /// `x y` lines.

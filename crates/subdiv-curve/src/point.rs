@@ -152,6 +152,13 @@ impl CurvePoint for DVec3 {
 ///
 /// # Errors
 /// [`CurveError::NonFinite`](crate::CurveError::NonFinite) naming the first bad point and axis.
+///
+/// ```
+/// use subdiv_curve::{CurveError, check_finite};
+/// assert!(check_finite(&[[0.0, 1.0], [2.0, 3.0]]).is_ok());
+/// let err = check_finite(&[[0.0, 1.0], [2.0, f64::INFINITY]]).unwrap_err();
+/// assert!(matches!(err, CurveError::NonFinite { index: 1, axis: 1, .. }));
+/// ```
 pub fn check_finite<P: CurvePoint>(points: &[P]) -> Result<(), crate::CurveError> {
     for (index, point) in points.iter().enumerate() {
         for axis in 0..P::DIM {

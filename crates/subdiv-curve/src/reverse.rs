@@ -255,6 +255,19 @@ impl<P: CurvePoint> ChaikinPyramid<P> {
     ///
     /// # Errors
     /// [`CurveError::IncompatibleLength`] if `level` exceeds the number of levels.
+    ///
+    /// ```
+    /// use subdiv_curve::{CurveScheme, Topology, reverse::decompose_chaikin};
+    /// let base = [[0.0, 0.0], [3.0, 0.0], [3.0, 2.0], [0.0, 2.0]];
+    /// let mut fine = CurveScheme::chaikin().refine(&base, Topology::Closed, 2)?;
+    /// fine[5][1] += 0.25; // no longer a Chaikin polygon: the details keep the bump
+    /// let pyramid = decompose_chaikin(&fine, Topology::Closed, 2)?;
+    /// let back = pyramid.reconstruct(2)?;
+    /// assert!(back.iter().zip(&fine).all(|(a, b)| (a[0] - b[0]).abs() < 1e-14 && (a[1] - b[1]).abs() < 1e-14));
+    /// assert_eq!(pyramid.reconstruct(0)?, pyramid.base);
+    /// assert!(pyramid.reconstruct(3).is_err());
+    /// # Ok::<(), subdiv_curve::CurveError>(())
+    /// ```
     pub fn reconstruct(&self, level: usize) -> Result<Vec<P>, CurveError> {
         if level > self.details.len() {
             return Err(CurveError::IncompatibleLength {

@@ -162,6 +162,12 @@ pub enum Topology {
 
 impl Topology {
     /// An open polygon with the default end rule ([`EndRule::Reflect`]).
+    ///
+    /// ```
+    /// use subdiv_curve::{EndRule, Topology};
+    /// assert_eq!(Topology::open(), Topology::Open(EndRule::Reflect));
+    /// assert!(!Topology::open().is_closed() && Topology::Closed.is_closed());
+    /// ```
     pub fn open() -> Self {
         Topology::Open(EndRule::Reflect)
     }
@@ -355,11 +361,27 @@ impl CurveScheme {
     }
 
     /// The even rule (vertex rule of a primal scheme).
+    ///
+    /// ```
+    /// use subdiv_curve::{CurveScheme, Rule};
+    /// // The four-point scheme is interpolatory: its vertex rule copies p_i.
+    /// assert_eq!(CurveScheme::four_point(1.0 / 16.0)?.even_rule(), &Rule::new(0, &[1.0])?);
+    /// assert_eq!(CurveScheme::chaikin().even_rule().weights(), &[0.75, 0.25]);
+    /// # Ok::<(), subdiv_curve::CurveError>(())
+    /// ```
     pub fn even_rule(&self) -> &Rule {
         &self.even
     }
 
     /// The odd rule (edge rule of a primal scheme).
+    ///
+    /// ```
+    /// use subdiv_curve::CurveScheme;
+    /// // (-1, 9, 9, -1)/16 on p_{i-1} .. p_{i+2}.
+    /// let dlg = CurveScheme::four_point(1.0 / 16.0)?;
+    /// assert_eq!((dlg.odd_rule().offset(), dlg.odd_rule().weights()), (-1, &[-0.0625, 0.5625, 0.5625, -0.0625][..]));
+    /// # Ok::<(), subdiv_curve::CurveError>(())
+    /// ```
     pub fn odd_rule(&self) -> &Rule {
         &self.odd
     }

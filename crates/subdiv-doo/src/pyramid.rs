@@ -712,6 +712,28 @@ impl DooPyramid {
     /// Each call builds the base mesh's connectivity from its polygon soup first; to
     /// reconstruct several times from one pyramid, [`prepare`](Self::prepare) it once.
     ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::pyramid::{DecomposeOptions, decompose};
+    /// use subdiv_doo::{DooOptions, FaceRule, subdivide};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let mut fine = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 2))?.to_mesh()?;
+    /// fine.positions_mut()[10].x += 0.2; // a bump: non-zero details
+    /// let pyramid = decompose(&fine, &DecomposeOptions::levels(FaceRule::DooSabin, 2))?.pyramid;
+    /// assert_eq!(pyramid.reconstruct(0, None)?, pyramid.base);
+    /// assert_eq!(pyramid.reconstruct(1, None)?.face_count(), 6 + 12 + 8);
+    /// // Keeping every detail is the exact reconstruction; keeping none, Doo-Sabin
+    /// // subdivision of the base mesh.
+    /// assert_eq!(pyramid.reconstruct(2, Some(1.0))?, pyramid.reconstruct(2, None)?);
+    /// let base = HalfedgeMesh::from_soup(&pyramid.base)?;
+    /// let smooth = subdivide(&base, &DooOptions::new(FaceRule::DooSabin, 2))?.to_soup();
+    /// let none = pyramid.reconstruct(2, Some(0.0))?;
+    /// assert!(none.positions.iter().zip(&smooth.positions).all(|(a, b)| a.distance(*b) < 1e-12));
+    /// assert!(pyramid.reconstruct(3, None).is_err() && pyramid.reconstruct(2, Some(1.5)).is_err());
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
+    ///
     /// # Errors
     /// [`DooError::InvalidPyramid`] if `level` is out of range, `keep` is not in `[0, 1]`,
     /// or the pyramid is inconsistent (wrong array lengths, bad permutations).
@@ -854,6 +876,23 @@ impl DooPyramid {
     /// reconstruction keeping that fraction of the details, relative to the bounding-box
     /// diagonal of the exact finest mesh.
     ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::pyramid::{DecomposeOptions, decompose};
+    /// use subdiv_doo::{DooOptions, FaceRule, subdivide};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let mut fine = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 2))?.to_mesh()?;
+    /// fine.positions_mut()[10].x += 0.2; // a bump: non-zero details
+    /// let pyramid = decompose(&fine, &DecomposeOptions::levels(FaceRule::DooSabin, 2))?.pyramid;
+    /// let rows = pyramid.rate_distortion(&[0.0, 1.0])?;
+    /// // Nothing kept: the bump is smoothed away. Everything kept: exact.
+    /// assert!(rows[0].kept == 0 && rows[0].max_error > 0.0 && rows[0].rms_error < rows[0].max_error);
+    /// assert_eq!(rows[1].kept, pyramid.detail_count());
+    /// assert!(rows[1].max_error < 1e-12);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
+    ///
     /// # Errors
     /// As [`reconstruct`](Self::reconstruct).
     pub fn rate_distortion(&self, fractions: &[f64]) -> Result<Vec<RateDistortion>, DooError> {
@@ -891,6 +930,25 @@ impl DooPyramid {
     }
 
     /// Encodes the pyramid as a `.mres` file.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes::{self, CellKind}};
+    /// use subdiv_doo::pyramid::{DecomposeOptions, DooPyramid, PYRAMID_MAGIC, decompose};
+    /// use subdiv_doo::{BoundaryRule, DooOptions, FaceRule, subdivide};
+    ///
+    /// // An open grid under the Chaikin boundary rule: rule and boundary rule are in the file.
+    /// let grid = HalfedgeMesh::from_soup(&shapes::grid(2, 2, CellKind::Quads)?)?;
+    /// let refine = DooOptions::new(FaceRule::Simple, 1).with_boundary(BoundaryRule::Chaikin);
+    /// let fine = subdivide(&grid, &refine)?.to_mesh()?;
+    /// let options = DecomposeOptions::levels(FaceRule::Simple, 1).with_boundary(BoundaryRule::Chaikin);
+    /// let pyramid = decompose(&fine, &options)?.pyramid;
+    /// let bytes = pyramid.to_bytes()?;
+    /// assert_eq!(bytes[..8], PYRAMID_MAGIC);
+    /// let read = DooPyramid::from_bytes(&bytes)?;
+    /// assert_eq!((read.rule, read.boundary), (FaceRule::Simple, BoundaryRule::Chaikin));
+    /// assert_eq!(read, pyramid);
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     ///
     /// # Errors
     /// [`DooError::Binary`] if encoding fails.
@@ -933,6 +991,22 @@ impl DooPyramid {
 
     /// Checks that the pyramid can be reconstructed (array lengths, permutations), level
     /// by level, without computing positions.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::pyramid::{DecomposeOptions, decompose};
+    /// use subdiv_doo::{DooError, DooOptions, FaceRule, subdivide};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 2))?.to_mesh()?;
+    /// let mut pyramid = decompose(&fine, &DecomposeOptions::levels(FaceRule::DooSabin, 2))?.pyramid;
+    /// pyramid.validate()?;
+    /// // One detail more than level 2 has fine vertices for: the level is named.
+    /// pyramid.levels[1].details.push(glam::DVec3::X);
+    /// let error = pyramid.validate().unwrap_err();
+    /// assert!(matches!(&error, DooError::InvalidPyramid(message) if message.starts_with("level 2:")));
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     ///
     /// # Errors
     /// [`DooError::InvalidPyramid`] naming the first inconsistency.
@@ -978,6 +1052,25 @@ fn scaled_up_soup(mut soup: PolygonSoup, scale: UnitScale) -> PolygonSoup {
 impl PreparedDooPyramid<'_> {
     /// [`DooPyramid::reconstruct`] without building the base connectivity again: the same
     /// result, bit for bit.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_doo::pyramid::{DecomposeOptions, decompose};
+    /// use subdiv_doo::{DooOptions, FaceRule, subdivide};
+    ///
+    /// let cube = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let fine = subdivide(&cube, &DooOptions::new(FaceRule::DooSabin, 2))?.to_mesh()?;
+    /// let pyramid = decompose(&fine, &DecomposeOptions::max(FaceRule::DooSabin))?.pyramid;
+    /// let prepared = pyramid.prepare()?;
+    /// // F' = F + E + V at each level: 6, then 6 + 12 + 8, then 26 + 48 + 24 faces.
+    /// for (level, faces) in [6, 26, 98].into_iter().enumerate() {
+    ///     assert_eq!(prepared.reconstruct(level, None)?.face_count(), faces);
+    /// }
+    /// let rebuilt = prepared.reconstruct(2, None)?;
+    /// assert!(rebuilt.positions.iter().zip(fine.positions()).all(|(a, b)| a.distance(*b) < 1e-14));
+    /// assert!(prepared.reconstruct(3, None).is_err()); // only two levels
+    /// # Ok::<(), subdiv_doo::DooError>(())
+    /// ```
     ///
     /// # Errors
     /// As [`DooPyramid::reconstruct`], except the base mesh's errors, which

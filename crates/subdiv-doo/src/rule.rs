@@ -143,6 +143,24 @@ impl FaceRule {
     /// The weights `w_0 .. w_{m-1}` for an `m`-gon (`w_0` on the vertex itself, `w_k` on
     /// the vertex `k` steps further along the face). They sum to 1.
     ///
+    /// ```
+    /// use subdiv_doo::FaceRule;
+    ///
+    /// // Doo-Sabin on a triangle: w_0 = 1/4 + 5/12 = 2/3, w_1 = w_2 = (3 + 2 cos(2π/3)) / 12 = 1/6,
+    /// // which is also the centroid contraction with a = 1/2.
+    /// let w = FaceRule::DooSabin.weights(3);
+    /// assert!((w[0] - 2.0 / 3.0).abs() < 1e-15 && (w[1] - 1.0 / 6.0).abs() < 1e-15 && w[1] == w[2]);
+    /// assert!(FaceRule::CENTROID_HALF.weights(3).iter().zip(&w).all(|(a, b)| (a - b).abs() < 1e-15));
+    /// // Every rule at every face size: affine (sum 1) and symmetric (w_k = w_{m-k}).
+    /// for rule in [FaceRule::DooSabin, FaceRule::Simple, FaceRule::Centroid { a: 0.3 }] {
+    ///     for m in 3..=9 {
+    ///         let w = rule.weights(m);
+    ///         assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+    ///         assert!((1..m).all(|k| (w[k] - w[m - k]).abs() < 1e-15));
+    ///     }
+    /// }
+    /// ```
+    ///
     /// # Panics
     /// If `m < 3`, `m >` [`MAX_FACE_CORNERS`] or the rule fails [`FaceRule::validate`]
     /// (the weights of such a rule are not finite).

@@ -45,6 +45,25 @@ use crate::forward::{LoopOptions, SubdivisionMatrix, refine, subdivision_matrix}
 use crate::mband::{TernaryOptions, ternary_levels, ternary_matrix};
 
 /// The schemes this module analyses.
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes};
+/// use subdiv_loop::analysis::Scheme;
+/// use subdiv_loop::mband::{TernaryOptions, ternary_subdivide};
+///
+/// for scheme in Scheme::ALL {
+///     // The command-line name is the `Display` form, and parses back.
+///     assert_eq!(scheme.name().parse::<Scheme>()?, scheme);
+///     assert_eq!(scheme.to_string(), scheme.name());
+/// }
+/// assert!("butterfly".parse::<Scheme>().is_err());
+/// // One step of arity M splits every triangle into M^2.
+/// assert_eq!(Scheme::ALL.map(Scheme::arity), [2, 2, 3, 4]);
+/// let tetrahedron = HalfedgeMesh::from_soup(&shapes::tetrahedron())?;
+/// let ternary = ternary_subdivide(&tetrahedron, 1, &TernaryOptions::default())?;
+/// assert_eq!(ternary.face_count(), 4 * Scheme::TernaryLoop.arity().pow(2) as usize);
+/// # Ok::<(), subdiv_loop::LoopError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Scheme {

@@ -333,6 +333,30 @@ impl LoopConnectivity {
 
     /// How the fine mesh is numbered relative to the canonical refinement of the coarse
     /// mesh; `None` if it is the canonical order itself.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::detect::{DetectOptions, detect};
+    /// use subdiv_loop::forward::{LoopOptions, subdivide};
+    ///
+    /// // A subdivided icosahedron (42 vertices, 80 faces), its vertex numbering reversed and
+    /// // every face starting at its second corner.
+    /// let fine = subdivide(&HalfedgeMesh::from_soup(&shapes::icosahedron())?, 1, &LoopOptions::default())?;
+    /// let triangles: Vec<[u32; 3]> = fine.triangles.iter().map(|&[a, b, c]| [b, c, a].map(|v| 41 - v)).collect();
+    /// let renumbered = HalfedgeMesh::from_faces(fine.positions.iter().rev().copied().collect(), triangles.clone())?;
+    /// let structure = detect(&renumbered, &DetectOptions::default())?;
+    /// let order = structure.fine_order().expect("not the canonical order");
+    /// assert_eq!(order.check(42, 80), Ok(()));
+    /// // Canonical vertex i < 12 is coarse vertex i, the i-th vertex point: fine vertex 30 + i.
+    /// assert_eq!(order.vertex_of_canonical[..12], (30..42).collect::<Vec<u32>>());
+    /// // Canonical face 4f is the corner face (a, ab, ca) of coarse face f = (a, b, c):
+    /// // its corner 0, the vertex point of a, is corner (3 - rotation) % 3 of the fine face.
+    /// for (f, [a, _, _]) in structure.coarse_faces().into_iter().enumerate() {
+    ///     let (face, rotation) = ((order.face_of_canonical[4 * f] / 3) as usize, order.face_of_canonical[4 * f] % 3);
+    ///     assert_eq!(triangles[face][((3 - rotation) % 3) as usize], structure.vertex_points()[a as usize]);
+    /// }
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn fine_order(&self) -> Option<FineOrder> {
         self.coarsening.fine_order()
     }

@@ -134,6 +134,24 @@ impl BoxSplineMasks {
     }
 
     /// The numerator of the coefficient of `z1^i z2^j` in `M^4 a_M(z)` (0 outside).
+    ///
+    /// ```
+    /// use subdiv_loop::mband::box_spline_masks;
+    ///
+    /// // M = 2: M^4 a_2(z) = (1 + z1)^2 (1 + z2)^2 (1 + z1 z2)^2.
+    /// let masks = box_spline_masks(2)?;
+    /// assert_eq!(masks.symbol_coefficient(2, 2), 10); // Loop's regular vertex weight 10/16
+    /// assert_eq!((masks.symbol_coefficient(4, 4), masks.symbol_coefficient(4, 0)), (1, 0));
+    /// assert_eq!(masks.symbol_coefficient(5, 2), 0); // outside the 5 x 5 square
+    /// // At z = (1, 1) each of the six factors is M: the coefficients sum to M^6.
+    /// for m in 2..=4u32 {
+    ///     let masks = box_spline_masks(m)?;
+    ///     let size = masks.symbol_size();
+    ///     let sum: u64 = (0..size * size).map(|k| masks.symbol_coefficient(k % size, k / size)).sum();
+    ///     assert_eq!(sum, u64::from(m).pow(6));
+    /// }
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn symbol_coefficient(&self, i: usize, j: usize) -> u64 {
         let size = self.symbol_size();
         if i < size && j < size { self.symbol[i + size * j] } else { 0 }

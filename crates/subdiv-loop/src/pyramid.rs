@@ -612,6 +612,21 @@ impl LoopPyramid {
     /// Encodes the pyramid as a `.mres` file (see the [module docs](self)); see
     /// [`from_bytes`](Self::from_bytes) for a round trip.
     ///
+    /// ```
+    /// use glam::DVec3;
+    /// use mesh_topo::shapes;
+    /// use subdiv_loop::forward::LoopOptions;
+    /// use subdiv_loop::pyramid::{LoopPyramid, PYRAMID_MAGIC};
+    ///
+    /// let mut pyramid = LoopPyramid::smooth(shapes::octahedron(), LoopOptions::warren_weights(), 2)?;
+    /// pyramid.levels[1].details[7] = DVec3::new(0.1, -0.2, 0.3);
+    /// let bytes = pyramid.to_bytes()?;
+    /// assert_eq!(bytes[..8], PYRAMID_MAGIC);
+    /// // Rules, base mesh and every detail come back exactly.
+    /// assert_eq!(LoopPyramid::from_bytes(&bytes)?, pyramid);
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
+    ///
     /// # Errors
     /// [`LoopError::Binary`] if encoding fails.
     pub fn to_bytes(&self) -> Result<Vec<u8>, LoopError> {
@@ -644,6 +659,18 @@ impl LoopPyramid {
     }
 
     /// True if `bytes` starts with the magic number of a Loop pyramid.
+    ///
+    /// ```
+    /// use mesh_topo::shapes;
+    /// use subdiv_loop::forward::LoopOptions;
+    /// use subdiv_loop::pyramid::LoopPyramid;
+    ///
+    /// let pyramid = LoopPyramid::smooth(shapes::tetrahedron(), LoopOptions::default(), 1)?;
+    /// assert!(LoopPyramid::is_loop_pyramid(&pyramid.to_bytes()?));
+    /// assert!(!LoopPyramid::is_loop_pyramid(b"ply\nformat ascii 1.0\n"));
+    /// assert!(!LoopPyramid::is_loop_pyramid(b"MRSDOO\0\0")); // a Doo-Sabin pyramid
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn is_loop_pyramid(bytes: &[u8]) -> bool {
         bytes.starts_with(&PYRAMID_MAGIC)
     }

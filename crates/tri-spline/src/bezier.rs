@@ -204,11 +204,34 @@ impl<P: Point> TriBezier<P> {
     }
 
     /// `S(u)` by de Casteljau's algorithm.
+    ///
+    /// ```
+    /// use glam::{DVec2, DVec3};
+    /// use tri_spline::{DomainTriangle, TriBezier};
+    /// // A patch interpolates its corner control points b_200, b_020, b_002.
+    /// let control: Vec<DVec3> = (0..6).map(|i| DVec3::new(i as f64, (i * i) as f64, 1.0)).collect();
+    /// let patch = TriBezier::new(2, DomainTriangle::reference(), control.clone())?;
+    /// assert_eq!(patch.eval(DVec2::ZERO), control[0]);
+    /// assert_eq!(patch.eval(DVec2::X), control[2]);
+    /// assert_eq!(patch.eval(DVec2::Y), control[5]);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval(&self, u: DVec2) -> P {
         self.eval_barycentric(self.domain.barycentric(u))
     }
 
     /// `S` at barycentric coordinates `l` by de Casteljau's algorithm.
+    ///
+    /// ```
+    /// use tri_spline::{DomainTriangle, TriBezier};
+    /// let domain = DomainTriangle::equilateral();
+    /// // A linear patch is `sum_i l_i b_i`, on any domain triangle.
+    /// let patch = TriBezier::new(1, domain, vec![1.0, 2.0, 6.0])?;
+    /// assert_eq!(patch.eval_barycentric([0.5, 0.25, 0.25]), 2.5);
+    /// let l = [0.2, 0.3, 0.5];
+    /// assert!((patch.eval_barycentric(l) - patch.eval(domain.point(l))).abs() < 1e-14);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval_barycentric(&self, l: [f64; 3]) -> P {
         with_scratch(&self.control, |buf| {
             for m in (0..self.degree).rev() {
@@ -219,6 +242,19 @@ impl<P: Point> TriBezier<P> {
     }
 
     /// `S(u)` as the direct Bernstein sum (for checking; de Casteljau is preferred).
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::{DomainTriangle, TriBezier};
+    /// let u = DVec2::new(0.2, 0.3);
+    /// // The Bernstein polynomials sum to one: equal control points give a constant.
+    /// let constant = TriBezier::new(3, DomainTriangle::reference(), vec![7.0; 10])?;
+    /// assert!((constant.eval_bernstein(u) - 7.0).abs() < 1e-14);
+    /// // The sum agrees with de Casteljau's algorithm.
+    /// let patch = TriBezier::new(3, DomainTriangle::reference(), (0..10).map(|i| (i * i) as f64).collect())?;
+    /// assert!((patch.eval_bernstein(u) - patch.eval(u)).abs() < 1e-12);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval_bernstein(&self, u: DVec2) -> P {
         let l = self.domain.barycentric(u);
         let mut sum = P::ZERO;
@@ -259,6 +295,17 @@ impl<P: Point> TriBezier<P> {
     }
 
     /// The directional derivative `D_d S(u) = n F(u, …, u, d)` (with `d` a vector).
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::{DomainTriangle, TriBezier};
+    /// // On the reference triangle x = λ1, so x² = λ1² is the Bernstein polynomial B_020.
+    /// let square = TriBezier::new(2, DomainTriangle::reference(), vec![0.0, 0.0, 1.0, 0.0, 0.0, 0.0])?;
+    /// let u = DVec2::new(0.3, 0.2);
+    /// assert!((square.derivative(u, DVec2::X) - 0.6).abs() < 1e-15);
+    /// assert!(square.derivative(u, DVec2::Y).abs() < 1e-15);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn derivative(&self, u: DVec2, d: DVec2) -> P {
         if self.degree == 0 {
             return P::ZERO;
@@ -275,6 +322,17 @@ impl<P: Point> TriBezier<P> {
 
     /// `S(u)` and its partial derivatives with respect to the two domain coordinates, in
     /// one de Casteljau pass.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::{DomainTriangle, TriBezier};
+    /// // x y = λ1 λ2 = B_011 / 2 on the reference triangle.
+    /// let xy = TriBezier::new(2, DomainTriangle::reference(), vec![0.0, 0.0, 0.0, 0.0, 0.5, 0.0])?;
+    /// let (value, [dx, dy]) = xy.eval_with_gradient(DVec2::new(0.3, 0.2));
+    /// assert!((value - 0.06).abs() < 1e-15);
+    /// assert!((dx - 0.2).abs() < 1e-15 && (dy - 0.3).abs() < 1e-15);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval_with_gradient(&self, u: DVec2) -> (P, [P; 2]) {
         if self.degree == 0 {
             return (self.control[0], [P::ZERO; 2]);
@@ -298,6 +356,21 @@ impl<P: Point> TriBezier<P> {
     ///
     /// # Errors
     /// [`SplineError::Degree`] above [`MAX_BEZIER_DEGREE`].
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::bezier::MAX_BEZIER_DEGREE;
+    /// use tri_spline::index::tri_count;
+    /// use tri_spline::{DomainTriangle, TriBezier};
+    /// let patch = TriBezier::new(2, DomainTriangle::reference(), vec![0.0, 1.0, 4.0, 2.0, 3.0, 5.0])?;
+    /// let higher = patch.elevate()?;
+    /// assert_eq!((higher.degree(), higher.control_points().len()), (3, 10));
+    /// let u = DVec2::new(0.2, 0.5);
+    /// assert!((higher.eval(u) - patch.eval(u)).abs() < 1e-14);
+    /// let top = TriBezier::new(MAX_BEZIER_DEGREE, DomainTriangle::reference(), vec![0.0; tri_count(MAX_BEZIER_DEGREE)])?;
+    /// assert!(top.elevate().is_err());
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn elevate(&self) -> Result<Self, SplineError> {
         let n = self.degree;
         if n + 1 > MAX_BEZIER_DEGREE {
@@ -328,6 +401,21 @@ impl<P: Point> TriBezier<P> {
     ///
     /// # Errors
     /// [`SplineError::DegenerateDomain`] for a degenerate sub-triangle.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::{DomainTriangle, TriBezier};
+    /// let patch = TriBezier::new(2, DomainTriangle::reference(), vec![0.0, 1.0, 4.0, 2.0, 3.0, 5.0])?;
+    /// let corners = [DVec2::new(0.1, 0.1), DVec2::new(0.6, 0.1), DVec2::new(0.1, 0.6)];
+    /// let sub = patch.subpatch(corners)?;
+    /// assert_eq!(sub.domain().corners(), corners);
+    /// // The same polynomial: equal values, and the sub-patch interpolates at its corners.
+    /// let u = DVec2::new(0.25, 0.3);
+    /// assert!((sub.eval(u) - patch.eval(u)).abs() < 1e-14);
+    /// assert!((sub.control_point([2, 0, 0]) - patch.eval(corners[0])).abs() < 1e-14);
+    /// assert!(patch.subpatch([DVec2::ZERO, DVec2::X, DVec2::X * 2.0]).is_err());
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn subpatch(&self, corners: [DVec2; 3]) -> Result<Self, SplineError> {
         let domain = DomainTriangle::new(corners)?;
         let mut args = Vec::with_capacity(self.degree);
@@ -345,6 +433,20 @@ impl<P: Point> TriBezier<P> {
 
     /// The four patches of the midpoint subdivision of the domain: the corner triangles
     /// at `t0`, `t1`, `t2` and the middle one `(m12, m20, m01)`.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::{DomainTriangle, TriBezier};
+    /// let patch = TriBezier::new(2, DomainTriangle::reference(), vec![0.0, 1.0, 4.0, 2.0, 3.0, 5.0])?;
+    /// let pieces = patch.split4();
+    /// assert_eq!(pieces[3].domain().corners(), [DVec2::new(0.5, 0.5), DVec2::new(0.0, 0.5), DVec2::new(0.5, 0.0)]);
+    /// // Each piece matches the patch on its quarter (here at its centroid).
+    /// for piece in &pieces {
+    ///     let c = piece.domain().point([1.0 / 3.0; 3]);
+    ///     assert!((piece.eval(c) - patch.eval(c)).abs() < 1e-14);
+    /// }
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn split4(&self) -> [Self; 4] {
         let [t0, t1, t2] = self.domain.corners();
         let (m01, m12, m20) = ((t0 + t1) * 0.5, (t1 + t2) * 0.5, (t2 + t0) * 0.5);
@@ -356,6 +458,18 @@ impl<P: Point> TriBezier<P> {
 impl TriBezier<DVec3> {
     /// The unit normal `S_x × S_y / |S_x × S_y|` (oriented like the domain's `x, y`
     /// axes); `None` where the patch is singular.
+    ///
+    /// ```
+    /// use glam::{DVec2, DVec3};
+    /// use tri_spline::{DomainTriangle, TriBezier};
+    /// let u = DVec2::new(0.2, 0.3);
+    /// let flat = TriBezier::new(1, DomainTriangle::reference(), vec![DVec3::ZERO, DVec3::X, DVec3::Y])?;
+    /// assert!((flat.normal(u).unwrap() - DVec3::Z).length() < 1e-15);
+    /// // All control points equal: the patch is a point, with no normal.
+    /// let point = TriBezier::new(1, DomainTriangle::reference(), vec![DVec3::ONE; 3])?;
+    /// assert_eq!(point.normal(u), None);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn normal(&self, u: DVec2) -> Option<DVec3> {
         let (_, [du, dv]) = self.eval_with_gradient(u);
         // (At unit scale: the product of tangents far from 1 underflows or overflows.)

@@ -46,6 +46,19 @@ pub struct KnotSequences {
 
 impl KnotSequences {
     /// Coincident knots at the corners of `domain`: the B-patch is then the Bézier patch.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::{BPatch, DomainTriangle, KnotSequences, TriBezier};
+    /// let domain = DomainTriangle::reference();
+    /// let control = vec![0.0, 1.0, 4.0, 2.0, 3.0, 5.0];
+    /// let bpatch = BPatch::new(2, KnotSequences::bezier(&domain, 2), control.clone())?;
+    /// let bezier = TriBezier::new(2, domain, control)?;
+    /// assert_eq!(bpatch.base_triangle(), domain.corners());
+    /// let u = DVec2::new(0.2, 0.5);
+    /// assert!((bpatch.eval(u) - bezier.eval(u)).abs() < 1e-14);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn bezier(domain: &DomainTriangle, degree: usize) -> Self {
         let [t0, t1, t2] = domain.corners();
         Self { r: vec![t0; degree], s: vec![t1; degree], t: vec![t2; degree] }
@@ -56,6 +69,17 @@ impl KnotSequences {
     /// # Panics
     /// If an index is beyond its sequence (the message names the sequence, the index and
     /// the length); [`try_triangle`](Self::try_triangle) returns an error instead.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::KnotSequences;
+    /// let knots = KnotSequences {
+    ///     r: vec![DVec2::ZERO, DVec2::new(-0.1, 0.0)],
+    ///     s: vec![DVec2::X, DVec2::new(1.1, 0.0)],
+    ///     t: vec![DVec2::Y, DVec2::new(0.0, 1.1)],
+    /// };
+    /// assert_eq!(knots.triangle(1, 0, 1), [DVec2::new(-0.1, 0.0), DVec2::X, DVec2::new(0.0, 1.1)]);
+    /// ```
     pub fn triangle(&self, i: usize, j: usize, k: usize) -> [DVec2; 3] {
         self.try_triangle(i, j, k).unwrap_or_else(|e| panic!("KnotSequences::triangle: {e}"))
     }
@@ -211,6 +235,27 @@ impl<P: Point> BPatch<P> {
     }
 
     /// `P(u)` by the de Boor-like recursion.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::index::multi_indices;
+    /// # use tri_spline::{BPatch, KnotSequences};
+    /// # let knots = KnotSequences {
+    /// #     r: vec![DVec2::new(0.0, 0.0), DVec2::new(-0.1, -0.1)],
+    /// #     s: vec![DVec2::new(1.0, 0.0), DVec2::new(1.1, -0.1)],
+    /// #     t: vec![DVec2::new(0.0, 1.0), DVec2::new(0.0, 1.1)],
+    /// # };
+    /// // `knots`: the admissible degree-2 knots of the `BPatch::new` example.
+    /// // c_ijk = F(r_0..r_{i-1}, s_0..s_{j-1}, t_0..t_{k-1}) for the identity u -> u,
+    /// // whose blossom is the mean of its arguments: the patch reproduces the identity.
+    /// let control: Vec<DVec2> = multi_indices(2)
+    ///     .map(|[i, j, k]| knots.r[..i].iter().chain(&knots.s[..j]).chain(&knots.t[..k]).sum::<DVec2>() / 2.0)
+    ///     .collect();
+    /// let patch = BPatch::new(2, knots.clone(), control)?;
+    /// let u = DVec2::new(0.3, 0.2);
+    /// assert!((patch.eval(u) - u).length() < 1e-15);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval(&self, u: DVec2) -> P {
         with_scratch(&self.control, |buf| {
             for m in (0..self.degree).rev() {
@@ -224,6 +269,28 @@ impl<P: Point> BPatch<P> {
     ///
     /// # Errors
     /// [`SplineError::Count`] unless exactly `n` arguments are given.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::index::multi_indices;
+    /// # use tri_spline::{BPatch, KnotSequences};
+    /// # let knots = KnotSequences {
+    /// #     r: vec![DVec2::new(0.0, 0.0), DVec2::new(-0.1, -0.1)],
+    /// #     s: vec![DVec2::new(1.0, 0.0), DVec2::new(1.1, -0.1)],
+    /// #     t: vec![DVec2::new(0.0, 1.0), DVec2::new(0.0, 1.1)],
+    /// # };
+    /// // `knots`: the admissible degree-2 knots of the `BPatch::new` example.
+    /// # use tri_spline::SplineError;
+    /// let patch = BPatch::new(2, knots.clone(), vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0])?;
+    /// // The control points are blossom values at the knots: c_200 = F(r_0, r_1), c_011 = F(s_0, t_0).
+    /// assert!((patch.blossom(&[knots.r[0], knots.r[1]])? - 1.0).abs() < 1e-14);
+    /// assert!((patch.blossom(&[knots.s[0], knots.t[0]])? - 5.0).abs() < 1e-14);
+    /// // On the diagonal it is the patch.
+    /// let u = DVec2::new(0.3, 0.2);
+    /// assert!((patch.blossom(&[u, u])? - patch.eval(u)).abs() < 1e-14);
+    /// assert!(matches!(patch.blossom(&[u]), Err(SplineError::Count { expected: 2, got: 1, .. })));
+    /// # Ok::<(), SplineError>(())
+    /// ```
     pub fn blossom(&self, args: &[DVec2]) -> Result<P, SplineError> {
         if args.len() != self.degree {
             return Err(SplineError::Count { what: "blossom arguments", expected: self.degree, got: args.len() });
@@ -237,6 +304,28 @@ impl<P: Point> BPatch<P> {
     }
 
     /// The directional derivative `D_d P(u) = n F(u^{n-1}, d)`.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::index::multi_indices;
+    /// # use tri_spline::{BPatch, KnotSequences};
+    /// # let knots = KnotSequences {
+    /// #     r: vec![DVec2::new(0.0, 0.0), DVec2::new(-0.1, -0.1)],
+    /// #     s: vec![DVec2::new(1.0, 0.0), DVec2::new(1.1, -0.1)],
+    /// #     t: vec![DVec2::new(0.0, 1.0), DVec2::new(0.0, 1.1)],
+    /// # };
+    /// // `knots`: the admissible degree-2 knots of the `BPatch::new` example.
+    /// // c_ijk = F(r_0..r_{i-1}, s_0..s_{j-1}, t_0..t_{k-1}) for the identity u -> u,
+    /// // whose blossom is the mean of its arguments: the patch reproduces the identity.
+    /// let control: Vec<DVec2> = multi_indices(2)
+    ///     .map(|[i, j, k]| knots.r[..i].iter().chain(&knots.s[..j]).chain(&knots.t[..k]).sum::<DVec2>() / 2.0)
+    ///     .collect();
+    /// let patch = BPatch::new(2, knots.clone(), control)?;
+    /// // The derivative of the identity along d is d.
+    /// let d = DVec2::new(0.6, -0.8);
+    /// assert!((patch.derivative(DVec2::new(0.3, 0.2), d) - d).length() < 1e-14);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn derivative(&self, u: DVec2, d: DVec2) -> P {
         with_scratch(&self.control, |buf| {
             for m in (1..self.degree).rev() {
@@ -248,6 +337,29 @@ impl<P: Point> BPatch<P> {
     }
 
     /// `P(u)` and its partial derivatives along the two domain axes in one pass.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::index::multi_indices;
+    /// # use tri_spline::{BPatch, KnotSequences};
+    /// # let knots = KnotSequences {
+    /// #     r: vec![DVec2::new(0.0, 0.0), DVec2::new(-0.1, -0.1)],
+    /// #     s: vec![DVec2::new(1.0, 0.0), DVec2::new(1.1, -0.1)],
+    /// #     t: vec![DVec2::new(0.0, 1.0), DVec2::new(0.0, 1.1)],
+    /// # };
+    /// // `knots`: the admissible degree-2 knots of the `BPatch::new` example.
+    /// // c_ijk = F(r_0..r_{i-1}, s_0..s_{j-1}, t_0..t_{k-1}) for the identity u -> u,
+    /// // whose blossom is the mean of its arguments: the patch reproduces the identity.
+    /// let control: Vec<DVec2> = multi_indices(2)
+    ///     .map(|[i, j, k]| knots.r[..i].iter().chain(&knots.s[..j]).chain(&knots.t[..k]).sum::<DVec2>() / 2.0)
+    ///     .collect();
+    /// let patch = BPatch::new(2, knots.clone(), control)?;
+    /// let u = DVec2::new(0.3, 0.2);
+    /// let (value, [dx, dy]) = patch.eval_with_gradient(u);
+    /// assert!((value - u).length() < 1e-15);
+    /// assert!((dx - DVec2::X).length() < 1e-14 && (dy - DVec2::Y).length() < 1e-14);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval_with_gradient(&self, u: DVec2) -> (P, [P; 2]) {
         with_scratch(&self.control, |buf| {
             for m in (1..self.degree).rev() {
@@ -264,6 +376,27 @@ impl<P: Point> BPatch<P> {
 
     /// The B-patch basis functions at `u` (the weights of the control points in `P(u)`),
     /// by the transposed recursion: `O(n³)` for all of them. `out` is resized.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::index::multi_indices;
+    /// # use tri_spline::{BPatch, KnotSequences};
+    /// # let knots = KnotSequences {
+    /// #     r: vec![DVec2::new(0.0, 0.0), DVec2::new(-0.1, -0.1)],
+    /// #     s: vec![DVec2::new(1.0, 0.0), DVec2::new(1.1, -0.1)],
+    /// #     t: vec![DVec2::new(0.0, 1.0), DVec2::new(0.0, 1.1)],
+    /// # };
+    /// // `knots`: the admissible degree-2 knots of the `BPatch::new` example.
+    /// let patch = BPatch::new(2, knots, vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0])?;
+    /// let u = DVec2::new(0.3, 0.2);
+    /// let mut values = Vec::new();
+    /// patch.basis(u, &mut values);
+    /// // A partition of unity, and the weights of the control points in P(u).
+    /// assert!((values.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+    /// let weighted: f64 = values.iter().zip(patch.control_points()).map(|(w, c)| w * c).sum();
+    /// assert!((weighted - patch.eval(u)).abs() < 1e-14);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn basis(&self, u: DVec2, out: &mut Vec<f64>) {
         bpatch_basis(self.degree, &self.maps, u, out);
     }
@@ -310,6 +443,17 @@ impl BPatchBasis {
     ///
     /// # Errors
     /// As [`BPatch::new`].
+    ///
+    /// ```
+    /// use tri_spline::{BPatchBasis, DomainTriangle, KnotSequences, SplineError};
+    /// let domain = DomainTriangle::reference();
+    /// let basis = BPatchBasis::new(3, KnotSequences::bezier(&domain, 3))?;
+    /// assert_eq!(basis.degree(), 3);
+    /// // Three knots per sequence do not make a degree-2 basis, and degree 0 has none.
+    /// assert!(matches!(BPatchBasis::new(2, KnotSequences::bezier(&domain, 3)), Err(SplineError::Count { .. })));
+    /// assert!(matches!(BPatchBasis::new(0, KnotSequences::bezier(&domain, 0)), Err(SplineError::Degree { .. })));
+    /// # Ok::<(), SplineError>(())
+    /// ```
     pub fn new(degree: usize, knots: KnotSequences) -> Result<Self, SplineError> {
         if !(1..=MAX_BPATCH_DEGREE).contains(&degree) {
             return Err(SplineError::Degree { degree, min: 1, max: MAX_BPATCH_DEGREE });
@@ -329,6 +473,25 @@ impl BPatchBasis {
     }
 
     /// The basis functions at `u` in storage order. `out` is resized.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{BPatchBasis, KnotSequences};
+    /// # let knots = KnotSequences {
+    /// #     r: vec![DVec2::new(0.0, 0.0), DVec2::new(-0.1, -0.1)],
+    /// #     s: vec![DVec2::new(1.0, 0.0), DVec2::new(1.1, -0.1)],
+    /// #     t: vec![DVec2::new(0.0, 1.0), DVec2::new(0.0, 1.1)],
+    /// # };
+    /// // `knots`: the admissible degree-2 knots of the `BPatch::new` example.
+    /// let basis = BPatchBasis::new(2, knots)?;
+    /// let mut values = Vec::new();
+    /// basis.eval(DVec2::new(0.3, 0.2), &mut values);
+    /// // Six functions, non-negative inside the base triangle and summing to one.
+    /// assert_eq!(values.len(), 6);
+    /// assert!(values.iter().all(|&v| v >= 0.0));
+    /// assert!((values.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval(&self, u: DVec2, out: &mut Vec<f64>) {
         bpatch_basis(self.degree, &self.maps, u, out);
     }
@@ -337,6 +500,23 @@ impl BPatchBasis {
     ///
     /// # Errors
     /// As [`BPatch::new`] for the control points.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{BPatch, BPatchBasis, KnotSequences};
+    /// # let knots = KnotSequences {
+    /// #     r: vec![DVec2::new(0.0, 0.0), DVec2::new(-0.1, -0.1)],
+    /// #     s: vec![DVec2::new(1.0, 0.0), DVec2::new(1.1, -0.1)],
+    /// #     t: vec![DVec2::new(0.0, 1.0), DVec2::new(0.0, 1.1)],
+    /// # };
+    /// // `knots`: the admissible degree-2 knots of the `BPatch::new` example.
+    /// let basis = BPatchBasis::new(2, knots.clone())?;
+    /// let control = vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
+    /// assert_eq!(basis.with_control(control.clone())?, BPatch::new(2, knots, control)?);
+    /// assert!(basis.with_control(vec![1.0; 5]).is_err());
+    /// assert!(basis.with_control(vec![f64::NAN; 6]).is_err());
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn with_control<P: Point>(&self, control: Vec<P>) -> Result<BPatch<P>, SplineError> {
         if control.len() != tri_count(self.degree) {
             return Err(SplineError::Count {
@@ -354,6 +534,27 @@ impl BPatchBasis {
 
 impl BPatch<DVec3> {
     /// The unit normal `P_x × P_y / |P_x × P_y|`; `None` where the patch is singular.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::index::multi_indices;
+    /// # use tri_spline::{BPatch, KnotSequences};
+    /// # let knots = KnotSequences {
+    /// #     r: vec![DVec2::new(0.0, 0.0), DVec2::new(-0.1, -0.1)],
+    /// #     s: vec![DVec2::new(1.0, 0.0), DVec2::new(1.1, -0.1)],
+    /// #     t: vec![DVec2::new(0.0, 1.0), DVec2::new(0.0, 1.1)],
+    /// # };
+    /// // `knots`: the admissible degree-2 knots of the `BPatch::new` example.
+    /// # use glam::DVec3;
+    /// // The plane z = 0 (the identity map of the other B-patch examples, lifted to 3D).
+    /// let control: Vec<DVec3> = multi_indices(2)
+    ///     .map(|[i, j, k]| knots.r[..i].iter().chain(&knots.s[..j]).chain(&knots.t[..k]).sum::<DVec2>() / 2.0)
+    ///     .map(|p| p.extend(0.0))
+    ///     .collect();
+    /// let patch = BPatch::new(2, knots, control)?;
+    /// assert!((patch.normal(DVec2::new(0.3, 0.2)).unwrap() - DVec3::Z).length() < 1e-14);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn normal(&self, u: DVec2) -> Option<DVec3> {
         let (_, [du, dv]) = self.eval_with_gradient(u);
         // (At unit scale: the product of tangents far from 1 underflows or overflows.)

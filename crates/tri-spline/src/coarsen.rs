@@ -177,6 +177,20 @@ pub fn reverse_loop(mesh: &HalfedgeMesh, levels: u32, options: &CoarsenOptions) 
 
 /// How many reverse-Loop levels the connectivity of `mesh` allows (up to `max`), and the
 /// reason the next level is impossible.
+///
+/// ```
+/// use mesh_topo::HalfedgeMesh;
+/// use tri_spline::coarsen::{CoarsenOptions, possible_levels};
+/// use tri_spline::samples::{smooth_surface, triangle_grid};
+/// // 8 = 2³ segments per side: three levels down to a single triangle, and no fourth.
+/// let mesh = HalfedgeMesh::from_soup(&triangle_grid(8, smooth_surface))?;
+/// let (levels, reason) = possible_levels(&mesh, 5, &CoarsenOptions::default());
+/// assert_eq!(levels, 3);
+/// assert!(reason.is_some());
+/// // Capped at `max`, with no reason to report.
+/// assert_eq!(possible_levels(&mesh, 2, &CoarsenOptions::default()), (2, None));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn possible_levels(mesh: &HalfedgeMesh, max: u32, options: &CoarsenOptions) -> (u32, Option<String>) {
     let mut current = mesh.clone();
     let mut seed = options.seed_vertex;

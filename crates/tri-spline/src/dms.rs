@@ -301,6 +301,23 @@ impl DmsBasis {
     ///
     /// # Errors
     /// As [`new`](Self::new) (for the triangulation itself, or when no placement passes).
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::{DmsBasis, KnotPlacement, SplineError};
+    /// // The two triangles of the unit square, degree 2: six functions per triangle.
+    /// let vertices = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let triangles = vec![[0, 1, 2], [0, 2, 3]];
+    /// let basis = DmsBasis::with_generated_knots(2, vertices.clone(), triangles.clone(), KnotPlacement::default())?;
+    /// assert_eq!((basis.degree(), basis.basis_count()), (2, 12));
+    /// // A partition of unity inside.
+    /// let sum: f64 = basis.eval_basis(DVec2::new(0.3, 0.6)).iter().map(|&(_, v)| v).sum();
+    /// assert!((sum - 1.0).abs() < 1e-12);
+    /// let clockwise = vec![[0, 2, 1], [0, 2, 3]];
+    /// let bad = DmsBasis::with_generated_knots(2, vertices, clockwise, KnotPlacement::default());
+    /// assert!(matches!(bad, Err(SplineError::BadDomainTriangle { triangle: 0, .. })));
+    /// # Ok::<(), SplineError>(())
+    /// ```
     pub fn with_generated_knots(
         degree: usize,
         vertices: Vec<DVec2>,
@@ -356,6 +373,19 @@ impl DmsBasis {
     /// # Panics
     /// If `v` is not a vertex (the message names it and the vertex count);
     /// [`try_cloud`](Self::try_cloud) returns an error instead.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// let cloud = basis.cloud(2);
+    /// assert_eq!(cloud.len(), 3);
+    /// assert_eq!(cloud[0], DVec2::ONE);
+    /// // Boundary knots lie outside the square (`KnotPlacement::boundary_outward`).
+    /// assert!(cloud[1..].iter().all(|k| k.x > 1.0 || k.y > 1.0));
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn cloud(&self, v: usize) -> &[DVec2] {
         self.try_cloud(v).unwrap_or_else(|e| panic!("DmsBasis::cloud: {e}"))
     }
@@ -364,6 +394,17 @@ impl DmsBasis {
     ///
     /// # Errors
     /// [`SplineError::IndexOutOfRange`] if `v` is not a vertex.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// # use tri_spline::SplineError;
+    /// assert_eq!(basis.try_cloud(1)?[0], DVec2::X);
+    /// assert!(matches!(basis.try_cloud(4), Err(SplineError::IndexOutOfRange { what: "vertex", index: 4, len: 4 })));
+    /// # Ok::<(), SplineError>(())
+    /// ```
     pub fn try_cloud(&self, v: usize) -> Result<&[DVec2], SplineError> {
         if v >= self.vertices.len() {
             return Err(SplineError::IndexOutOfRange { what: "vertex", index: v, len: self.vertices.len() });
@@ -383,6 +424,18 @@ impl DmsBasis {
     /// If `triangle` is not a triangle or `|β|` is not the degree (it used to return the
     /// index of another basis function, or one beyond them all);
     /// [`try_basis_index`](Self::try_basis_index) returns an error instead.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// // Six functions per triangle, multi-indices in storage order: triangle 1 starts at 6.
+    /// assert_eq!(basis.basis_index(0, [2, 0, 0]), 0);
+    /// assert_eq!(basis.basis_index(1, [1, 1, 0]), 7);
+    /// assert_eq!(basis.basis_index(1, [0, 0, 2]), 11);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn basis_index(&self, triangle: usize, beta: [usize; 3]) -> usize {
         self.try_basis_index(triangle, beta).unwrap_or_else(|e| panic!("DmsBasis::basis_index: {e}"))
     }
@@ -425,6 +478,17 @@ impl DmsBasis {
     /// # Panics
     /// As [`basis_index`](Self::basis_index); [`try_blossom_args`](Self::try_blossom_args)
     /// returns an error instead.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// // Triangle 1 is (0, 2, 3): r, s, t are the clouds of vertices 0, 2 and 3.
+    /// assert_eq!(basis.blossom_args(1, [1, 0, 1]), vec![DVec2::ZERO, DVec2::Y]);
+    /// assert_eq!(basis.blossom_args(1, [0, 2, 0]), basis.cloud(2)[..2].to_vec());
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn blossom_args(&self, triangle: usize, beta: [usize; 3]) -> Vec<DVec2> {
         self.try_blossom_args(triangle, beta).unwrap_or_else(|e| panic!("DmsBasis::blossom_args: {e}"))
     }
@@ -433,6 +497,18 @@ impl DmsBasis {
     ///
     /// # Errors
     /// As [`try_basis_index`](Self::try_basis_index).
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// # use tri_spline::SplineError;
+    /// assert_eq!(basis.try_blossom_args(0, [1, 1, 0])?, vec![DVec2::ZERO, DVec2::X]);
+    /// assert!(matches!(basis.try_blossom_args(0, [1, 0, 0]), Err(SplineError::MultiIndexDegree { degree: 2, .. })));
+    /// assert!(matches!(basis.try_blossom_args(2, [2, 0, 0]), Err(SplineError::IndexOutOfRange { .. })));
+    /// # Ok::<(), SplineError>(())
+    /// ```
     pub fn try_blossom_args(&self, triangle: usize, beta: [usize; 3]) -> Result<Vec<DVec2>, SplineError> {
         self.check_basis_function(triangle, beta)?;
         let k = self.degree + 1;
@@ -450,6 +526,20 @@ impl DmsBasis {
     /// # Panics
     /// If `index >= basis_count()` (the message names both);
     /// [`try_greville`](Self::try_greville) returns an error instead.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, DmsSpline, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// // Control points f(Greville point) reproduce a linear function f.
+    /// let f = |p: DVec2| 2.0 * p.x - p.y + 1.0;
+    /// let control = (0..basis.basis_count()).map(|i| f(basis.greville(i))).collect();
+    /// let spline = DmsSpline::new(basis, control)?;
+    /// let u = DVec2::new(0.3, 0.6);
+    /// assert!((spline.eval(u) - f(u)).abs() < 1e-12);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn greville(&self, index: usize) -> DVec2 {
         self.try_greville(index).unwrap_or_else(|e| panic!("DmsBasis::greville: {e}"))
     }
@@ -458,6 +548,17 @@ impl DmsBasis {
     ///
     /// # Errors
     /// [`SplineError::IndexOutOfRange`] if `index >= basis_count()`.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// // N^0_(1,1,0) has the blossom arguments r_0 = (0, 0) and s_0 = (1, 0).
+    /// assert_eq!(basis.try_greville(basis.basis_index(0, [1, 1, 0]))?, DVec2::new(0.5, 0.0));
+    /// assert!(basis.try_greville(12).is_err());
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn try_greville(&self, index: usize) -> Result<DVec2, SplineError> {
         self.check_basis_function_index(index)?;
         let nb = self.masks.len();
@@ -474,6 +575,20 @@ impl DmsBasis {
     }
 
     /// The non-zero basis functions at `u` as `(index, value)`, ascending by index.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// let values = basis.eval_basis(DVec2::new(0.5, 0.45));
+    /// assert!(values.windows(2).all(|w| w[0].0 < w[1].0));
+    /// assert!(values.iter().all(|&(_, v)| v > 0.0));
+    /// assert!((values.iter().map(|&(_, v)| v).sum::<f64>() - 1.0).abs() < 1e-12);
+    /// // Far outside every knot cloud: none.
+    /// assert!(basis.eval_basis(DVec2::splat(5.0)).is_empty());
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval_basis(&self, u: DVec2) -> Vec<(usize, f64)> {
         let mut out = Vec::new();
         self.eval_basis_with(u, &mut DmsScratch::default(), &mut out);
@@ -481,6 +596,20 @@ impl DmsBasis {
     }
 
     /// As [`eval_basis`](Self::eval_basis) with caller-provided scratch and output.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// # use tri_spline::DmsScratch;
+    /// let (mut scratch, mut values) = (DmsScratch::default(), Vec::new());
+    /// for u in [DVec2::new(0.5, 0.45), DVec2::new(0.1, 0.8), DVec2::new(0.9, 0.2)] {
+    ///     basis.eval_basis_with(u, &mut scratch, &mut values);
+    ///     assert_eq!(values, basis.eval_basis(u));
+    /// }
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval_basis_with(&self, u: DVec2, scratch: &mut DmsScratch, out: &mut Vec<(usize, f64)>) {
         out.clear();
         let nb = self.masks.len();
@@ -495,6 +624,20 @@ impl DmsBasis {
     }
 
     /// The non-zero basis functions at `u` with their gradients: `(index, value, d/dx, d/dy)`.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// # use tri_spline::DmsScratch;
+    /// let mut out = Vec::new();
+    /// basis.eval_basis_gradient_with(DVec2::new(0.3, 0.6), &mut DmsScratch::default(), &mut out);
+    /// // The basis sums to one, so the gradients sum to zero.
+    /// assert!((out.iter().map(|e| e.1).sum::<f64>() - 1.0).abs() < 1e-12);
+    /// assert!(out.iter().map(|e| e.2).sum::<DVec2>().length() < 1e-12);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval_basis_gradient_with(&self, u: DVec2, scratch: &mut DmsScratch, out: &mut Vec<(usize, f64, DVec2)>) {
         out.clear();
         let nb = self.masks.len();
@@ -546,6 +689,21 @@ impl DmsBasis {
     /// # Panics
     /// If `index >= basis_count()` (the message names both);
     /// [`try_eval_one_with`](Self::try_eval_one_with) returns an error instead.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// # use tri_spline::WChoice;
+    /// let u = DVec2::new(0.5, 0.45);
+    /// for (index, value) in basis.eval_basis(u) {
+    ///     for choice in [WChoice::Widest, WChoice::First, WChoice::Last, WChoice::Spread] {
+    ///         assert!((basis.eval_one_with(index, u, choice) - value).abs() < 1e-10);
+    ///     }
+    /// }
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval_one_with(&self, index: usize, u: DVec2, choice: WChoice) -> f64 {
         self.try_eval_one_with(index, u, choice).unwrap_or_else(|e| panic!("DmsBasis::eval_one_with: {e}"))
     }
@@ -555,6 +713,18 @@ impl DmsBasis {
     ///
     /// # Errors
     /// [`SplineError::IndexOutOfRange`] if `index >= basis_count()`.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// # use tri_spline::WChoice;
+    /// let u = DVec2::new(0.5, 0.45);
+    /// assert!(basis.try_eval_one_with(0, u, WChoice::First)? >= 0.0);
+    /// assert!(basis.try_eval_one_with(12, u, WChoice::First).is_err());
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn try_eval_one_with(&self, index: usize, u: DVec2, choice: WChoice) -> Result<f64, SplineError> {
         self.check_basis_function_index(index)?;
         let nb = self.masks.len();
@@ -641,6 +811,19 @@ impl<P: Point> DmsSpline<P> {
     ///
     /// # Errors
     /// [`SplineError::Count`], [`SplineError::NonFinite`].
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, DmsSpline, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// // Equal control points: a constant (the basis sums to one).
+    /// let spline = DmsSpline::new(basis.clone(), vec![4.0; 12])?;
+    /// assert!((spline.eval(DVec2::new(0.3, 0.6)) - 4.0).abs() < 1e-12);
+    /// assert!(DmsSpline::new(basis.clone(), vec![4.0; 11]).is_err());
+    /// assert!(DmsSpline::new(basis, vec![f64::INFINITY; 12]).is_err());
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn new(basis: DmsBasis, control: Vec<P>) -> Result<Self, SplineError> {
         if control.len() != basis.basis_count() {
             return Err(SplineError::Count {
@@ -660,6 +843,19 @@ impl<P: Point> DmsSpline<P> {
     ///
     /// # Errors
     /// As [`new`](Self::new).
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, DmsSpline, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// // x y has the blossom F(a, b) = (a.x b.y + b.x a.y) / 2 and is reproduced.
+    /// let xy = DmsSpline::from_blossom(basis, |a: &[DVec2]| (a[0].x * a[1].y + a[1].x * a[0].y) / 2.0)?;
+    /// for u in [DVec2::new(0.5, 0.45), DVec2::new(0.1, 0.8)] {
+    ///     assert!((xy.eval(u) - u.x * u.y).abs() < 1e-12);
+    /// }
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn from_blossom(basis: DmsBasis, blossom: impl Fn(&[DVec2]) -> P) -> Result<Self, SplineError> {
         let n = basis.degree();
         let mut control = Vec::with_capacity(basis.basis_count());
@@ -682,17 +878,57 @@ impl<P: Point> DmsSpline<P> {
     }
 
     /// `F(u)`.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, DmsSpline, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// // A linear function's blossom is its mean over the arguments: reproduced exactly.
+    /// let f = |p: DVec2| 2.0 * p.x - p.y + 1.0;
+    /// let spline = DmsSpline::from_blossom(basis, |a: &[DVec2]| a.iter().map(|&p| f(p)).sum::<f64>() / a.len() as f64)?;
+    /// let u = DVec2::new(0.7, 0.2);
+    /// assert!((spline.eval(u) - f(u)).abs() < 1e-12);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval(&self, u: DVec2) -> P {
         self.eval_with(u, &mut DmsScratch::default(), &mut Vec::new())
     }
 
     /// `F(u)` with reusable scratch memory.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, DmsSpline, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// # use tri_spline::DmsScratch;
+    /// let spline = DmsSpline::new(basis, (0..12).map(|i| i as f64).collect())?;
+    /// let (mut scratch, mut values) = (DmsScratch::default(), Vec::new());
+    /// for u in [DVec2::new(0.5, 0.45), DVec2::new(0.1, 0.8)] {
+    ///     assert_eq!(spline.eval_with(u, &mut scratch, &mut values), spline.eval(u));
+    /// }
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval_with(&self, u: DVec2, scratch: &mut DmsScratch, values: &mut Vec<(usize, f64)>) -> P {
         self.basis.eval_basis_with(u, scratch, values);
         values.iter().fold(P::ZERO, |sum, &(i, v)| sum + self.control[i] * v)
     }
 
     /// `F(u)` and its partial derivatives along the domain axes.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, DmsSpline, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// // x y (see `from_blossom`): gradient (y, x).
+    /// let xy = DmsSpline::from_blossom(basis, |a: &[DVec2]| (a[0].x * a[1].y + a[1].x * a[0].y) / 2.0)?;
+    /// let (value, [dx, dy]) = xy.eval_with_gradient(DVec2::new(0.3, 0.6));
+    /// assert!((value - 0.18).abs() < 1e-12);
+    /// assert!((dx - 0.6).abs() < 1e-12 && (dy - 0.3).abs() < 1e-12);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval_with_gradient(&self, u: DVec2) -> (P, [P; 2]) {
         let mut values = Vec::new();
         self.basis.eval_basis_gradient_with(u, &mut DmsScratch::default(), &mut values);
@@ -709,6 +945,22 @@ impl<P: Point> DmsSpline<P> {
 
 impl DmsSpline<DVec3> {
     /// The unit normal; `None` where the surface is singular.
+    ///
+    /// ```
+    /// # use glam::DVec2;
+    /// # use tri_spline::{DmsBasis, DmsSpline, KnotPlacement};
+    /// let square = vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y];
+    /// let basis = DmsBasis::with_generated_knots(2, square, vec![[0, 1, 2], [0, 2, 3]], KnotPlacement::default())?;
+    /// # use glam::DVec3;
+    /// // The plane (x, y, x + y): normal (-1, -1, 1) / √3.
+    /// let plane = DmsSpline::from_blossom(basis, |a: &[DVec2]| {
+    ///     let p = a.iter().sum::<DVec2>() / a.len() as f64;
+    ///     DVec3::new(p.x, p.y, p.x + p.y)
+    /// })?;
+    /// let normal = plane.normal(DVec2::new(0.3, 0.6)).unwrap();
+    /// assert!((normal - DVec3::new(-1.0, -1.0, 1.0) / 3f64.sqrt()).length() < 1e-12);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn normal(&self, u: DVec2) -> Option<DVec3> {
         let (_, [du, dv]) = self.eval_with_gradient(u);
         // (At unit scale: the product of tangents far from 1 underflows or overflows.)

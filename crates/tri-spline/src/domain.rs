@@ -10,12 +10,29 @@ use crate::SplineError;
 pub const DEGENERATE: f64 = 1e-12;
 
 /// `det(a, b, c) = (b - a) x (c - a)`: twice the signed area, positive counter-clockwise.
+///
+/// ```
+/// use glam::DVec2;
+/// use tri_spline::domain::orient;
+/// assert_eq!(orient(DVec2::ZERO, DVec2::X, DVec2::Y), 1.0);
+/// assert_eq!(orient(DVec2::ZERO, DVec2::Y, DVec2::X), -1.0);
+/// assert_eq!(orient(DVec2::ZERO, DVec2::ONE, DVec2::splat(3.0)), 0.0);
+/// ```
 #[inline(always)]
 pub fn orient(a: DVec2, b: DVec2, c: DVec2) -> f64 {
     (b - a).perp_dot(c - a)
 }
 
 /// Whether `(a, b, c)` is degenerate relative to its own size (or not finite).
+///
+/// ```
+/// use glam::DVec2;
+/// use tri_spline::domain::is_degenerate;
+/// assert!(is_degenerate(DVec2::ZERO, DVec2::X, DVec2::X * 2.0));
+/// assert!(is_degenerate(DVec2::ZERO, DVec2::X, DVec2::NAN));
+/// // Relative to its size: a tiny triangle is fine.
+/// assert!(!is_degenerate(DVec2::ZERO, DVec2::X * 1e-9, DVec2::Y * 1e-9));
+/// ```
 pub fn is_degenerate(a: DVec2, b: DVec2, c: DVec2) -> bool {
     let scale2 = (b - a).length_squared().max((c - b).length_squared()).max((a - c).length_squared());
     let det = orient(a, b, c);
@@ -35,6 +52,14 @@ pub struct BaryMap {
 
 impl BaryMap {
     /// The map for triangle `(a, b, c)`; `None` when it is degenerate.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::domain::BaryMap;
+    /// let map = BaryMap::new(DVec2::X, DVec2::new(3.0, 0.0), DVec2::new(1.0, 2.0)).unwrap();
+    /// assert_eq!(map.coords(DVec2::new(2.0, 1.0)), [0.0, 0.5, 0.5]);
+    /// assert!(BaryMap::new(DVec2::ZERO, DVec2::X, DVec2::X * 2.0).is_none());
+    /// ```
     pub fn new(a: DVec2, b: DVec2, c: DVec2) -> Option<Self> {
         if is_degenerate(a, b, c) {
             return None;
@@ -46,6 +71,16 @@ impl BaryMap {
     }
 
     /// Barycentric coordinates of `u` (they sum to one).
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::domain::BaryMap;
+    /// let (a, b, c) = (DVec2::new(0.5, 0.0), DVec2::new(2.0, 0.5), DVec2::new(1.0, 2.0));
+    /// let map = BaryMap::new(a, b, c).unwrap();
+    /// let l = map.coords(DVec2::new(1.2, 0.8));
+    /// assert!((l.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+    /// assert!((a * l[0] + b * l[1] + c * l[2] - DVec2::new(1.2, 0.8)).length() < 1e-15);
+    /// ```
     #[inline(always)]
     pub fn coords(&self, u: DVec2) -> [f64; 3] {
         let w = u - self.origin;
@@ -56,6 +91,14 @@ impl BaryMap {
 
     /// Barycentric coordinates of the vector `d` (they sum to zero): the directional
     /// derivatives of the three coordinate functions along `d`.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::domain::BaryMap;
+    /// let map = BaryMap::new(DVec2::ZERO, DVec2::X, DVec2::Y).unwrap();
+    /// assert_eq!(map.direction(DVec2::X), [-1.0, 1.0, 0.0]);
+    /// assert_eq!(map.direction(DVec2::new(0.5, 0.5)), [-1.0, 0.5, 0.5]);
+    /// ```
     #[inline(always)]
     pub fn direction(&self, d: DVec2) -> [f64; 3] {
         let l1 = self.g1.dot(d);
@@ -91,11 +134,27 @@ impl DomainTriangle {
     }
 
     /// The reference triangle `(0,0), (1,0), (0,1)`.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::DomainTriangle;
+    /// let t = DomainTriangle::reference();
+    /// assert_eq!(t.corners(), [DVec2::ZERO, DVec2::X, DVec2::Y]);
+    /// assert_eq!(t.barycentric(DVec2::new(0.5, 0.25)), [0.25, 0.5, 0.25]);
+    /// ```
     pub fn reference() -> Self {
         Self::new([DVec2::ZERO, DVec2::X, DVec2::Y]).expect("internal: reference triangle")
     }
 
     /// The equilateral triangle `(0,0), (1,0), (1/2, √3/2)` (the fitting domain).
+    ///
+    /// ```
+    /// use tri_spline::DomainTriangle;
+    /// let [a, b, c] = DomainTriangle::equilateral().corners();
+    /// for side in [b - a, c - b, a - c] {
+    ///     assert!((side.length() - 1.0).abs() < 1e-15);
+    /// }
+    /// ```
     pub fn equilateral() -> Self {
         Self::new([DVec2::ZERO, DVec2::X, DVec2::new(0.5, 0.75f64.sqrt())]).expect("internal: equilateral triangle")
     }
@@ -106,18 +165,49 @@ impl DomainTriangle {
     }
 
     /// Barycentric coordinates of `u`.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::DomainTriangle;
+    /// let t = DomainTriangle::equilateral();
+    /// let [_, b, c] = t.corners();
+    /// assert!((t.barycentric((b + c) * 0.5)[0]).abs() < 1e-15);
+    /// // `point` inverts it.
+    /// let u = DVec2::new(0.4, 0.3);
+    /// assert!((t.point(t.barycentric(u)) - u).length() < 1e-15);
+    /// ```
     #[inline]
     pub fn barycentric(&self, u: DVec2) -> [f64; 3] {
         self.map.coords(u)
     }
 
     /// Barycentric coordinates of a direction vector (summing to zero).
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::DomainTriangle;
+    /// let t = DomainTriangle::equilateral();
+    /// let (u, d) = (DVec2::new(0.4, 0.3), DVec2::new(0.1, -0.2));
+    /// // The change of the barycentric coordinates along d.
+    /// let (l, m, dl) = (t.barycentric(u), t.barycentric(u + d), t.direction(d));
+    /// assert!((0..3).all(|i| (m[i] - l[i] - dl[i]).abs() < 1e-15));
+    /// assert!(dl.iter().sum::<f64>().abs() < 1e-15);
+    /// ```
     #[inline]
     pub fn direction(&self, d: DVec2) -> [f64; 3] {
         self.map.direction(d)
     }
 
     /// The point with barycentric coordinates `l`.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::DomainTriangle;
+    /// let t = DomainTriangle::new([DVec2::ZERO, DVec2::new(3.0, 0.0), DVec2::new(0.0, 3.0)])?;
+    /// assert_eq!(t.point([0.0, 1.0, 0.0]), DVec2::new(3.0, 0.0));
+    /// assert_eq!(t.point([1.0 / 3.0; 3]), DVec2::ONE);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     #[inline]
     pub fn point(&self, l: [f64; 3]) -> DVec2 {
         self.corners[0] * l[0] + self.corners[1] * l[1] + self.corners[2] * l[2]
@@ -129,6 +219,16 @@ impl DomainTriangle {
     }
 
     /// Twice the signed area.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::DomainTriangle;
+    /// assert_eq!(DomainTriangle::reference().det(), 1.0);
+    /// assert!((DomainTriangle::equilateral().det() - 0.75f64.sqrt()).abs() < 1e-15);
+    /// // Clockwise triangles are allowed, with a negative determinant.
+    /// assert_eq!(DomainTriangle::new([DVec2::ZERO, DVec2::Y, DVec2::X])?.det(), -1.0);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn det(&self) -> f64 {
         orient(self.corners[0], self.corners[1], self.corners[2])
     }
@@ -148,6 +248,18 @@ const HALF_OPEN_DIRECTIONS: [DVec2; 2] = [
 /// exactly, so sums of characteristic functions are exactly one on shared edges.
 /// Each edge sign is computed as `(p - u) x (q - u)` for the edge's two end points, the
 /// same expression (up to an exact sign change) in every triangle sharing that edge.
+///
+/// ```
+/// use glam::DVec2;
+/// use tri_spline::domain::in_half_open;
+/// // The two triangles of the unit square share the diagonal.
+/// let (a, b, c, d) = (DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y);
+/// assert!(in_half_open(DVec2::new(0.6, 0.2), a, b, c));
+/// assert!(!in_half_open(DVec2::new(0.2, 0.6), a, b, c));
+/// // A point on the shared edge belongs to exactly one of them.
+/// let on_edge = DVec2::new(0.5, 0.5);
+/// assert!(in_half_open(on_edge, a, b, c) != in_half_open(on_edge, a, c, d));
+/// ```
 pub fn in_half_open(u: DVec2, a: DVec2, b: DVec2, c: DVec2) -> bool {
     let det = orient(a, b, c);
     if det == 0.0 {

@@ -397,6 +397,18 @@ pub fn lspia(
 /// is fastest there but barely damps the top one (it flips sign each step). On the
 /// reference problems (Bézier degrees 3 to 24, B-patch degree 3) the factor 1.5 gave the
 /// lowest `ε_avg` over the first ten iterations among 1, 1.5, 1.9 and 1.99.
+///
+/// ```
+/// use tri_spline::fit::{default_lspia_step, lspia_spectrum};
+/// use tri_spline::linalg::SparseMatrix;
+/// let n = SparseMatrix::from_rows(2, vec![vec![(0, 1.0)], vec![(0, 0.5), (1, 0.5)], vec![(0, 0.2), (1, 0.8)]]);
+/// let mu = default_lspia_step(&n);
+/// let spectrum = lspia_spectrum(&n, mu)?;
+/// // 1.5 / λ_max (the bound is tight here): inside the stable range (0, 2/λ_max).
+/// assert!((mu * spectrum.lambda_max - 1.5).abs() < 1e-9);
+/// assert!(spectrum.spectral_radius < 1.0);
+/// # Ok::<(), tri_spline::SplineError>(())
+/// ```
 pub fn default_lspia_step(n: &SparseMatrix) -> f64 {
     1.5 / gram_lambda_max_bound(n, 50)
 }
@@ -410,6 +422,24 @@ pub fn default_lspia_step(n: &SparseMatrix) -> f64 {
 /// means `ρ(I - w N_T) >= 1`, see [`pia_spectral_radius`]); [`SplineError::Count`] if
 /// `n_targets` is not square of the control size; [`SplineError::NonFinite`] naming a
 /// non-finite target.
+///
+/// ```
+/// # use glam::{DVec2, DVec3};
+/// # use tri_spline::index::multi_indices;
+/// # use tri_spline::{DomainTriangle, SurfaceBasis};
+/// // The quadratic Bézier basis at the six uniform domain points (square collocation).
+/// let params: Vec<DVec2> = multi_indices(2).map(|[_, j, k]| DVec2::new(j as f64, k as f64) / 2.0).collect();
+/// let n_t = SurfaceBasis::Bezier { degree: 2, domain: DomainTriangle::reference() }.collocation(&params)?;
+/// use tri_spline::fit::{IterationOptions, pia};
+/// // Interpolate a quadratic surface at the six points, starting from the data itself.
+/// let data: Vec<DVec3> = params.iter().map(|u| DVec3::new(u.x, u.y, u.x * u.y)).collect();
+/// let options = IterationOptions { max_iterations: 100, tolerance: Some(1e-12), hit_tol: 1e-9 };
+/// let fit = pia(&n_t, &data, &n_t, &data, data.clone(), 1.0, &options)?;
+/// // ρ(I - N_T) = 1 - 2!/2² = 1/2: the error halves at every step.
+/// assert!(fit.reached_tolerance && fit.records.len() < 50);
+/// assert!(pia(&n_t, &data, &n_t, &data, data.clone(), 0.0, &options).is_err());
+/// # Ok::<(), tri_spline::SplineError>(())
+/// ```
 pub fn pia(
     n: &SparseMatrix,
     data: &[DVec3],
@@ -447,6 +477,29 @@ pub fn pia(
 /// As [`lspia`] (divergence means `ρ(I - R N) >= 1`, see [`seed_spectral_radius`]);
 /// [`SplineError::Count`] if `r` does not map data to control points (also when its
 /// result has the wrong length); errors of `r`.
+///
+/// ```
+/// # use glam::{DVec2, DVec3};
+/// # use tri_spline::index::multi_indices;
+/// # use tri_spline::linalg::SparseMatrix;
+/// # use tri_spline::{DomainTriangle, SurfaceBasis};
+/// // A linear patch (3 control points) against 6 data points at the degree-2 domain points;
+/// // R picks the data at the three corners (positions 0, 2, 5).
+/// let params: Vec<DVec2> = multi_indices(2).map(|[_, j, k]| DVec2::new(j as f64, k as f64) / 2.0).collect();
+/// let n = SurfaceBasis::Bezier { degree: 1, domain: DomainTriangle::reference() }.collocation(&params)?;
+/// let r = SparseMatrix::from_rows(6, vec![vec![(0, 1.0)], vec![(2, 1.0)], vec![(5, 1.0)]]);
+/// use tri_spline::fit::{IterationOptions, seed_iteration};
+/// // Data on z = x y; here R N = I, so the loop stays at C = R D, the corner data:
+/// // the oblique projection (R N)^-1 R D, neither interpolation nor least squares.
+/// let data: Vec<DVec3> = params.iter().map(|u| DVec3::new(u.x, u.y, u.x * u.y)).collect();
+/// let options = IterationOptions { max_iterations: 3, tolerance: None, hit_tol: 1e-9 };
+/// let fit = seed_iteration(&n, &data, &r, &options)?;
+/// assert_eq!(fit.control, vec![data[0], data[2], data[5]]);
+/// assert!(fit.records.iter().all(|record| record.eps_max == 0.25));
+/// // R must map the data (6 points) to the control points (3).
+/// assert!(seed_iteration(&n, &data, &r.transpose(), &options).is_err());
+/// # Ok::<(), tri_spline::SplineError>(())
+/// ```
 pub fn seed_iteration(
     n: &SparseMatrix,
     data: &[DVec3],
@@ -502,6 +555,20 @@ pub struct LspiaSpectrum {
 /// `μ` is not finite (the radius would be NaN or infinite); [`SplineError::NonFinite`]
 /// for a row of `N` with a non-finite entry; [`SplineError::Singular`] if the eigenvalue
 /// computation fails.
+///
+/// ```
+/// use tri_spline::SplineError;
+/// use tri_spline::fit::lspia_spectrum;
+/// use tri_spline::linalg::SparseMatrix;
+/// // NᵀN = [[1.25, 0.25], [0.25, 1.25]] has the eigenvalues 1 and 1.5.
+/// let n = SparseMatrix::from_rows(2, vec![vec![(0, 1.0)], vec![(0, 0.5), (1, 0.5)], vec![(1, 1.0)]]);
+/// let spectrum = lspia_spectrum(&n, 1.0)?;
+/// assert!((spectrum.lambda_min - 1.0).abs() < 1e-14 && (spectrum.lambda_max - 1.5).abs() < 1e-14);
+/// // ρ(I - NᵀN) = max(|1 - 1|, |1 - 1.5|).
+/// assert!((spectrum.spectral_radius - 0.5).abs() < 1e-14);
+/// assert!(matches!(lspia_spectrum(&n, f64::NAN), Err(SplineError::BadOption { name: "mu", .. })));
+/// # Ok::<(), SplineError>(())
+/// ```
 pub fn lspia_spectrum(n: &SparseMatrix, mu: f64) -> Result<LspiaSpectrum, SplineError> {
     if !mu.is_finite() {
         return Err(SplineError::BadOption { name: "mu", value: mu.to_string(), reason: "a finite step" });
@@ -531,6 +598,21 @@ pub fn lspia_spectrum(n: &SparseMatrix, mu: f64) -> Result<LspiaSpectrum, Spline
 /// [`SplineError::Count`] if `n_targets` is not square; [`SplineError::BadOption`] if the
 /// weight is not finite; [`SplineError::NonFinite`] for a row with a non-finite entry;
 /// [`SplineError::Singular`] if the eigenvalue computation fails.
+///
+/// ```
+/// # use glam::{DVec2, DVec3};
+/// # use tri_spline::index::multi_indices;
+/// # use tri_spline::{DomainTriangle, SurfaceBasis};
+/// // The quadratic Bézier basis at the six uniform domain points (square collocation).
+/// let params: Vec<DVec2> = multi_indices(2).map(|[_, j, k]| DVec2::new(j as f64, k as f64) / 2.0).collect();
+/// let n_t = SurfaceBasis::Bezier { degree: 2, domain: DomainTriangle::reference() }.collocation(&params)?;
+/// use tri_spline::fit::pia_spectral_radius;
+/// // Chen & Wang: ρ(I - N_T) = 1 - n!/n^n for degree n at the uniform points.
+/// assert!((pia_spectral_radius(&n_t, 1.0)? - 0.5).abs() < 1e-14);
+/// // N_T has the eigenvalues 1, 1, 1, 1/2, 1/2, 1/2: a weight of 2.5 overshoots (|1 - 2.5| > 1).
+/// assert!(pia_spectral_radius(&n_t, 2.5)? > 1.0);
+/// # Ok::<(), tri_spline::SplineError>(())
+/// ```
 pub fn pia_spectral_radius(n_targets: &SparseMatrix, weight: f64) -> Result<f64, SplineError> {
     if !weight.is_finite() {
         return Err(SplineError::BadOption { name: "weight", value: weight.to_string(), reason: "a finite weight" });
@@ -557,6 +639,24 @@ pub fn pia_spectral_radius(n_targets: &SparseMatrix, weight: f64) -> Result<f64,
 ///
 /// # Errors
 /// Errors of `r`.
+///
+/// ```
+/// # use glam::{DVec2, DVec3};
+/// # use tri_spline::index::multi_indices;
+/// # use tri_spline::linalg::SparseMatrix;
+/// # use tri_spline::{DomainTriangle, SurfaceBasis};
+/// // A linear patch (3 control points) against 6 data points at the degree-2 domain points;
+/// // R picks the data at the three corners (positions 0, 2, 5).
+/// let params: Vec<DVec2> = multi_indices(2).map(|[_, j, k]| DVec2::new(j as f64, k as f64) / 2.0).collect();
+/// let n = SurfaceBasis::Bezier { degree: 1, domain: DomainTriangle::reference() }.collocation(&params)?;
+/// let r = SparseMatrix::from_rows(6, vec![vec![(0, 1.0)], vec![(2, 1.0)], vec![(5, 1.0)]]);
+/// use tri_spline::fit::weighted_collocation;
+/// // The corners' rows of N are those of the identity: R N = I.
+/// let rn = weighted_collocation(&n, &r)?;
+/// assert_eq!((rn.nrows(), rn.ncols()), (3, 3));
+/// assert!((0..3).all(|i| (0..3).all(|j| rn[(i, j)] == if i == j { 1.0 } else { 0.0 })));
+/// # Ok::<(), tri_spline::SplineError>(())
+/// ```
 pub fn weighted_collocation(n: &SparseMatrix, r: &dyn LinearOperator) -> Result<Mat<f64>, SplineError> {
     let k = n.cols();
     let dense = n.to_dense();
@@ -586,6 +686,25 @@ pub fn weighted_collocation(n: &SparseMatrix, r: &dyn LinearOperator) -> Result<
 ///
 /// # Errors
 /// As [`weighted_collocation`]; [`SplineError::Singular`] if the eigenvalues fail.
+///
+/// ```
+/// # use glam::{DVec2, DVec3};
+/// # use tri_spline::index::multi_indices;
+/// # use tri_spline::linalg::SparseMatrix;
+/// # use tri_spline::{DomainTriangle, SurfaceBasis};
+/// // A linear patch (3 control points) against 6 data points at the degree-2 domain points;
+/// // R picks the data at the three corners (positions 0, 2, 5).
+/// let params: Vec<DVec2> = multi_indices(2).map(|[_, j, k]| DVec2::new(j as f64, k as f64) / 2.0).collect();
+/// let n = SurfaceBasis::Bezier { degree: 1, domain: DomainTriangle::reference() }.collocation(&params)?;
+/// let r = SparseMatrix::from_rows(6, vec![vec![(0, 1.0)], vec![(2, 1.0)], vec![(5, 1.0)]]);
+/// use tri_spline::fit::seed_spectral_radius;
+/// // R N = I: the loop reaches its fixed point at once.
+/// assert!(seed_spectral_radius(&n, &r)?.abs() < 1e-15);
+/// // Half of the corner data: I - R N = I / 2.
+/// let half = SparseMatrix::from_rows(6, vec![vec![(0, 0.5)], vec![(2, 0.5)], vec![(5, 0.5)]]);
+/// assert!((seed_spectral_radius(&n, &half)? - 0.5).abs() < 1e-15);
+/// # Ok::<(), tri_spline::SplineError>(())
+/// ```
 pub fn seed_spectral_radius(n: &SparseMatrix, r: &dyn LinearOperator) -> Result<f64, SplineError> {
     let rn = weighted_collocation(n, r)?;
     let mut a = rn * faer::Scale(-1.0);
@@ -599,6 +718,16 @@ pub fn seed_spectral_radius(n: &SparseMatrix, r: &dyn LinearOperator) -> Result<
 ///
 /// # Errors
 /// [`SplineError::Singular`] if the computation fails.
+///
+/// ```
+/// use tri_spline::fit::matrix_eigenvalues;
+/// // Upper triangular: the eigenvalues are the diagonal, all real.
+/// let mut values = matrix_eigenvalues(&faer::mat![[2.0, 1.0], [0.0, 3.0]])?;
+/// values.sort_by(|a, b| a.0.total_cmp(&b.0));
+/// assert!((values[0].0 - 2.0).abs() < 1e-14 && (values[1].0 - 3.0).abs() < 1e-14);
+/// assert!(values.iter().all(|v| v.1 == 0.0));
+/// # Ok::<(), tri_spline::SplineError>(())
+/// ```
 pub fn matrix_eigenvalues(a: &Mat<f64>) -> Result<Vec<(f64, f64)>, SplineError> {
     eigenvalues(a)
 }
@@ -621,6 +750,21 @@ pub struct LeastSquaresReport {
 ///
 /// # Errors
 /// [`SplineError::Singular`] if `N` is rank deficient or has fewer rows than columns.
+///
+/// ```
+/// use glam::DVec3;
+/// use tri_spline::fit::least_squares_fit;
+/// use tri_spline::linalg::SparseMatrix;
+/// // A segment sampled at t = 0, 1/2, 1 with a bump in the middle: the fit spreads the bump.
+/// let n = SparseMatrix::from_rows(2, vec![vec![(0, 1.0)], vec![(0, 0.5), (1, 0.5)], vec![(1, 1.0)]]);
+/// let data = [DVec3::ZERO, DVec3::new(0.5, 0.3, 0.0), DVec3::X];
+/// let fit = least_squares_fit(&n, &data, 0.15)?;
+/// assert!((fit.control[0] - DVec3::new(0.0, 0.1, 0.0)).length() < 1e-14);
+/// assert!((fit.stats.eps_max - 0.2).abs() < 1e-14 && fit.stats.n_eps < 100.0);
+/// // Fewer data points than control points.
+/// assert!(least_squares_fit(&n.transpose(), &data[..2], 0.15).is_err());
+/// # Ok::<(), tri_spline::SplineError>(())
+/// ```
 pub fn least_squares_fit(n: &SparseMatrix, data: &[DVec3], hit_tol: f64) -> Result<LeastSquaresReport, SplineError> {
     let start = Instant::now();
     let control = least_squares(n, data)?;

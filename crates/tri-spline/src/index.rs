@@ -10,6 +10,12 @@
 ///
 /// For the degrees of patches and grids (the count must fit in `usize`; see
 /// [`checked_tri_count`] for a size given by a caller).
+///
+/// ```
+/// use tri_spline::index::{multi_indices, tri_count};
+/// assert_eq!(tri_count(3), 10);
+/// assert_eq!(multi_indices(7).count(), tri_count(7));
+/// ```
 #[inline]
 pub const fn tri_count(n: usize) -> usize {
     (n + 1) * (n + 2) / 2
@@ -34,18 +40,36 @@ pub const fn checked_tri_count(n: usize) -> Option<usize> {
 }
 
 /// Number of multi-indices of all degrees `0..d` (exclusive): `d (d + 1)(d + 2) / 6`.
+///
+/// ```
+/// use tri_spline::index::{tet_count, tri_count};
+/// assert_eq!(tet_count(3), tri_count(0) + tri_count(1) + tri_count(2));
+/// assert_eq!(tet_count(3), 10);
+/// ```
 #[inline]
 pub const fn tet_count(d: usize) -> usize {
     d * (d + 1) * (d + 2) / 6
 }
 
 /// Storage position of `β = (n - j - k, j, k)` among the multi-indices of degree `n`.
+///
+/// ```
+/// use tri_spline::index::{multi_indices, tri_index};
+/// assert_eq!(tri_index(3, 1, 2), 8);
+/// assert_eq!(multi_indices(3).position(|b| b == [0, 1, 2]), Some(8));
+/// ```
 #[inline(always)]
 pub const fn tri_index(n: usize, j: usize, k: usize) -> usize {
     k * (n + 1) - (k * k.saturating_sub(1)) / 2 + j
 }
 
 /// Storage position of `β` (whose degree is `β0 + β1 + β2`).
+///
+/// ```
+/// use tri_spline::index::{beta_index, multi_indices};
+/// assert_eq!(beta_index([0, 1, 2]), 8);
+/// assert!(multi_indices(5).enumerate().all(|(i, beta)| beta_index(beta) == i));
+/// ```
 #[inline(always)]
 pub const fn beta_index(beta: [usize; 3]) -> usize {
     tri_index(beta[0] + beta[1] + beta[2], beta[1], beta[2])
@@ -109,6 +133,14 @@ impl Iterator for MultiIndices {
 impl ExactSizeIterator for MultiIndices {}
 
 /// `n! / (β0! β1! β2!)`, exactly as `f64` for the degrees used here.
+///
+/// ```
+/// use tri_spline::index::{multi_indices, multinomial};
+/// assert_eq!(multinomial([1, 1, 1]), 6.0);
+/// assert_eq!(multinomial([2, 0, 3]), 10.0);
+/// // The trinomial theorem: the coefficients of degree n sum to 3^n.
+/// assert_eq!(multi_indices(4).map(multinomial).sum::<f64>(), 81.0);
+/// ```
 pub fn multinomial(beta: [usize; 3]) -> f64 {
     // Product of binomials, each exact in f64 up to far beyond the supported degrees
     // (a degree beyond `usize` is infinite).
@@ -120,6 +152,14 @@ pub fn multinomial(beta: [usize; 3]) -> f64 {
 
 /// Binomial coefficient `C(n, k)` as `f64`: 0 for `k > n`, infinite beyond the `f64`
 /// range (found after a few hundred factors, not `k` of them).
+///
+/// ```
+/// use tri_spline::index::binomial;
+/// assert_eq!(binomial(5, 2), 10.0);
+/// assert_eq!(binomial(40, 20), 137_846_528_820.0);
+/// assert_eq!(binomial(2, 5), 0.0);
+/// assert!(binomial(1100, 550).is_infinite());
+/// ```
 pub fn binomial(n: usize, k: usize) -> f64 {
     if k > n {
         return 0.0;

@@ -28,6 +28,15 @@ impl SparseMatrix {
     /// # Panics
     /// If a column index is `>= cols` (an internal invariant of the callers) or beyond
     /// the `u32` column indices.
+    ///
+    /// ```
+    /// use tri_spline::linalg::SparseMatrix;
+    /// // Row 0 lists column 2 twice (summed) and out of order (sorted).
+    /// let a = SparseMatrix::from_rows(3, vec![vec![(2, 1.0), (0, 2.0), (2, 0.5)], vec![]]);
+    /// assert_eq!((a.rows(), a.cols(), a.nnz()), (2, 3, 2));
+    /// assert_eq!(a.row(0), (&[0, 2][..], &[2.0, 1.5][..]));
+    /// assert_eq!(a.mul_vec(&[1.0, 1.0, 1.0]), vec![3.5, 0.0]);
+    /// ```
     pub fn from_rows(cols: usize, rows: Vec<Vec<(usize, f64)>>) -> Self {
         let mut row_start = Vec::with_capacity(rows.len() + 1);
         row_start.push(0);
@@ -103,6 +112,13 @@ impl SparseMatrix {
     }
 
     /// The first row holding a NaN or infinite entry, if any.
+    ///
+    /// ```
+    /// use tri_spline::linalg::SparseMatrix;
+    /// let a = SparseMatrix::from_rows(2, vec![vec![(0, 1.0)], vec![], vec![(1, f64::NAN)]]);
+    /// assert_eq!(a.first_non_finite_row(), Some(2));
+    /// assert_eq!(SparseMatrix::from_rows(2, vec![vec![(1, 1.0)]]).first_non_finite_row(), None);
+    /// ```
     pub fn first_non_finite_row(&self) -> Option<usize> {
         let entry = self.values.iter().position(|v| !v.is_finite())?;
         // The row whose range holds the entry: the last row starting at or before it.
@@ -114,6 +130,15 @@ impl SparseMatrix {
     /// # Panics
     /// Unless `x` has one entry per column; [`try_mul_vec`](Self::try_mul_vec) returns an
     /// error instead.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use tri_spline::linalg::SparseMatrix;
+    /// let a = SparseMatrix::from_rows(2, vec![vec![(0, 1.0), (1, 2.0)], vec![(1, 3.0)]]);
+    /// assert_eq!(a.mul_vec(&[1.0, 1.0]), vec![3.0, 3.0]);
+    /// // Points are combined coordinate-wise.
+    /// assert_eq!(a.mul_vec(&[DVec3::X, DVec3::Y]), vec![DVec3::new(1.0, 2.0, 0.0), DVec3::new(0.0, 3.0, 0.0)]);
+    /// ```
     pub fn mul_vec<P: Point>(&self, x: &[P]) -> Vec<P> {
         self.try_mul_vec(x).unwrap_or_else(|e| panic!("SparseMatrix::mul_vec: {e}"))
     }
@@ -155,6 +180,15 @@ impl SparseMatrix {
     }
 
     /// The transpose.
+    ///
+    /// ```
+    /// use tri_spline::linalg::SparseMatrix;
+    /// let a = SparseMatrix::from_rows(3, vec![vec![(0, 1.0), (2, 2.0)], vec![(1, 3.0)]]);
+    /// let t = a.transpose();
+    /// assert_eq!((t.rows(), t.cols()), (3, 2));
+    /// assert_eq!(t.to_dense()[(2, 0)], 2.0);
+    /// assert_eq!(t.transpose(), a);
+    /// ```
     pub fn transpose(&self) -> Self {
         let mut counts = vec![0usize; self.cols + 1];
         for &c in &self.col_index {
@@ -182,6 +216,15 @@ impl SparseMatrix {
     ///
     /// # Panics
     /// Unless `other` has one row per column of `self`.
+    ///
+    /// ```
+    /// use tri_spline::linalg::SparseMatrix;
+    /// let a = SparseMatrix::from_rows(2, vec![vec![(0, 1.0), (1, 2.0)], vec![(1, 3.0)]]);
+    /// let square = a.mul(&a).to_dense();
+    /// assert_eq!([square[(0, 0)], square[(0, 1)], square[(1, 0)], square[(1, 1)]], [1.0, 8.0, 0.0, 9.0]);
+    /// assert_eq!(a.mul(&SparseMatrix::identity(2)?), a);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn mul(&self, other: &SparseMatrix) -> Self {
         assert!(
             self.cols == other.rows,
@@ -205,6 +248,13 @@ impl SparseMatrix {
     }
 
     /// `max_j sum_i |a_ij|` (the 1-norm).
+    ///
+    /// ```
+    /// use tri_spline::linalg::SparseMatrix;
+    /// // [[1, -2], [0, 4]]: column sums 1 and 6.
+    /// let a = SparseMatrix::from_rows(2, vec![vec![(0, 1.0), (1, -2.0)], vec![(1, 4.0)]]);
+    /// assert_eq!(a.norm_1(), 6.0);
+    /// ```
     pub fn norm_1(&self) -> f64 {
         let mut sums = vec![0.0; self.cols];
         for (&c, &v) in self.col_index.iter().zip(&self.values) {
@@ -214,16 +264,36 @@ impl SparseMatrix {
     }
 
     /// `max_i sum_j |a_ij|` (the infinity norm).
+    ///
+    /// ```
+    /// use tri_spline::linalg::SparseMatrix;
+    /// // [[1, -2], [0, 4]]: row sums 3 and 4.
+    /// let a = SparseMatrix::from_rows(2, vec![vec![(0, 1.0), (1, -2.0)], vec![(1, 4.0)]]);
+    /// assert_eq!(a.norm_inf(), 4.0);
+    /// ```
     pub fn norm_inf(&self) -> f64 {
         (0..self.rows).map(|i| self.row(i).1.iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max)
     }
 
     /// Whether every stored entry is non-negative.
+    ///
+    /// ```
+    /// use tri_spline::linalg::SparseMatrix;
+    /// assert!(SparseMatrix::from_rows(2, vec![vec![(0, 0.5), (1, 0.5)]]).is_non_negative());
+    /// assert!(!SparseMatrix::from_rows(2, vec![vec![(0, 1.5), (1, -0.5)]]).is_non_negative());
+    /// ```
     pub fn is_non_negative(&self) -> bool {
         self.values.iter().all(|&v| v >= 0.0)
     }
 
     /// As a dense faer matrix.
+    ///
+    /// ```
+    /// use tri_spline::linalg::SparseMatrix;
+    /// let dense = SparseMatrix::from_rows(3, vec![vec![(2, 5.0)], vec![(0, 1.0)]]).to_dense();
+    /// assert_eq!((dense.nrows(), dense.ncols()), (2, 3));
+    /// assert_eq!((dense[(0, 2)], dense[(1, 0)], dense[(0, 0)]), (5.0, 1.0, 0.0));
+    /// ```
     pub fn to_dense(&self) -> Mat<f64> {
         let mut m = Mat::<f64>::zeros(self.rows, self.cols);
         for i in 0..self.rows {
@@ -245,6 +315,20 @@ pub const MAX_POWER_ITERATIONS: usize = 1 << 16;
 /// A rigorous upper bound on `λ_max(NᵀN)`, tight for non-negative `N`: the
 /// Collatz–Wielandt bound `max_i (A x)_i / x_i` along power iterations with a positive
 /// vector (Perron–Frobenius), else `‖N‖₁ ‖N‖∞`.
+///
+/// ```
+/// use tri_spline::linalg::{SparseMatrix, gram_lambda_max_bound, symmetric_eigenvalues};
+/// let n = SparseMatrix::from_rows(2, vec![
+///     vec![(0, 1.0)], vec![(0, 0.5), (1, 0.5)], vec![(0, 0.2), (1, 0.8)], vec![(1, 1.0)],
+/// ]);
+/// let dense = n.to_dense();
+/// let exact = *symmetric_eigenvalues(&(dense.transpose() * &dense))?.last().unwrap();
+/// let bound = gram_lambda_max_bound(&n, 50);
+/// // An upper bound, tight here, and far below the crude one.
+/// assert!(bound >= exact * (1.0 - 1e-12) && bound <= exact * (1.0 + 1e-9));
+/// assert!(bound < n.norm_1() * n.norm_inf() - 0.1);
+/// # Ok::<(), tri_spline::SplineError>(())
+/// ```
 pub fn gram_lambda_max_bound(n: &SparseMatrix, iterations: usize) -> f64 {
     let crude = n.norm_1() * n.norm_inf();
     if !n.is_non_negative() || n.cols() == 0 {
@@ -281,6 +365,16 @@ pub fn gram_lambda_max_bound(n: &SparseMatrix, iterations: usize) -> f64 {
 ///
 /// # Errors
 /// [`SplineError::Singular`] if the eigenvalue iteration does not converge.
+///
+/// ```
+/// use tri_spline::linalg::eigenvalues;
+/// // A quarter turn has the eigenvalues ±i.
+/// let mut values = eigenvalues(&faer::mat![[0.0, -1.0], [1.0, 0.0]])?;
+/// values.sort_by(|a, b| a.1.total_cmp(&b.1));
+/// assert!(values[0].0.abs() < 1e-15 && (values[0].1 + 1.0).abs() < 1e-15);
+/// assert!(values[1].0.abs() < 1e-15 && (values[1].1 - 1.0).abs() < 1e-15);
+/// # Ok::<(), tri_spline::SplineError>(())
+/// ```
 pub fn eigenvalues(a: &Mat<f64>) -> Result<Vec<(f64, f64)>, SplineError> {
     let n = a.nrows();
     let mut re = faer::diag::Diag::<f64>::zeros(n);
@@ -311,6 +405,13 @@ pub fn eigenvalues(a: &Mat<f64>) -> Result<Vec<(f64, f64)>, SplineError> {
 ///
 /// # Errors
 /// [`SplineError::Singular`] if the iteration does not converge.
+///
+/// ```
+/// use tri_spline::linalg::symmetric_eigenvalues;
+/// let values = symmetric_eigenvalues(&faer::mat![[2.0, 1.0], [1.0, 2.0]])?;
+/// assert!((values[0] - 1.0).abs() < 1e-15 && (values[1] - 3.0).abs() < 1e-15);
+/// # Ok::<(), tri_spline::SplineError>(())
+/// ```
 pub fn symmetric_eigenvalues(a: &Mat<f64>) -> Result<Vec<f64>, SplineError> {
     let n = a.nrows();
     let mut s = faer::diag::Diag::<f64>::zeros(n);
@@ -339,6 +440,14 @@ pub fn symmetric_eigenvalues(a: &Mat<f64>) -> Result<Vec<f64>, SplineError> {
 ///
 /// # Errors
 /// As [`eigenvalues`].
+///
+/// ```
+/// use tri_spline::linalg::spectral_radius;
+/// // Eigenvalues ±i√2: the radius is √2 (the largest |entry| is 2).
+/// let rho = spectral_radius(&faer::mat![[0.0, -2.0], [1.0, 0.0]])?;
+/// assert!((rho - 2f64.sqrt()).abs() < 1e-15);
+/// # Ok::<(), tri_spline::SplineError>(())
+/// ```
 pub fn spectral_radius(a: &Mat<f64>) -> Result<f64, SplineError> {
     Ok(eigenvalues(a)?.into_iter().map(|(re, im)| re.hypot(im)).fold(0.0, f64::max))
 }
@@ -350,6 +459,21 @@ pub fn spectral_radius(a: &Mat<f64>) -> Result<f64, SplineError> {
 /// [`SplineError::Count`] unless there is one data point per row of `N`;
 /// [`SplineError::Singular`] when `N` has fewer rows than columns or is rank deficient
 /// (a zero on the diagonal of `R`).
+///
+/// ```
+/// use glam::DVec3;
+/// use tri_spline::SplineError;
+/// use tri_spline::linalg::{SparseMatrix, least_squares};
+/// // The line through two control points, sampled at t = 0, 1/2, 1.
+/// let n = SparseMatrix::from_rows(2, vec![vec![(0, 1.0)], vec![(0, 0.5), (1, 0.5)], vec![(1, 1.0)]]);
+/// let (a, b) = (DVec3::new(1.0, 2.0, 3.0), DVec3::new(-1.0, 0.0, 5.0));
+/// let control = least_squares(&n, &[a, (a + b) * 0.5, b])?;
+/// assert!((control[0] - a).length() < 1e-14 && (control[1] - b).length() < 1e-14);
+/// // Two equal columns: rank deficient.
+/// let twins = SparseMatrix::from_rows(2, vec![vec![(0, 1.0), (1, 1.0)], vec![(0, 2.0), (1, 2.0)]]);
+/// assert!(matches!(least_squares(&twins, &[a, b]), Err(SplineError::Singular { .. })));
+/// # Ok::<(), SplineError>(())
+/// ```
 pub fn least_squares(n: &SparseMatrix, data: &[DVec3]) -> Result<Vec<DVec3>, SplineError> {
     let (m, k) = (n.rows(), n.cols());
     if data.len() != m {

@@ -114,6 +114,24 @@ pub struct Parameterization {
 /// # Errors
 /// [`SplineError::NotTriangle`], [`SplineError::IsolatedVertex`],
 /// [`SplineError::NotDisk`] (closed, holes, several components).
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes};
+/// use tri_spline::SplineError;
+/// use tri_spline::param::disk_boundary;
+/// use tri_spline::samples::{smooth_surface, triangle_grid};
+/// // A grid with 4 segments per side: 15 vertices, 3 of them interior.
+/// let mesh = HalfedgeMesh::from_soup(&triangle_grid(4, smooth_surface))?;
+/// let boundary = disk_boundary(&mesh)?;
+/// assert_eq!(boundary.len(), 12);
+/// // Counter-clockwise: positive signed area in the (x, y) plane of the grid.
+/// let p = mesh.positions();
+/// let area: f64 = (0..12).map(|i| p[boundary[i]].truncate().perp_dot(p[boundary[(i + 1) % 12]].truncate())).sum();
+/// assert!(area > 0.0);
+/// let closed = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+/// assert!(matches!(disk_boundary(&closed), Err(SplineError::NotDisk { boundary_loops: 0, .. })));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn disk_boundary(mesh: &HalfedgeMesh) -> Result<Vec<usize>, SplineError> {
     if let Some(f) = mesh.faces().find(|&f| mesh.face_degree(f) != 3) {
         return Err(SplineError::NotTriangle { face: f.index(), corners: mesh.face_degree(f) });
@@ -156,6 +174,22 @@ pub struct RegularGrid {
 }
 
 /// Recognises a regular triangular grid (module docs); `None` if the mesh is not one.
+///
+/// ```
+/// use mesh_topo::{HalfedgeMesh, shapes::{self, CellKind}};
+/// use tri_spline::index::tri_index;
+/// use tri_spline::param::detect_regular_grid;
+/// use tri_spline::samples::{smooth_surface, triangle_grid};
+/// let mesh = HalfedgeMesh::from_soup(&triangle_grid(8, smooth_surface))?;
+/// let grid = detect_regular_grid(&mesh).unwrap();
+/// assert_eq!(grid.segments, 8);
+/// assert_eq!(grid.corners, [0, 8, 44]);
+/// // `triangle_grid` stores vertex (j, k) at position tri_index(8, j, k).
+/// assert!(grid.coords.iter().enumerate().all(|(v, &(j, k))| tri_index(8, j as usize, k as usize) == v));
+/// // A square grid is a disk, but not a triangular grid.
+/// assert!(detect_regular_grid(&HalfedgeMesh::from_soup(&shapes::grid(4, 3, CellKind::Triangles)?)?).is_none());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn detect_regular_grid(mesh: &HalfedgeMesh) -> Option<RegularGrid> {
     let nv = mesh.vertex_count();
     let mut corners = Vec::new();

@@ -301,6 +301,19 @@ fn check_options(options: &FitOptions) -> Result<(), SplineError> {
 }
 
 /// The B-patch knots of the pipeline docs.
+///
+/// ```
+/// use tri_spline::pipeline::bpatch_knots;
+/// use tri_spline::{BPatchBasis, DomainTriangle, KnotSequences};
+/// let domain = DomainTriangle::equilateral();
+/// let knots = bpatch_knots(&domain, 3, 0.1);
+/// // r_0, s_0, t_0 are the domain corners; the later knots move away from the centre.
+/// assert_eq!([knots.r[0], knots.s[0], knots.t[0]], domain.corners());
+/// assert!(knots.r[2].length() > 0.0 && knots.r[2].x < 0.0);
+/// assert!(BPatchBasis::new(3, knots).is_ok());
+/// // Without spread they are the Bézier knots.
+/// assert_eq!(bpatch_knots(&domain, 3, 0.0), KnotSequences::bezier(&domain, 3));
+/// ```
 pub fn bpatch_knots(domain: &DomainTriangle, degree: usize, spread: f64) -> KnotSequences {
     let corners = domain.corners();
     let centre = (corners[0] + corners[1] + corners[2]) / 3.0;

@@ -10,6 +10,13 @@ use crate::surface::grid_triangles;
 
 /// The smooth test surface of ALGORITHMS.md §12.4 (Appendix A):
 /// `(a, b, 0.3 sin(3a) cos(2b) + 0.2 a b)`.
+///
+/// ```
+/// use glam::DVec3;
+/// use tri_spline::samples::smooth_surface;
+/// assert_eq!(smooth_surface(0.0, 0.7), DVec3::new(0.0, 0.7, 0.0));
+/// assert_eq!(smooth_surface(0.5, 0.0), DVec3::new(0.5, 0.0, 0.3 * 1.5f64.sin()));
+/// ```
 pub fn smooth_surface(a: f64, b: f64) -> DVec3 {
     DVec3::new(a, b, 0.3 * (3.0 * a).sin() * (2.0 * b).cos() + 0.2 * a * b)
 }
@@ -74,6 +81,21 @@ pub fn try_triangle_grid(n: usize, f: impl Fn(f64, f64) -> DVec3) -> Result<Poly
 ///
 /// `None` unless the patch is a topological disk with at most three ear tips (boundary
 /// vertices with one face), as the fitting pipeline needs.
+///
+/// ```
+/// use glam::DVec3;
+/// use mesh_topo::HalfedgeMesh;
+/// use tri_spline::index::tri_index;
+/// use tri_spline::samples::{disk_patch, smooth_surface, triangle_grid};
+/// let mesh = HalfedgeMesh::from_soup(&triangle_grid(16, smooth_surface))?;
+/// // Grid vertex (5, 5) is interior, of valence 6.
+/// let patch = disk_patch(&mesh, tri_index(16, 5, 5), 2).unwrap();
+/// assert_eq!((patch.vertex_count(), patch.face_count()), (37, 54));
+/// let (lo, hi) = patch.positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), &p| (l.min(p), h.max(p)));
+/// assert!(((hi - lo).max_element() - 1.0).abs() < 1e-12);
+/// assert!(disk_patch(&mesh, 10_000, 2).is_none());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn disk_patch(mesh: &HalfedgeMesh, seed_vertex: usize, rings: usize) -> Option<PolygonSoup> {
     let seed = mesh.vertex(seed_vertex)?;
     let mut distance = vec![usize::MAX; mesh.vertex_count()];

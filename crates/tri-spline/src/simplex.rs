@@ -360,6 +360,20 @@ impl SimplexSpline {
     /// # Errors
     /// None in practice (the knots were checked to be in general position); kept for
     /// [`SplineError::DegenerateSimplex`] should the recurrence meet a degenerate subset.
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::SimplexSpline;
+    /// // The corners of the unit square: the pyramid min(x, y, 1 - x, 1 - y) of volume 1/6.
+    /// let m = SimplexSpline::new(vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y])?;
+    /// assert_eq!(m.degree(), 1);
+    /// for (x, y) in [(0.5f64, 0.25f64), (0.2, 0.7), (0.9, 0.4)] {
+    ///     let pyramid = f64::min(x.min(y), (1.0 - x).min(1.0 - y));
+    ///     assert!((m.eval(DVec2::new(x, y))? - pyramid).abs() < 1e-14);
+    /// }
+    /// assert_eq!(m.eval(DVec2::new(1.5, 0.5))?, 0.0);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval(&self, u: DVec2) -> Result<f64, SplineError> {
         self.eval_with(u, WChoice::Widest)
     }
@@ -368,6 +382,20 @@ impl SimplexSpline {
     ///
     /// # Errors
     /// As [`eval`](Self::eval).
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::{SimplexSpline, WChoice};
+    /// let knots = vec![DVec2::ZERO, DVec2::X, DVec2::new(1.2, 0.9), DVec2::new(0.1, 1.1), DVec2::new(0.5, 0.45)];
+    /// let m = SimplexSpline::new(knots)?;
+    /// let u = DVec2::new(0.4, 0.3);
+    /// let value = m.eval_with(u, WChoice::Widest)?;
+    /// assert!(value > 0.0);
+    /// for choice in [WChoice::First, WChoice::Last, WChoice::Spread] {
+    ///     assert!((m.eval_with(u, choice)? - value).abs() < 1e-12);
+    /// }
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval_with(&self, u: DVec2, choice: WChoice) -> Result<f64, SplineError> {
         let mut memo = Memo::default();
         memo.reset(self.knots.len());
@@ -383,6 +411,19 @@ impl SimplexSpline {
     ///
     /// # Errors
     /// As [`eval`](Self::eval).
+    ///
+    /// ```
+    /// use glam::DVec2;
+    /// use tri_spline::SimplexSpline;
+    /// // The pyramid min(x, y, 1 - x, 1 - y) over the unit square (see `eval`).
+    /// let m = SimplexSpline::new(vec![DVec2::ZERO, DVec2::X, DVec2::ONE, DVec2::Y])?;
+    /// let u = DVec2::new(0.2, 0.4); // where x is the smallest of the four
+    /// assert!((m.derivative(u, DVec2::X)? - 1.0).abs() < 1e-14);
+    /// assert!(m.derivative(u, DVec2::Y)?.abs() < 1e-14);
+    /// let u = DVec2::new(0.9, 0.5); // where 1 - x is
+    /// assert!((m.derivative(u, DVec2::X)? + 1.0).abs() < 1e-14);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn derivative(&self, u: DVec2, y: DVec2) -> Result<f64, SplineError> {
         let mut memo = Memo::default();
         memo.reset(self.knots.len());

@@ -133,6 +133,17 @@ impl SurfaceBasis {
     ///
     /// # Errors
     /// [`SplineError::Count`] or [`SplineError::NonFinite`] for bad control points.
+    ///
+    /// ```
+    /// use glam::{DVec2, DVec3};
+    /// use tri_spline::{DomainTriangle, FittedSurface, SurfaceBasis};
+    /// let basis = SurfaceBasis::Bezier { degree: 1, domain: DomainTriangle::reference() };
+    /// let surface = basis.with_control(vec![DVec3::ZERO, DVec3::X, DVec3::Y])?;
+    /// assert!(matches!(surface, FittedSurface::Bezier(_)));
+    /// assert_eq!(surface.eval(DVec2::new(0.25, 0.5)), DVec3::new(0.25, 0.5, 0.0));
+    /// assert!(basis.with_control(vec![DVec3::ZERO; 4]).is_err());
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn with_control(&self, control: Vec<DVec3>) -> Result<FittedSurface, SplineError> {
         Ok(match self {
             Self::Bezier { degree, domain } => FittedSurface::Bezier(TriBezier::new(*degree, *domain, control)?),
@@ -155,6 +166,19 @@ pub enum FittedSurface {
 
 impl FittedSurface {
     /// The point at parameter `u`.
+    ///
+    /// ```
+    /// use glam::{DVec2, DVec3};
+    /// use tri_spline::{BPatch, DomainTriangle, FittedSurface, KnotSequences, TriBezier};
+    /// let domain = DomainTriangle::reference();
+    /// let control: Vec<DVec3> = (0..6).map(|i| DVec3::new(i as f64, 1.0, (i * i) as f64)).collect();
+    /// let bezier = FittedSurface::Bezier(TriBezier::new(2, domain, control.clone())?);
+    /// // The same surface as a B-patch with coincident knots.
+    /// let bpatch = FittedSurface::Bpatch(BPatch::new(2, KnotSequences::bezier(&domain, 2), control)?);
+    /// let u = DVec2::new(0.2, 0.5);
+    /// assert!((bezier.eval(u) - bpatch.eval(u)).length() < 1e-13);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn eval(&self, u: DVec2) -> DVec3 {
         match self {
             Self::Bezier(s) => s.eval(u),
@@ -164,6 +188,18 @@ impl FittedSurface {
     }
 
     /// The unit normal at `u`, `None` where the surface is singular.
+    ///
+    /// ```
+    /// use glam::{DVec2, DVec3};
+    /// use tri_spline::{DomainTriangle, SurfaceBasis};
+    /// let basis = SurfaceBasis::Bezier { degree: 1, domain: DomainTriangle::reference() };
+    /// // The plane z = 1 - x - y, counter-clockwise over the domain: normal (1, 1, 1) / √3.
+    /// let tilted = basis.with_control(vec![DVec3::Z, DVec3::X, DVec3::Y])?;
+    /// assert!((tilted.normal(DVec2::new(0.2, 0.3)).unwrap() - DVec3::ONE / 3f64.sqrt()).length() < 1e-15);
+    /// let collapsed = basis.with_control(vec![DVec3::ZERO, DVec3::X, DVec3::X * 2.0])?;
+    /// assert_eq!(collapsed.normal(DVec2::new(0.2, 0.3)), None);
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn normal(&self, u: DVec2) -> Option<DVec3> {
         match self {
             Self::Bezier(s) => s.normal(u),
@@ -181,6 +217,22 @@ impl FittedSurface {
     /// Above [`MAX_GRID_SEGMENTS`](crate::samples::MAX_GRID_SEGMENTS) segments per side
     /// (a mistyped size used to abort the process allocating); [`Self::try_sample`]
     /// returns an error instead.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use tri_spline::index::tri_index;
+    /// use tri_spline::{DomainTriangle, SurfaceBasis};
+    /// let domain = DomainTriangle::reference();
+    /// let control: Vec<DVec3> = (0..6).map(|i| DVec3::new(i as f64, 1.0, (i * i) as f64)).collect();
+    /// let surface = SurfaceBasis::Bezier { degree: 2, domain }.with_control(control.clone())?;
+    /// let (points, triangles) = surface.sample(&domain, 4);
+    /// assert_eq!((points.len(), triangles.len()), (15, 16));
+    /// // Grid point (j, k) is the surface at t0 + (j/4)(t1 - t0) + (k/4)(t2 - t0).
+    /// let u = domain.point([0.25, 0.5, 0.25]);
+    /// assert!((points[tri_index(4, 2, 1)] - surface.eval(u)).length() < 1e-14);
+    /// assert_eq!((points[0], points[4], points[14]), (control[0], control[2], control[5]));
+    /// # Ok::<(), tri_spline::SplineError>(())
+    /// ```
     pub fn sample(&self, domain: &DomainTriangle, samples: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
         self.try_sample(domain, samples).unwrap_or_else(|e| panic!("sample: {e}"))
     }
@@ -191,6 +243,20 @@ impl FittedSurface {
     /// [`SplineError::TooLarge`] above
     /// [`MAX_GRID_SEGMENTS`](crate::samples::MAX_GRID_SEGMENTS) segments per side, checked
     /// before allocating.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use tri_spline::samples::MAX_GRID_SEGMENTS;
+    /// use tri_spline::{DomainTriangle, SplineError, SurfaceBasis};
+    /// let domain = DomainTriangle::reference();
+    /// let surface = SurfaceBasis::Bezier { degree: 1, domain }.with_control(vec![DVec3::ZERO, DVec3::X, DVec3::Y])?;
+    /// let (points, triangles) = surface.try_sample(&domain, 2)?;
+    /// assert_eq!((points.len(), triangles.len()), (6, 4));
+    /// assert_eq!(points[1], DVec3::new(0.5, 0.0, 0.0));
+    /// let too_fine = surface.try_sample(&domain, MAX_GRID_SEGMENTS + 1);
+    /// assert!(matches!(too_fine, Err(SplineError::TooLarge { .. })));
+    /// # Ok::<(), SplineError>(())
+    /// ```
     pub fn try_sample(
         &self,
         domain: &DomainTriangle,
@@ -232,6 +298,21 @@ fn check_grid_segments(s: usize) -> Result<(), SplineError> {
 /// # Panics
 /// Above [`MAX_GRID_SEGMENTS`](crate::samples::MAX_GRID_SEGMENTS) segments per side (a
 /// mistyped size used to abort the process allocating).
+///
+/// ```
+/// use glam::DVec2;
+/// use tri_spline::domain::orient;
+/// use tri_spline::index::multi_indices;
+/// use tri_spline::surface::grid_triangles;
+/// // Positions 0, 1, 2 are row k = 0; 3, 4 row k = 1; 5 the apex.
+/// assert_eq!(grid_triangles(2, true), vec![[0, 1, 3], [1, 4, 3], [1, 2, 4], [3, 4, 5]]);
+/// assert_eq!(grid_triangles(2, false)[0], [0, 3, 1]);
+/// // All s² triangles are counter-clockwise in the lattice coordinates (j, k).
+/// let lattice: Vec<DVec2> = multi_indices(8).map(|[_, j, k]| DVec2::new(j as f64, k as f64)).collect();
+/// let triangles = grid_triangles(8, true);
+/// assert_eq!(triangles.len(), 64);
+/// assert!(triangles.iter().all(|t| orient(lattice[t[0] as usize], lattice[t[1] as usize], lattice[t[2] as usize]) > 0.0));
+/// ```
 pub fn grid_triangles(s: usize, ccw: bool) -> Vec<[u32; 3]> {
     check_grid_segments(s).unwrap_or_else(|e| panic!("grid_triangles: {e}"));
     use crate::index::tri_index;

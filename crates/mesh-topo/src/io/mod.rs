@@ -119,6 +119,16 @@ impl Format {
     }
 
     /// The usual file extension, without the dot.
+    ///
+    /// ```
+    /// use mesh_topo::io::Format;
+    ///
+    /// assert_eq!(Format::Ply.extension(), "ply");
+    /// for format in [Format::Obj, Format::Off, Format::Ply] {
+    ///     assert_eq!(Format::from_path(format!("mesh.{}", format.extension()))?, format);
+    /// }
+    /// # Ok::<(), mesh_topo::io::IoError>(())
+    /// ```
     pub fn extension(self) -> &'static str {
         match self {
             Self::Obj => "obj",
@@ -152,6 +162,16 @@ pub enum PlyEncoding {
 
 impl PlyEncoding {
     /// The name used on the PLY `format` line.
+    ///
+    /// ```
+    /// use mesh_topo::io::{self, PlyEncoding};
+    ///
+    /// assert_eq!(PlyEncoding::default().header_name(), "binary_little_endian");
+    /// let mut ply = Vec::new();
+    /// io::write_ply(&mut ply, &mesh_topo::shapes::tetrahedron(), PlyEncoding::Ascii)?;
+    /// assert!(ply.starts_with(format!("ply\nformat {} 1.0\n", PlyEncoding::Ascii.header_name()).as_bytes()));
+    /// # Ok::<(), mesh_topo::io::IoError>(())
+    /// ```
     pub fn header_name(self) -> &'static str {
         match self {
             Self::Ascii => "ascii",
@@ -305,6 +325,14 @@ pub enum IoError {
 
 impl IoError {
     /// Where in the file the problem is, for content errors.
+    ///
+    /// ```
+    /// use mesh_topo::io::{self, Format, Location};
+    ///
+    /// let err = io::read_bytes(b"v 0 0 0\nv 1 x 0\n", Format::Obj).unwrap_err();
+    /// assert_eq!(err.location(), Some(Location::Line(2)));
+    /// assert_eq!(Format::from_path("mesh.stl").unwrap_err().location(), None);
+    /// ```
     pub fn location(&self) -> Option<Location> {
         match self {
             Self::Unsupported { at, .. }
@@ -323,6 +351,20 @@ impl IoError {
 
 /// Reads a mesh file as a polygon soup, the format chosen by the extension.
 ///
+/// ```
+/// use mesh_topo::io::{self, IoError};
+///
+/// let path = std::env::temp_dir().join(format!("mesh-topo-read-soup-{}.off", std::process::id()));
+/// std::fs::write(&path, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")?;
+/// let read = io::read_soup(&path);
+/// std::fs::remove_file(&path)?;
+/// let (soup, report) = read?;
+/// assert_eq!((soup.vertex_count(), soup.face(0)), (3, &[0, 1, 2][..]));
+/// assert!(report.is_lossless());
+/// assert!(matches!(io::read_soup("mesh.stl"), Err(IoError::UnknownExtension { .. })));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
 /// # Errors
 /// [`IoError::UnknownExtension`], [`IoError::File`] if the file cannot be read, or the
 /// content error of the format's reader.
@@ -334,6 +376,19 @@ pub fn read_soup(path: impl AsRef<Path>) -> Result<(PolygonSoup, ReadReport), Io
 }
 
 /// Reads a mesh file from memory.
+///
+/// ```
+/// use mesh_topo::io::{self, Format, IoError};
+///
+/// let off = b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+/// let (soup, report) = io::read_bytes(off, Format::Off)?;
+/// assert_eq!((soup.vertex_count(), soup.face(0)), (3, &[0, 1, 2][..]));
+/// assert!(report.is_lossless());
+/// // The face line is missing.
+/// let err = io::read_bytes(&off[..off.len() - 8], Format::Off).unwrap_err();
+/// assert!(matches!(err, IoError::Truncated { .. }), "{err}");
+/// # Ok::<(), IoError>(())
+/// ```
 ///
 /// # Errors
 /// The content error of the format's reader ([`read_obj`], [`read_off`], [`read_ply`]).
@@ -353,6 +408,20 @@ pub fn read_bytes(bytes: &[u8], format: Format) -> Result<(PolygonSoup, ReadRepo
 /// # Ok::<(), mesh_topo::io::IoError>(())
 /// ```
 ///
+/// A file that reads but whose faces do not form a mesh:
+/// ```
+/// use mesh_topo::MeshError;
+/// use mesh_topo::io::{self, IoError};
+///
+/// // Both faces run along the file's vertices 1 -> 2 (0 -> 1 in the soup, 0-based).
+/// let path = std::env::temp_dir().join(format!("mesh-topo-read-mesh-{}.obj", std::process::id()));
+/// std::fs::write(&path, "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 2 4\n")?;
+/// let read = io::read_mesh(&path);
+/// std::fs::remove_file(&path)?;
+/// assert!(matches!(read, Err(IoError::Mesh(MeshError::InconsistentOrientation { from: 0, to: 1, .. }))));
+/// # Ok::<(), std::io::Error>(())
+/// ```
+///
 /// # Errors
 /// Everything [`read_soup`] reports, and [`IoError::Mesh`] when the faces do not form a
 /// manifold, consistently oriented mesh.
@@ -362,6 +431,21 @@ pub fn read_mesh(path: impl AsRef<Path>) -> Result<(HalfedgeMesh, ReadReport), I
 }
 
 /// Writes a soup to a file, the format chosen by the extension.
+///
+/// ```
+/// use mesh_topo::io::{self, IoError, WriteOptions};
+/// use mesh_topo::shapes;
+///
+/// let path = std::env::temp_dir().join(format!("mesh-topo-write-soup-{}.ply", std::process::id()));
+/// let soup = shapes::icosahedron();
+/// io::write_soup(&path, &soup, &WriteOptions::default())?;
+/// let read = io::read_soup(&path);
+/// std::fs::remove_file(&path)?;
+/// assert_eq!(read?.0, soup); // binary PLY by default, bit for bit
+/// let err = io::write_soup("mesh.stl", &soup, &WriteOptions::default()).unwrap_err();
+/// assert!(matches!(err, IoError::UnknownExtension { .. }));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 ///
 /// # Errors
 /// [`IoError::UnknownExtension`], [`IoError::File`] if the file cannot be written,
@@ -380,6 +464,19 @@ pub fn write_soup(path: impl AsRef<Path>, soup: &PolygonSoup, options: &WriteOpt
 
 /// Writes a mesh to a file, the format chosen by the extension.
 ///
+/// ```
+/// use mesh_topo::io::{self, WriteOptions};
+/// use mesh_topo::{HalfedgeMesh, shapes};
+///
+/// let path = std::env::temp_dir().join(format!("mesh-topo-write-mesh-{}.obj", std::process::id()));
+/// let mesh = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+/// io::write_mesh(&path, &mesh, &WriteOptions::default())?;
+/// let read = io::read_mesh(&path);
+/// std::fs::remove_file(&path)?;
+/// assert_eq!(read?.0, mesh);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
 /// # Errors
 /// As [`write_soup`] (a mesh is always a writable soup, so only extension and file
 /// errors remain).
@@ -388,6 +485,22 @@ pub fn write_mesh(path: impl AsRef<Path>, mesh: &HalfedgeMesh, options: &WriteOp
 }
 
 /// Writes a soup to a stream in the given format. The stream is buffered internally.
+///
+/// ```
+/// use mesh_topo::io::{self, Format, IoError, PlyEncoding, WriteOptions};
+/// use mesh_topo::{DVec3, PolygonSoup, shapes};
+///
+/// let soup = shapes::tetrahedron();
+/// let options = WriteOptions { ply_encoding: PlyEncoding::Ascii };
+/// let mut ply = Vec::new();
+/// io::write_to(&mut ply, &soup, Format::Ply, &options)?;
+/// assert!(ply.starts_with(b"ply\nformat ascii 1.0\n"));
+/// assert_eq!(io::read_bytes(&ply, Format::Ply)?.0, soup);
+/// // Vertex 2 does not exist: no file format could hold this face.
+/// let broken = PolygonSoup::from_faces(vec![DVec3::ZERO; 2], [[0u32, 1, 2]]);
+/// assert!(matches!(io::write_to(Vec::new(), &broken, Format::Obj, &options), Err(IoError::InvalidSoup(_))));
+/// # Ok::<(), IoError>(())
+/// ```
 ///
 /// # Errors
 /// [`IoError::InvalidSoup`] (see [`write_soup`]) or [`IoError::Stream`].

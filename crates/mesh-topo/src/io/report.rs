@@ -34,6 +34,18 @@ pub struct ReadReport {
 
 impl ReadReport {
     /// True if the soup holds everything the file contains.
+    ///
+    /// ```
+    /// use mesh_topo::io::{self, Format};
+    ///
+    /// let (_, report) = io::read_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", Format::Obj)?;
+    /// assert!(report.is_lossless());
+    /// // A texture coordinate the soup cannot hold.
+    /// let (_, report) = io::read_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1 2 3\n", Format::Obj)?;
+    /// assert!(!report.is_lossless());
+    /// assert_eq!(report.dropped[0].count, 1);
+    /// # Ok::<(), mesh_topo::io::IoError>(())
+    /// ```
     pub fn is_lossless(&self) -> bool {
         self.dropped.is_empty()
     }

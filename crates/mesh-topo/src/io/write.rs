@@ -199,6 +199,18 @@ fn push_corners(text: &mut Vec<u8>, face: &[u32], base: u32) {
 /// Writes a soup as OBJ: one `v x y z` line per vertex, one `f` line per face with
 /// 1-based indices, after a comment with the counts.
 ///
+/// ```
+/// use mesh_topo::{DVec3, PolygonSoup, io};
+///
+/// let positions = vec![DVec3::ZERO, DVec3::new(0.5, 0.0, 0.0), DVec3::new(0.0, 0.1, -2.0)];
+/// let soup = PolygonSoup::from_faces(positions, [[0u32, 1, 2]]);
+/// let mut obj = Vec::new();
+/// io::write_obj(&mut obj, &soup)?;
+/// assert_eq!(obj, b"# 3 vertices, 1 faces\nv 0 0 0\nv 0.5 0 0\nv 0 0.1 -2\nf 1 2 3\n");
+/// assert_eq!(io::read_obj(&obj)?.0, soup);
+/// # Ok::<(), mesh_topo::io::IoError>(())
+/// ```
+///
 /// # Errors
 /// [`IoError::InvalidSoup`] if the soup cannot be written (see [`write_soup`]),
 /// [`IoError::Stream`] if the output fails.
@@ -221,6 +233,17 @@ pub fn write_obj(out: impl Write, soup: &PolygonSoup) -> Result<(), IoError> {
 }
 
 /// Writes a soup as OFF (`OFF`, counts with an edge count of 0, vertex lines, face lines).
+///
+/// ```
+/// use mesh_topo::{io, shapes};
+///
+/// let soup = shapes::icosahedron();
+/// let mut off = Vec::new();
+/// io::write_off(&mut off, &soup)?;
+/// assert!(off.starts_with(b"OFF\n12 20 0\n"));
+/// assert_eq!(io::read_off(&off)?.0, soup); // coordinates bit for bit
+/// # Ok::<(), mesh_topo::io::IoError>(())
+/// ```
 ///
 /// # Errors
 /// As [`write_obj`].
@@ -246,6 +269,19 @@ fn write_counted_body<W: Write>(w: &mut LineWriter<W>, soup: &PolygonSoup) -> Re
 
 /// Writes a soup as PLY: `double` coordinates, faces as `vertex_indices` lists of
 /// `uint` (counted by `uchar`, or by `uint` when a face has more than 255 corners).
+///
+/// ```
+/// use mesh_topo::io::{self, PlyEncoding};
+/// use mesh_topo::shapes;
+///
+/// let soup = shapes::cube();
+/// let mut ply = Vec::new();
+/// io::write_ply(&mut ply, &soup, PlyEncoding::BinaryBigEndian)?;
+/// assert!(ply.starts_with(b"ply\nformat binary_big_endian 1.0\nelement vertex 8\n"));
+/// let (read, report) = io::read_ply(&ply)?;
+/// assert_eq!((read, report.ply_encoding), (soup, Some(PlyEncoding::BinaryBigEndian)));
+/// # Ok::<(), mesh_topo::io::IoError>(())
+/// ```
 ///
 /// # Errors
 /// As [`write_obj`].

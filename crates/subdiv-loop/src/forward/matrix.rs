@@ -49,6 +49,19 @@ impl SubdivisionMatrix {
 
     /// A matrix from explicit CSR arrays.
     ///
+    /// ```
+    /// use subdiv_loop::forward::SubdivisionMatrix;
+    ///
+    /// // Two coarse points, three fine ones: both ends and the midpoint.
+    /// let s = SubdivisionMatrix::from_csr(2, vec![0, 1, 3, 4], vec![0, 0, 1, 1], vec![1.0, 0.5, 0.5, 1.0])?;
+    /// assert_eq!((s.rows(), s.columns(), s.nnz()), (3, 2, 4));
+    /// assert_eq!(s.apply(&[2.0f64, 4.0])?, [2.0, 3.0, 4.0]);
+    /// // Columns must increase strictly within a row and stay below `columns`.
+    /// assert!(SubdivisionMatrix::from_csr(2, vec![0, 2], vec![1, 0], vec![0.5, 0.5]).is_err());
+    /// assert!(SubdivisionMatrix::from_csr(2, vec![0, 1], vec![2], vec![1.0]).is_err());
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
+    ///
     /// # Errors
     /// [`LoopError::InvalidParameter`] if the arrays are inconsistent: offsets not
     /// starting at 0, decreasing or not ending at the entry count, columns out of range
@@ -160,11 +173,42 @@ impl SubdivisionMatrix {
     }
 
     /// The raw CSR arrays: row offsets, column indices, values.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    /// use subdiv_loop::forward::{LoopOptions, SubdivisionMatrix, subdivision_matrix};
+    ///
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let s = subdivision_matrix(&octahedron, 1, &LoopOptions::default())?;
+    /// let (offsets, columns, values) = s.csr();
+    /// assert_eq!((offsets.len(), columns.len(), values.len()), (s.rows() + 1, s.nnz(), s.nnz()));
+    /// // Row 6 (the edge point of edge (0, 2)) is the run of entries between two offsets.
+    /// assert_eq!(columns[offsets[6]..offsets[7]], [0, 2, 4, 5]);
+    /// // The arrays rebuild the same matrix.
+    /// let copy = SubdivisionMatrix::from_csr(s.columns(), offsets.to_vec(), columns.to_vec(), values.to_vec())?;
+    /// assert_eq!(copy, s);
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn csr(&self) -> (&[usize], &[u32], &[f64]) {
         (&self.row_offsets, &self.column_indices, &self.values)
     }
 
     /// The sum of each row (1 for every row of a subdivision matrix, up to rounding).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes::{self, CellKind}};
+    /// use subdiv_loop::forward::{LoopOptions, subdivision_matrix};
+    ///
+    /// // Affine invariance under every rule at once: interior and boundary vertices and
+    /// // edges, fixed corners, Warren's weights, two steps.
+    /// let grid = HalfedgeMesh::from_soup(&shapes::grid(3, 3, CellKind::Triangles)?)?;
+    /// let options = LoopOptions { keep_corners: true, ..LoopOptions::warren_weights() };
+    /// let s = subdivision_matrix(&grid, 2, &options)?;
+    /// let sums = s.row_sums();
+    /// assert_eq!(sums.len(), s.rows());
+    /// assert!(sums.iter().all(|&sum| (sum - 1.0).abs() < 1e-14));
+    /// # Ok::<(), subdiv_loop::LoopError>(())
+    /// ```
     pub fn row_sums(&self) -> Vec<f64> {
         (0..self.rows()).map(|i| self.row(i).1.iter().sum()).collect()
     }
