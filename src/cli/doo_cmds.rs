@@ -17,8 +17,8 @@ use subdiv_doo::{BoundaryRule, DooError, DooOptions, FaceRule, SeedChoice, subdi
 
 use super::common::{self, note_dropped, read_soup, write_soup};
 use super::{
-    AnalyzeArgs, AnalyzeScheme, BoundaryArg, CliError, CliResult, DecomposeArgs, ReconstructArgs, ReverseArgs,
-    ReverseScheme, SubdivideArgs, SurfaceScheme, input_error,
+    AnalyzeArgs, AnalyzeScheme, BoundaryArg, CliError, CliResult, DecomposeArgs, ReadingArgs, ReconstructArgs,
+    ReverseArgs, ReverseScheme, SubdivideArgs, SurfaceScheme, input_error,
 };
 
 /// The per-face rule that `reverse` and `decompose` invert: that of `subdivide` with the
@@ -125,6 +125,16 @@ fn seeds(seed_faces: &[u32]) -> Vec<usize> {
     seed_faces.iter().map(|&f| f as usize).collect()
 }
 
+/// The options of `reverse` and `decompose` for a Doo-Sabin scheme, to `depth`.
+fn decompose_options(scheme: ReverseScheme, reading: &ReadingArgs, depth: Depth) -> Result<DecomposeOptions, CliError> {
+    Ok(DecomposeOptions {
+        rule: reverse_rule(scheme, reading.keep_corners, &reading.seed_vertex)?,
+        depth,
+        seeds: seeds(&reading.seed_face),
+        boundary: boundary_rule(reading.boundary),
+    })
+}
+
 /// `reverse --scheme doo`: the coarse mesh after `--levels` reverse Doo-Sabin steps (the
 /// details are dropped; `decompose` keeps them). Prints the seed and candidate class
 /// chosen for every component of every level, with the detail norm `sqrt(Σ|d_i|²)`.
@@ -132,13 +142,7 @@ pub fn reverse(args: &ReverseArgs) -> CliResult {
     if args.levels == 0 {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
-    let rule = reverse_rule(args.scheme, args.keep_corners, &args.seed_vertex)?;
-    let options = DecomposeOptions {
-        rule,
-        depth: Depth::Levels(args.levels),
-        seeds: seeds(&args.seed_face),
-        boundary: boundary_rule(args.boundary),
-    };
+    let options = decompose_options(args.scheme, &args.reading, Depth::Levels(args.levels))?;
     let (mesh, decomposition) = decompose_file(&args.mesh, &options)?;
     let pyramid = &decomposition.pyramid;
     write_soup(&args.out, &pyramid.base, &WriteOptions::default())?;
@@ -162,10 +166,8 @@ pub fn decompose(args: &DecomposeArgs) -> CliResult {
     if !args.max && args.levels == 0 {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
-    let rule = reverse_rule(args.scheme, args.keep_corners, &args.seed_vertex)?;
     let depth = if args.max { Depth::Max } else { Depth::Levels(args.levels) };
-    let options =
-        DecomposeOptions { rule, depth, seeds: seeds(&args.seed_face), boundary: boundary_rule(args.boundary) };
+    let options = decompose_options(args.scheme, &args.reading, depth)?;
     let (mesh, decomposition) = decompose_file(&args.mesh, &options)?;
     let pyramid = &decomposition.pyramid;
     let report = if args.report {

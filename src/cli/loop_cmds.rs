@@ -10,8 +10,8 @@ use subdiv_loop::pyramid::{self, DecomposeOptions, Levels, LoopPyramid};
 
 use super::common::{self, note_dropped, read_soup, write_soup};
 use super::{
-    AnalyzeArgs, CliError, CliResult, DecomposeArgs, ReconstructArgs, ReverseArgs, ReverseScheme, SubdivideArgs,
-    input_error,
+    AnalyzeArgs, CliError, CliResult, DecomposeArgs, ReadingArgs, ReconstructArgs, ReverseArgs, ReverseScheme,
+    SubdivideArgs, input_error,
 };
 
 /// `subdivide --scheme loop | loop-warren | ternary-loop | quaternary-loop`.
@@ -65,13 +65,23 @@ fn loop_error(path: &Path, error: LoopError) -> CliError {
     input_error(path.display(), error)
 }
 
-fn no_seed_face(seed_faces: &[u32]) -> CliResult {
-    if seed_faces.is_empty() {
-        return Ok(());
+/// The options of `reverse` and `decompose` for a Loop scheme, for `levels` (an error
+/// for `--seed-face`, which only the Doo-Sabin reversal takes).
+fn decompose_options(
+    scheme: ReverseScheme,
+    reading: &ReadingArgs,
+    levels: Levels,
+) -> Result<DecomposeOptions, CliError> {
+    if !reading.seed_face.is_empty() {
+        return Err(CliError::Input(
+            "--seed-face applies to --scheme doo; Loop connectivity is detected from the mesh alone".into(),
+        ));
     }
-    Err(CliError::Input(
-        "--seed-face applies to --scheme doo; Loop connectivity is detected from the mesh alone".into(),
-    ))
+    Ok(DecomposeOptions {
+        rules: reverse_rules(scheme, reading.keep_corners),
+        levels,
+        seed_vertices: reading.seed_vertex.clone(),
+    })
 }
 
 /// [`common::decompose_file`] by `pyramid::decompose_soup` (a file written by Loop
@@ -87,15 +97,10 @@ fn decompose_file(path: &Path, options: &DecomposeOptions) -> CliResult<(Polygon
 /// `reverse --scheme loop`: the coarse mesh after `--levels` reverse Loop steps (the
 /// details are dropped; `decompose` keeps them).
 pub fn reverse(args: &ReverseArgs) -> CliResult {
-    no_seed_face(&args.seed_face)?;
+    let options = decompose_options(args.scheme, &args.reading, Levels::Count(args.levels as usize))?;
     if args.levels == 0 {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
-    let options = DecomposeOptions {
-        rules: reverse_rules(args.scheme, args.keep_corners),
-        levels: Levels::Count(args.levels as usize),
-        seed_vertices: args.seed_vertex.clone(),
-    };
     let (fine, pyramid) = decompose_file(&args.mesh, &options)?;
     write_soup(&args.out, &pyramid.base, &WriteOptions::default())?;
     println!(
@@ -114,13 +119,11 @@ const REPORT_FRACTIONS: [f64; 9] = [1.0, 0.5, 0.25, 0.1, 0.05, 0.02, 0.01, 0.005
 
 /// `decompose --scheme loop`: base mesh plus the details of every level, as a `.mres` file.
 pub fn decompose(args: &DecomposeArgs) -> CliResult {
-    no_seed_face(&args.seed_face)?;
+    let levels = if args.max { Levels::Max } else { Levels::Count(args.levels as usize) };
+    let options = decompose_options(args.scheme, &args.reading, levels)?;
     if !args.max && args.levels == 0 {
         return Err(CliError::Input("--levels must be at least 1".into()));
     }
-    let levels = if args.max { Levels::Max } else { Levels::Count(args.levels as usize) };
-    let rules = reverse_rules(args.scheme, args.keep_corners);
-    let options = DecomposeOptions { rules, levels, seed_vertices: args.seed_vertex.clone() };
     let (_, pyramid) = decompose_file(&args.mesh, &options)?;
     let report = if args.report {
         Some(pyramid.rate_distortion(&REPORT_FRACTIONS).map_err(|e| loop_error(&args.mesh, e))?)

@@ -203,19 +203,10 @@ impl ReverseScheme {
     }
 }
 
-/// Options of `reverse`.
+/// What `reverse` and `decompose` are told of how the fine mesh was made: the seeds of
+/// its first (finest) level and the rules it was subdivided with.
 #[derive(Debug, Args)]
-pub struct ReverseArgs {
-    /// Input mesh with subdivision connectivity.
-    pub mesh: PathBuf,
-    /// Output (coarse) mesh.
-    pub out: PathBuf,
-    /// The scheme to reverse.
-    #[arg(long, value_enum)]
-    pub scheme: ReverseScheme,
-    /// Number of levels to reverse.
-    #[arg(long, default_value_t = 1)]
-    pub levels: u32,
+pub struct ReadingArgs {
     /// Faces known to come from coarse faces (Doo-Sabin): at most one per connected
     /// component, repeated or separated by commas; the seeds of the other components are
     /// found automatically. They seed the first (finest) level only.
@@ -240,6 +231,24 @@ pub struct ReverseArgs {
     pub boundary: Option<BoundaryArg>,
 }
 
+/// Options of `reverse`.
+#[derive(Debug, Args)]
+pub struct ReverseArgs {
+    /// Input mesh with subdivision connectivity.
+    pub mesh: PathBuf,
+    /// Output (coarse) mesh.
+    pub out: PathBuf,
+    /// The scheme to reverse.
+    #[arg(long, value_enum)]
+    pub scheme: ReverseScheme,
+    /// Number of levels to reverse.
+    #[arg(long, default_value_t = 1)]
+    pub levels: u32,
+    /// How the fine mesh was made.
+    #[command(flatten)]
+    pub reading: ReadingArgs,
+}
+
 /// Options of `decompose`.
 #[derive(Debug, Args)]
 pub struct DecomposeArgs {
@@ -259,27 +268,9 @@ pub struct DecomposeArgs {
     /// Print a rate-distortion table (fraction of details kept vs error).
     #[arg(long)]
     pub report: bool,
-    /// Faces known to come from coarse faces (Doo-Sabin), as for `reverse`: at most one
-    /// per connected component of the input, for its first level.
-    #[arg(long, value_delimiter = ',')]
-    pub seed_face: Vec<u32>,
-    /// Vertices known to come from coarse vertices (Loop schemes): one per connected
-    /// component at most, repeated or separated by commas; the labeling of each one's
-    /// component starts from it, for the first level. Needed only to pick one of the
-    /// readings of a component whose valences are all regular: without a seed, each such
-    /// component gets the reading with the smallest details.
-    #[arg(long, value_delimiter = ',')]
-    pub seed_vertex: Vec<u32>,
-    /// The mesh was subdivided with boundary corners (valence-2 boundary vertices) kept
-    /// fixed (Loop schemes).
-    #[arg(long)]
-    pub keep_corners: bool,
-    /// The boundary rule the mesh was subdivided with (Doo-Sabin): `shrink` (no faces at
-    /// the boundary, the default) or `chaikin` (boundary quads and vertex faces through
-    /// the Chaikin points: the boundary converges to the quadratic B-spline of the
-    /// boundary polygon).
-    #[arg(long, value_enum)]
-    pub boundary: Option<BoundaryArg>,
+    /// How the fine mesh was made.
+    #[command(flatten)]
+    pub reading: ReadingArgs,
 }
 
 /// Options of `reconstruct`.
@@ -354,10 +345,10 @@ pub fn run(cli: Cli) -> CliResult {
         Some(Command::Subdivide(args)) if args.boundary.is_some() && !args.scheme.is_doo() => {
             Err(CliError::Input("--boundary applies to the Doo-Sabin schemes only".into()))
         }
-        Some(Command::Reverse(args)) if args.boundary.is_some() && args.scheme.is_loop() => {
+        Some(Command::Reverse(args)) if args.reading.boundary.is_some() && args.scheme.is_loop() => {
             Err(CliError::Input("--boundary applies to the Doo-Sabin schemes only".into()))
         }
-        Some(Command::Decompose(args)) if args.boundary.is_some() && args.scheme.is_loop() => {
+        Some(Command::Decompose(args)) if args.reading.boundary.is_some() && args.scheme.is_loop() => {
             Err(CliError::Input("--boundary applies to the Doo-Sabin schemes only".into()))
         }
         Some(Command::Subdivide(args)) => match args.scheme {
