@@ -55,6 +55,21 @@ pub struct RateDistortion {
     pub rms_error: f64,
 }
 
+impl From<subdiv_loop::pyramid::RateDistortion> for RateDistortion {
+    fn from(row: subdiv_loop::pyramid::RateDistortion) -> Self {
+        // (The total number of details is the pyramid's `detail_count`.)
+        let subdiv_loop::pyramid::RateDistortion { fraction, kept, total: _, max_error, rms_error } = row;
+        Self { fraction, kept, max_error, rms_error }
+    }
+}
+
+impl From<subdiv_doo::pyramid::RateDistortion> for RateDistortion {
+    fn from(row: subdiv_doo::pyramid::RateDistortion) -> Self {
+        let subdiv_doo::pyramid::RateDistortion { fraction, kept, max_error, rms_error } = row;
+        Self { fraction, kept, max_error, rms_error }
+    }
+}
+
 /// Decomposes `mesh` into a base mesh and details by repeated reverse subdivision of
 /// `scheme`.
 ///
@@ -310,26 +325,8 @@ impl Pyramid {
     /// As [`reconstruct_keeping`](Self::reconstruct_keeping).
     pub fn rate_distortion(&self, fractions: &[f64]) -> Result<Vec<RateDistortion>, Error> {
         Ok(match self {
-            Pyramid::Loop(p) => p
-                .rate_distortion(fractions)?
-                .into_iter()
-                .map(|r| RateDistortion {
-                    fraction: r.fraction,
-                    kept: r.kept,
-                    max_error: r.max_error,
-                    rms_error: r.rms_error,
-                })
-                .collect(),
-            Pyramid::Doo(p) => p
-                .rate_distortion(fractions)?
-                .into_iter()
-                .map(|r| RateDistortion {
-                    fraction: r.fraction,
-                    kept: r.kept,
-                    max_error: r.max_error,
-                    rms_error: r.rms_error,
-                })
-                .collect(),
+            Pyramid::Loop(p) => p.rate_distortion(fractions)?.into_iter().map(RateDistortion::from).collect(),
+            Pyramid::Doo(p) => p.rate_distortion(fractions)?.into_iter().map(RateDistortion::from).collect(),
         })
     }
 
