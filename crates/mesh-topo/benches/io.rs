@@ -1,4 +1,4 @@
-//! Reading and writing OBJ, OFF and binary PLY from and to memory, in faces per second
+//! Reading and writing OBJ, OFF and ascii and binary PLY from and to memory, in faces per second
 //! (so the file system is not measured); the text readers and writers also on one
 //! thread, beside the default pool.
 
@@ -9,9 +9,10 @@ use std::time::Duration;
 
 mod fixtures;
 
-const FORMATS: [(&str, Format, PlyEncoding); 3] = [
+const FORMATS: [(&str, Format, PlyEncoding); 4] = [
     ("obj", Format::Obj, PlyEncoding::Ascii),
     ("off", Format::Off, PlyEncoding::Ascii),
+    ("ply-ascii", Format::Ply, PlyEncoding::Ascii),
     ("ply-binary", Format::Ply, PlyEncoding::BinaryLittleEndian),
 ];
 

@@ -2,7 +2,8 @@
 
 use super::report::{Counter, DroppedLog};
 use super::text::{
-    Lines, Tokens, check_finite, coordinate, invalid_number, parse_i64, show_token, strip_comment, tokens,
+    Lines, Tokens, check_finite, coordinate, cut_at_line_ends, invalid_number, parse_i64, show_token, strip_comment,
+    tokens,
 };
 use super::{Format, IoError, Location, ReadReport};
 use crate::ids::MAX_ELEMENTS;
@@ -329,15 +330,7 @@ fn read_body(mut lines: Lines<'_>, first_item: usize, counts: BodyCounts, file_b
 /// ends early (the caller then reads it in one pass, which names the first problem), or
 /// when the pieces together hold too many corners.
 fn read_body_in_pieces(body: &[u8], lines_before: usize, counts: BodyCounts) -> Option<Body> {
-    let threads = rayon::current_num_threads();
-    let mut cuts = vec![0];
-    for k in 1..threads {
-        let target = (body.len() * k / threads).max(*cuts.last()?);
-        let cut = memchr::memchr(b'\n', &body[target..]).map_or(body.len(), |i| target + i + 1);
-        cuts.push(cut);
-    }
-    cuts.push(body.len());
-    let pieces: Vec<&[u8]> = cuts.windows(2).map(|w| &body[w[0]..w[1]]).collect();
+    let pieces = cut_at_line_ends(body, rayon::current_num_threads());
     let file_bytes = body.len();
     // Each piece read from where the pieces before it end: their lines (their line ends,
     // as every piece but the last ends with one) and their content lines.

@@ -1,10 +1,11 @@
 //! PLY (Polygon File Format) reader: ascii, binary little- and big-endian.
 
 use super::report::DroppedLog;
-use super::text::{Lines, invalid_number, is_space, parse_f64, parse_i64, show_token, tokens};
+use super::text::{Lines, cut_at_line_ends, invalid_number, is_space, parse_f64, parse_i64, show_token, tokens};
 use super::{Format, IoError, Location, PlyEncoding, ReadReport};
 use crate::ids::MAX_ELEMENTS;
 use crate::soup::PolygonSoup;
+use rayon::prelude::*;
 
 /// A PLY scalar type.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -295,11 +296,9 @@ impl Body for AsciiBody<'_> {
     #[inline]
     fn float(&mut self, ty: Scalar) -> Result<f64, IoError> {
         let token = self.token()?;
-        if ty.is_integer() {
-            parse_i64(token).map(|v| v as f64).ok_or_else(|| invalid_number(self.token_line, token, "an integer"))
-        } else {
-            parse_f64(token).ok_or_else(|| invalid_number(self.token_line, token, "a number"))
-        }
+        ascii_value(token, ty).ok_or_else(|| {
+            invalid_number(self.token_line, token, if ty.is_integer() { "an integer" } else { "a number" })
+        })
     }
 
     #[inline]
@@ -336,6 +335,12 @@ impl Body for AsciiBody<'_> {
             Err(_) => Ok(()),
         }
     }
+}
+
+/// An ascii value of type `ty`, as a float: integer types take integer tokens only.
+#[inline]
+fn ascii_value(token: &[u8], ty: Scalar) -> Option<f64> {
+    if ty.is_integer() { parse_i64(token).map(|v| v as f64) } else { parse_f64(token) }
 }
 
 struct BinaryBody<'a> {
@@ -514,6 +519,11 @@ fn read_face<B: Body>(
 /// Every other property and element is skipped and reported. Elements may come in any
 /// order.
 ///
+/// Ascii data of a megabyte or more with one element per line (as nearly every writer
+/// puts it) is read in pieces, cut at line ends, on the threads of the current `rayon`
+/// pool; the result, and the error of a bad file, are those of one pass (other layouts
+/// are read in one pass).
+///
 /// ```
 /// let ply = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
 ///     property float z\nproperty uchar red\nelement face 1\nproperty list uchar int vertex_indices\n\
@@ -531,10 +541,31 @@ fn read_face<B: Body>(
 /// data after the last element ([`IoError::TrailingData`]), a non-numeric token, a NaN
 /// or infinite coordinate, an index out of range, too many elements.
 pub fn read_ply(bytes: &[u8]) -> Result<(PolygonSoup, ReadReport), IoError> {
+    read_ply_split(bytes, PARALLEL_MIN_BYTES)
+}
+
+/// Ascii files whose data takes fewer bytes than this are read on the calling thread.
+const PARALLEL_MIN_BYTES: usize = 1 << 20;
+
+/// Pieces of a large ascii file per thread: vertex lines (floats) cost more per byte than
+/// face lines, and files list their vertices first, so threads that come free take more.
+const PIECES_PER_THREAD: usize = 4;
+
+/// [`read_ply`], whose ascii data is read in parallel pieces when it takes
+/// `parallel_min_bytes` or more and the current `rayon` pool has several threads.
+fn read_ply_split(bytes: &[u8], parallel_min_bytes: usize) -> Result<(PolygonSoup, ReadReport), IoError> {
     let mut header = parse_header(bytes)?;
     let mut dropped = DroppedLog::default();
     let (vertex_count, face_count) = assign_roles(&mut header, &mut dropped)?;
     let data = &bytes[header.data_start..];
+    // The report comes from the header alone: the pieces give the one pass's.
+    if header.encoding == PlyEncoding::Ascii
+        && data.len() >= parallel_min_bytes
+        && rayon::current_num_threads() > 1
+        && let Some(soup) = read_ascii_in_pieces(data, &header, vertex_count)
+    {
+        return Ok((soup, dropped.into_report(Format::Ply, Some(header.encoding))));
+    }
     // Never reserve more than the data can fill (3 values per vertex, 1 per face).
     let mut soup = PolygonSoup::with_capacity(
         (vertex_count as usize).min(data.len() / 3),
@@ -560,9 +591,147 @@ pub fn read_ply(bytes: &[u8]) -> Result<(PolygonSoup, ReadReport), IoError> {
     Ok((soup, dropped.into_report(Format::Ply, Some(header.encoding))))
 }
 
+/// The ascii data of the elements, read in [`PIECES_PER_THREAD`] pieces per thread cut at
+/// line ends, if every data line holds exactly one element (as nearly every writer puts
+/// them): then a piece's first line number tells which element it starts at. `None`
+/// when the file has not one data line per element, a piece finds a line that is not
+/// exactly one element or a value the one pass would reject, or the joined soup is too
+/// large (the caller then reads it in one pass, which names the first problem).
+fn read_ascii_in_pieces(data: &[u8], header: &Header, vertex_count: u64) -> Option<PolygonSoup> {
+    // The elements that take data, each with its first data line (from 0).
+    let mut spans = Vec::new();
+    let mut data_lines: u64 = 0;
+    for element in header.elements.iter().filter(|e| !e.properties.is_empty()) {
+        spans.push((element, data_lines));
+        data_lines = data_lines.checked_add(element.count)?;
+    }
+    let pieces = cut_at_line_ends(data, PIECES_PER_THREAD * rayon::current_num_threads());
+    let line_ends: Vec<u64> = pieces.par_iter().map(|piece| memchr::memchr_iter(b'\n', piece).count() as u64).collect();
+    // Every piece but the last ends with a line end; a last line without one counts.
+    let unterminated = u64::from(!data.is_empty() && !data.ends_with(b"\n"));
+    // Truncated data, trailing data and blank lines all show here (the common case
+    // of a final blank line included, which the one pass accepts).
+    if line_ends.iter().sum::<u64>() + unterminated != data_lines {
+        return None;
+    }
+    // The data lines of each piece, from its first to the next piece's first.
+    let mut piece_starts = Vec::with_capacity(pieces.len() + 1);
+    let mut line = 0;
+    for &ends in &line_ends {
+        piece_starts.push(line);
+        line += ends;
+    }
+    piece_starts.push(data_lines);
+    let read: Vec<PolygonSoup> = pieces
+        .par_iter()
+        .zip(piece_starts.par_windows(2))
+        .map(|(piece, lines)| read_lines_of_one_element(piece, lines[0]..lines[1], &spans, vertex_count))
+        .collect::<Option<_>>()?;
+    let vertices: usize = read.iter().map(|soup| soup.positions.len()).sum();
+    let faces: usize = read.iter().map(PolygonSoup::face_count).sum();
+    let corners: usize = read.iter().map(|soup| soup.indices.len()).sum();
+    if corners > u32::MAX as usize {
+        return None;
+    }
+    // The first piece's arrays take the others'.
+    let mut read = read.into_iter();
+    let mut soup = read.next()?;
+    soup.positions.reserve_exact(vertices - soup.positions.len());
+    soup.indices.reserve_exact(corners - soup.indices.len());
+    soup.offsets.reserve_exact(faces + 1 - soup.offsets.len());
+    for piece in read {
+        let base = soup.indices.len() as u32;
+        soup.positions.extend_from_slice(&piece.positions);
+        soup.indices.extend_from_slice(&piece.indices);
+        soup.offsets.extend(piece.offsets[1..].iter().map(|&o| base + o));
+    }
+    Some(soup)
+}
+
+/// The vertices and faces on the lines of `piece`, data lines `lines` (from 0), if each
+/// line holds exactly one element; `spans` are the elements that take data, each with its
+/// first data line (face offsets from 0 at the piece's first face).
+fn read_lines_of_one_element(
+    piece: &[u8],
+    lines: std::ops::Range<u64>,
+    spans: &[(&Element, u64)],
+    vertex_count: u64,
+) -> Option<PolygonSoup> {
+    let first_line = lines.start;
+    // The lines of this piece that hold elements named `name`, for the reservations.
+    let lines_of = |name: &[u8]| -> usize {
+        let span_lines = spans.iter().filter(|(element, _)| element.name == name).map(|&(element, first)| {
+            (first + element.count).min(lines.end).saturating_sub(first.max(first_line)) as usize
+        });
+        span_lines.sum()
+    };
+    let faces = lines_of(b"face");
+    let mut soup = PolygonSoup::with_capacity(lines_of(b"vertex"), faces, (3 * faces).min(piece.len() / 2));
+    let mut lines = Lines::new(piece);
+    for &(element, first) in spans.iter().filter(|(element, first)| first + element.count > first_line) {
+        let is_vertex = element.name == b"vertex";
+        for _ in first_line.max(first)..first + element.count {
+            let Some((_, line)) = lines.next() else { return Some(soup) };
+            read_element_line(line, element, is_vertex, vertex_count, &mut soup)?;
+        }
+    }
+    // More lines than elements (not met when the line count matched).
+    lines.next().is_none().then_some(soup)
+}
+
+/// Reads one `element` from `line`, which must hold exactly it: `None` if a value is
+/// missing, malformed, out of range or non-finite, or if the line holds more.
+#[inline]
+fn read_element_line(
+    line: &[u8],
+    element: &Element,
+    is_vertex: bool,
+    vertex_count: u64,
+    soup: &mut PolygonSoup,
+) -> Option<()> {
+    let mut words = tokens(line);
+    let list_length = |token: &[u8]| parse_i64(token).and_then(|n| u64::try_from(n).ok());
+    let mut position = [0.0; 3];
+    for property in &element.properties {
+        match (property.role, property.kind) {
+            (Role::Coordinate(axis), Kind::Scalar(ty)) => position[axis] = ascii_value(words.next()?, ty)?,
+            (Role::FaceIndices, Kind::List { .. }) => {
+                for _ in 0..list_length(words.next()?)? {
+                    let index = parse_i64(words.next()?)?;
+                    if index < 0 || index as u64 >= vertex_count {
+                        return None;
+                    }
+                    soup.indices.push(index as u32);
+                }
+                if soup.indices.len() > u32::MAX as usize {
+                    return None;
+                }
+                soup.offsets.push(soup.indices.len() as u32);
+            }
+            (_, Kind::Scalar(ty)) => drop(ascii_value(words.next()?, ty)?),
+            (_, Kind::List { item, .. }) => {
+                for _ in 0..list_length(words.next()?)? {
+                    ascii_value(words.next()?, item)?;
+                }
+            }
+        }
+    }
+    if words.next().is_some() {
+        return None;
+    }
+    if is_vertex {
+        if !position.iter().all(|x| x.is_finite()) {
+            return None;
+        }
+        soup.positions.push(position.into());
+    }
+    Some(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
 
     const HEADER: &str = "ply\nformat ascii 1.0\ncomment made by hand\nelement vertex 3\nproperty double x\n\
         property double y\nproperty double z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n";
@@ -696,5 +865,158 @@ mod tests {
         let text = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n\
                     property float y\nproperty float z\nend_header\n";
         assert!(matches!(read_ply(text.as_bytes()).unwrap_err(), IoError::Truncated { .. }));
+    }
+
+    /// An ascii PLY text of `soup`, with what `extras` picks (bit 0: a `uchar` vertex
+    /// property; bit 1: a list vertex property; bit 2: a `float` face property; bit 3: the
+    /// faces before the vertices; bits 4-5: an `edge` element first, between the vertices
+    /// and the faces, or last), then one kind of damage at `at`: 1 cut short, 2 a token
+    /// that is not a number, 3 an index out of range, 4 a NaN, 5 two elements on one line,
+    /// 6 an element over two lines, 7 a blank line, 8 both 5 and 6, 9 both 5 and a line
+    /// copied (8 and 9 keep as many lines as elements), 10 a line after the last element.
+    fn ply_text(soup: &PolygonSoup, extras: u8, damage: u8, at: usize) -> String {
+        let vertex_extra = match extras & 3 {
+            0 => "",
+            1 => " 255",
+            2 => " 2 0.5 0.25",
+            _ => " 255 2 0.5 0.25",
+        };
+        let face_extra = if extras & 4 != 0 { " 0.5" } else { "" };
+        let mut vertices = vec![format!("element vertex {}", soup.vertex_count()), "property double x".into()];
+        vertices.extend(["property double y".into(), "property double z".into()]);
+        if extras & 1 != 0 {
+            vertices.push("property uchar red".into());
+        }
+        if extras & 2 != 0 {
+            vertices.push("property list uchar float texture".into());
+        }
+        let mut vertex_lines = Vec::new();
+        for (i, p) in soup.positions.iter().enumerate() {
+            let p = if damage == 4 && i == at % soup.vertex_count() { DVec3::new(f64::NAN, 0.0, 0.0) } else { *p };
+            vertex_lines.push(format!("{} {} {}{vertex_extra}", p.x, p.y, p.z));
+        }
+        let mut faces = vec![format!("element face {}", soup.face_count())];
+        faces.push("property list uchar int vertex_indices".into());
+        if extras & 4 != 0 {
+            faces.push("property float quality".into());
+        }
+        let mut face_lines = Vec::new();
+        for (i, face) in soup.faces().enumerate() {
+            let mut words: Vec<String> = face.iter().map(u32::to_string).collect();
+            if damage == 3 && i == at % soup.face_count() {
+                words[0] = (soup.vertex_count() + 5).to_string();
+            }
+            face_lines.push(format!("{} {}{face_extra}", face.len(), words.join(" ")));
+        }
+        let edges = vec!["element edge 2".into(), "property int vertex1".into(), "property int vertex2".into()];
+        let edge_lines = vec!["0 1".to_string(), "1 2".into()];
+        let mut sections = vec![(vertices, vertex_lines), (faces, face_lines)];
+        if extras & 8 != 0 {
+            sections.reverse();
+        }
+        match (extras >> 4) % 4 {
+            1 => sections.insert(0, (edges, edge_lines)),
+            2 => sections.insert(1, (edges, edge_lines)),
+            3 => sections.push((edges, edge_lines)),
+            _ => {}
+        }
+        let mut header = vec!["ply".to_string(), "format ascii 1.0".into(), "comment pieces".into()];
+        let mut data = Vec::new();
+        for (declaration, lines) in sections {
+            header.extend(declaration);
+            data.extend(lines);
+        }
+        header.push("end_header\n".into());
+        let k = at % data.len();
+        let j = (at / 7) % data.len();
+        let merge = |data: &mut Vec<String>, k: usize| {
+            if k + 1 < data.len() {
+                let next = data.remove(k + 1);
+                data[k] = format!("{} {next}", data[k]);
+            }
+        };
+        match damage {
+            2 => data[k] = data[k].replacen(' ', " x ", 1),
+            5 => merge(&mut data, k),
+            6 => data[k] = data[k].replacen(' ', "\n", 1),
+            7 => data.insert(at % (data.len() + 1), String::new()),
+            8 => {
+                merge(&mut data, k);
+                let j = j.min(data.len() - 1);
+                data[j] = data[j].replacen(' ', "\n", 1);
+            }
+            9 => {
+                merge(&mut data, k);
+                let copy = data[j.min(data.len() - 1)].clone();
+                data.insert(j.min(data.len()), copy);
+            }
+            10 => data.push("0 0 0".into()),
+            _ => {}
+        }
+        let header = header.join("\n");
+        let mut text = header.clone() + &data.join("\n") + "\n";
+        if damage == 1 {
+            text.truncate(header.len() + at % (text.len() - header.len()));
+        }
+        text
+    }
+
+    proptest::proptest! {
+        /// Read in parallel pieces (forced on small files, on two, three and five threads), an
+        /// ascii file gives what one pass gives: the same soup and report, or the same error.
+        #[test]
+        fn pieces_read_as_one_pass(
+            soup in crate::testing::arb_mesh(),
+            extras in proptest::prelude::any::<u8>(),
+            damage in 0u8..11,
+            at in proptest::prelude::any::<usize>(),
+        ) {
+            let text = ply_text(&soup, extras, damage, at);
+            let one_pass = format!("{:?}", read_ply_split(text.as_bytes(), usize::MAX));
+            for threads in [2, 3, 5] {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                let pieces = format!("{:?}", pool.install(|| read_ply_split(text.as_bytes(), 0)));
+                proptest::prop_assert_eq!(&pieces, &one_pass);
+            }
+            if damage == 0 {
+                let (read, _) = read_ply_split(text.as_bytes(), usize::MAX).unwrap();
+                proptest::prop_assert_eq!(read.face_count(), soup.face_count());
+                // And the pieces did read it (not the one pass after them).
+                proptest::prop_assert_eq!(in_pieces(&text, 3), Some(read));
+            }
+        }
+    }
+
+    /// The pieces of `text` read apart on a pool of `threads`, or `None` where the one
+    /// pass must read it.
+    fn in_pieces(text: &str, threads: usize) -> Option<PolygonSoup> {
+        let mut header = parse_header(text.as_bytes()).unwrap();
+        let (vertex_count, _) = assign_roles(&mut header, &mut DroppedLog::default()).unwrap();
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| read_ascii_in_pieces(&text.as_bytes()[header.data_start..], &header, vertex_count))
+    }
+
+    /// A file over the threshold is really read in pieces (and gives the one-pass soup);
+    /// with one element over two lines it is not, and still reads as one pass.
+    #[test]
+    fn large_files_are_read_in_pieces() {
+        let soup = crate::shapes::torus(150, 150, crate::shapes::CellKind::Triangles).unwrap();
+        let text = ply_text(&soup, 0b1_0111, 0, 0);
+        assert!(text.len() > PARALLEL_MIN_BYTES);
+        let (one_pass, report) = read_ply_split(text.as_bytes(), usize::MAX).unwrap();
+        assert_eq!(one_pass.positions, soup.positions);
+        assert_eq!(in_pieces(&text, 2).expect("read in pieces"), one_pass);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        assert_eq!(pool.install(|| read_ply(text.as_bytes())).unwrap(), (one_pass.clone(), report));
+
+        // As this crate's writer writes it.
+        let mut written = Vec::new();
+        crate::io::write_ply(&mut written, &soup, PlyEncoding::Ascii).unwrap();
+        assert_eq!(in_pieces(std::str::from_utf8(&written).unwrap(), 2).expect("read in pieces"), soup);
+
+        let split = ply_text(&soup, 0b1_0111, 6, 30_000);
+        assert_eq!(in_pieces(&split, 2), None);
+        let read = pool.install(|| read_ply(split.as_bytes())).unwrap().0;
+        assert_eq!(read, one_pass);
     }
 }

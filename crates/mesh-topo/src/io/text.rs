@@ -50,6 +50,20 @@ impl<'a> Iterator for Lines<'a> {
     }
 }
 
+/// `bytes` cut into `count` pieces of about equal size (at least one; some may be
+/// empty), each but the last ending with a line end, for reading in parallel.
+pub(crate) fn cut_at_line_ends(bytes: &[u8], count: usize) -> Vec<&[u8]> {
+    let mut cuts = vec![0];
+    let mut previous = 0;
+    for k in 1..count {
+        let target = (bytes.len() * k / count).max(previous);
+        previous = memchr::memchr(b'\n', &bytes[target..]).map_or(bytes.len(), |i| target + i + 1);
+        cuts.push(previous);
+    }
+    cuts.push(bytes.len());
+    cuts.windows(2).map(|w| &bytes[w[0]..w[1]]).collect()
+}
+
 /// The part of a line before a `#` comment.
 #[inline]
 pub(crate) fn strip_comment(line: &[u8]) -> &[u8] {
