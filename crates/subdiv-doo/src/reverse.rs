@@ -2388,20 +2388,40 @@ pub(crate) fn means_and_details_in(
     for (v, w) in (range.start..).zip(offsets.windows(2)) {
         let corners = &by_vertex.corners[w[0] as usize..w[1] as usize];
         before(v, corners);
-        let mean = corners.iter().map(|&c| candidates[c as usize]).sum::<DVec3>() / corners.len() as f64;
+        let (mean, energy) = if corners.len() <= GATHERED {
+            // Each candidate read once, into registers.
+            let mut gathered = [DVec3::ZERO; GATHERED];
+            for (slot, &c) in gathered.iter_mut().zip(corners) {
+                *slot = candidates[c as usize];
+            }
+            mean_and_details(&gathered[..corners.len()], &mut details)
+        } else {
+            let gathered: Vec<DVec3> = corners.iter().map(|&c| candidates[c as usize]).collect();
+            mean_and_details(&gathered, &mut details)
+        };
         means.push(mean);
-        let mut prefix = DVec3::ZERO;
-        let mut energy = 0.0;
-        for &c in &corners[..corners.len() - 1] {
-            let offset = candidates[c as usize] - mean;
-            energy += offset.length_squared();
-            prefix += offset;
-            details.push(prefix);
-        }
-        let last = candidates[corners[corners.len() - 1] as usize] - mean;
-        energies.push(energy + last.length_squared());
+        energies.push(energy);
     }
     (means, details, energies)
+}
+
+/// Vertices of at most this many candidates are summed from a copy on the stack.
+const GATHERED: usize = 8;
+
+/// The mean of one vertex's `candidates`, their details (pushed) and squared detail norm.
+#[inline(always)]
+fn mean_and_details(candidates: &[DVec3], details: &mut Vec<DVec3>) -> (DVec3, f64) {
+    let mean = candidates.iter().sum::<DVec3>() / candidates.len() as f64;
+    let mut prefix = DVec3::ZERO;
+    let mut energy = 0.0;
+    let (last, rest) = candidates.split_last().expect("a vertex has candidates");
+    for &candidate in rest {
+        let offset = candidate - mean;
+        energy += offset.length_squared();
+        prefix += offset;
+        details.push(prefix);
+    }
+    (mean, energy + (*last - mean).length_squared())
 }
 
 /// The coarse vertices sorted by their F_V faces (`vertex_face`, [`NONE`] for boundary
