@@ -2385,6 +2385,7 @@ pub(crate) fn means_and_details_in(
     let mut details = advised_vec(detail_room);
     let mut energies = advised_vec(reserve);
     let offsets = &by_vertex.offsets[range.start..=range.end];
+    let mut long = Vec::new();
     for (v, w) in (range.start..).zip(offsets.windows(2)) {
         let corners = &by_vertex.corners[w[0] as usize..w[1] as usize];
         before(v, corners);
@@ -2396,8 +2397,10 @@ pub(crate) fn means_and_details_in(
             }
             mean_and_details(&gathered[..corners.len()], &mut details)
         } else {
-            let gathered: Vec<DVec3> = corners.iter().map(|&c| candidates[c as usize]).collect();
-            mean_and_details(&gathered, &mut details)
+            // Longer lists (vertices of high valence) in one buffer reused across them.
+            long.clear();
+            long.extend(corners.iter().map(|&c| candidates[c as usize]));
+            mean_and_details(&long, &mut details)
         };
         means.push(mean);
         energies.push(energy);
