@@ -57,14 +57,49 @@ pub fn unit_scale_of(largest: f64) -> f64 {
 /// [`unit_scale_of`] the largest coordinate magnitude of `points` (NaN coordinates are
 /// passed over).
 pub fn unit_scale<'a>(points: impl IntoIterator<Item = &'a DVec3>) -> f64 {
+    unit_scale_of_magnitudes(points.into_iter().fold(DVec3::ZERO, |largest, &p| fold_magnitudes(largest, p)))
+}
+
+/// One step of the running maximum that [`unit_scale`] folds over its points: each
+/// coordinate's largest magnitude so far (`largest`, from `DVec3::ZERO`) against that of
+/// `p`, a NaN coordinate passed over. For a pass that reads the points anyway and can
+/// measure them on the way, in any order, instead of a pass of its own; then
+/// [`unit_scale_of_magnitudes`].
+///
+/// ```
+/// use mesh_topo::DVec3;
+/// use mesh_topo::scale::{fold_magnitudes, unit_scale, unit_scale_of_magnitudes};
+///
+/// let points = [DVec3::new(1e300, -2.0, f64::NAN), DVec3::new(0.5, -3e301, 1.0)];
+/// let largest = points.iter().fold(DVec3::ZERO, |m, &p| fold_magnitudes(m, p));
+/// assert_eq!(largest, DVec3::new(1e300, 3e301, 1.0));
+/// assert_eq!(unit_scale_of_magnitudes(largest), unit_scale(&points));
+/// ```
+#[inline]
+pub fn fold_magnitudes(largest: DVec3, p: DVec3) -> DVec3 {
     // A plain comparison, which compiles to a vector maximum (`f64::max` handles NaN
     // and does not): one pass at memory speed, cheap beside any operation on the mesh.
-    let larger = |a: f64, b: f64| if a > b { a } else { b };
-    let largest = points.into_iter().fold(DVec3::ZERO, |largest, p| {
-        let p = p.abs();
-        DVec3::new(larger(p.x, largest.x), larger(p.y, largest.y), larger(p.z, largest.z))
-    });
+    let p = p.abs();
+    DVec3::new(larger(p.x, largest.x), larger(p.y, largest.y), larger(p.z, largest.z))
+}
+
+/// [`unit_scale_of`] the largest of the three magnitudes that [`fold_magnitudes`] kept.
+///
+/// ```
+/// use mesh_topo::DVec3;
+/// use mesh_topo::scale::unit_scale_of_magnitudes;
+///
+/// assert_eq!(unit_scale_of_magnitudes(DVec3::new(1.0, 1e300, 2.0)), 2f64.powi(-996));
+/// assert_eq!(unit_scale_of_magnitudes(DVec3::ZERO), 1.0);
+/// ```
+pub fn unit_scale_of_magnitudes(largest: DVec3) -> f64 {
     unit_scale_of(larger(largest.x, larger(largest.y, largest.z)))
+}
+
+/// `a` if it is larger than `b`, else `b` (so a NaN `a` gives `b`).
+#[inline]
+fn larger(a: f64, b: f64) -> f64 {
+    if a > b { a } else { b }
 }
 
 /// Multiplies every one of `values` by `factor` (for a change of scale, a power of two:

@@ -20,6 +20,7 @@
 //! mesh) makes this path give up, and the general path runs and names the face at fault.
 
 use mesh_topo::memory::{advised_vec, filled_vec};
+use mesh_topo::scale::{fold_magnitudes, unit_scale_of_magnitudes};
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 
 use glam::DVec3;
@@ -150,13 +151,14 @@ fn reverse_canonical_with(
         coarse_vertices(arrays, &ff, fv_first, quads as usize, automatic_choice)
     };
     let expand = || expand_in_order(&offsets, &maps, positions, automatic_choice);
-    let (found, (candidates, scale)) = if rayon::current_num_threads() > 1 && vertices >= PARALLEL_VERTICES {
-        let (found, expanded) = rayon::join(find_vertices, expand);
-        (found?, expanded)
-    } else {
-        let found = find_vertices()?;
-        (found, expand())
-    };
+    let (found, Expanded { candidates, diagonal: scale, unit_scale }) =
+        if rayon::current_num_threads() > 1 && vertices >= PARALLEL_VERTICES {
+            let (found, expanded) = rayon::join(find_vertices, expand);
+            (found?, expanded)
+        } else {
+            let found = find_vertices()?;
+            (found, expand())
+        };
     let CoarseVertices {
         labels,
         vertex_corner,
@@ -167,6 +169,7 @@ fn reverse_canonical_with(
         interior,
     } = found;
     let coarse_vertex_count = vertex_corner.len();
+    let offsets_end = offsets.last().map_or(0, |&n| n as usize);
     let candidate_edges = twins.iter().filter(|&&t| t != NONE).count();
     let coarse = CornerMesh {
         offsets,
@@ -284,7 +287,9 @@ fn reverse_canonical_with(
     choice.detail_energy = detail_energy;
     choice.detail_norm = detail_energy.sqrt();
     let reversal = DooReversal::shrink(options.rule, coarse, coarse_positions, details, FineOrder::default(), stats);
-    Some(DooReversal { choices: vec![choice], ..reversal })
+    // Every fine vertex is a corner of one F_F face, so the expansion read them all.
+    debug_assert_eq!(offsets_end, positions.len(), "internal: the F_F faces hold every vertex");
+    Some(DooReversal { choices: vec![choice], fine_unit_scale: Some(unit_scale), ..reversal })
 }
 
 /// The F_F side of the first reading, as [`coarse_vertices`] reads it.
@@ -1142,22 +1147,43 @@ pub(crate) fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark:
 ///
 /// With `diagonal`, also the length of the bounding-box diagonal of all positions (the
 /// scale of the automatic choice's zero test), on one thread from the slices while they
-/// are in cache; else zero.
-fn expand_in_order(offsets: &[u32], maps: &FaceMaps, positions: &[DVec3], diagonal: bool) -> (Vec<DVec3>, f64) {
+/// are in cache; else zero. Always the unit scale of the positions read
+/// ([`mesh_topo::scale::unit_scale`], measured on the way), so that the caller's check of
+/// the scale needs no pass of its own.
+fn expand_in_order(offsets: &[u32], maps: &FaceMaps, positions: &[DVec3], diagonal: bool) -> Expanded {
     let mut out = advised_vec(offsets.last().map_or(0, |&n| n as usize));
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let mut magnitudes = DVec3::ZERO;
     for w in offsets.windows(2) {
         let (b, e) = (w[0] as usize, w[1] as usize);
         out.resize(e, DVec3::ZERO);
-        maps.inverse(&positions[b..e], &mut out[b..e]);
+        let face = &positions[b..e];
+        maps.inverse(face, &mut out[b..e]);
+        for &p in face {
+            magnitudes = fold_magnitudes(magnitudes, p);
+        }
         if diagonal {
-            for &p in &positions[b..e] {
+            for &p in face {
                 lo = lo.min(p);
                 hi = hi.max(p);
             }
         }
     }
-    (out, if diagonal { (hi - lo).length() } else { 0.0 })
+    Expanded {
+        candidates: out,
+        diagonal: if diagonal { (hi - lo).length() } else { 0.0 },
+        unit_scale: unit_scale_of_magnitudes(magnitudes),
+    }
+}
+
+/// What [`expand_in_order`] finds.
+struct Expanded {
+    /// The candidates, corner by corner.
+    candidates: Vec<DVec3>,
+    /// The bounding-box diagonal of the positions read, or zero.
+    diagonal: f64,
+    /// The unit scale of the positions read.
+    unit_scale: f64,
 }
 
 /// Whether the coarse faces (`offsets`) form one component across the coarse edges
@@ -2112,6 +2138,27 @@ pub(crate) mod tests {
         assert!(ff.unreached.iter().all(|&k| reaches_lower_in_two(&ff.offsets, &ff.twins, &next, k)));
         // Not through the face itself: a face whose neighbours reach below only through it.
         assert!(!reaches_lower_in_two(&[0, 3, 6], &[NONE, 4, NONE, NONE, 1, NONE], &[1, 2, 0, 4, 5, 3], 1));
+    }
+
+    /// The unit scale measured on the way is that of all the positions (which
+    /// `decompose` then reads no further time), at any scale and wherever the largest
+    /// coordinate is; it is left out of the comparison of reversals.
+    #[test]
+    fn the_unit_scale_measured_on_the_way_is_that_of_all_positions() {
+        let fine = refine(&shapes::torus(6, 4, CellKind::Triangles).unwrap(), FaceRule::DooSabin);
+        let options = ReverseOptions::auto(FaceRule::DooSabin);
+        for (vertex, largest) in [(0, 1.5), (37, 3e80), (fine.vertex_count() - 1, 2f64.powi(300)), (11, -1e-90)] {
+            let mut mesh = fine.clone();
+            if largest.abs() < 1.0 {
+                mesh.positions_mut().iter_mut().for_each(|p| *p *= 1e-100);
+            }
+            mesh.positions_mut()[vertex].y = largest;
+            let reversal = reverse_canonical(&mesh, &options).expect("canonical order");
+            assert_eq!(reversal.fine_unit_scale, Some(mesh_topo::scale::unit_scale(mesh.positions())), "{largest:e}");
+            let general = general(&mesh, &options);
+            assert_eq!(general.fine_unit_scale, None);
+            assert_eq!(reversal, general);
+        }
     }
 
     #[test]

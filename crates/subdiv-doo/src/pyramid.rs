@@ -254,6 +254,15 @@ pub use crate::forward::MAX_LEVELS;
 /// [`MAX_LEVELS`]. Coordinates so large that a reversal overflows are
 /// [`DooError::ReversalOverflow`].
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
+    // The canonical path measures the scale of the positions as it reads them: a mesh
+    // that needs no change of scale keeps that first level, and its positions are not
+    // read again for the scale (a pass as long as a tenth of the reversal). Otherwise the
+    // scale is measured, and the first level made again at unit scale if it needs one
+    // (the level made as given is kept for the case where that fails).
+    let first = first_level(mesh, options);
+    if let Ok(FirstLevel { unit_scale: Some(1.0), .. }) = first {
+        return decompose_after(mesh, options, first?);
+    }
     // Coordinates far from 1: decomposed at unit scale (see `crate::scale`). Its errors
     // and overflows are left to the mesh as given, which reports them as before.
     if let Some(scale) = UnitScale::of(mesh.positions()) {
@@ -263,7 +272,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
             return Ok(decomposition);
         }
     }
-    decompose_as_given(mesh, options)
+    decompose_after(mesh, options, first?)
 }
 
 /// A decomposition made at unit scale brought back to the input's scale, if it fits.
@@ -279,6 +288,21 @@ fn scaled_up(mut decomposition: Decomposition, scale: UnitScale) -> Option<Decom
 
 /// [`decompose`] without the change of scale.
 fn decompose_as_given(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
+    decompose_after(mesh, options, first_level(mesh, options)?)
+}
+
+/// The first level of [`decompose`] when the canonical path takes it, after the checks of
+/// the level count.
+struct FirstLevel {
+    step: Option<Step>,
+    /// The unit scale of the input's positions, when the canonical path measured it.
+    unit_scale: Option<f64>,
+}
+
+/// The checks of the level count, then the first level by the canonical path where it
+/// applies (`None` where it does not, also when a position is not finite, so that
+/// [`decompose_after`] names it).
+fn first_level(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<FirstLevel, DooError> {
     if options.depth == Depth::Levels(0) {
         check_finite(mesh.positions())?;
         return Err(DooError::InvalidParameter { name: "levels", value: 0.0, reason: "decompose at least one level" });
@@ -296,21 +320,32 @@ fn decompose_as_given(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result
         });
     }
     // A mesh in the canonical order: the first level without the general search (the
-    // same result; `None` when it does not apply, also when a position is not finite,
-    // so that the check below names it). The coarser levels try it in turn.
+    // same result). The coarser levels try it in turn.
     let first = match options.boundary {
         _ if !canonical_enabled() => None,
         BoundaryRule::Shrink => {
-            crate::canonical::reverse_canonical(mesh, &reverse_options(options, 0)).map(Step::from_canonical)
+            crate::canonical::reverse_canonical(mesh, &reverse_options(options, 0)).map(|reversal| {
+                let unit_scale = reversal.fine_unit_scale;
+                (Step::from_canonical(reversal), unit_scale)
+            })
         }
-        BoundaryRule::Chaikin => {
-            crate::boundary::reverse_chaikin_canonical(mesh, &reverse_options(options, 0)).map(Step::from_reversal)
-        }
+        BoundaryRule::Chaikin => crate::boundary::reverse_chaikin_canonical(mesh, &reverse_options(options, 0))
+            .map(|reversal| (Step::from_reversal(reversal), None)),
     };
-    if first.is_none() {
+    let (step, unit_scale) = first.unzip();
+    Ok(FirstLevel { step, unit_scale: unit_scale.flatten() })
+}
+
+/// [`decompose`] from its first level.
+fn decompose_after(
+    mesh: &HalfedgeMesh,
+    options: &DecomposeOptions,
+    first: FirstLevel,
+) -> Result<Decomposition, DooError> {
+    if first.step.is_none() {
         check_finite(mesh.positions())?;
     }
-    let decomposition = decompose_from(first, Some(mesh), mesh.face_count(), options)?;
+    let decomposition = decompose_from(first.step, Some(mesh), mesh.face_count(), options)?;
     Ok(decomposition.expect("internal: with the mesh at hand every path can run"))
 }
 

@@ -405,7 +405,7 @@ impl SeedChoice {
 }
 
 /// The result of reversing one Doo-Sabin step.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct DooReversal {
     pub(crate) rule: FaceRule,
     pub(crate) coarse: CornerMesh,
@@ -415,6 +415,27 @@ pub struct DooReversal {
     pub(crate) choices: Vec<SeedChoice>,
     pub(crate) stats: ReverseStats,
     pub(crate) boundary: BoundaryRule,
+    /// The unit scale of the fine positions ([`mesh_topo::scale::unit_scale`]) when the
+    /// path that made the reversal measured it as it read them (the canonical path), so
+    /// that a caller deciding on a change of scale reads the positions no further time.
+    pub(crate) fine_unit_scale: Option<f64>,
+}
+
+/// Equal when the results are (the unit scale some paths measure on the way is left out:
+/// the same reversal is equal whichever path made it).
+impl PartialEq for DooReversal {
+    fn eq(&self, other: &Self) -> bool {
+        let Self { rule, coarse, coarse_positions, details, order, choices, stats, boundary, fine_unit_scale: _ } =
+            self;
+        *rule == other.rule
+            && *coarse == other.coarse
+            && *coarse_positions == other.coarse_positions
+            && *details == other.details
+            && *order == other.order
+            && *choices == other.choices
+            && *stats == other.stats
+            && *boundary == other.boundary
+    }
 }
 
 impl DooReversal {
@@ -429,7 +450,7 @@ impl DooReversal {
     ) -> Self {
         let choices = Vec::new();
         let boundary = BoundaryRule::Shrink;
-        Self { rule, coarse, coarse_positions, details, order, choices, stats, boundary }
+        Self { rule, coarse, coarse_positions, details, order, choices, stats, boundary, fine_unit_scale: None }
     }
 
     /// The coarse mesh: vertices at the means of their candidates, faces in the order of
