@@ -724,6 +724,8 @@ fn attach_ring<F: FaceCorners>(
         map_choice(choice, face_of_inner);
     }
     reversal.boundary = BoundaryRule::Chaikin;
+    // What the inner part measured leaves out the ring's positions.
+    reversal.fine_unit_scale = None;
     Ok(reversal)
 }
 

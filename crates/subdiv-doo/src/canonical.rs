@@ -2158,6 +2158,14 @@ pub(crate) mod tests {
             let general = general(&mesh, &options);
             assert_eq!(general.fine_unit_scale, None);
             assert_eq!(reversal, general);
+            // The public entry points keep the measured reversal, or redo it at unit scale.
+            let scale = mesh_topo::scale::unit_scale(mesh.positions());
+            let public = crate::reverse(&mesh, &options).unwrap();
+            assert_eq!(public == reversal, scale == 1.0, "{largest:e}");
+            let levels = crate::DecomposeOptions::levels(FaceRule::DooSabin, 1);
+            let decomposed = crate::decompose(&mesh, &levels).unwrap();
+            assert_eq!(decomposed.pyramid, crate::decompose_soup(&mesh.to_soup(), &levels).unwrap().pyramid);
+            assert_eq!(decomposed.pyramid.levels[0].details, public.details);
         }
     }
 

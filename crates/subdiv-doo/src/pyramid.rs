@@ -260,7 +260,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
     // scale is measured, and the first level made again at unit scale if it needs one
     // (the level made as given is kept for the case where that fails).
     let first = first_level(mesh, options);
-    if let Ok(FirstLevel { unit_scale: Some(1.0), .. }) = first {
+    if matches!(first, Ok(FirstLevel { unit_scale: Some(1.0), .. })) {
         return decompose_after(mesh, options, first?);
     }
     // Coordinates far from 1: decomposed at unit scale (see `crate::scale`). Its errors
@@ -378,6 +378,11 @@ fn decompose_after(
 /// # Errors
 /// Those of [`HalfedgeMesh::from_soup`] (as [`DooError::Mesh`]) and of [`decompose`].
 pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
+    // As in `decompose`: the canonical path measures the scale on the way.
+    let first = first_soup_level(soup, options);
+    if first.as_ref().is_some_and(|reversal| reversal.fine_unit_scale == Some(1.0)) {
+        return decompose_soup_after(soup, options, first);
+    }
     if let Some(scale) = UnitScale::of(&soup.positions) {
         let mut scaled = soup.clone();
         scale.scale_down(&mut scaled.positions);
@@ -385,17 +390,34 @@ pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<
             return Ok(decomposition);
         }
     }
-    decompose_soup_as_given(soup, options)
+    decompose_soup_after(soup, options, first)
 }
 
 /// [`decompose_soup`] without the change of scale.
 fn decompose_soup_as_given(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
-    if !matches!(options.depth, Depth::Levels(levels) if levels == 0 || levels > MAX_LEVELS)
-        && options.boundary == BoundaryRule::Shrink
-        && canonical_enabled()
-        && let Some(halfedges) = CornerHalfedges::of_canonical_soup(soup)
-        // (The fine mesh's arrays are freed once its level is reversed.)
-        && let Some(first) = halfedges.reverse_canonical(&soup.positions, false, &reverse_options(options, 0))
+    decompose_soup_after(soup, options, first_soup_level(soup, options))
+}
+
+/// The first level of a soup in the canonical order, read from its face list (`None`
+/// where that path does not apply: the soup then goes through `from_soup`). The fine
+/// mesh's arrays are freed once its level is reversed.
+fn first_soup_level(soup: &PolygonSoup, options: &DecomposeOptions) -> Option<crate::DooReversal> {
+    if matches!(options.depth, Depth::Levels(levels) if levels == 0 || levels > MAX_LEVELS)
+        || options.boundary != BoundaryRule::Shrink
+        || !canonical_enabled()
+    {
+        return None;
+    }
+    CornerHalfedges::of_canonical_soup(soup)?.reverse_canonical(&soup.positions, false, &reverse_options(options, 0))
+}
+
+/// [`decompose_soup`] once its first level was tried by the face-list path (`first`).
+fn decompose_soup_after(
+    soup: &PolygonSoup,
+    options: &DecomposeOptions,
+    first: Option<crate::DooReversal>,
+) -> Result<Decomposition, DooError> {
+    if let Some(first) = first
         && let Some(decomposition) =
             decompose_from(Some(Step::from_canonical(first)), None, soup.face_count(), options)?
     {

@@ -698,6 +698,13 @@ impl DooReversal {
 /// [`DooError::ReversalOverflow`] for finite coordinates so large (near `f64::MAX`) that
 /// the coarse positions or details are not.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
+    // The canonical path measures the scale of the positions as it reads them: its
+    // reversal of a mesh that needs no change of scale is kept without a pass of its own
+    // over the positions (see `decompose`).
+    let canonical = reverse_canonical(fine, options);
+    if canonical.as_ref().is_some_and(|reversal| reversal.fine_unit_scale == Some(1.0)) {
+        return reverse_after(fine, options, canonical);
+    }
     // Coordinates far from 1: reversed at unit scale (see `crate::scale`). Its errors
     // and overflows are left to the mesh as given, which reports them as before.
     if let Some(scale) = UnitScale::of(fine.positions()) {
@@ -711,16 +718,31 @@ pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooRever
             return Ok(reversal);
         }
     }
-    reverse_as_given(fine, options)
+    reverse_after(fine, options, canonical)
 }
 
 /// [`reverse`] without the change of scale.
 fn reverse_as_given(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
-    // `None` also when a position is not finite, so that the check below names it.
-    let canonical = match options.boundary {
+    reverse_after(fine, options, reverse_canonical(fine, options))
+}
+
+/// The reversal of a mesh in the canonical order, by its boundary rule; `None` where the
+/// canonical path does not apply, also when a position is not finite, so that
+/// [`reverse_after`] names it.
+fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -> Option<DooReversal> {
+    match options.boundary {
         BoundaryRule::Shrink => crate::canonical::reverse_canonical(fine, options),
         BoundaryRule::Chaikin => crate::boundary::reverse_chaikin_canonical(fine, options),
-    };
+    }
+}
+
+/// [`reverse`] once the canonical path was tried (`canonical`, its reversal if it took
+/// the mesh).
+fn reverse_after(
+    fine: &HalfedgeMesh,
+    options: &ReverseOptions,
+    canonical: Option<DooReversal>,
+) -> Result<DooReversal, DooError> {
     if let Some(reversal) = canonical {
         return Ok(reversal);
     }
