@@ -912,8 +912,8 @@ fn stream_ff_faces(arrays: &HalfedgeArrays<'_>) -> Option<FfFaces> {
     let v2 = 2 * vertices as u32;
     let mut offsets = Vec::with_capacity(vertices / 3 + 2);
     offsets.push(0u32);
-    let mut twins = Vec::with_capacity(vertices);
-    let mut coarse_next = Vec::with_capacity(vertices);
+    let mut twins = advised_vec(vertices);
+    let mut coarse_next = advised_vec(vertices);
     let mut quads = 0u32;
     let mut on_boundary = false;
     let mut unreached = Vec::new();
@@ -1240,8 +1240,8 @@ fn stream_fv_faces(arrays: &HalfedgeArrays<'_>, fv_first: usize, quads: usize) -
     if to.len() != vertices + 6 * quads || 2 * quads != vertices {
         return None;
     }
-    let mut labels = vec![NONE; vertices];
-    let mut ends = vec![NONE; vertices];
+    let mut labels = filled_vec(vertices, NONE);
+    let mut ends = filled_vec(vertices, NONE);
     // Quad `j` of the layout, `(c, next(t), t, next(c))`: its sides `c -> next(t)` and
     // `t -> next(c)`, each followed by its twin (which ends at `c`, resp. `t`).
     let quad_sides = to[2 * vertices..].chunks_exact(4).zip(face_of[2 * vertices..].chunks_exact(4));

@@ -9,6 +9,7 @@
 //! level after level, without ever rebuilding a half-edge structure.
 
 use glam::DVec3;
+use mesh_topo::memory::filled_vec;
 use mesh_topo::{HalfedgeMesh, PolygonSoup};
 use rayon::prelude::*;
 
@@ -262,7 +263,7 @@ pub(crate) type VertexCorners = (Vec<u32>, Vec<u32>);
 /// counting sort: `members[offsets[k]..offsets[k + 1]]` are the indices whose key is `k`,
 /// in increasing order. Linear in `keys.len() + key_count`.
 pub(crate) fn group_by_key(keys: &[u32], key_count: usize) -> (Vec<u32>, Vec<u32>) {
-    let mut offsets = vec![0u32; key_count + 1];
+    let mut offsets = filled_vec(key_count + 1, 0u32);
     for &k in keys {
         offsets[k as usize + 1] += 1;
     }
@@ -270,7 +271,7 @@ pub(crate) fn group_by_key(keys: &[u32], key_count: usize) -> (Vec<u32>, Vec<u32
         offsets[k + 1] += offsets[k];
     }
     // Each group's start serves as its fill cursor and ends at the next group's start.
-    let mut members = vec![0u32; keys.len()];
+    let mut members = filled_vec(keys.len(), 0u32);
     for (i, &k) in keys.iter().enumerate() {
         let fill = &mut offsets[k as usize];
         members[*fill as usize] = i as u32;
