@@ -169,7 +169,6 @@ fn reverse_canonical_with(
         interior,
     } = found;
     let coarse_vertex_count = vertex_corner.len();
-    let offsets_end = offsets.last().map_or(0, |&n| n as usize);
     let candidate_edges = twins.iter().filter(|&&t| t != NONE).count();
     let coarse = CornerMesh {
         offsets,
@@ -287,8 +286,6 @@ fn reverse_canonical_with(
     choice.detail_energy = detail_energy;
     choice.detail_norm = detail_energy.sqrt();
     let reversal = DooReversal::shrink(options.rule, coarse, coarse_positions, details, FineOrder::default(), stats);
-    // Every fine vertex is a corner of one F_F face, so the expansion read them all.
-    debug_assert_eq!(offsets_end, positions.len(), "internal: the F_F faces hold every vertex");
     Some(DooReversal { choices: vec![choice], fine_unit_scale: Some(unit_scale), ..reversal })
 }
 
@@ -1151,7 +1148,10 @@ pub(crate) fn distinct(values: &[u32], stamp: &mut Vec<u32>, slots: usize, mark:
 /// ([`mesh_topo::scale::unit_scale`], measured on the way), so that the caller's check of
 /// the scale needs no pass of its own.
 fn expand_in_order(offsets: &[u32], maps: &FaceMaps, positions: &[DVec3], diagonal: bool) -> Expanded {
-    let mut out = advised_vec(offsets.last().map_or(0, |&n| n as usize));
+    let corners = offsets.last().map_or(0, |&n| n as usize);
+    // Every fine vertex is a corner of one F_F face: the unit scale is that of all of them.
+    debug_assert_eq!(corners, positions.len(), "internal: the F_F faces hold every vertex");
+    let mut out = advised_vec(corners);
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     let mut magnitudes = DVec3::ZERO;
     for w in offsets.windows(2) {
@@ -2153,13 +2153,13 @@ pub(crate) mod tests {
                 mesh.positions_mut().iter_mut().for_each(|p| *p *= 1e-100);
             }
             mesh.positions_mut()[vertex].y = largest;
+            let scale = mesh_topo::scale::unit_scale(mesh.positions());
             let reversal = reverse_canonical(&mesh, &options).expect("canonical order");
-            assert_eq!(reversal.fine_unit_scale, Some(mesh_topo::scale::unit_scale(mesh.positions())), "{largest:e}");
+            assert_eq!(reversal.fine_unit_scale, Some(scale), "{largest:e}");
             let general = general(&mesh, &options);
             assert_eq!(general.fine_unit_scale, None);
             assert_eq!(reversal, general);
             // The public entry points keep the measured reversal, or redo it at unit scale.
-            let scale = mesh_topo::scale::unit_scale(mesh.positions());
             let public = crate::reverse(&mesh, &options).unwrap();
             assert_eq!(public == reversal, scale == 1.0, "{largest:e}");
             let levels = crate::DecomposeOptions::levels(FaceRule::DooSabin, 1);

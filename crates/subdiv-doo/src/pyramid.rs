@@ -254,18 +254,14 @@ pub use crate::forward::MAX_LEVELS;
 /// [`MAX_LEVELS`]. Coordinates so large that a reversal overflows are
 /// [`DooError::ReversalOverflow`].
 pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
-    // The canonical path measures the scale of the positions as it reads them: a mesh
-    // that needs no change of scale keeps that first level, and its positions are not
-    // read again for the scale (a pass as long as a tenth of the reversal). Otherwise the
-    // scale is measured, and the first level made again at unit scale if it needs one
-    // (the level made as given is kept for the case where that fails).
-    let first = first_level(mesh, options);
-    if matches!(first, Ok(FirstLevel { unit_scale: Some(1.0), .. })) {
-        return decompose_after(mesh, options, first?);
-    }
     // Coordinates far from 1: decomposed at unit scale (see `crate::scale`). Its errors
-    // and overflows are left to the mesh as given, which reports them as before.
-    if let Some(scale) = UnitScale::of(mesh.positions()) {
+    // and overflows are left to the mesh as given, which reports them as before, from
+    // the first level made as given. The canonical path measures the scale as it reads
+    // the positions, which then need no pass of their own for it (a pass as long as a
+    // twentieth of the reversal).
+    let first = first_level(mesh, options);
+    let measured = first.as_ref().ok().and_then(|first| first.unit_scale);
+    if let Some(scale) = UnitScale::of_measured(measured, mesh.positions()) {
         let mut scaled = mesh.clone();
         scale.scale_down(scaled.positions_mut());
         if let Some(decomposition) = decompose_as_given(&scaled, options).ok().and_then(|d| scaled_up(d, scale)) {
@@ -323,16 +319,12 @@ fn first_level(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<FirstL
     // same result). The coarser levels try it in turn.
     let first = match options.boundary {
         _ if !canonical_enabled() => None,
-        BoundaryRule::Shrink => {
-            crate::canonical::reverse_canonical(mesh, &reverse_options(options, 0)).map(|reversal| {
-                let unit_scale = reversal.fine_unit_scale;
-                (Step::from_canonical(reversal), unit_scale)
-            })
-        }
+        BoundaryRule::Shrink => crate::canonical::reverse_canonical(mesh, &reverse_options(options, 0))
+            .map(|reversal| (reversal.fine_unit_scale, Step::from_canonical(reversal))),
         BoundaryRule::Chaikin => crate::boundary::reverse_chaikin_canonical(mesh, &reverse_options(options, 0))
-            .map(|reversal| (Step::from_reversal(reversal), None)),
+            .map(|reversal| (reversal.fine_unit_scale, Step::from_reversal(reversal))),
     };
-    let (step, unit_scale) = first.unzip();
+    let (unit_scale, step) = first.unzip();
     Ok(FirstLevel { step, unit_scale: unit_scale.flatten() })
 }
 
@@ -378,12 +370,10 @@ fn decompose_after(
 /// # Errors
 /// Those of [`HalfedgeMesh::from_soup`] (as [`DooError::Mesh`]) and of [`decompose`].
 pub fn decompose_soup(soup: &PolygonSoup, options: &DecomposeOptions) -> Result<Decomposition, DooError> {
-    // As in `decompose`: the canonical path measures the scale on the way.
+    // As in `decompose` (the canonical path measures the scale on the way).
     let first = first_soup_level(soup, options);
-    if first.as_ref().is_some_and(|reversal| reversal.fine_unit_scale == Some(1.0)) {
-        return decompose_soup_after(soup, options, first);
-    }
-    if let Some(scale) = UnitScale::of(&soup.positions) {
+    let measured = first.as_ref().and_then(|reversal| reversal.fine_unit_scale);
+    if let Some(scale) = UnitScale::of_measured(measured, &soup.positions) {
         let mut scaled = soup.clone();
         scale.scale_down(&mut scaled.positions);
         if let Some(decomposition) = decompose_soup_as_given(&scaled, options).ok().and_then(|d| scaled_up(d, scale)) {

@@ -698,16 +698,13 @@ impl DooReversal {
 /// [`DooError::ReversalOverflow`] for finite coordinates so large (near `f64::MAX`) that
 /// the coarse positions or details are not.
 pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<DooReversal, DooError> {
-    // The canonical path measures the scale of the positions as it reads them: its
-    // reversal of a mesh that needs no change of scale is kept without a pass of its own
-    // over the positions (see `decompose`).
-    let canonical = reverse_canonical(fine, options);
-    if canonical.as_ref().is_some_and(|reversal| reversal.fine_unit_scale == Some(1.0)) {
-        return reverse_after(fine, options, canonical);
-    }
     // Coordinates far from 1: reversed at unit scale (see `crate::scale`). Its errors
-    // and overflows are left to the mesh as given, which reports them as before.
-    if let Some(scale) = UnitScale::of(fine.positions()) {
+    // and overflows are left to the mesh as given, which reports them as before, from
+    // the reversal made as given. The canonical path measures the scale as it reads the
+    // positions, which then need no pass of their own for it.
+    let canonical = reverse_canonical(fine, options);
+    let measured = canonical.as_ref().and_then(|reversal| reversal.fine_unit_scale);
+    if let Some(scale) = UnitScale::of_measured(measured, fine.positions()) {
         let mut scaled = fine.clone();
         scale.scale_down(scaled.positions_mut());
         if let Ok(mut reversal) = reverse_as_given(&scaled, options)

@@ -50,6 +50,16 @@ impl UnitScale {
         Self::of_values(positions)
     }
 
+    /// [`Self::of`], from the unit scale of `positions` if a pass that read them all
+    /// measured it on the way (`measured`, [`mesh_topo::scale::unit_scale`]), else by a
+    /// pass of its own.
+    pub(crate) fn of_measured(measured: Option<f64>, positions: &[DVec3]) -> Option<Self> {
+        match measured {
+            Some(down) => (down != 1.0).then_some(Self { down }),
+            None => Self::of(positions),
+        }
+    }
+
     /// [`Self::of`] for values in several arrays (a pyramid's base and details).
     pub(crate) fn of_values<'a>(values: impl IntoIterator<Item = &'a DVec3>) -> Option<Self> {
         let down = mesh_topo::scale::unit_scale(values);
