@@ -2,7 +2,8 @@
 //!
 //! - `ci`: everything CI checks, in order, stopping at the first failure: formatting,
 //!   clippy with warnings denied, the layering rules, the dependency diet of each library
-//!   crate, all tests and doctests, docs with warnings denied, and that benches compile.
+//!   crate, all tests and doctests, docs (public and internal) with warnings denied, and
+//!   that benches compile.
 //! - `bench [crate]`: runs the criterion benches and prints a compact table, then compares
 //!   the `subdivide-*` benchmarks with the peer libraries found on the machine (see
 //!   `peers.rs`; `MULTIRES_PEERS_DIR`); both are written to `target/bench-summary.md`.
@@ -95,6 +96,11 @@ fn ci() -> Result<(), String> {
     layering()?;
     run("test", cargo().args(["test", "--workspace"]))?;
     run("doc", cargo().args(["doc", "--workspace", "--no-deps"]).env("RUSTDOCFLAGS", "-D warnings"))?;
+    // The internal docs' links too (a renamed private function left them dangling); the
+    // public run above stays, as it is the one that flags public docs linking to private
+    // items.
+    let private = ["doc", "--workspace", "--no-deps", "--document-private-items"];
+    run("doc (private items)", cargo().args(private).env("RUSTDOCFLAGS", "-D warnings"))?;
     // The benches are type-checked by clippy above; this links them too, in the test
     // profile whose dependencies the test step already built (a release build of every
     // bench would double the time of the whole run).

@@ -463,7 +463,7 @@ fn mesh_face_corners(fine: &HalfedgeMesh) -> impl Fn(usize) -> Option<[u32; 3]> 
     }
 }
 
-/// [`reverse_canonical`](crate::reverse::reverse_canonical) on a half-edge mesh.
+/// [`reverse_canonical`] on a half-edge mesh.
 pub(crate) fn reverse_canonical_mesh(
     fine: &HalfedgeMesh,
     seeds: &[u32],
@@ -473,7 +473,7 @@ pub(crate) fn reverse_canonical_mesh(
     reverse_canonical(fine.face_count(), fine.vertex_count(), seeds, mesh_face_corners(fine), positions, rules)
 }
 
-/// [`reverse_canonical`](crate::reverse::reverse_canonical) on the face list of a polygon
+/// [`reverse_canonical`] on the face list of a polygon
 /// soup that no one has validated: a face that is not a triangle, or an index out of
 /// range, reads as a mismatch (`None`), so nothing here can index out of bounds.
 /// The canonical checks then prove that the soup is the Loop refinement of a coarse mesh
@@ -496,7 +496,7 @@ pub(crate) fn reverse_canonical_soup(soup: &PolygonSoup, seeds: &[u32], rules: &
     reverse_canonical(faces, vertices, seeds, face, &soup.positions, rules)
 }
 
-/// [`reverse_canonical`](crate::reverse::reverse_canonical) on a corner table.
+/// [`reverse_canonical`] on a corner table.
 pub(crate) fn reverse_canonical_table(
     fine: &CornerTable,
     seeds: &[u32],

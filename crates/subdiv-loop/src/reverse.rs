@@ -854,8 +854,7 @@ impl RegularReadings {
     }
 
     /// Per component, the largest sum of squared details that is still zero at its scale
-    /// ([`details_are_zero`] with the bounding-box diagonal of its vertices and their
-    /// number).
+    /// ([`zero_energy`] of the bounding-box diagonal of its vertices and their number).
     fn zero_energies(&self, positions: &[DVec3]) -> Vec<f64> {
         let components = self.energies_len();
         let mut boxes = vec![(DVec3::INFINITY, DVec3::NEG_INFINITY, 0usize); components];
@@ -1087,14 +1086,14 @@ pub(crate) struct CanonicalLevel {
     /// non-finite one makes its coarse position or detail non-finite): callers that
     /// must reject non-finite input only look at the input when this is false.
     pub(crate) finite: bool,
-    /// Whether every coarse vertex has a regular valence ([`all_valences_regular`] of
-    /// `coarse`, read off the valences the reversal counts anyway).
+    /// Whether every coarse vertex has a regular valence (what `all_valences_regular`
+    /// tells of `coarse`, read off the valences the reversal counts anyway).
     pub(crate) valences_regular: bool,
 }
 
 /// A fine mesh in the canonical order (see [`detect`](crate::detect)), detected and
 /// reversed in one go: the same coarse mesh, positions and details, bit for bit, as
-/// [`detect_mesh`] / [`detect_table`](crate::detect::detect_table) followed by
+/// [`detect_mesh`] / [`detect_table`] followed by
 /// [`reverse_positions`], in fewer passes over memory. `None` when anything differs
 /// from a valid canonical refinement; the caller then takes the general path, which
 /// also names the error.
