@@ -28,6 +28,20 @@
 //! `decompose_soup_1thread` (`decompose_soup`: the fine mesh as a polygon soup, as read
 //! from a file, its half-edges computed from its face list) with `forward_soup_1thread`.
 //!
+//! Fresh memory: every call hands its arrays back to the allocator, and glibc returns the
+//! top of its heap to the kernel once more than its trim threshold is free there (by
+//! default twice the largest block it has unmapped so far in the process, at most
+//! 64 MiB). A call whose peak is above that finds its memory unmapped on the next call
+//! and faults every page in again, which the kernel also clears. A decomposition keeps
+//! its scratch and its output alive at its peak, the forward step mostly its output, so
+//! the decompositions are the ones that pay, and which sizes pay depends on what the
+//! process allocated before: in a run of all four `doo_multires` sizes, smallest first,
+//! the largest seeded decomposition took 34-50 ms, against 18-22 ms run alone or with
+//! `MALLOC_TRIM_THRESHOLD_` and `MALLOC_MMAP_THRESHOLD_` fixed at 4 GiB, while the
+//! forward step did not change; the first level of a three-level `decompose` costs up to
+//! 1.8x the same reversal run alone for the same reason. The benches keep the default
+//! allocator settings, as a user's program has them: read the ratios with this in mind.
+//!
 //! Run with `cargo bench -p subdiv-doo --bench doo`. The inputs are built before timing;
 //! the timed call is `subdivide` on an already built half-edge mesh (the counterpart of
 //! CGAL's `DooSabin_subdivision` on a `Surface_mesh`).
