@@ -275,7 +275,7 @@ pub fn decompose(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Deco
     // the positions, which then need no pass of their own for it (a pass as long as a
     // twentieth of the reversal).
     let first = first_level(mesh, options);
-    let measured = first.as_ref().ok().and_then(|first| first.unit_scale);
+    let measured = first.as_ref().ok().and_then(Option::as_ref).and_then(|reversal| reversal.fine_unit_scale);
     if let Some(scale) = UnitScale::of_measured(measured, mesh.positions()) {
         let mut scaled = mesh.clone();
         scale.scale_down(scaled.positions_mut());
@@ -302,18 +302,10 @@ fn decompose_as_given(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result
     decompose_after(mesh, options, first_level(mesh, options)?)
 }
 
-/// The first level of [`decompose`] when the canonical path takes it, after the checks of
-/// the level count.
-struct FirstLevel {
-    step: Option<Step>,
-    /// The unit scale of the input's positions, when the canonical path measured it.
-    unit_scale: Option<f64>,
-}
-
 /// The checks of the level count, then the first level by the canonical path where it
 /// applies (`None` where it does not, also when a position is not finite, so that
 /// [`decompose_after`] names it).
-fn first_level(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<FirstLevel, DooError> {
+fn first_level(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<Option<crate::DooReversal>, DooError> {
     if options.depth == Depth::Levels(0) {
         check_finite(mesh.positions())?;
         return Err(DooError::InvalidParameter { name: "levels", value: 0.0, reason: "decompose at least one level" });
@@ -331,28 +323,24 @@ fn first_level(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result<FirstL
         });
     }
     // A mesh in the canonical order: the first level without the general search (the
-    // same result). The coarser levels try it in turn.
-    let first = match options.boundary {
-        _ if !canonical_enabled() => None,
-        BoundaryRule::Shrink => crate::canonical::reverse_canonical(mesh, &reverse_options(options, 0))
-            .map(|reversal| (reversal.fine_unit_scale, Step::from_canonical(reversal))),
-        BoundaryRule::Chaikin => crate::boundary::reverse_chaikin_canonical(mesh, &reverse_options(options, 0))
-            .map(|reversal| (reversal.fine_unit_scale, Step::from_reversal(reversal))),
-    };
-    let (unit_scale, step) = first.unzip();
-    Ok(FirstLevel { step, unit_scale: unit_scale.flatten() })
+    // same result), by the reversal's own canonical path. The coarser levels try it in
+    // turn.
+    if !canonical_enabled() {
+        return Ok(None);
+    }
+    Ok(crate::reverse::reverse_canonical(mesh, &reverse_options(options, 0)))
 }
 
-/// [`decompose`] from its first level.
+/// [`decompose`] from its first level (`first`: what [`first_level`] made of it).
 fn decompose_after(
     mesh: &HalfedgeMesh,
     options: &DecomposeOptions,
-    first: FirstLevel,
+    first: Option<crate::DooReversal>,
 ) -> Result<Decomposition, DooError> {
-    if first.step.is_none() {
+    if first.is_none() {
         check_finite(mesh.positions())?;
     }
-    let decomposition = decompose_from(first.step, Some(mesh), mesh.face_count(), options)?;
+    let decomposition = decompose_from(first.map(Step::from_canonical), Some(mesh), mesh.face_count(), options)?;
     Ok(decomposition.expect("internal: with the mesh at hand every path can run"))
 }
 
@@ -569,11 +557,14 @@ impl Step {
         Self { coarse, coarse_positions, details, order, choices, connected: false }
     }
 
-    /// A step of the canonical path under the shrinking boundary rule, whose coarse mesh
-    /// is one connected component (the path checks it, or knows it from a connected fine
-    /// mesh), so that the next level skips that check.
+    /// A step of the canonical path. Under the shrinking boundary rule its coarse mesh is
+    /// one connected component (the path checks it, or knows it from a connected fine
+    /// mesh), so that the next level skips that check; under the Chaikin rule the claim
+    /// is not made (it holds for the Shrink rule, whose fine faces all lie on coarse
+    /// faces, edges or interior vertices).
     fn from_canonical(reversal: crate::DooReversal) -> Self {
-        Self { connected: true, ..Self::from_reversal(reversal) }
+        let connected = reversal.boundary == BoundaryRule::Shrink;
+        Self { connected, ..Self::from_reversal(reversal) }
     }
 }
 
@@ -698,15 +689,11 @@ fn canonical_step(
     let halfedges = CornerHalfedges::of_canonical_faces(positions, &fine.offsets, &fine.corner_vertex)
         .or_else(|| CornerHalfedges::of(fine))?;
     let options = reverse_options(options, level);
-    match options.boundary {
-        BoundaryRule::Shrink => {
-            let reversal = halfedges.reverse_canonical(positions, connected, &options)?;
-            Some(Step::from_canonical(reversal))
-        }
-        // (Its coarse mesh is not claimed connected: the claim is made for the Shrink
-        // rule, whose fine faces all lie on coarse faces, edges or interior vertices.)
-        BoundaryRule::Chaikin => reverse_chaikin_arrays(&halfedges.view(positions), &options).map(Step::from_reversal),
-    }
+    let reversal = match options.boundary {
+        BoundaryRule::Shrink => halfedges.reverse_canonical(positions, connected, &options),
+        BoundaryRule::Chaikin => reverse_chaikin_arrays(&halfedges.view(positions), &options),
+    };
+    reversal.map(Step::from_canonical)
 }
 
 #[cfg(test)]

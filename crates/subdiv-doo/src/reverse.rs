@@ -726,7 +726,7 @@ fn reverse_as_given(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<Doo
 /// The reversal of a mesh in the canonical order, by its boundary rule; `None` where the
 /// canonical path does not apply, also when a position is not finite, so that
 /// [`reverse_after`] names it.
-fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -> Option<DooReversal> {
+pub(crate) fn reverse_canonical(fine: &HalfedgeMesh, options: &ReverseOptions) -> Option<DooReversal> {
     match options.boundary {
         BoundaryRule::Shrink => crate::canonical::reverse_canonical(fine, options),
         BoundaryRule::Chaikin => crate::boundary::reverse_chaikin_canonical(fine, options),
