@@ -2435,12 +2435,12 @@ pub(crate) fn means_and_details_in(
             for (slot, &c) in gathered.iter_mut().zip(corners) {
                 *slot = candidates[c as usize];
             }
-            mean_and_details(&gathered[..corners.len()], &mut details)
+            mean_and_details(&mut gathered[..corners.len()], &mut details)
         } else {
             // Longer lists (vertices of high valence) in one buffer reused across them.
             long.clear();
             long.extend(corners.iter().map(|&c| candidates[c as usize]));
-            mean_and_details(&long, &mut details)
+            mean_and_details(&mut long, &mut details)
         };
         means.push(mean);
         energies.push(energy);
@@ -2451,19 +2451,23 @@ pub(crate) fn means_and_details_in(
 /// Vertices of at most this many candidates are summed from a copy on the stack.
 const GATHERED: usize = 8;
 
-/// The mean of one vertex's `candidates`, their details (pushed) and squared detail norm.
+/// The mean of one vertex's `candidates`, their details (appended) and squared detail
+/// norm. The details are written over the candidates first and then appended in one
+/// copy: the loop calls nothing and keeps its sums in registers (with a `push` per
+/// detail, which may grow the vector, they lived on the stack).
 #[inline(always)]
-fn mean_and_details(candidates: &[DVec3], details: &mut Vec<DVec3>) -> (DVec3, f64) {
+fn mean_and_details(candidates: &mut [DVec3], details: &mut Vec<DVec3>) -> (DVec3, f64) {
     let mean = candidates.iter().sum::<DVec3>() / candidates.len() as f64;
+    let (last, rest) = candidates.split_last_mut().expect("a vertex has candidates");
     let mut prefix = DVec3::ZERO;
     let mut energy = 0.0;
-    let (last, rest) = candidates.split_last().expect("a vertex has candidates");
-    for &candidate in rest {
-        let offset = candidate - mean;
+    for slot in rest.iter_mut() {
+        let offset = *slot - mean;
         energy += offset.length_squared();
         prefix += offset;
-        details.push(prefix);
+        *slot = prefix;
     }
+    details.extend_from_slice(rest);
     (mean, energy + (*last - mean).length_squared())
 }
 
