@@ -113,7 +113,7 @@ mod scheme;
 
 pub use error::Error;
 pub use pyramid::{Depth, Pyramid, RateDistortion, decompose, decompose_soup, decompose_with};
-pub use scheme::{Boundaries, SurfaceScheme};
+pub use scheme::{Boundaries, ElementCounts, SurfaceScheme};
 
 pub use ifs_nonlinear as ifs;
 pub use mesh_topo as mesh;

@@ -44,6 +44,25 @@ pub enum SurfaceScheme {
     DooCentroid,
 }
 
+/// How many vertices, edges and faces a mesh has (see
+/// [`SurfaceScheme::closed_counts`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct ElementCounts {
+    /// Vertices.
+    pub vertices: usize,
+    /// Edges (each counted once).
+    pub edges: usize,
+    /// Faces.
+    pub faces: usize,
+}
+
+impl ElementCounts {
+    /// The counts of `mesh`.
+    pub fn of(mesh: &HalfedgeMesh) -> Self {
+        ElementCounts { vertices: mesh.vertex_count(), edges: mesh.edge_count(), faces: mesh.face_count() }
+    }
+}
+
 impl SurfaceScheme {
     /// Every scheme, in a fixed order.
     pub const ALL: [SurfaceScheme; 7] = [
@@ -100,6 +119,8 @@ impl SurfaceScheme {
     /// `edges` and `faces`: `4^k F`, `9^k F`, `16^k F` for the Loop family; for
     /// Doo-Sabin one face per face, edge and vertex at each step (`F' = F + E + V`,
     /// `V' = 2E`, `E' = 4E`), so benchmarks can state throughput before running.
+    /// The faces of [`closed_counts`](Self::closed_counts), which saturates at
+    /// `usize::MAX`.
     ///
     /// ```
     /// use multires::prelude::*;
@@ -117,20 +138,59 @@ impl SurfaceScheme {
     /// # Ok::<(), multires::Error>(())
     /// ```
     pub fn closed_face_count(self, vertices: usize, edges: usize, faces: usize, levels: u32) -> usize {
-        match self {
-            SurfaceScheme::Loop | SurfaceScheme::LoopWarren => faces * 4usize.pow(levels),
-            SurfaceScheme::TernaryLoop => faces * 9usize.pow(levels),
-            SurfaceScheme::QuaternaryLoop => faces * 16usize.pow(levels),
+        self.closed_counts(ElementCounts { vertices, edges, faces }, levels).faces
+    }
+
+    /// The vertices, edges and faces after `levels` steps of this scheme on a mesh of
+    /// `counts`, computed before any work (to state throughput, or to see whether the
+    /// output fits in memory). Each entry saturates at `usize::MAX`.
+    ///
+    /// The Loop family splits every edge into `M` (M = 2, 3, 4) and every triangle into
+    /// `M^2`: `V' = V + (M-1) E + (M-1)(M-2)/2 F`, `E' = M E + 3 M(M-1)/2 F`,
+    /// `F' = M^2 F`, exact on any triangle mesh, closed or not. A Doo-Sabin step makes one
+    /// vertex per face corner and one face per face, edge and vertex: on a closed mesh
+    /// (whose corners are `2E`) `V' = 2E`, `E' = 4E`, `F' = F + E + V`. On a mesh with a
+    /// boundary these are upper bounds under the default (shrinking) boundary rule, which
+    /// makes no faces at boundary edges and vertices.
+    ///
+    /// ```
+    /// use multires::prelude::*;
+    /// use multires::ElementCounts;
+    ///
+    /// // An open mesh (a 4 x 4 triangle grid): Loop's counts are exact.
+    /// let grid = shapes::grid(4, 4, shapes::CellKind::Triangles)?;
+    /// let grid = HalfedgeMesh::from_soup(&grid)?;
+    /// let counts = ElementCounts::of(&grid);
+    /// let fine = HalfedgeMesh::from_soup(&SurfaceScheme::Loop.subdivide(&grid, 2)?)?;
+    /// assert_eq!(SurfaceScheme::Loop.closed_counts(counts, 2), ElementCounts::of(&fine));
+    /// // Nothing overflows: 4^40 faces per face saturate.
+    /// assert_eq!(SurfaceScheme::Loop.closed_counts(counts, 40).faces, usize::MAX);
+    /// # Ok::<(), multires::Error>(())
+    /// ```
+    pub fn closed_counts(self, counts: ElementCounts, levels: u32) -> ElementCounts {
+        let ElementCounts { vertices: mut v, edges: mut e, faces: mut f } = counts;
+        let arity = match self {
+            SurfaceScheme::Loop | SurfaceScheme::LoopWarren => 2,
+            SurfaceScheme::TernaryLoop => 3,
+            SurfaceScheme::QuaternaryLoop => 4,
             SurfaceScheme::DooSabin | SurfaceScheme::DooSimple | SurfaceScheme::DooCentroid => {
-                // Each step makes one face per face, edge and vertex; every corner becomes a
-                // vertex (V' = 2E) of valence 4 (E' = 2V' = 4E).
-                let (mut v, mut e, mut f) = (vertices, edges, faces);
                 for _ in 0..levels {
-                    (v, e, f) = (2 * e, 4 * e, f + e + v);
+                    // Every corner becomes a vertex (V' = 2E) of valence 4 (E' = 2V' = 4E).
+                    (v, e, f) = (e.saturating_mul(2), e.saturating_mul(4), f.saturating_add(e).saturating_add(v));
                 }
-                f
+                return ElementCounts { vertices: v, edges: e, faces: f };
             }
+        };
+        let m: usize = arity;
+        for _ in 0..levels {
+            // New vertices: M - 1 inside each edge, (M-1)(M-2)/2 inside each triangle.
+            let vertices =
+                v.saturating_add(e.saturating_mul(m - 1)).saturating_add(f.saturating_mul((m - 1) * (m - 2) / 2));
+            // Each edge into M, and 3 M(M-1)/2 edges inside each triangle.
+            let edges = e.saturating_mul(m).saturating_add(f.saturating_mul(3 * m * (m - 1) / 2));
+            (v, e, f) = (vertices, edges, f.saturating_mul(m * m));
         }
+        ElementCounts { vertices: v, edges: e, faces: f }
     }
 
     /// `levels` steps of this scheme on `mesh`, with default parameters.
@@ -359,6 +419,46 @@ mod tests {
                 let fine_mesh = HalfedgeMesh::from_soup(&fine).unwrap();
                 assert_eq!(fine_mesh.topology_stats().euler, 2, "{scheme} level {levels}");
             }
+        }
+    }
+
+    #[test]
+    fn predicted_counts_match_subdivision() {
+        let closed = [shapes::octahedron(), shapes::cube(), shapes::torus(6, 4, shapes::CellKind::Quads).unwrap()];
+        let open = [
+            shapes::grid(3, 2, shapes::CellKind::Triangles).unwrap(),
+            shapes::grid(3, 3, shapes::CellKind::Quads).unwrap(),
+        ];
+        for scheme in SurfaceScheme::ALL {
+            for (soup, is_closed) in closed.iter().map(|s| (s, true)).chain(open.iter().map(|s| (s, false))) {
+                let mesh = HalfedgeMesh::from_soup(soup).unwrap();
+                if !scheme.accepts_polygons() && soup.faces().any(|f| f.len() != 3) {
+                    continue;
+                }
+                for levels in 0..3 {
+                    let fine = HalfedgeMesh::from_soup(&scheme.subdivide(&mesh, levels).unwrap()).unwrap();
+                    let (predicted, made) =
+                        (scheme.closed_counts(ElementCounts::of(&mesh), levels), ElementCounts::of(&fine));
+                    if is_closed || !scheme.accepts_polygons() {
+                        // Exact: the Loop family on any mesh, Doo-Sabin on closed ones.
+                        assert_eq!(predicted, made, "{scheme} level {levels}");
+                    } else {
+                        // An open mesh shrinks under Doo-Sabin: an upper bound.
+                        assert!(made.vertices <= predicted.vertices && made.edges <= predicted.edges, "{scheme}");
+                        assert!(made.faces <= predicted.faces, "{scheme} level {levels}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn predicted_counts_saturate() {
+        let counts = ElementCounts { vertices: 1 << 40, edges: 3 << 40, faces: 2 << 40 };
+        for scheme in SurfaceScheme::ALL {
+            let far = scheme.closed_counts(counts, 64);
+            assert_eq!((far.edges, far.faces), (usize::MAX, usize::MAX), "{scheme}");
+            assert_eq!(scheme.closed_face_count(5, 9, 6, u32::MAX), usize::MAX, "{scheme}");
         }
     }
 

@@ -16,6 +16,8 @@ use subdiv_doo::pyramid::{DecomposeOptions, Decomposition, Depth, DooPyramid, de
 use subdiv_doo::{BoundaryRule, DooError, DooOptions, FaceRule, SeedChoice, subdivide_soup};
 
 use super::common::{self, note_dropped, read_soup, write_soup};
+use multires::ElementCounts;
+
 use super::{
     AnalyzeArgs, AnalyzeScheme, BoundaryArg, CliError, CliResult, DecomposeArgs, ReadingArgs, ReconstructArgs,
     ReverseArgs, ReverseScheme, SubdivideArgs, SurfaceScheme, input_error,
@@ -68,6 +70,11 @@ pub fn subdivide(args: &SubdivideArgs) -> CliResult {
     }
     let (soup, report) = read_soup(&args.mesh)?;
     note_dropped(&args.mesh, &report);
+    // As if closed (a closed mesh has half as many edges as corners): with the default
+    // boundary rule an upper bound of what an open mesh makes.
+    let counts =
+        ElementCounts { vertices: soup.vertex_count(), edges: soup.indices.len() / 2, faces: soup.face_count() };
+    super::memory::check_output_fits(&args.mesh, args.scheme.library(), counts, args.levels)?;
     let options = DooOptions::new(rule, args.levels).with_boundary(boundary_rule(args.boundary));
     let fine = subdivide_soup(&soup, &options).map_err(|e| doo_error(&args.mesh, e))?;
     drop(soup);

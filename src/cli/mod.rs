@@ -15,6 +15,7 @@ mod demo;
 mod doo_cmds;
 mod ifs_cmds;
 mod loop_cmds;
+mod memory;
 mod mesh_cmds;
 pub mod render;
 mod spline_cmds;
@@ -137,6 +138,19 @@ impl SurfaceScheme {
     /// True for the Doo-Sabin schemes.
     pub fn is_doo(self) -> bool {
         matches!(self, Self::DooSabin | Self::DooSimple | Self::DooCentroid)
+    }
+
+    /// The library's name of this scheme.
+    pub fn library(self) -> multires::SurfaceScheme {
+        match self {
+            Self::Loop => multires::SurfaceScheme::Loop,
+            Self::LoopWarren => multires::SurfaceScheme::LoopWarren,
+            Self::TernaryLoop => multires::SurfaceScheme::TernaryLoop,
+            Self::QuaternaryLoop => multires::SurfaceScheme::QuaternaryLoop,
+            Self::DooSabin => multires::SurfaceScheme::DooSabin,
+            Self::DooSimple => multires::SurfaceScheme::DooSimple,
+            Self::DooCentroid => multires::SurfaceScheme::DooCentroid,
+        }
     }
 
     /// The `--scheme` word of this scheme.

@@ -1,0 +1,120 @@
+//! The check that a subdivision's output fits in memory before any work is done: a
+//! level too many would otherwise run until the system kills the process (Linux
+//! overcommits, so the allocation itself does not fail).
+
+use std::path::Path;
+
+use multires::{ElementCounts, SurfaceScheme};
+
+use super::{CliError, CliResult};
+
+/// Bytes an output soup of `counts` holds: positions (three `f64`), one `u32` index per
+/// corner (a closed mesh has `2E`) and one offset per face. The least the output can
+/// take; making it takes more.
+fn soup_bytes(counts: ElementCounts) -> u128 {
+    let ElementCounts { vertices, edges, faces } = counts;
+    24 * vertices as u128 + 8 * edges as u128 + 4 * (faces as u128 + 1)
+}
+
+/// Refuses `levels` steps of `scheme` on `input` (of `counts`) when the output alone
+/// would need more memory than the system has available now (an output past the `u32`
+/// index range is left to the library, which refuses it with its limit).
+pub fn check_output_fits(input: &Path, scheme: SurfaceScheme, counts: ElementCounts, levels: u32) -> CliResult {
+    match available_bytes() {
+        Some(available) => output_fits(scheme, counts, levels, available)
+            .map_err(|reason| CliError::Input(format!("{}: {reason}", input.display()))),
+        None => Ok(()),
+    }
+}
+
+/// [`check_output_fits`] against `available` bytes: the reason, naming the levels that
+/// would fit, if the output does not.
+fn output_fits(scheme: SurfaceScheme, counts: ElementCounts, levels: u32, available: u64) -> Result<(), String> {
+    let fine = scheme.closed_counts(counts, levels);
+    let needed = soup_bytes(fine);
+    // Beyond the `u32` index range the library refuses at once, naming its own limit.
+    let indexable = [fine.vertices, fine.edges.saturating_mul(2), fine.faces].iter().all(|&n| n <= u32::MAX as usize);
+    if needed <= u128::from(available) || !indexable {
+        return Ok(());
+    }
+    let fitting = (0..levels).rev().find(|&k| soup_bytes(scheme.closed_counts(counts, k)) <= u128::from(available));
+    let advice = match fitting {
+        Some(k) => format!("at most {k} level(s) fit"),
+        None => "not even the input fits".into(),
+    };
+    Err(format!(
+        "{} x{levels} would make {} vertices and {} faces, {} for the output alone; the system has {} available ({advice})",
+        scheme.name(),
+        fine.vertices,
+        fine.faces,
+        gigabytes(needed),
+        gigabytes(u128::from(available))
+    ))
+}
+
+fn gigabytes(bytes: u128) -> String {
+    format!("{:.1} GB", bytes as f64 / 1e9)
+}
+
+/// Memory the system can give now: `MemAvailable` plus `SwapFree` of `/proc/meminfo`
+/// (Linux); `None` where that cannot be read, and then nothing is refused.
+fn available_bytes() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let kilobytes = |key: &str| {
+        info.lines()
+            .find_map(|line| line.strip_prefix(key)?.strip_prefix(':'))
+            .and_then(|rest| rest.trim().strip_suffix("kB")?.trim().parse::<u64>().ok())
+    };
+    let available = kilobytes("MemAvailable")?;
+    Some(available.saturating_add(kilobytes("SwapFree").unwrap_or(0)).saturating_mul(1024))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bunny of `tests/data` (1839 vertices, 5511 edges, 3674 triangles).
+    const BUNNY: ElementCounts = ElementCounts { vertices: 1839, edges: 5511, faces: 3674 };
+
+    #[test]
+    fn an_output_larger_than_the_memory_is_refused_with_the_levels_that_fit() {
+        let available = 16_000_000_000;
+        // Loop level 8: 240.8M faces, 6.7 GB; level 9: 963.1M faces, 27.0 GB.
+        assert!(output_fits(SurfaceScheme::Loop, BUNNY, 8, available).is_ok());
+        let reason = output_fits(SurfaceScheme::Loop, BUNNY, 9, available).unwrap_err();
+        assert!(
+            reason.starts_with("loop x9 would make 481558530 vertices and 963117056 faces, 27.0 GB for"),
+            "{reason}"
+        );
+        assert!(reason.ends_with("the system has 16.0 GB available (at most 8 level(s) fit)"), "{reason}");
+        let reason = output_fits(SurfaceScheme::DooSabin, BUNNY, 9, available).unwrap_err();
+        assert!(reason.contains("at most 8 level(s) fit"), "{reason}");
+        let reason = output_fits(SurfaceScheme::QuaternaryLoop, BUNNY, 3, 100_000).unwrap_err();
+        assert!(reason.ends_with("(not even the input fits)"), "{reason}");
+        // Past the index range (and saturated counts): left to the library's limits.
+        assert!(output_fits(SurfaceScheme::Loop, BUNNY, 11, available).is_ok());
+        assert!(output_fits(SurfaceScheme::Loop, BUNNY, 200, 1).is_ok());
+    }
+
+    #[test]
+    fn the_soup_bytes_are_those_of_the_arrays() {
+        // An octahedron: 6 positions, 24 corners, 8 faces and their end offset.
+        let octahedron = ElementCounts { vertices: 6, edges: 12, faces: 8 };
+        assert_eq!(soup_bytes(octahedron), 6 * 24 + 24 * 4 + 9 * 4);
+    }
+
+    #[test]
+    fn every_scheme_of_the_command_line_is_the_library_scheme_of_its_name() {
+        use clap::ValueEnum;
+        for scheme in super::super::SurfaceScheme::value_variants() {
+            assert_eq!(scheme.word(), scheme.library().name());
+        }
+    }
+
+    #[test]
+    fn this_system_reports_its_memory() {
+        if cfg!(target_os = "linux") {
+            assert!(available_bytes().is_some_and(|bytes| bytes > 0));
+        }
+    }
+}
