@@ -62,7 +62,6 @@ pub fn invalid_mesh(path: &Path, error: MeshError) -> CliError {
 }
 
 /// Reads a mesh file and builds its half-edge mesh; notes dropped attributes on stderr.
-#[allow(dead_code)] // The entry point of the subdivision commands, which land in their own issues.
 pub fn read_mesh(path: &Path) -> CliResult<HalfedgeMesh> {
     let (soup, report) = read_soup(path)?;
     note_dropped(path, &report);
