@@ -11,13 +11,12 @@ use std::path::Path;
 
 use mesh_topo::PolygonSoup;
 use mesh_topo::io::WriteOptions;
+use multires::ElementCounts;
 use subdiv_doo::analysis::{ReifReport, reif_check};
 use subdiv_doo::pyramid::{DecomposeOptions, Decomposition, Depth, DooPyramid, decompose_soup};
 use subdiv_doo::{BoundaryRule, DooError, DooOptions, FaceRule, SeedChoice, subdivide_soup};
 
 use super::common::{self, note_dropped, read_soup, write_soup};
-use multires::ElementCounts;
-
 use super::{
     AnalyzeArgs, AnalyzeScheme, BoundaryArg, CliError, CliResult, DecomposeArgs, ReadingArgs, ReconstructArgs,
     ReverseArgs, ReverseScheme, SubdivideArgs, SurfaceScheme, input_error,

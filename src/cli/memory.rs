@@ -42,8 +42,12 @@ fn output_fits(scheme: SurfaceScheme, counts: ElementCounts, levels: u32, availa
         Some(k) => format!("at most {k} level(s) fit"),
         None => "not even the input fits".into(),
     };
+    // Exact for the Loop family; for Doo-Sabin the counts of a closed mesh, which bound
+    // those of an open one under the default boundary rule.
+    let bound = if scheme.accepts_polygons() { "up to " } else { "" };
     Err(format!(
-        "{} x{levels} would make {} vertices and {} faces, {} for the output alone; the system has {} available ({advice})",
+        "{} x{levels} would make {bound}{} vertices and {} faces, {} for the output alone; the system has {} \
+         available ({advice})",
         scheme.name(),
         fine.vertices,
         fine.faces,
@@ -88,7 +92,8 @@ mod tests {
         );
         assert!(reason.ends_with("the system has 16.0 GB available (at most 8 level(s) fit)"), "{reason}");
         let reason = output_fits(SurfaceScheme::DooSabin, BUNNY, 9, available).unwrap_err();
-        assert!(reason.contains("at most 8 level(s) fit"), "{reason}");
+        assert!(reason.starts_with("doo-sabin x9 would make up to 722337792 vertices"), "{reason}");
+        assert!(reason.ends_with("(at most 8 level(s) fit)"), "{reason}");
         let reason = output_fits(SurfaceScheme::QuaternaryLoop, BUNNY, 3, 100_000).unwrap_err();
         assert!(reason.ends_with("(not even the input fits)"), "{reason}");
         // Past the index range (and saturated counts): left to the library's limits.
