@@ -2,18 +2,20 @@
 //! level too many would otherwise run until the system kills the process (Linux
 //! overcommits, so the allocation itself does not fail).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use multires::{ElementCounts, SurfaceScheme};
 
 use super::{CliError, CliResult};
 
 /// Bytes an output soup of `counts` holds: positions (three `f64`), one `u32` index per
-/// corner (a closed mesh has `2E`) and one offset per face. The least the output can
-/// take; making it takes more.
-fn soup_bytes(counts: ElementCounts) -> u128 {
+/// corner and one offset per face. The least the output of `scheme` can take (making it
+/// takes more): the Loop family writes triangles (`3F` corners), Doo-Sabin `2E` on a
+/// closed mesh.
+fn soup_bytes(scheme: SurfaceScheme, counts: ElementCounts) -> u128 {
     let ElementCounts { vertices, edges, faces } = counts;
-    24 * vertices as u128 + 8 * edges as u128 + 4 * (faces as u128 + 1)
+    let corners = if scheme.accepts_polygons() { 2 * edges as u128 } else { 3 * faces as u128 };
+    24 * vertices as u128 + 4 * corners + 4 * (faces as u128 + 1)
 }
 
 /// Refuses `levels` steps of `scheme` on `input` (of `counts`) when the output alone
@@ -31,13 +33,14 @@ pub fn check_output_fits(input: &Path, scheme: SurfaceScheme, counts: ElementCou
 /// would fit, if the output does not.
 fn output_fits(scheme: SurfaceScheme, counts: ElementCounts, levels: u32, available: u64) -> Result<(), String> {
     let fine = scheme.closed_counts(counts, levels);
-    let needed = soup_bytes(fine);
+    let needed = soup_bytes(scheme, fine);
     // Beyond the `u32` index range the library refuses at once, naming its own limit.
     let indexable = [fine.vertices, fine.edges.saturating_mul(2), fine.faces].iter().all(|&n| n <= u32::MAX as usize);
     if needed <= u128::from(available) || !indexable {
         return Ok(());
     }
-    let fitting = (0..levels).rev().find(|&k| soup_bytes(scheme.closed_counts(counts, k)) <= u128::from(available));
+    let fitting =
+        (0..levels).rev().find(|&k| soup_bytes(scheme, scheme.closed_counts(counts, k)) <= u128::from(available));
     let advice = match fitting {
         Some(k) => format!("at most {k} level(s) fit"),
         None => "not even the input fits".into(),
@@ -61,9 +64,26 @@ fn gigabytes(bytes: u128) -> String {
 }
 
 /// Memory the system can give now: `MemAvailable` plus `SwapFree` of `/proc/meminfo`
-/// (Linux); `None` where that cannot be read, and then nothing is refused.
+/// (Linux), or less if the process's control group has less left under its limit (a
+/// container's memory limit); `None` where that cannot be read, and then nothing is
+/// refused.
 fn available_bytes() -> Option<u64> {
     let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let system = meminfo_available(&info)?;
+    let groups = std::fs::read_to_string("/proc/self/cgroup").unwrap_or_default();
+    let headroom = control_group_files(&groups)
+        .into_iter()
+        .filter_map(|(limit, usage)| {
+            let read = |path: &Path| std::fs::read_to_string(path).ok()?.trim().parse::<u64>().ok();
+            // An unlimited group says `max` (v2) and fails the parse.
+            Some(read(&limit)?.saturating_sub(read(&usage).unwrap_or(0)))
+        })
+        .min();
+    Some(headroom.map_or(system, |headroom| headroom.min(system)))
+}
+
+/// `MemAvailable + SwapFree` in bytes, from the text of `/proc/meminfo`.
+fn meminfo_available(info: &str) -> Option<u64> {
     let kilobytes = |key: &str| {
         info.lines()
             .find_map(|line| line.strip_prefix(key)?.strip_prefix(':'))
@@ -71,6 +91,35 @@ fn available_bytes() -> Option<u64> {
     };
     let available = kilobytes("MemAvailable")?;
     Some(available.saturating_add(kilobytes("SwapFree").unwrap_or(0)).saturating_mul(1024))
+}
+
+/// The (limit, usage) files of the memory controller for the group that
+/// `/proc/self/cgroup` (`groups`) names and for each of its ancestors (a limit may be set
+/// on any of them): cgroup v2 (`0::/path`, `memory.max` and `memory.current`) and v1
+/// (`n:memory:/path`, `memory.limit_in_bytes` and `memory.usage_in_bytes`).
+fn control_group_files(groups: &str) -> Vec<(PathBuf, PathBuf)> {
+    let mut files = Vec::new();
+    for line in groups.lines() {
+        let mut fields = line.splitn(3, ':');
+        let (Some(_), Some(controllers), Some(path)) = (fields.next(), fields.next(), fields.next()) else {
+            continue;
+        };
+        let (root, limit, usage) = if controllers.is_empty() {
+            ("/sys/fs/cgroup", "memory.max", "memory.current")
+        } else if controllers.split(',').any(|c| c == "memory") {
+            ("/sys/fs/cgroup/memory", "memory.limit_in_bytes", "memory.usage_in_bytes")
+        } else {
+            continue;
+        };
+        let mut dir = Path::new(root).join(path.trim_start_matches('/'));
+        loop {
+            files.push((dir.join(limit), dir.join(usage)));
+            if dir == Path::new(root) || !dir.pop() {
+                break;
+            }
+        }
+    }
+    files
 }
 
 #[cfg(test)]
@@ -105,7 +154,13 @@ mod tests {
     fn the_soup_bytes_are_those_of_the_arrays() {
         // An octahedron: 6 positions, 24 corners, 8 faces and their end offset.
         let octahedron = ElementCounts { vertices: 6, edges: 12, faces: 8 };
-        assert_eq!(soup_bytes(octahedron), 6 * 24 + 24 * 4 + 9 * 4);
+        for scheme in [SurfaceScheme::Loop, SurfaceScheme::DooSabin] {
+            assert_eq!(soup_bytes(scheme, octahedron), 6 * 24 + 24 * 4 + 9 * 4);
+        }
+        // An open triangle grid (2 x 1 cells: 6 vertices, 9 edges, 4 triangles): Loop
+        // writes its 12 corners, not twice its edges.
+        let grid = ElementCounts { vertices: 6, edges: 9, faces: 4 };
+        assert_eq!(soup_bytes(SurfaceScheme::Loop, grid), 6 * 24 + 12 * 4 + 5 * 4);
     }
 
     #[test]
@@ -114,6 +169,31 @@ mod tests {
         for scheme in super::super::SurfaceScheme::value_variants() {
             assert_eq!(scheme.word(), scheme.library().name());
         }
+    }
+
+    #[test]
+    fn the_memory_files_are_read_as_linux_writes_them() {
+        let info = "MemTotal:       24000000 kB\nMemFree:        20000000 kB\nMemAvailable:   21000000 kB\n\
+                    SwapTotal:       1000000 kB\nSwapFree:         500000 kB\n";
+        assert_eq!(meminfo_available(info), Some((21_000_000 + 500_000) * 1024));
+        assert_eq!(meminfo_available("MemAvailable:   1000 kB\n"), Some(1_024_000));
+        assert_eq!(meminfo_available("MemFree: 1000 kB\n"), None);
+        // v2 (the unified line) and v1 (the memory controller among others), each group
+        // with its ancestors up to the mount; other controllers are passed over.
+        let groups = "0::/user.slice/job\n4:cpu,memory:/box\n3:cpuset:/\n";
+        let files: Vec<(String, String)> = control_group_files(groups)
+            .into_iter()
+            .map(|(limit, usage)| (limit.display().to_string(), usage.display().to_string()))
+            .collect();
+        let expected = [
+            ("/sys/fs/cgroup/user.slice/job/memory.max", "/sys/fs/cgroup/user.slice/job/memory.current"),
+            ("/sys/fs/cgroup/user.slice/memory.max", "/sys/fs/cgroup/user.slice/memory.current"),
+            ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+            ("/sys/fs/cgroup/memory/box/memory.limit_in_bytes", "/sys/fs/cgroup/memory/box/memory.usage_in_bytes"),
+            ("/sys/fs/cgroup/memory/memory.limit_in_bytes", "/sys/fs/cgroup/memory/memory.usage_in_bytes"),
+        ];
+        assert_eq!(files, expected.map(|(l, u)| (l.to_owned(), u.to_owned())));
+        assert!(control_group_files("garbage\n1:cpu:/x\n").is_empty());
     }
 
     #[test]
