@@ -168,29 +168,42 @@ impl SurfaceScheme {
     /// # Ok::<(), multires::Error>(())
     /// ```
     pub fn closed_counts(self, counts: ElementCounts, levels: u32) -> ElementCounts {
-        let ElementCounts { vertices: mut v, edges: mut e, faces: mut f } = counts;
-        let arity = match self {
+        let mut counts = counts;
+        for _ in 0..levels {
+            let next = self.counts_after_step(counts);
+            // A fixed point (a mesh that does not grow, or counts saturated): every further
+            // step gives it again, so a huge level count costs nothing more.
+            if next == counts {
+                break;
+            }
+            counts = next;
+        }
+        counts
+    }
+
+    /// [`closed_counts`](Self::closed_counts) of one step.
+    fn counts_after_step(self, counts: ElementCounts) -> ElementCounts {
+        let ElementCounts { vertices: v, edges: e, faces: f } = counts;
+        let m: usize = match self {
             SurfaceScheme::Loop | SurfaceScheme::LoopWarren => 2,
             SurfaceScheme::TernaryLoop => 3,
             SurfaceScheme::QuaternaryLoop => 4,
             SurfaceScheme::DooSabin | SurfaceScheme::DooSimple | SurfaceScheme::DooCentroid => {
-                for _ in 0..levels {
-                    // Every corner becomes a vertex (V' = 2E) of valence 4 (E' = 2V' = 4E).
-                    (v, e, f) = (e.saturating_mul(2), e.saturating_mul(4), f.saturating_add(e).saturating_add(v));
-                }
-                return ElementCounts { vertices: v, edges: e, faces: f };
+                // Every corner becomes a vertex (V' = 2E) of valence 4 (E' = 2V' = 4E).
+                return ElementCounts {
+                    vertices: e.saturating_mul(2),
+                    edges: e.saturating_mul(4),
+                    faces: f.saturating_add(e).saturating_add(v),
+                };
             }
         };
-        let m: usize = arity;
-        for _ in 0..levels {
+        ElementCounts {
             // New vertices: M - 1 inside each edge, (M-1)(M-2)/2 inside each triangle.
-            let vertices =
-                v.saturating_add(e.saturating_mul(m - 1)).saturating_add(f.saturating_mul((m - 1) * (m - 2) / 2));
+            vertices: v.saturating_add(e.saturating_mul(m - 1)).saturating_add(f.saturating_mul((m - 1) * (m - 2) / 2)),
             // Each edge into M, and 3 M(M-1)/2 edges inside each triangle.
-            let edges = e.saturating_mul(m).saturating_add(f.saturating_mul(3 * m * (m - 1) / 2));
-            (v, e, f) = (vertices, edges, f.saturating_mul(m * m));
+            edges: e.saturating_mul(m).saturating_add(f.saturating_mul(3 * m * (m - 1) / 2)),
+            faces: f.saturating_mul(m * m),
         }
-        ElementCounts { vertices: v, edges: e, faces: f }
     }
 
     /// `levels` steps of this scheme on `mesh`, with default parameters.

@@ -8,14 +8,17 @@ use multires::{ElementCounts, SurfaceScheme};
 
 use super::{CliError, CliResult};
 
+/// The face corners of an output of `counts`: the Loop family writes triangles (`3F`),
+/// Doo-Sabin `2E` on a closed mesh.
+fn corners(scheme: SurfaceScheme, counts: ElementCounts) -> u128 {
+    if scheme.accepts_polygons() { 2 * counts.edges as u128 } else { 3 * counts.faces as u128 }
+}
+
 /// Bytes an output soup of `counts` holds: positions (three `f64`), one `u32` index per
 /// corner and one offset per face. The least the output of `scheme` can take (making it
-/// takes more): the Loop family writes triangles (`3F` corners), Doo-Sabin `2E` on a
-/// closed mesh.
+/// takes more).
 fn soup_bytes(scheme: SurfaceScheme, counts: ElementCounts) -> u128 {
-    let ElementCounts { vertices, edges, faces } = counts;
-    let corners = if scheme.accepts_polygons() { 2 * edges as u128 } else { 3 * faces as u128 };
-    24 * vertices as u128 + 4 * corners + 4 * (faces as u128 + 1)
+    24 * counts.vertices as u128 + 4 * corners(scheme, counts) + 4 * (counts.faces as u128 + 1)
 }
 
 /// Refuses `levels` steps of `scheme` on `input` (of `counts`) when the output alone
@@ -35,12 +38,15 @@ fn output_fits(scheme: SurfaceScheme, counts: ElementCounts, levels: u32, availa
     let fine = scheme.closed_counts(counts, levels);
     let needed = soup_bytes(scheme, fine);
     // Beyond the `u32` index range the library refuses at once, naming its own limit.
-    let indexable = [fine.vertices, fine.edges.saturating_mul(2), fine.faces].iter().all(|&n| n <= u32::MAX as usize);
+    let largest = u128::from(u32::MAX);
+    let indexable = [fine.vertices as u128, corners(scheme, fine), fine.faces as u128].iter().all(|&n| n <= largest);
     if needed <= u128::from(available) || !indexable {
         return Ok(());
     }
-    let fitting =
-        (0..levels).rev().find(|&k| soup_bytes(scheme, scheme.closed_counts(counts, k)) <= u128::from(available));
+    // The outputs grow with the level: the last level that fits is before the first that
+    // does not (a few dozen levels at most reach the index range).
+    let fits = |k: u32| soup_bytes(scheme, scheme.closed_counts(counts, k)) <= u128::from(available);
+    let fitting = (0..levels).take_while(|&k| fits(k)).last();
     let advice = match fitting {
         Some(k) => format!("at most {k} level(s) fit"),
         None => "not even the input fits".into(),
@@ -148,6 +154,12 @@ mod tests {
         // Past the index range (and saturated counts): left to the library's limits.
         assert!(output_fits(SurfaceScheme::Loop, BUNNY, 11, available).is_ok());
         assert!(output_fits(SurfaceScheme::Loop, BUNNY, 200, 1).is_ok());
+        // A mesh that does not grow (no faces), asked for every level there is: its counts
+        // stop changing, so the answer comes at once (the steps were all counted before).
+        let points = ElementCounts { vertices: 1_000_000, edges: 0, faces: 0 };
+        assert!(output_fits(SurfaceScheme::Loop, points, u32::MAX, 100_000_000).is_ok());
+        let reason = output_fits(SurfaceScheme::Loop, points, u32::MAX, 1_000).unwrap_err();
+        assert!(reason.ends_with("(not even the input fits)"), "{reason}");
     }
 
     #[test]
