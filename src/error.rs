@@ -49,6 +49,10 @@ pub enum Error {
         /// The option and the schemes it belongs to.
         option: &'static str,
     },
+    /// A subdivision whose output alone would need more memory than the system has
+    /// available, refused before any work (see [`crate::memory`]).
+    #[error(transparent)]
+    OutputTooLarge(#[from] crate::memory::OutputTooLarge),
     /// The bytes start with neither the Loop nor the Doo-Sabin pyramid magic number.
     #[error("not a multiresolution pyramid (.mres) file: unknown magic number")]
     NotAPyramid,

@@ -108,6 +108,7 @@
 //! ```
 
 mod error;
+pub mod memory;
 mod pyramid;
 mod scheme;
 

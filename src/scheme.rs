@@ -9,7 +9,7 @@ use subdiv_doo::{BoundaryRule, DooOptions, FaceRule};
 use subdiv_loop::forward::{LoopOptions, VertexWeights};
 use subdiv_loop::mband::TernaryOptions;
 
-use crate::Error;
+use crate::{Error, memory};
 
 /// A surface subdivision scheme with its default parameters.
 ///
@@ -206,6 +206,43 @@ impl SurfaceScheme {
         }
     }
 
+    /// Bytes an output soup of `counts` holds (see [`Self::closed_counts`]): three `f64`
+    /// per vertex, one `u32` index per face corner (3 per triangle for the Loop family,
+    /// twice the edges of a closed mesh for Doo-Sabin) and one offset per face. The least
+    /// the output takes: making it takes more for a while.
+    ///
+    /// ```
+    /// use multires::prelude::*;
+    /// use multires::ElementCounts;
+    ///
+    /// let octahedron = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let fine = SurfaceScheme::Loop.subdivide(&octahedron, 1)?;
+    /// let counts = SurfaceScheme::Loop.closed_counts(ElementCounts::of(&octahedron), 1);
+    /// let arrays = 24 * fine.vertex_count() + 4 * fine.indices.len() + 4 * fine.offsets.len();
+    /// assert_eq!(SurfaceScheme::Loop.output_bytes(counts), arrays as u128);
+    /// # Ok::<(), multires::Error>(())
+    /// ```
+    pub fn output_bytes(self, counts: ElementCounts) -> u128 {
+        memory::soup_bytes(self, counts)
+    }
+
+    /// Whether the output of `levels` steps on a mesh of `input` ([`Self::output_bytes`]
+    /// of [`Self::closed_counts`]) fits in `available` bytes; if not, the error names
+    /// the most levels that would fit. An output past the `u32` index range passes: the
+    /// member crates refuse it at once, naming their limit. See [`crate::memory`] for an
+    /// example.
+    ///
+    /// # Errors
+    /// [`OutputTooLarge`](memory::OutputTooLarge) when it does not fit.
+    pub fn check_output_fits(
+        self,
+        input: ElementCounts,
+        levels: u32,
+        available: u64,
+    ) -> Result<(), memory::OutputTooLarge> {
+        memory::output_fits(self, input, levels, available)
+    }
+
     /// `levels` steps of this scheme on `mesh`, with default parameters.
     ///
     /// ```
@@ -224,9 +261,15 @@ impl SurfaceScheme {
     /// # Ok::<(), multires::Error>(())
     /// ```
     ///
+    /// An output that would not fit in the memory available is refused before any work
+    /// ([`Error::OutputTooLarge`]): outputs above 256 MiB are checked against what the
+    /// system says it has ([`memory::available_bytes`]), smaller ones are made without
+    /// asking.
+    ///
     /// # Errors
     /// The member crate's error ([`Error::Loop`] or [`Error::Doo`]): a non-triangle face
-    /// for the Loop family, non-finite positions, a mesh without faces.
+    /// for the Loop family, non-finite positions, a mesh without faces;
+    /// [`Error::OutputTooLarge`].
     pub fn subdivide(self, mesh: &HalfedgeMesh, levels: u32) -> Result<PolygonSoup, Error> {
         self.subdivide_with(mesh, levels, &Boundaries::default())
     }
@@ -258,6 +301,7 @@ impl SurfaceScheme {
         boundaries: &Boundaries,
     ) -> Result<PolygonSoup, Error> {
         boundaries.check(self)?;
+        self.check_available_memory(ElementCounts::of(mesh), levels)?;
         let soup = match self {
             SurfaceScheme::Loop | SurfaceScheme::LoopWarren => {
                 let options = self.loop_options_with(boundaries).expect("internal: Loop family");
@@ -278,6 +322,37 @@ impl SurfaceScheme {
             }
         };
         Ok(soup)
+    }
+
+    /// [`Self::check_output_fits`] against what the system has available now
+    /// ([`memory::available_bytes`]), as [`Self::subdivide`] checks before any work: an
+    /// output up to 256 MiB passes without asking the system, and where it cannot be
+    /// read nothing is refused.
+    ///
+    /// ```
+    /// use multires::prelude::*;
+    /// use multires::ElementCounts;
+    ///
+    /// let bunny = ElementCounts { vertices: 1839, edges: 5511, faces: 3674 };
+    /// // Two Loop levels (746 KB): made without asking the system.
+    /// assert!(SurfaceScheme::Loop.check_available_memory(bunny, 2).is_ok());
+    /// // Five quaternary levels: 108 GB of soup.
+    /// match SurfaceScheme::QuaternaryLoop.check_available_memory(bunny, 5) {
+    ///     Ok(()) => println!("this machine has room for it"),
+    ///     Err(refused) => println!("{refused}"), // ".. (at most 4 level(s) fit)" or fewer
+    /// }
+    /// ```
+    ///
+    /// # Errors
+    /// [`OutputTooLarge`](memory::OutputTooLarge) when the output does not fit.
+    pub fn check_available_memory(self, input: ElementCounts, levels: u32) -> Result<(), memory::OutputTooLarge> {
+        if self.output_bytes(self.closed_counts(input, levels)) <= memory::ALWAYS_FITS_BYTES {
+            return Ok(());
+        }
+        match memory::available_bytes() {
+            Some(available) => self.check_output_fits(input, levels, available),
+            None => Ok(()),
+        }
     }
 
     /// The per-face rule of a Doo-Sabin-family scheme, `None` for the Loop family.
@@ -473,6 +548,34 @@ mod tests {
             assert_eq!((far.edges, far.faces), (usize::MAX, usize::MAX), "{scheme}");
             assert_eq!(scheme.closed_face_count(5, 9, 6, u32::MAX), usize::MAX, "{scheme}");
         }
+    }
+
+    #[test]
+    fn an_output_that_cannot_fit_is_refused_before_any_work() {
+        // About the bunny's counts (1840 vertices, 3680 triangles): nine Loop levels make
+        // 27 GB, within the index range.
+        let torus = HalfedgeMesh::from_soup(&shapes::torus(46, 40, shapes::CellKind::Triangles).unwrap()).unwrap();
+        let counts = ElementCounts::of(&torus);
+        let needed = SurfaceScheme::Loop.output_bytes(SurfaceScheme::Loop.closed_counts(counts, 9));
+        assert!(needed > 26_000_000_000, "{needed}");
+        match memory::available_bytes() {
+            Some(available) if u128::from(available) < needed => {
+                let Err(Error::OutputTooLarge(refused)) = SurfaceScheme::Loop.subdivide(&torus, 9) else {
+                    panic!("refused");
+                };
+                assert_eq!(
+                    (refused.levels, refused.needed_bytes, refused.available_bytes <= available),
+                    (9, needed, true)
+                );
+                let fitting = refused.fitting_levels.expect("the input fits");
+                assert!(fitting < 9 && SurfaceScheme::Loop.check_output_fits(counts, fitting, available).is_ok());
+                assert!(refused.to_string().starts_with("loop x9 would make 482344960 vertices"), "{refused}");
+            }
+            // (A machine with room for it: not made, only predicted.)
+            _ => assert!(SurfaceScheme::Loop.check_available_memory(counts, 9).is_ok()),
+        }
+        // Small outputs are made without asking the system.
+        assert!(SurfaceScheme::Loop.check_available_memory(counts, 2).is_ok());
     }
 
     #[test]

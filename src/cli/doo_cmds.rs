@@ -73,7 +73,7 @@ pub fn subdivide(args: &SubdivideArgs) -> CliResult {
     // boundary rule an upper bound of what an open mesh makes.
     let counts =
         ElementCounts { vertices: soup.vertex_count(), edges: soup.indices.len() / 2, faces: soup.face_count() };
-    super::memory::check_output_fits(&args.mesh, args.scheme.library(), counts, args.levels)?;
+    super::check_output_fits(&args.mesh, args.scheme, counts, args.levels)?;
     let options = DooOptions::new(rule, args.levels).with_boundary(boundary_rule(args.boundary));
     let fine = subdivide_soup(&soup, &options).map_err(|e| doo_error(&args.mesh, e))?;
     drop(soup);

@@ -32,12 +32,7 @@ pub fn subdivide(args: &SubdivideArgs) -> CliResult {
     }
     let mesh = super::common::build_mesh(&args.mesh, &soup)?;
     drop(soup);
-    super::memory::check_output_fits(
-        &args.mesh,
-        args.scheme.library(),
-        multires::ElementCounts::of(&mesh),
-        args.levels,
-    )?;
+    super::check_output_fits(&args.mesh, args.scheme, multires::ElementCounts::of(&mesh), args.levels)?;
     let weights = if args.scheme == SurfaceScheme::LoopWarren { VertexWeights::Warren } else { VertexWeights::Loop };
     let options = LoopOptions { weights, keep_corners: args.keep_corners };
     let fine = match args.scheme {

@@ -15,7 +15,6 @@ mod demo;
 mod doo_cmds;
 mod ifs_cmds;
 mod loop_cmds;
-mod memory;
 mod mesh_cmds;
 pub mod render;
 mod spline_cmds;
@@ -157,6 +156,21 @@ impl SurfaceScheme {
     pub fn word(self) -> String {
         self.to_possible_value().map_or_else(|| format!("{self:?}"), |value| value.get_name().to_owned())
     }
+}
+
+/// Refuses `levels` steps of `scheme` on `input` (of `counts`) when the output alone would
+/// need more memory than the system has available now (see `multires::memory`), naming
+/// the levels that fit.
+fn check_output_fits(
+    input: &std::path::Path,
+    scheme: SurfaceScheme,
+    counts: multires::ElementCounts,
+    levels: u32,
+) -> CliResult {
+    scheme
+        .library()
+        .check_available_memory(counts, levels)
+        .map_err(|refused| CliError::Input(format!("{}: {refused}", input.display())))
 }
 
 /// Options of `subdivide`.
@@ -419,5 +433,17 @@ fn reconstruct(args: &ReconstructArgs) -> CliResult {
         doo_cmds::reconstruct(args, &bytes)
     } else {
         loop_cmds::reconstruct(args, &bytes)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_scheme_of_the_command_line_is_the_library_scheme_of_its_name() {
+        for scheme in SurfaceScheme::value_variants() {
+            assert_eq!(scheme.word(), scheme.library().name());
+        }
     }
 }

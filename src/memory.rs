@@ -1,12 +1,83 @@
-//! The check that a subdivision's output fits in memory before any work is done: a
-//! level too many would otherwise run until the system kills the process (Linux
-//! overcommits, so the allocation itself does not fail).
+//! Whether a subdivision's output fits in memory, checked before any work: a level too
+//! many would otherwise run until the system kills the process (Linux overcommits, so
+//! the allocation itself does not fail, and the pages are only claimed as the output is
+//! written).
+//!
+//! [`SurfaceScheme::subdivide`] makes this check itself; [`available_bytes`] and
+//! [`SurfaceScheme::check_output_fits`] let a caller make it for any budget (say, a
+//! share of the memory, or a fixed limit in a service).
+//!
+//! ```
+//! use multires::prelude::*;
+//! use multires::{ElementCounts, memory};
+//!
+//! let bunny = ElementCounts { vertices: 1839, edges: 5511, faces: 3674 };
+//! // Eight Loop levels make 240 779 264 triangles: 6.7 GB of soup.
+//! let needed = SurfaceScheme::Loop.output_bytes(SurfaceScheme::Loop.closed_counts(bunny, 8));
+//! assert_eq!(needed / 100_000_000, 67);
+//! let refused = SurfaceScheme::Loop.check_output_fits(bunny, 8, 4_000_000_000).unwrap_err();
+//! assert!(refused.to_string().ends_with("the system has 4.0 GB available (at most 7 level(s) fit)"));
+//! if let Some(bytes) = memory::available_bytes() {
+//!     println!("{bytes} bytes available now");
+//! }
+//! ```
 
+use std::fmt;
 use std::path::{Path, PathBuf};
 
-use multires::{ElementCounts, SurfaceScheme};
+use crate::{ElementCounts, SurfaceScheme};
 
-use super::{CliError, CliResult};
+/// Outputs up to this size are made without asking the system what it has (reading its
+/// files costs more than making a small mesh): every machine this runs on has it.
+pub(crate) const ALWAYS_FITS_BYTES: u128 = 256 << 20;
+
+/// A subdivision whose output alone needs more memory than is available (see
+/// [`SurfaceScheme::check_output_fits`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OutputTooLarge {
+    /// The scheme.
+    pub scheme: SurfaceScheme,
+    /// The levels asked for.
+    pub levels: u32,
+    /// The counts of the output ([`SurfaceScheme::closed_counts`]: exact for the Loop
+    /// family, an upper bound for Doo-Sabin on an open mesh).
+    pub counts: ElementCounts,
+    /// The bytes of the output soup ([`SurfaceScheme::output_bytes`]).
+    pub needed_bytes: u128,
+    /// The bytes available.
+    pub available_bytes: u64,
+    /// The most levels whose output fits (`None`: not even the input's size does).
+    pub fitting_levels: Option<u32>,
+}
+
+impl fmt::Display for OutputTooLarge {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        // Exact for the Loop family; for Doo-Sabin the counts of a closed mesh, which bound
+        // those of an open one under the default boundary rule.
+        let bound = if self.scheme.accepts_polygons() { "up to " } else { "" };
+        write!(
+            f,
+            "{} x{} would make {bound}{} vertices and {} faces, {} for the output alone; the system has {} available \
+             (",
+            self.scheme,
+            self.levels,
+            self.counts.vertices,
+            self.counts.faces,
+            gigabytes(self.needed_bytes),
+            gigabytes(u128::from(self.available_bytes))
+        )?;
+        match self.fitting_levels {
+            Some(k) => write!(f, "at most {k} level(s) fit)"),
+            None => f.write_str("not even the input fits)"),
+        }
+    }
+}
+
+impl std::error::Error for OutputTooLarge {}
+
+fn gigabytes(bytes: u128) -> String {
+    format!("{:.1} GB", bytes as f64 / 1e9)
+}
 
 /// The face corners of an output of `counts`: the Loop family writes triangles (`3F`),
 /// Doo-Sabin `2E` on a closed mesh.
@@ -15,29 +86,21 @@ fn corners(scheme: SurfaceScheme, counts: ElementCounts) -> u128 {
 }
 
 /// Bytes an output soup of `counts` holds: positions (three `f64`), one `u32` index per
-/// corner and one offset per face. The least the output of `scheme` can take (making it
-/// takes more).
-fn soup_bytes(scheme: SurfaceScheme, counts: ElementCounts) -> u128 {
+/// corner and one offset per face.
+pub(crate) fn soup_bytes(scheme: SurfaceScheme, counts: ElementCounts) -> u128 {
     24 * counts.vertices as u128 + 4 * corners(scheme, counts) + 4 * (counts.faces as u128 + 1)
 }
 
-/// Refuses `levels` steps of `scheme` on `input` (of `counts`) when the output alone
-/// would need more memory than the system has available now (an output past the `u32`
-/// index range is left to the library, which refuses it with its limit).
-pub fn check_output_fits(input: &Path, scheme: SurfaceScheme, counts: ElementCounts, levels: u32) -> CliResult {
-    match available_bytes() {
-        Some(available) => output_fits(scheme, counts, levels, available)
-            .map_err(|reason| CliError::Input(format!("{}: {reason}", input.display()))),
-        None => Ok(()),
-    }
-}
-
-/// [`check_output_fits`] against `available` bytes: the reason, naming the levels that
-/// would fit, if the output does not.
-fn output_fits(scheme: SurfaceScheme, counts: ElementCounts, levels: u32, available: u64) -> Result<(), String> {
-    let fine = scheme.closed_counts(counts, levels);
+/// [`SurfaceScheme::check_output_fits`].
+pub(crate) fn output_fits(
+    scheme: SurfaceScheme,
+    input: ElementCounts,
+    levels: u32,
+    available: u64,
+) -> Result<(), OutputTooLarge> {
+    let fine = scheme.closed_counts(input, levels);
     let needed = soup_bytes(scheme, fine);
-    // Beyond the `u32` index range the library refuses at once, naming its own limit.
+    // Beyond the `u32` index range the member crates refuse at once, naming their limit.
     let largest = u128::from(u32::MAX);
     let indexable = [fine.vertices as u128, corners(scheme, fine), fine.faces as u128].iter().all(|&n| n <= largest);
     if needed <= u128::from(available) || !indexable {
@@ -45,35 +108,25 @@ fn output_fits(scheme: SurfaceScheme, counts: ElementCounts, levels: u32, availa
     }
     // The outputs grow with the level: the last level that fits is before the first that
     // does not (a few dozen levels at most reach the index range).
-    let fits = |k: u32| soup_bytes(scheme, scheme.closed_counts(counts, k)) <= u128::from(available);
-    let fitting = (0..levels).take_while(|&k| fits(k)).last();
-    let advice = match fitting {
-        Some(k) => format!("at most {k} level(s) fit"),
-        None => "not even the input fits".into(),
-    };
-    // Exact for the Loop family; for Doo-Sabin the counts of a closed mesh, which bound
-    // those of an open one under the default boundary rule.
-    let bound = if scheme.accepts_polygons() { "up to " } else { "" };
-    Err(format!(
-        "{} x{levels} would make {bound}{} vertices and {} faces, {} for the output alone; the system has {} \
-         available ({advice})",
-        scheme.name(),
-        fine.vertices,
-        fine.faces,
-        gigabytes(needed),
-        gigabytes(u128::from(available))
-    ))
+    let fits = |k: u32| soup_bytes(scheme, scheme.closed_counts(input, k)) <= u128::from(available);
+    let fitting_levels = (0..levels).take_while(|&k| fits(k)).last();
+    Err(OutputTooLarge {
+        scheme,
+        levels,
+        counts: fine,
+        needed_bytes: needed,
+        available_bytes: available,
+        fitting_levels,
+    })
 }
 
-fn gigabytes(bytes: u128) -> String {
-    format!("{:.1} GB", bytes as f64 / 1e9)
-}
-
-/// Memory the system can give now: `MemAvailable` plus `SwapFree` of `/proc/meminfo`
+/// Memory the system can give now, in bytes: `MemAvailable` plus `SwapFree` of `/proc/meminfo`
 /// (Linux), or less if the process's control group has less left under its limit (a
 /// container's memory limit); `None` where that cannot be read, and then nothing is
 /// refused.
-fn available_bytes() -> Option<u64> {
+///
+/// Reads a few small files: about as long as making a mesh of some thousand faces.
+pub fn available_bytes() -> Option<u64> {
     let info = std::fs::read_to_string("/proc/meminfo").ok()?;
     let system = meminfo_available(&info)?;
     let groups = std::fs::read_to_string("/proc/self/cgroup").unwrap_or_default();
@@ -140,16 +193,20 @@ mod tests {
         let available = 16_000_000_000;
         // Loop level 8: 240.8M faces, 6.7 GB; level 9: 963.1M faces, 27.0 GB.
         assert!(output_fits(SurfaceScheme::Loop, BUNNY, 8, available).is_ok());
-        let reason = output_fits(SurfaceScheme::Loop, BUNNY, 9, available).unwrap_err();
+        let refused = output_fits(SurfaceScheme::Loop, BUNNY, 9, available).unwrap_err();
+        assert_eq!(refused.fitting_levels, Some(8));
+        assert_eq!(refused.counts, SurfaceScheme::Loop.closed_counts(BUNNY, 9));
+        assert_eq!((refused.needed_bytes, refused.available_bytes), (26_967_277_620, available));
+        let reason = refused.to_string();
         assert!(
             reason.starts_with("loop x9 would make 481558530 vertices and 963117056 faces, 27.0 GB for"),
             "{reason}"
         );
         assert!(reason.ends_with("the system has 16.0 GB available (at most 8 level(s) fit)"), "{reason}");
-        let reason = output_fits(SurfaceScheme::DooSabin, BUNNY, 9, available).unwrap_err();
+        let reason = output_fits(SurfaceScheme::DooSabin, BUNNY, 9, available).unwrap_err().to_string();
         assert!(reason.starts_with("doo-sabin x9 would make up to 722337792 vertices"), "{reason}");
         assert!(reason.ends_with("(at most 8 level(s) fit)"), "{reason}");
-        let reason = output_fits(SurfaceScheme::QuaternaryLoop, BUNNY, 3, 100_000).unwrap_err();
+        let reason = output_fits(SurfaceScheme::QuaternaryLoop, BUNNY, 3, 100_000).unwrap_err().to_string();
         assert!(reason.ends_with("(not even the input fits)"), "{reason}");
         // Past the index range (and saturated counts): left to the library's limits.
         assert!(output_fits(SurfaceScheme::Loop, BUNNY, 11, available).is_ok());
@@ -158,7 +215,7 @@ mod tests {
         // stop changing, so the answer comes at once (the steps were all counted before).
         let points = ElementCounts { vertices: 1_000_000, edges: 0, faces: 0 };
         assert!(output_fits(SurfaceScheme::Loop, points, u32::MAX, 100_000_000).is_ok());
-        let reason = output_fits(SurfaceScheme::Loop, points, u32::MAX, 1_000).unwrap_err();
+        let reason = output_fits(SurfaceScheme::Loop, points, u32::MAX, 1_000).unwrap_err().to_string();
         assert!(reason.ends_with("(not even the input fits)"), "{reason}");
     }
 
@@ -173,14 +230,6 @@ mod tests {
         // writes its 12 corners, not twice its edges.
         let grid = ElementCounts { vertices: 6, edges: 9, faces: 4 };
         assert_eq!(soup_bytes(SurfaceScheme::Loop, grid), 6 * 24 + 12 * 4 + 5 * 4);
-    }
-
-    #[test]
-    fn every_scheme_of_the_command_line_is_the_library_scheme_of_its_name() {
-        use clap::ValueEnum;
-        for scheme in super::super::SurfaceScheme::value_variants() {
-            assert_eq!(scheme.word(), scheme.library().name());
-        }
     }
 
     #[test]
