@@ -1,7 +1,9 @@
 //! PLY (Polygon File Format) reader: ascii, binary little- and big-endian.
 
 use super::report::DroppedLog;
-use super::text::{Lines, cut_at_line_ends, invalid_number, is_space, parse_f64, parse_i64, show_token, tokens};
+use super::text::{
+    Lines, Tokens, cut_at_line_ends, invalid_number, is_space, parse_f64, parse_i64, show_token, tokens,
+};
 use super::{Format, IoError, Location, PlyEncoding, ReadReport};
 use crate::ids::MAX_ELEMENTS;
 use crate::soup::PolygonSoup;
@@ -243,16 +245,26 @@ fn assign_roles(header: &mut Header, dropped: &mut DroppedLog) -> Result<(u64, u
     Ok((vertex_count, face_count))
 }
 
-/// A source of PLY values (ascii tokens or binary numbers).
-trait Body {
+/// A source of PLY values: ascii tokens or binary numbers of the whole data (a [`Body`]),
+/// or the tokens of one line (the pieces of [`read_ascii_in_pieces`]).
+trait Values {
+    /// What a failed read gives: an [`IoError`] that says where (a [`Body`]), or nothing
+    /// (a line, whose file is then read in one pass, which names the problem).
+    type Error;
     /// Reads a value as a float (coordinates).
-    fn float(&mut self, ty: Scalar) -> Result<f64, IoError>;
+    fn float(&mut self, ty: Scalar) -> Result<f64, Self::Error>;
     /// Reads an integer value (list counts, indices).
-    fn integer(&mut self, ty: Scalar) -> Result<i64, IoError>;
+    fn integer(&mut self, ty: Scalar) -> Result<i64, Self::Error>;
     /// Skips one value.
-    fn skip(&mut self, ty: Scalar) -> Result<(), IoError>;
+    fn skip(&mut self, ty: Scalar) -> Result<(), Self::Error>;
     /// Skips `n` values.
-    fn skip_many(&mut self, ty: Scalar, n: u64) -> Result<(), IoError>;
+    fn skip_many(&mut self, ty: Scalar, n: u64) -> Result<(), Self::Error>;
+    /// The error of a value read but not accepted: `error` at the value read last.
+    fn invalid(&self, error: impl FnOnce(Location) -> IoError) -> Self::Error;
+}
+
+/// The values of the whole data, read in one pass.
+trait Body: Values<Error = IoError> {
     /// Where the value read last starts.
     fn location(&self) -> Location;
     /// Location of the end of the data.
@@ -292,7 +304,9 @@ impl<'a> AsciiBody<'a> {
     }
 }
 
-impl Body for AsciiBody<'_> {
+impl Values for AsciiBody<'_> {
+    type Error = IoError;
+
     #[inline]
     fn float(&mut self, ty: Scalar) -> Result<f64, IoError> {
         let token = self.token()?;
@@ -319,6 +333,12 @@ impl Body for AsciiBody<'_> {
         Ok(())
     }
 
+    fn invalid(&self, error: impl FnOnce(Location) -> IoError) -> IoError {
+        error(self.location())
+    }
+}
+
+impl Body for AsciiBody<'_> {
     fn location(&self) -> Location {
         Location::Line(self.token_line)
     }
@@ -367,7 +387,9 @@ impl<'a> BinaryBody<'a> {
     }
 }
 
-impl Body for BinaryBody<'_> {
+impl Values for BinaryBody<'_> {
+    type Error = IoError;
+
     #[inline]
     fn float(&mut self, ty: Scalar) -> Result<f64, IoError> {
         Ok(match ty {
@@ -411,6 +433,12 @@ impl Body for BinaryBody<'_> {
         }
     }
 
+    fn invalid(&self, error: impl FnOnce(Location) -> IoError) -> IoError {
+        error(self.location())
+    }
+}
+
+impl Body for BinaryBody<'_> {
     fn location(&self) -> Location {
         Location::Byte(self.value_start)
     }
@@ -456,57 +484,71 @@ fn read_body<B: Body>(body: &mut B, header: &Header, vertex_count: u64, soup: &m
             other => other,
         };
         for i in 0..element.count {
-            let mut position = [0.0; 3];
-            for property in &element.properties {
-                let result = match (property.role, property.kind) {
-                    (Role::Coordinate(axis), Kind::Scalar(ty)) => body.float(ty).map(|x| position[axis] = x),
-                    (Role::FaceIndices, Kind::List { count, item }) => read_face(body, count, item, vertex_count, soup),
-                    (_, Kind::Scalar(ty)) => body.skip(ty),
-                    (_, Kind::List { count, item }) => body
-                        .integer(count)
-                        .and_then(|n| {
-                            u64::try_from(n).map_err(|_| IoError::InvalidNumber {
-                                at: body.location(),
-                                token: n.to_string(),
-                                expected: "a list length",
-                            })
-                        })
-                        .and_then(|n| body.skip_many(item, n)),
-                };
-                result.map_err(|e| in_element(e, i))?;
-            }
-            if is_vertex {
-                if let Some(&value) = position.iter().find(|x| !x.is_finite()) {
-                    return Err(IoError::NonFiniteCoordinate { at: body.location(), vertex: i as usize, value });
-                }
-                soup.positions.push(position.into());
-            }
+            read_element(body, element, is_vertex, i, vertex_count, soup).map_err(|e| in_element(e, i))?;
         }
     }
     body.finish(last_element)
 }
 
+/// Reads element `i` of `element` (a vertex if `is_vertex`) into `soup`: its position,
+/// or its face; every other value is read and dropped.
 #[inline]
-fn read_face<B: Body>(
-    body: &mut B,
+fn read_element<V: Values>(
+    values: &mut V,
+    element: &Element,
+    is_vertex: bool,
+    i: u64,
+    vertex_count: u64,
+    soup: &mut PolygonSoup,
+) -> Result<(), V::Error> {
+    let mut position = [0.0; 3];
+    for property in &element.properties {
+        match (property.role, property.kind) {
+            (Role::Coordinate(axis), Kind::Scalar(ty)) => position[axis] = values.float(ty)?,
+            (Role::FaceIndices, Kind::List { count, item }) => read_face(values, count, item, vertex_count, soup)?,
+            (_, Kind::Scalar(ty)) => values.skip(ty)?,
+            (_, Kind::List { count, item }) => {
+                let n = list_length(values, count)?;
+                values.skip_many(item, n)?;
+            }
+        }
+    }
+    if is_vertex {
+        if let Some(&value) = position.iter().find(|x| !x.is_finite()) {
+            return Err(values.invalid(|at| IoError::NonFiniteCoordinate { at, vertex: i as usize, value }));
+        }
+        soup.positions.push(position.into());
+    }
+    Ok(())
+}
+
+/// The length of a list, whose count has type `count`.
+#[inline]
+fn list_length<V: Values>(values: &mut V, count: Scalar) -> Result<u64, V::Error> {
+    let n = values.integer(count)?;
+    u64::try_from(n).map_err(|_| {
+        values.invalid(|at| IoError::InvalidNumber { at, token: n.to_string(), expected: "a list length" })
+    })
+}
+
+#[inline]
+fn read_face<V: Values>(
+    values: &mut V,
     count: Scalar,
     item: Scalar,
     vertex_count: u64,
     soup: &mut PolygonSoup,
-) -> Result<(), IoError> {
-    let n = body.integer(count)?;
-    if n < 0 {
-        return Err(IoError::InvalidNumber { at: body.location(), token: n.to_string(), expected: "a list length" });
-    }
-    for _ in 0..n {
-        let index = body.integer(item)?;
+) -> Result<(), V::Error> {
+    for _ in 0..list_length(values, count)? {
+        let index = values.integer(item)?;
         if index < 0 || index as u64 >= vertex_count {
-            return Err(IoError::IndexOutOfRange { at: body.location(), index, vertex_count: vertex_count as usize });
+            let vertex_count = vertex_count as usize;
+            return Err(values.invalid(|at| IoError::IndexOutOfRange { at, index, vertex_count }));
         }
         soup.indices.push(index as u32);
     }
     if soup.indices.len() > u32::MAX as usize {
-        return Err(IoError::TooLarge { at: body.location(), what: "face corners", max: u32::MAX as usize });
+        return Err(values.invalid(|at| IoError::TooLarge { at, what: "face corners", max: u32::MAX as usize }));
     }
     soup.offsets.push(soup.indices.len() as u32);
     Ok(())
@@ -670,62 +712,50 @@ fn read_lines_of_one_element(
     let mut lines = Lines::new(piece);
     for &(element, first) in spans.iter().filter(|(element, first)| first + element.count > first_line) {
         let is_vertex = element.name == b"vertex";
-        for _ in first_line.max(first)..first + element.count {
+        for i in first_line.max(first)..first + element.count {
             let Some((_, line)) = lines.next() else { return Some(soup) };
-            read_element_line(line, element, is_vertex, vertex_count, &mut soup)?;
+            // The line holds exactly the element.
+            let mut values = LineValues { tokens: tokens(line) };
+            read_element(&mut values, element, is_vertex, i - first, vertex_count, &mut soup).ok()?;
+            values.tokens.next().is_none().then_some(())?;
         }
     }
     // More lines than elements (not met when the line count matched).
     lines.next().is_none().then_some(soup)
 }
 
-/// Reads one `element` from `line`, which must hold exactly it: `None` if a value is
-/// missing, malformed, out of range or non-finite, or if the line holds more.
-#[inline]
-fn read_element_line(
-    line: &[u8],
-    element: &Element,
-    is_vertex: bool,
-    vertex_count: u64,
-    soup: &mut PolygonSoup,
-) -> Option<()> {
-    let mut words = tokens(line);
-    let list_length = |token: &[u8]| parse_i64(token).and_then(|n| u64::try_from(n).ok());
-    let mut position = [0.0; 3];
-    for property in &element.properties {
-        match (property.role, property.kind) {
-            (Role::Coordinate(axis), Kind::Scalar(ty)) => position[axis] = ascii_value(words.next()?, ty)?,
-            (Role::FaceIndices, Kind::List { .. }) => {
-                for _ in 0..list_length(words.next()?)? {
-                    let index = parse_i64(words.next()?)?;
-                    if index < 0 || index as u64 >= vertex_count {
-                        return None;
-                    }
-                    soup.indices.push(index as u32);
-                }
-                if soup.indices.len() > u32::MAX as usize {
-                    return None;
-                }
-                soup.offsets.push(soup.indices.len() as u32);
-            }
-            (_, Kind::Scalar(ty)) => drop(ascii_value(words.next()?, ty)?),
-            (_, Kind::List { item, .. }) => {
-                for _ in 0..list_length(words.next()?)? {
-                    ascii_value(words.next()?, item)?;
-                }
-            }
+/// The values of one line of ascii data: a value missing or malformed is an error
+/// without a location (the one pass then names it).
+struct LineValues<'a> {
+    tokens: Tokens<'a>,
+}
+
+impl Values for LineValues<'_> {
+    type Error = ();
+
+    #[inline]
+    fn float(&mut self, ty: Scalar) -> Result<f64, ()> {
+        self.tokens.next().and_then(|token| ascii_value(token, ty)).ok_or(())
+    }
+
+    #[inline]
+    fn integer(&mut self, _ty: Scalar) -> Result<i64, ()> {
+        self.tokens.next().and_then(parse_i64).ok_or(())
+    }
+
+    #[inline]
+    fn skip(&mut self, ty: Scalar) -> Result<(), ()> {
+        self.float(ty).map(drop)
+    }
+
+    fn skip_many(&mut self, ty: Scalar, n: u64) -> Result<(), ()> {
+        for _ in 0..n {
+            self.skip(ty)?;
         }
+        Ok(())
     }
-    if words.next().is_some() {
-        return None;
-    }
-    if is_vertex {
-        if !position.iter().all(|x| x.is_finite()) {
-            return None;
-        }
-        soup.positions.push(position.into());
-    }
-    Some(())
+
+    fn invalid(&self, _error: impl FnOnce(Location) -> IoError) {}
 }
 
 #[cfg(test)]
