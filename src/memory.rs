@@ -16,7 +16,7 @@
 //! let needed = SurfaceScheme::Loop.output_bytes(SurfaceScheme::Loop.closed_counts(bunny, 8));
 //! assert_eq!(needed / 100_000_000, 67);
 //! let refused = SurfaceScheme::Loop.check_output_fits(bunny, 8, 4_000_000_000).unwrap_err();
-//! assert!(refused.to_string().ends_with("the system has 4.0 GB available (at most 7 level(s) fit)"));
+//! assert!(refused.to_string().ends_with("6.7 GB for the output alone, 4.0 GB available (at most 7 level(s) fit)"));
 //! if let Some(bytes) = memory::available_bytes() {
 //!     println!("{bytes} bytes available now");
 //! }
@@ -44,7 +44,8 @@ pub struct OutputTooLarge {
     pub counts: ElementCounts,
     /// The bytes of the output soup ([`SurfaceScheme::output_bytes`]).
     pub needed_bytes: u128,
-    /// The bytes available.
+    /// The bytes available (the system's, for [`SurfaceScheme::subdivide`], or the
+    /// caller's budget).
     pub available_bytes: u64,
     /// The most levels whose output fits (`None`: not even the input's size does).
     pub fitting_levels: Option<u32>,
@@ -57,8 +58,7 @@ impl fmt::Display for OutputTooLarge {
         let bound = if self.scheme.accepts_polygons() { "up to " } else { "" };
         write!(
             f,
-            "{} x{} would make {bound}{} vertices and {} faces, {} for the output alone; the system has {} available \
-             (",
+            "{} x{} would make {bound}{} vertices and {} faces, {} for the output alone, {} available (",
             self.scheme,
             self.levels,
             self.counts.vertices,
@@ -202,7 +202,10 @@ mod tests {
             reason.starts_with("loop x9 would make 481558530 vertices and 963117056 faces, 27.0 GB for"),
             "{reason}"
         );
-        assert!(reason.ends_with("the system has 16.0 GB available (at most 8 level(s) fit)"), "{reason}");
+        assert!(
+            reason.ends_with("27.0 GB for the output alone, 16.0 GB available (at most 8 level(s) fit)"),
+            "{reason}"
+        );
         let reason = output_fits(SurfaceScheme::DooSabin, BUNNY, 9, available).unwrap_err().to_string();
         assert!(reason.starts_with("doo-sabin x9 would make up to 722337792 vertices"), "{reason}");
         assert!(reason.ends_with("(at most 8 level(s) fit)"), "{reason}");
