@@ -5,8 +5,10 @@
 //! so a comparison over schemes is a loop), [`Boundaries`] (the boundary rules of open
 //! meshes: Loop's fixed corners, Doo-Sabin's Chaikin ring), [`Pyramid`], [`decompose`],
 //! [`decompose_with`] and [`decompose_soup`] (multiresolution by reverse Loop or reverse
-//! Doo-Sabin, one file format), and one [`Error`]. It defines no algorithm of its own. Depend on a member crate alone when you
-//! need only one job; none of them pulls in the command-line dependencies.
+//! Doo-Sabin, one file format), [`memory`] (whether an output fits before it is made:
+//! [`SurfaceScheme::subdivide`] refuses one that would not) and one [`Error`]. It
+//! defines no algorithm of its own. Depend on a member crate alone when you need only
+//! one job; none of them pulls in the command-line dependencies.
 //!
 //! | module | crate | what |
 //! |---|---|---|
