@@ -107,6 +107,17 @@ pub enum MeshError {
         /// The limit.
         max: usize,
     },
+    /// An output that would need more memory than the system has available, refused
+    /// before any work (see [`crate::memory::check_available`]).
+    #[error("the {what} would take {needed_bytes} bytes; {available_bytes} bytes are available")]
+    OutOfMemory {
+        /// What would have been made.
+        what: &'static str,
+        /// The bytes it needs (at least).
+        needed_bytes: u128,
+        /// The bytes available.
+        available_bytes: u64,
+    },
 }
 
 /// An internal invariant that [`HalfedgeMesh::validate`](crate::HalfedgeMesh::validate) found broken.

@@ -11,6 +11,10 @@
 //! how the kernel backs the pages, never what they hold, so calling them on any range of
 //! memory is sound; errors (an older kernel, THP turned off) are ignored.
 //!
+//! And whether an output fits before it is made: [`available_bytes`] (what the system
+//! and the process's control group have left) and [`check_available`], which the
+//! subdivision crates call with the size of their output before any work.
+//!
 //! ```
 //! use mesh_topo::memory::filled_vec;
 //!
@@ -21,6 +25,10 @@
 //! ```
 
 #![allow(unsafe_code)]
+
+use std::path::{Path, PathBuf};
+
+use crate::MeshError;
 
 /// A vector of `len` copies of `value`; from one huge page of bytes on, its memory is
 /// advised to be backed by transparent huge pages ([`advise_huge_pages`]) before it is
@@ -122,6 +130,111 @@ pub fn huge_page_size() -> usize {
     }
 }
 
+/// Outputs up to this many bytes are made without asking the system what it has
+/// ([`check_available`]): reading its files costs more than making a small mesh, and
+/// every machine this runs on has that much.
+pub const ALWAYS_FITS_BYTES: u128 = 256 << 20;
+
+/// Fails with [`MeshError::OutOfMemory`] when an output of `needed_bytes` (`what`) would
+/// not fit in the memory the system has available now ([`available_bytes`]): the check
+/// the subdivision functions make before any work, as a level too many would otherwise
+/// run until the system kills the process (Linux overcommits, so no allocation fails).
+/// Up to [`ALWAYS_FITS_BYTES`] nothing is read; where the memory cannot be read, nothing
+/// is refused.
+///
+/// ```
+/// use mesh_topo::MeshError;
+/// use mesh_topo::memory::check_available;
+///
+/// assert!(check_available("mesh", 1 << 20).is_ok());
+/// // A zettabyte: no machine has it.
+/// match check_available("mesh", 1 << 70) {
+///     Err(MeshError::OutOfMemory { needed_bytes, .. }) => assert_eq!(needed_bytes, 1 << 70),
+///     other => assert!(other.is_ok() && mesh_topo::memory::available_bytes().is_none()),
+/// }
+/// ```
+///
+/// # Errors
+/// [`MeshError::OutOfMemory`] with the bytes needed and available.
+pub fn check_available(what: &'static str, needed_bytes: u128) -> Result<(), MeshError> {
+    if needed_bytes <= ALWAYS_FITS_BYTES {
+        return Ok(());
+    }
+    match available_bytes() {
+        Some(available_bytes) if needed_bytes > u128::from(available_bytes) => {
+            Err(MeshError::OutOfMemory { what, needed_bytes, available_bytes })
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Memory the system can give now, in bytes: `MemAvailable` plus `SwapFree` of `/proc/meminfo`
+/// (Linux), or less if the process's control group has less left under its limit (a
+/// container's memory limit); `None` where that cannot be read, and then nothing is
+/// refused.
+///
+/// Reads a few small files: about as long as making a mesh of some thousand faces.
+///
+/// ```
+/// if let Some(bytes) = mesh_topo::memory::available_bytes() {
+///     println!("{bytes} bytes available now");
+/// }
+/// ```
+pub fn available_bytes() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let system = meminfo_available(&info)?;
+    let groups = std::fs::read_to_string("/proc/self/cgroup").unwrap_or_default();
+    let headroom = control_group_files(&groups)
+        .into_iter()
+        .filter_map(|(limit, usage)| {
+            let read = |path: &Path| std::fs::read_to_string(path).ok()?.trim().parse::<u64>().ok();
+            // An unlimited group says `max` (v2) and fails the parse.
+            Some(read(&limit)?.saturating_sub(read(&usage).unwrap_or(0)))
+        })
+        .min();
+    Some(headroom.map_or(system, |headroom| headroom.min(system)))
+}
+
+/// `MemAvailable + SwapFree` in bytes, from the text of `/proc/meminfo`.
+fn meminfo_available(info: &str) -> Option<u64> {
+    let kilobytes = |key: &str| {
+        info.lines()
+            .find_map(|line| line.strip_prefix(key)?.strip_prefix(':'))
+            .and_then(|rest| rest.trim().strip_suffix("kB")?.trim().parse::<u64>().ok())
+    };
+    let available = kilobytes("MemAvailable")?;
+    Some(available.saturating_add(kilobytes("SwapFree").unwrap_or(0)).saturating_mul(1024))
+}
+
+/// The (limit, usage) files of the memory controller for the group that
+/// `/proc/self/cgroup` (`groups`) names and for each of its ancestors (a limit may be set
+/// on any of them): cgroup v2 (`0::/path`, `memory.max` and `memory.current`) and v1
+/// (`n:memory:/path`, `memory.limit_in_bytes` and `memory.usage_in_bytes`).
+fn control_group_files(groups: &str) -> Vec<(PathBuf, PathBuf)> {
+    let mut files = Vec::new();
+    for line in groups.lines() {
+        let mut fields = line.splitn(3, ':');
+        let (Some(_), Some(controllers), Some(path)) = (fields.next(), fields.next(), fields.next()) else {
+            continue;
+        };
+        let (root, limit, usage) = if controllers.is_empty() {
+            ("/sys/fs/cgroup", "memory.max", "memory.current")
+        } else if controllers.split(',').any(|c| c == "memory") {
+            ("/sys/fs/cgroup/memory", "memory.limit_in_bytes", "memory.usage_in_bytes")
+        } else {
+            continue;
+        };
+        let mut dir = Path::new(root).join(path.trim_start_matches('/'));
+        loop {
+            files.push((dir.join(limit), dir.join(usage)));
+            if dir == Path::new(root) || !dir.pop() {
+                break;
+            }
+        }
+    }
+    files
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -150,5 +263,37 @@ mod tests {
             assert!(pushed.iter().copied().eq(0..len as u64));
         }
         assert!(base_page_size().is_power_of_two() && huge_page_size() >= base_page_size());
+    }
+
+    #[test]
+    fn the_memory_files_are_read_as_linux_writes_them() {
+        let info = "MemTotal:       24000000 kB\nMemFree:        20000000 kB\nMemAvailable:   21000000 kB\n\
+                    SwapTotal:       1000000 kB\nSwapFree:         500000 kB\n";
+        assert_eq!(meminfo_available(info), Some((21_000_000 + 500_000) * 1024));
+        assert_eq!(meminfo_available("MemAvailable:   1000 kB\n"), Some(1_024_000));
+        assert_eq!(meminfo_available("MemFree: 1000 kB\n"), None);
+        // v2 (the unified line) and v1 (the memory controller among others), each group
+        // with its ancestors up to the mount; other controllers are passed over.
+        let groups = "0::/user.slice/job\n4:cpu,memory:/box\n3:cpuset:/\n";
+        let files: Vec<(String, String)> = control_group_files(groups)
+            .into_iter()
+            .map(|(limit, usage)| (limit.display().to_string(), usage.display().to_string()))
+            .collect();
+        let expected = [
+            ("/sys/fs/cgroup/user.slice/job/memory.max", "/sys/fs/cgroup/user.slice/job/memory.current"),
+            ("/sys/fs/cgroup/user.slice/memory.max", "/sys/fs/cgroup/user.slice/memory.current"),
+            ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+            ("/sys/fs/cgroup/memory/box/memory.limit_in_bytes", "/sys/fs/cgroup/memory/box/memory.usage_in_bytes"),
+            ("/sys/fs/cgroup/memory/memory.limit_in_bytes", "/sys/fs/cgroup/memory/memory.usage_in_bytes"),
+        ];
+        assert_eq!(files, expected.map(|(l, u)| (l.to_owned(), u.to_owned())));
+        assert!(control_group_files("garbage\n1:cpu:/x\n").is_empty());
+    }
+
+    #[test]
+    fn this_system_reports_its_memory() {
+        if cfg!(target_os = "linux") {
+            assert!(available_bytes().is_some_and(|bytes| bytes > 0));
+        }
     }
 }

@@ -437,8 +437,11 @@ fn check_no_overflow(fine: DooMesh, largest: f64) -> Result<DooMesh, DooError> {
 /// `(0, 1)`; [`DooError::TooLarge`] if a level would not fit `u32` indices, found from
 /// the input's counts before any level is built (so that too many levels fail at once,
 /// not after filling the memory, with the error the build of that level would give, under
-/// either boundary rule); [`DooError::InvalidParameter`] for more than [`MAX_LEVELS`]
-/// levels. Non-manifold input and faces with fewer than three corners cannot be a
+/// either boundary rule); [`DooError::Mesh`] with
+/// [`MeshError::OutOfMemory`](mesh_topo::MeshError::OutOfMemory) if the output would not
+/// fit in the memory the system has available (from the same counts, before any work:
+/// [`check_available`](mesh_topo::memory::check_available));
+/// [`DooError::InvalidParameter`] for more than [`MAX_LEVELS`] levels. Non-manifold input and faces with fewer than three corners cannot be a
 /// [`HalfedgeMesh`]; [`subdivide_soup`] reports them.
 pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, DooError> {
     options.rule.validate()?;
@@ -455,7 +458,46 @@ pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, D
     }
     let corners = CornerMesh::from_halfedge(mesh);
     check_level_sizes(&corners, options.levels, options.boundary)?;
+    check_output_memory(&corners, options.levels, options.boundary)?;
     check_no_overflow(subdivide_corner_mesh(corners, mesh.positions().to_vec(), options)?, largest)
+}
+
+/// Fails with [`MeshError::OutOfMemory`](mesh_topo::MeshError::OutOfMemory) before any
+/// work when the output of `levels` steps (a position per fine vertex, an index per
+/// corner, an offset per face) would not fit in the memory the system has available
+/// ([`mesh_topo::memory::check_available`]). A bound from the corners alone first (a
+/// step at most quadruples them, eight times under the Chaikin rule; no level has more
+/// vertices or faces than corners), so that a small output reads neither the mesh nor
+/// the system; past it the exact counts ([`LevelCounts`]). `levels` is at most
+/// [`MAX_LEVELS`] ([`check_level_sizes`] comes first).
+fn check_output_memory(mesh: &CornerMesh, levels: u32, boundary: BoundaryRule) -> Result<(), DooError> {
+    let growth: u128 = match boundary {
+        BoundaryRule::Shrink => 4,
+        BoundaryRule::Chaikin => 8,
+    };
+    let corners_bound = (mesh.corner_count() as u128).saturating_mul(growth.saturating_pow(levels));
+    if corners_bound.saturating_mul(32).saturating_add(4) <= mesh_topo::memory::ALWAYS_FITS_BYTES {
+        return Ok(());
+    }
+    Ok(mesh_topo::memory::check_available("Doo-Sabin output", output_bytes(mesh, levels, boundary))?)
+}
+
+/// The bytes of the arrays of the output of `levels` steps on `mesh`: a position per fine
+/// vertex, an index per corner and an offset per face and one more.
+fn output_bytes(mesh: &CornerMesh, levels: u32, boundary: BoundaryRule) -> u128 {
+    let mut counts = LevelCounts::of(mesh);
+    let mut vertices = mesh.vertex_count;
+    for _ in 0..levels {
+        // Every coarse corner becomes a fine vertex; the Chaikin rule adds two points per
+        // boundary edge.
+        (vertices, counts) = match boundary {
+            BoundaryRule::Shrink => (counts.corners, counts.next()),
+            BoundaryRule::Chaikin => {
+                (counts.corners.saturating_add(counts.boundary_edges.saturating_mul(2)), counts.next_chaikin())
+            }
+        };
+    }
+    24 * vertices as u128 + 4 * counts.corners as u128 + 4 * (counts.faces as u128 + 1)
 }
 
 /// Before any work, a level count whose output cannot be indexed fails at once, not
@@ -802,8 +844,35 @@ mod tests {
                 let counted = LevelCounts::of(&CornerMesh::from_halfedge(&fine.to_mesh().unwrap()));
                 assert_eq!(predicted, counted, "{boundary:?} level {level} of {soup:?}");
                 assert_eq!((predicted.faces, predicted.corners), (fine.face_count(), fine.topology.indices.len()));
+                // The bytes the memory check counts are those of the output's arrays.
+                let arrays =
+                    24 * fine.positions.len() + 4 * fine.topology.indices.len() + 4 * fine.topology.offsets.len();
+                assert_eq!(output_bytes(&CornerMesh::from_halfedge(&mesh), level, boundary), arrays as u128);
             }
         }
+    }
+
+    #[test]
+    fn an_output_that_cannot_fit_in_memory_is_refused_before_any_work() {
+        // 7500 edges: nine levels make 3.9G corners (within the index range) and 43 GB.
+        let torus = HalfedgeMesh::from_soup(&shapes::torus(50, 50, CellKind::Triangles).unwrap()).unwrap();
+        let needed = output_bytes(&CornerMesh::from_halfedge(&torus), 9, BoundaryRule::Shrink);
+        assert!(needed > 40_000_000_000, "{needed}");
+        // Made only where it is sure to be refused (the memory is read again by
+        // `subdivide`); elsewhere the bound alone is checked.
+        match mesh_topo::memory::available_bytes() {
+            Some(available) if u128::from(available) < needed / 3 * 2 => {
+                let error = subdivide(&torus, &DooOptions::new(FaceRule::DooSabin, 9)).unwrap_err();
+                let DooError::Mesh(mesh_topo::MeshError::OutOfMemory { what, needed_bytes, .. }) = error else {
+                    panic!("refused for its memory: {error}");
+                };
+                assert_eq!((what, needed_bytes), ("Doo-Sabin output", needed));
+            }
+            _ => eprintln!("this machine may have room for {needed} bytes: the refusal is not tried"),
+        }
+        // A small output is made without reading the mesh's counts or the system.
+        let cube = HalfedgeMesh::from_soup(&shapes::cube()).unwrap();
+        assert!(check_output_memory(&CornerMesh::from_halfedge(&cube), 3, BoundaryRule::Chaikin).is_ok());
     }
 
     #[test]

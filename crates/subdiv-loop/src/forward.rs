@@ -296,14 +296,18 @@ impl LoopMesh {
 /// # Errors
 /// [`LoopError::NotTriangle`] naming the first face that is not a triangle;
 /// [`LoopError::Mesh`] with [`MeshError::NonFiniteCoordinate`] if a position is NaN or
-/// infinite, or [`MeshError::TooLarge`] if the output would not fit `u32` indices;
+/// infinite, [`MeshError::TooLarge`] if the output would not fit `u32` indices, or
+/// [`MeshError::OutOfMemory`] if it would not fit in the memory the system has available
+/// (both found from the counts before any work:
+/// [`check_available`](mesh_topo::memory::check_available));
 /// [`LoopError::InvalidParameter`] for more than [`MAX_LEVELS`] levels;
 /// [`LoopError::Overflow`] for finite coordinates so large (beyond `f64::MAX / 2^32`)
 /// that the result is not.
 pub fn subdivide(mesh: &HalfedgeMesh, levels: u32, options: &LoopOptions) -> Result<LoopMesh, LoopError> {
     let largest = check_finite_largest(mesh.positions())?;
     let topology = Topology::from_mesh(mesh)?;
-    check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels)?;
+    let (vertices, faces) = check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels)?;
+    check_output_memory(vertices, faces, size_of::<DVec3>())?;
     let (positions, topology) = refine(topology, mesh.positions(), levels, &Rules::new(options));
     check_no_overflow(&positions, largest)?;
     Ok(LoopMesh { positions, triangles: topology.triangles })
@@ -372,7 +376,8 @@ pub fn refine_attribute<T: Attribute>(
     }
     attribute::check_finite_values(values)?;
     let topology = Topology::from_mesh(mesh)?;
-    check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels)?;
+    let (vertices, faces) = check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels)?;
+    check_output_memory(vertices, faces, size_of::<T>())?;
     attribute::checked_refined(refine(topology, values, levels, &Rules::new(options)).0)
 }
 
@@ -523,8 +528,8 @@ pub(crate) fn check_level_limit(levels: u32) -> Result<(), LoopError> {
 /// are refined further, vertex indices of the last (from the counts alone, before any
 /// work: `V + E`, `2E + 3F` and `4F` per step); then that `levels` is at most
 /// [`MAX_LEVELS`] (so that a mesh with a face, which fails the sizes first, is told its
-/// size).
-pub(crate) fn check_sizes(vertices: usize, edges: usize, faces: usize, levels: u32) -> Result<(), LoopError> {
+/// size). Returns the vertices and faces of the last level.
+pub(crate) fn check_sizes(vertices: usize, edges: usize, faces: usize, levels: u32) -> Result<(u64, u64), LoopError> {
     let (mut v, mut e, mut f) = (vertices as u64, edges as u64, faces as u64);
     let too_large = |what: &'static str, count: u64, max: u64| {
         Err(MeshError::TooLarge { what, count: count.min(usize::MAX as u64) as usize, max: max as usize }.into())
@@ -541,7 +546,15 @@ pub(crate) fn check_sizes(vertices: usize, edges: usize, faces: usize, levels: u
     if v >= u32::MAX as u64 {
         return too_large("vertices", v, u32::MAX as u64 - 1);
     }
-    check_level_limit(levels)
+    check_level_limit(levels).map(|()| (v, f))
+}
+
+/// Fails with [`MeshError::OutOfMemory`] (before any work) when an output of `vertices`
+/// values of `value_bytes` each and `faces` triangles would not fit in the memory the
+/// system has available ([`mesh_topo::memory::check_available`]).
+pub(crate) fn check_output_memory(vertices: u64, faces: u64, value_bytes: usize) -> Result<(), LoopError> {
+    let needed = u128::from(vertices) * value_bytes as u128 + u128::from(faces) * 12;
+    Ok(mesh_topo::memory::check_available("Loop output", needed)?)
 }
 
 #[cfg(test)]

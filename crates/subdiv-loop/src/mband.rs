@@ -434,7 +434,8 @@ fn edge_weights_closed(n: usize, lambda: f64) -> Vec<f64> {
 /// [`MAX_LEVELS`] levels; the mesh errors of
 /// [`subdivide`] (non-triangles, pillows, non-finite positions, [`LoopError::Overflow`]); [`mesh_topo::MeshError::TooLarge`]
 /// if a level would have more vertices or face corners than `u32` handles address,
-/// found from the counts before any level is built.
+/// and [`mesh_topo::MeshError::OutOfMemory`] if the output would not fit in the memory
+/// the system has available, both found from the counts before any level is built.
 pub fn ternary_subdivide(mesh: &HalfedgeMesh, levels: u32, options: &TernaryOptions) -> Result<LoopMesh, LoopError> {
     let largest = check_finite_largest(mesh.positions())?;
     let (positions, triangles) = ternary_levels(mesh, mesh.positions(), levels, options)?;
@@ -545,7 +546,8 @@ pub(crate) fn ternary_levels<T: Attribute>(
 ) -> Result<(Vec<T>, Vec<[u32; 3]>), LoopError> {
     options.validate()?;
     Topology::from_mesh(mesh)?; // triangles only, no pillows
-    check_ternary_sizes(mesh, levels)?;
+    let (vertices, faces) = check_ternary_sizes(mesh, levels)?;
+    crate::forward::check_output_memory(vertices as u64, faces as u64, size_of::<T>())?;
     let mut triangles: Vec<[u32; 3]> = mesh.faces().map(|f| face_corners(mesh, f)).collect();
     if levels == 0 {
         return Ok((values.to_vec(), triangles));
@@ -568,7 +570,7 @@ pub(crate) fn ternary_levels<T: Attribute>(
 /// counts before any work, so that too many levels fail at once, not after filling the
 /// memory. A step makes `V + 2E + F` vertices (two per edge, one per face), `3E + 9F`
 /// edges and `9F` faces, boundary or not.
-fn check_ternary_sizes(mesh: &HalfedgeMesh, levels: u32) -> Result<(), LoopError> {
+fn check_ternary_sizes(mesh: &HalfedgeMesh, levels: u32) -> Result<(usize, usize), LoopError> {
     let (mut vertices, mut edges, mut faces) = (mesh.vertex_count(), mesh.edge_count(), mesh.face_count());
     // A mesh with a face fails by level 11; then the level limit.
     for _ in 0..levels.min(MAX_LEVELS + 1) {
@@ -579,7 +581,7 @@ fn check_ternary_sizes(mesh: &HalfedgeMesh, levels: u32) -> Result<(), LoopError
         );
         mesh_topo::check_capacity(vertices, faces.saturating_mul(3))?;
     }
-    check_level_limit(levels)
+    check_level_limit(levels).map(|()| (vertices, faces))
 }
 
 fn face_corners(mesh: &HalfedgeMesh, f: mesh_topo::FaceId) -> [u32; 3] {

@@ -262,6 +262,30 @@ fn bad_input_gives_typed_errors() {
 }
 
 #[test]
+fn the_counts_checked_before_the_work_are_those_of_the_output() {
+    // Closed and open meshes: the last level's vertices and faces, and the bytes the
+    // memory check counts are those of the output's arrays.
+    for soup in [shapes::octahedron(), shapes::grid(3, 2, CellKind::Triangles).unwrap()] {
+        let m = mesh(&soup);
+        for levels in 0..4 {
+            let fine = subdivide(&m, levels, &LoopOptions::default()).unwrap();
+            let (vertices, faces) = check_sizes(m.vertex_count(), m.edge_count(), m.face_count(), levels).unwrap();
+            assert_eq!((vertices, faces), (fine.vertex_count() as u64, fine.face_count() as u64));
+        }
+    }
+    // No machine has 2^40 positions and triangles (40 TB); where the memory cannot be
+    // read, nothing is refused.
+    match check_output_memory(1 << 40, 1 << 40, size_of::<DVec3>()) {
+        Err(LoopError::Mesh(MeshError::OutOfMemory { what, needed_bytes, .. })) => {
+            assert_eq!((what, needed_bytes), ("Loop output", 36 << 40));
+        }
+        other => assert!(other.is_ok() && mesh_topo::memory::available_bytes().is_none(), "{other:?}"),
+    }
+    // Small outputs are made without asking.
+    assert!(check_output_memory(1000, 2000, size_of::<DVec3>()).is_ok());
+}
+
+#[test]
 fn matrix_matches_positions_over_several_levels() {
     let m = mesh(&mesh_topo::testing::scramble(shapes::grid(3, 3, CellKind::Triangles).unwrap(), 5, 0.2));
     let options = LoopOptions::default();
