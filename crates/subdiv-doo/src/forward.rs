@@ -441,8 +441,9 @@ fn check_no_overflow(fine: DooMesh, largest: f64) -> Result<DooMesh, DooError> {
 /// [`MeshError::OutOfMemory`](mesh_topo::MeshError::OutOfMemory) if the output would not
 /// fit in the memory the system has available (from the same counts, before any work:
 /// [`check_available`](mesh_topo::memory::check_available));
-/// [`DooError::InvalidParameter`] for more than [`MAX_LEVELS`] levels. Non-manifold input and faces with fewer than three corners cannot be a
-/// [`HalfedgeMesh`]; [`subdivide_soup`] reports them.
+/// [`DooError::InvalidParameter`] for more than [`MAX_LEVELS`] levels. Non-manifold
+/// input and faces with fewer than three corners cannot be a [`HalfedgeMesh`];
+/// [`subdivide_soup`] reports them.
 pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, DooError> {
     options.rule.validate()?;
     let largest = check_finite_largest(mesh.positions())?;

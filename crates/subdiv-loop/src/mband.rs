@@ -431,11 +431,11 @@ fn edge_weights_closed(n: usize, lambda: f64) -> Vec<f64> {
 ///
 /// # Errors
 /// [`LoopError::InvalidParameter`] for `lambda` outside `(1/9, 1/2]` or more than
-/// [`MAX_LEVELS`] levels; the mesh errors of
-/// [`subdivide`] (non-triangles, pillows, non-finite positions, [`LoopError::Overflow`]); [`mesh_topo::MeshError::TooLarge`]
-/// if a level would have more vertices or face corners than `u32` handles address,
-/// and [`mesh_topo::MeshError::OutOfMemory`] if the output would not fit in the memory
-/// the system has available, both found from the counts before any level is built.
+/// [`MAX_LEVELS`] levels; the mesh errors of [`subdivide`] (non-triangles, pillows,
+/// non-finite positions, [`LoopError::Overflow`]); [`mesh_topo::MeshError::TooLarge`] if
+/// a level would have more vertices or face corners than `u32` handles address, and
+/// [`mesh_topo::MeshError::OutOfMemory`] if the output would not fit in the memory the
+/// system has available, both found from the counts before any level is built.
 pub fn ternary_subdivide(mesh: &HalfedgeMesh, levels: u32, options: &TernaryOptions) -> Result<LoopMesh, LoopError> {
     let largest = check_finite_largest(mesh.positions())?;
     let (positions, triangles) = ternary_levels(mesh, mesh.positions(), levels, options)?;

@@ -263,8 +263,8 @@ fn bad_input_gives_typed_errors() {
 
 #[test]
 fn the_counts_checked_before_the_work_are_those_of_the_output() {
-    // Closed and open meshes: the last level's vertices and faces, and the bytes the
-    // memory check counts are those of the output's arrays.
+    // Closed and open meshes: the last level's vertices and faces, whose arrays (a
+    // position per vertex, three indices per triangle) the memory check counts.
     for soup in [shapes::octahedron(), shapes::grid(3, 2, CellKind::Triangles).unwrap()] {
         let m = mesh(&soup);
         for levels in 0..4 {
