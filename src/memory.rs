@@ -30,9 +30,6 @@ pub use mesh_topo::memory::available_bytes;
 
 use crate::{ElementCounts, SurfaceScheme};
 
-/// Outputs up to this size are made without asking the system what it has.
-pub(crate) const ALWAYS_FITS_BYTES: u128 = mesh_topo::memory::ALWAYS_FITS_BYTES;
-
 /// A subdivision whose output alone needs more memory than is available (see
 /// [`SurfaceScheme::check_output_fits`]).
 #[derive(Debug, Clone, PartialEq, Eq)]

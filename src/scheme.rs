@@ -346,7 +346,7 @@ impl SurfaceScheme {
     /// # Errors
     /// [`OutputTooLarge`](memory::OutputTooLarge) when the output does not fit.
     pub fn check_available_memory(self, input: ElementCounts, levels: u32) -> Result<(), memory::OutputTooLarge> {
-        if self.output_bytes(self.closed_counts(input, levels)) <= memory::ALWAYS_FITS_BYTES {
+        if self.output_bytes(self.closed_counts(input, levels)) <= mesh_topo::memory::ALWAYS_FITS_BYTES {
             return Ok(());
         }
         match memory::available_bytes() {

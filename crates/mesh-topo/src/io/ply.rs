@@ -256,9 +256,18 @@ trait Values {
     /// Reads an integer value (list counts, indices).
     fn integer(&mut self, ty: Scalar) -> Result<i64, Self::Error>;
     /// Skips one value.
-    fn skip(&mut self, ty: Scalar) -> Result<(), Self::Error>;
-    /// Skips `n` values.
-    fn skip_many(&mut self, ty: Scalar, n: u64) -> Result<(), Self::Error>;
+    /// Skips one value (read and checked as a text value, by default).
+    #[inline]
+    fn skip(&mut self, ty: Scalar) -> Result<(), Self::Error> {
+        self.float(ty).map(drop)
+    }
+    /// Skips `n` values (one at a time, by default).
+    fn skip_many(&mut self, ty: Scalar, n: u64) -> Result<(), Self::Error> {
+        for _ in 0..n {
+            self.skip(ty)?;
+        }
+        Ok(())
+    }
     /// The error of a value read but not accepted: `error` at the value read last.
     fn invalid(&self, error: impl FnOnce(Location) -> IoError) -> Self::Error;
 }
@@ -319,18 +328,6 @@ impl Values for AsciiBody<'_> {
     fn integer(&mut self, _ty: Scalar) -> Result<i64, IoError> {
         let token = self.token()?;
         parse_i64(token).ok_or_else(|| invalid_number(self.token_line, token, "an integer"))
-    }
-
-    #[inline]
-    fn skip(&mut self, ty: Scalar) -> Result<(), IoError> {
-        self.float(ty).map(drop)
-    }
-
-    fn skip_many(&mut self, ty: Scalar, n: u64) -> Result<(), IoError> {
-        for _ in 0..n {
-            self.skip(ty)?;
-        }
-        Ok(())
     }
 
     fn invalid(&self, error: impl FnOnce(Location) -> IoError) -> IoError {
@@ -741,18 +738,6 @@ impl Values for LineValues<'_> {
     #[inline]
     fn integer(&mut self, _ty: Scalar) -> Result<i64, ()> {
         self.tokens.next().and_then(parse_i64).ok_or(())
-    }
-
-    #[inline]
-    fn skip(&mut self, ty: Scalar) -> Result<(), ()> {
-        self.float(ty).map(drop)
-    }
-
-    fn skip_many(&mut self, ty: Scalar, n: u64) -> Result<(), ()> {
-        for _ in 0..n {
-            self.skip(ty)?;
-        }
-        Ok(())
     }
 
     fn invalid(&self, _error: impl FnOnce(Location) -> IoError) {}
