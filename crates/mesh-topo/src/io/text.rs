@@ -111,10 +111,94 @@ pub(crate) fn trim_end(line: &[u8]) -> &[u8] {
 }
 
 /// A decimal floating-point number (Rust's grammar: `1`, `-1.5`, `.5`, `1e-3`, `inf`,
-/// `NaN`...). Non-finite values parse; callers reject them where they matter.
+/// `NaN`...). Non-finite values parse; callers reject them where they matter. The value
+/// is the standard library's, bit for bit: most coordinates in mesh files take the
+/// exact shortcut of [`parse_short_decimal`], the others `f64::from_str`.
 #[inline]
 pub(crate) fn parse_f64(token: &[u8]) -> Option<f64> {
-    std::str::from_utf8(token).ok()?.parse().ok()
+    parse_short_decimal(token).or_else(|| std::str::from_utf8(token).ok()?.parse().ok())
+}
+
+/// The powers of ten that are exact `f64` values.
+const EXACT_POWERS_OF_TEN: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20,
+    1e21, 1e22,
+];
+
+/// The longest token [`parse_short_decimal`] reads: a sign, 16 digits and a point fit.
+const SHORT_DECIMAL_MAX_LEN: usize = 18;
+
+/// Clinger's fast path: a token `[sign] digits [. digits] [(e|E) [sign] digits]` (at
+/// least one digit before the exponent) whose digits, the point removed, make an integer
+/// `m <= 2^53`, and whose value is `m * 10^k` with `|k| <= 22`. Then `m` and `10^|k|` are
+/// exact `f64` values and one multiplication or division rounds their exact product or
+/// quotient correctly: the standard library's result. `None` for anything else (other
+/// forms, more digits, larger exponents, invalid tokens), left to `f64::from_str`.
+#[inline]
+fn parse_short_decimal(token: &[u8]) -> Option<f64> {
+    // Longer tokens (the 17 significant digits of a shortest round-trip, say) rarely
+    // qualify: they go to the standard library at once, not after a scan.
+    if token.len() > SHORT_DECIMAL_MAX_LEN {
+        return None;
+    }
+    let (negative, mut rest) = match token.first()? {
+        b'-' => (true, &token[1..]),
+        b'+' => (false, &token[1..]),
+        _ => (false, token),
+    };
+    // At most 19 digits fit a u64 without overflow; `m <= 2^53` is checked after.
+    let (mut mantissa, mut digits, mut fraction_digits) = (0u64, 0u32, 0i32);
+    let mut after_point = false;
+    while let Some((&b, tail)) = rest.split_first() {
+        match b {
+            b'0'..=b'9' if digits < 19 => {
+                mantissa = mantissa * 10 + u64::from(b - b'0');
+                digits += 1;
+                fraction_digits += i32::from(after_point);
+            }
+            b'.' if !after_point => after_point = true,
+            _ => break,
+        }
+        rest = tail;
+    }
+    if digits == 0 || mantissa > 1 << 53 {
+        return None;
+    }
+    let mut exponent = 0i32;
+    if let Some((&(b'e' | b'E'), tail)) = rest.split_first() {
+        let (exponent_negative, tail) = match tail.first() {
+            Some(b'-') => (true, &tail[1..]),
+            Some(b'+') => (false, &tail[1..]),
+            _ => (false, tail),
+        };
+        // Up to four digits: larger exponents are the standard library's.
+        if tail.is_empty() || tail.len() > 4 {
+            return None;
+        }
+        for &b in tail {
+            let digit = b.wrapping_sub(b'0');
+            if digit > 9 {
+                return None;
+            }
+            exponent = exponent * 10 + i32::from(digit);
+        }
+        if exponent_negative {
+            exponent = -exponent;
+        }
+        rest = &[];
+    }
+    if !rest.is_empty() {
+        return None;
+    }
+    let power = exponent - fraction_digits;
+    let value = mantissa as f64;
+    let value = match power {
+        0..=22 => value * EXACT_POWERS_OF_TEN[power as usize],
+        -22..=-1 => value / EXACT_POWERS_OF_TEN[(-power) as usize],
+        _ if mantissa == 0 => 0.0,
+        _ => return None,
+    };
+    Some(if negative { -value } else { value })
 }
 
 /// A decimal integer with an optional sign, without overflow.
@@ -232,6 +316,33 @@ mod tests {
         assert!(parse_f64(b"nan").unwrap().is_nan());
         assert_eq!(parse_f64(b"1,5"), None);
         assert_eq!(parse_f64(b"\xff"), None);
+    }
+
+    proptest::proptest! {
+        /// Decimal tokens of every shape (digit counts on both sides of the shortcut's
+        /// limits, points, exponents, signs, stray characters) parse to the standard
+        /// library's value, bit for bit, or fail where it fails.
+        #[test]
+        fn floats_parse_as_the_standard_library_does(
+            token in "[-+]?[0-9]{0,20}(\\.[0-9]{0,20})?([eE][-+]?[0-9]{0,5})?|[-+0-9.eE]{0,8}|[-+0-9.eEa-z_ ]{0,10}",
+        ) {
+            let expected = token.parse::<f64>().ok().map(f64::to_bits);
+            proptest::prop_assert_eq!(parse_f64(token.as_bytes()).map(f64::to_bits), expected);
+        }
+    }
+
+    #[test]
+    fn the_shortcut_takes_the_usual_coordinates_and_leaves_the_rest() {
+        for token in ["-0.338493", "0.120414", "1e-3", "-0", "0.0e-999", "12345678.5e+2", "-9007199254740992."] {
+            let expected = token.parse::<f64>().unwrap().to_bits();
+            assert_eq!(parse_short_decimal(token.as_bytes()).map(f64::to_bits), Some(expected), "{token}");
+        }
+        // 2^53 + 1, a 23rd power of ten, five exponent digits, 19 characters, no digits,
+        // words.
+        let others = ["9007199254740993", "1e23", "1e-23", "1e00001", "0.00000000000000001", ".", "-.e1", "inf", "NaN"];
+        for token in others {
+            assert_eq!(parse_short_decimal(token.as_bytes()), None, "{token}");
+        }
     }
 
     #[test]
