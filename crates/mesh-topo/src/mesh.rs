@@ -1397,22 +1397,6 @@ impl<'a> Builder<'a> {
 }
 
 impl HalfedgeMesh {
-    /// The number of faces [`Self::vertex_faces`] gives for `v`, counted up to `at_most`
-    /// (a walk on the raw arrays: this runs for every vertex of every mesh built).
-    #[inline]
-    fn faces_around(&self, v: VertexId, at_most: usize) -> usize {
-        let (prev, face) = (&self.halfedge_prev, &self.halfedge_face);
-        let start = self.vertex_halfedge[v.index()];
-        let (mut h, mut faces) = (start, 0);
-        loop {
-            faces += usize::from(face[h as usize] != INVALID);
-            h = prev[h as usize] ^ 1;
-            if h == start || faces == at_most {
-                return faces;
-            }
-        }
-    }
-
     /// Every vertex's circulation must reach all its outgoing half-edges; otherwise its
     /// faces form several fans (e.g. two cones touching at the apex).
     fn check_single_fans(&self, corner_out_offsets: &[u32]) -> Result<(), MeshError> {
@@ -1421,7 +1405,8 @@ impl HalfedgeMesh {
             if corner_out == 0 {
                 continue;
             }
-            if self.faces_around(v, corner_out + 1) != corner_out {
+            let reached_faces = self.vertex_faces(v).take(corner_out + 1).count();
+            if reached_faces != corner_out {
                 // Count the fans: the circulation cycles among v's outgoing half-edges.
                 let outgoing: Vec<HalfedgeId> = self.halfedges().filter(|&h| self.origin(h) == v).collect();
                 let mut cycle_of: Vec<Option<usize>> = vec![None; outgoing.len()];

@@ -472,15 +472,21 @@ pub fn subdivide(mesh: &HalfedgeMesh, options: &DooOptions) -> Result<DooMesh, D
 /// the system; past it the exact counts ([`LevelCounts`]). `levels` is at most
 /// [`MAX_LEVELS`] ([`check_level_sizes`] comes first).
 fn check_output_memory(mesh: &CornerMesh, levels: u32, boundary: BoundaryRule) -> Result<(), DooError> {
-    let growth: u128 = match boundary {
-        BoundaryRule::Shrink => 4,
-        BoundaryRule::Chaikin => 8,
-    };
+    let growth = u128::from(corner_growth(boundary));
     let corners_bound = (mesh.corner_count() as u128).saturating_mul(growth.saturating_pow(levels));
     if corners_bound.saturating_mul(32).saturating_add(4) <= mesh_topo::memory::ALWAYS_FITS_BYTES {
         return Ok(());
     }
     Ok(mesh_topo::memory::check_available("Doo-Sabin output", output_bytes(mesh, levels, boundary))?)
+}
+
+/// The most a step multiplies the corners by under `boundary` (see
+/// [`check_level_sizes`]): four under the shrinking rule, eight under the Chaikin rule.
+fn corner_growth(boundary: BoundaryRule) -> u32 {
+    match boundary {
+        BoundaryRule::Shrink => 4,
+        BoundaryRule::Chaikin => 8,
+    }
 }
 
 /// The bytes of the arrays of the output of `levels` steps on `mesh`: a position per fine
@@ -514,10 +520,7 @@ fn check_level_sizes(mesh: &CornerMesh, levels: u32, boundary: BoundaryRule) -> 
     // - C_b` with `2E_i <= C`), and a step's check counts at most four times its corners;
     // a Chaikin step gives `2C + 4E_i + 6E_b = 4C + 4E_b <= 8C` corners. When `4^levels`
     // (`8^levels`) times the corners fit, every level fits, and the mesh is not read.
-    let growth = match boundary {
-        BoundaryRule::Shrink => 4,
-        BoundaryRule::Chaikin => 8,
-    };
+    let growth = corner_growth(boundary) as usize;
     let bound = (0..checked).try_fold(mesh.corner_count(), |c, _| c.checked_mul(growth).filter(|&c| c < NONE as usize));
     if bound.is_none() {
         let mut counts = LevelCounts::of(mesh);

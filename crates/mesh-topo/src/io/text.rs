@@ -146,15 +146,15 @@ fn parse_short_decimal(token: &[u8]) -> Option<f64> {
         b'+' => (false, &token[1..]),
         _ => (false, token),
     };
-    // At most 19 digits fit a u64 without overflow; `m <= 2^53` is checked after.
-    let (mut mantissa, mut digits, mut fraction_digits) = (0u64, 0u32, 0i32);
+    // At most 18 digits: no overflow; `m <= 2^53` is checked after.
+    let (mut mantissa, mut digits, mut fraction_digits) = (0u64, 0u32, 0i64);
     let mut after_point = false;
     while let Some((&b, tail)) = rest.split_first() {
         match b {
-            b'0'..=b'9' if digits < 19 => {
+            b'0'..=b'9' => {
                 mantissa = mantissa * 10 + u64::from(b - b'0');
                 digits += 1;
-                fraction_digits += i32::from(after_point);
+                fraction_digits += i64::from(after_point);
             }
             b'.' if !after_point => after_point = true,
             _ => break,
@@ -164,32 +164,13 @@ fn parse_short_decimal(token: &[u8]) -> Option<f64> {
     if digits == 0 || mantissa > 1 << 53 {
         return None;
     }
-    let mut exponent = 0i32;
-    if let Some((&(b'e' | b'E'), tail)) = rest.split_first() {
-        let (exponent_negative, tail) = match tail.first() {
-            Some(b'-') => (true, &tail[1..]),
-            Some(b'+') => (false, &tail[1..]),
-            _ => (false, tail),
-        };
-        // Up to four digits: larger exponents are the standard library's.
-        if tail.is_empty() || tail.len() > 4 {
-            return None;
-        }
-        for &b in tail {
-            let digit = b.wrapping_sub(b'0');
-            if digit > 9 {
-                return None;
-            }
-            exponent = exponent * 10 + i32::from(digit);
-        }
-        if exponent_negative {
-            exponent = -exponent;
-        }
-        rest = &[];
-    }
-    if !rest.is_empty() {
-        return None;
-    }
+    // The exponent, if any, is the rest of the token: a signed integer of at most 16
+    // characters (no overflow).
+    let exponent = match rest.split_first() {
+        None => 0,
+        Some((&(b'e' | b'E'), tail)) => parse_i64(tail)?,
+        Some(_) => return None,
+    };
     let power = exponent - fraction_digits;
     let value = mantissa as f64;
     let value = match power {
@@ -333,13 +314,16 @@ mod tests {
 
     #[test]
     fn the_shortcut_takes_the_usual_coordinates_and_leaves_the_rest() {
-        for token in ["-0.338493", "0.120414", "1e-3", "-0", "0.0e-999", "12345678.5e+2", "-9007199254740992."] {
+        for token in
+            ["-0.338493", "0.120414", "1e-3", "-0", "0.0e-999", "12345678.5e+2", "-9007199254740992.", "1e00001"]
+        {
             let expected = token.parse::<f64>().unwrap().to_bits();
             assert_eq!(parse_short_decimal(token.as_bytes()).map(f64::to_bits), Some(expected), "{token}");
         }
-        // 2^53 + 1, a 23rd power of ten, five exponent digits, 19 characters, no digits,
-        // words.
-        let others = ["9007199254740993", "1e23", "1e-23", "1e00001", "0.00000000000000001", ".", "-.e1", "inf", "NaN"];
+        // 2^53 + 1, a 23rd power of ten, a huge exponent, 19 characters, no digits, an
+        // exponent without digits, words.
+        let others =
+            ["9007199254740993", "1e23", "1e-23", "1e99999", "0.00000000000000001", ".", "-.e1", "1e+", "inf", "NaN"];
         for token in others {
             assert_eq!(parse_short_decimal(token.as_bytes()), None, "{token}");
         }
