@@ -553,8 +553,13 @@ pub(crate) fn check_sizes(vertices: usize, edges: usize, faces: usize, levels: u
 /// values of `value_bytes` each and `faces` triangles would not fit in the memory the
 /// system has available ([`mesh_topo::memory::check_available`]).
 pub(crate) fn check_output_memory(vertices: u64, faces: u64, value_bytes: usize) -> Result<(), LoopError> {
-    let needed = u128::from(vertices) * value_bytes as u128 + u128::from(faces) * 12;
-    Ok(mesh_topo::memory::check_available("Loop output", needed)?)
+    Ok(mesh_topo::memory::check_available("Loop output", output_bytes(vertices, faces, value_bytes))?)
+}
+
+/// The bytes of an output of `vertices` values of `value_bytes` each and `faces`
+/// triangles.
+pub(crate) fn output_bytes(vertices: u64, faces: u64, value_bytes: usize) -> u128 {
+    u128::from(vertices) * value_bytes as u128 + u128::from(faces) * 12
 }
 
 #[cfg(test)]

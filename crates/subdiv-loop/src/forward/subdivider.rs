@@ -8,7 +8,7 @@ use mesh_topo::HalfedgeMesh;
 
 use super::kernel::{self, Buffers, Rules};
 use super::topology::Topology;
-use super::{LoopMesh, LoopOptions, check_finite_largest, check_no_overflow, check_sizes};
+use super::{LoopMesh, LoopOptions, check_finite_largest, check_no_overflow, check_sizes, output_bytes};
 use crate::LoopError;
 
 /// Loop subdivision that reuses its memory from one call to the next.
@@ -118,8 +118,10 @@ impl Subdivider {
     ///
     /// # Errors
     /// The errors of [`subdivide`](super::subdivide), in the same cases and order
-    /// (non-finite positions, then non-triangles and pillows, then sizes). On error `out`
-    /// is left empty (no vertices, no triangles) and keeps its memory for the next call.
+    /// (non-finite positions, then non-triangles and pillows, then sizes, then memory:
+    /// the output's bytes beyond what `out`'s arrays already hold must be available).
+    /// On error `out` is left empty (no vertices, no triangles) and keeps its memory for
+    /// the next call.
     pub fn subdivide_into(&mut self, mesh: &HalfedgeMesh, levels: u32, out: &mut LoopMesh) -> Result<(), LoopError> {
         let result = self.run(mesh, levels, out);
         if result.is_err() {
@@ -133,6 +135,9 @@ impl Subdivider {
         out.positions.clear();
         out.triangles.clear();
         let largest = check_finite_largest(mesh.positions())?;
+        // The output is written into `out`'s arrays: only what they lack must be new.
+        let held_bytes =
+            output_bytes(out.positions.capacity() as u64, out.triangles.capacity() as u64, size_of::<DVec3>());
         let scratch = &mut self.scratch;
         let mut topology = Topology {
             triangles: take(triangles_of(0, levels, out, scratch)),
@@ -142,7 +147,11 @@ impl Subdivider {
         };
         let built = topology
             .rebuild(mesh, &mut scratch.compact)
-            .and_then(|()| check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels));
+            .and_then(|()| check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels))
+            .and_then(|(vertices, faces)| {
+                let needed = output_bytes(vertices, faces, size_of::<DVec3>()).saturating_sub(held_bytes);
+                Ok(mesh_topo::memory::check_available("Loop output", needed)?)
+            });
         if let Err(error) = built {
             park(topology, None, 0, levels, out, scratch);
             return Err(error);
@@ -363,5 +372,36 @@ mod tests {
         }
         let too_large = subdivider.subdivide_into(&good, 20, &mut out).unwrap_err();
         assert!(matches!(too_large, LoopError::Mesh(MeshError::TooLarge { .. })));
+    }
+
+    #[test]
+    fn an_output_that_cannot_fit_in_memory_is_refused_before_any_work() {
+        // Thirteen levels of the icosahedron: 1.3G triangles, 32 GB (near the most the
+        // index range allows: the level refined last may have at most 2^29 edges).
+        let icosahedron = HalfedgeMesh::from_soup(&shapes::icosahedron()).unwrap();
+        let (vertices, faces) = check_sizes(12, 30, 20, 13).unwrap();
+        let needed = output_bytes(vertices, faces, size_of::<DVec3>());
+        assert!(needed > 32_000_000_000, "{needed}");
+        let mut subdivider = Subdivider::default();
+        let mut out = LoopMesh::default();
+        subdivider.subdivide_into(&icosahedron, 3, &mut out).unwrap();
+        let held = output_bytes(out.positions.capacity() as u64, out.triangles.capacity() as u64, size_of::<DVec3>());
+        assert!(held > 0);
+        // Tried only where it is sure to be refused (4 GiB to spare: the memory is read
+        // again by the call); elsewhere the call would make the 32 GB.
+        match mesh_topo::memory::available_bytes() {
+            Some(available) if u128::from(available) + (4 << 30) < needed - held => {
+                let error = subdivider.subdivide_into(&icosahedron, 13, &mut out).unwrap_err();
+                let LoopError::Mesh(MeshError::OutOfMemory { what, needed_bytes, .. }) = error else {
+                    panic!("refused for its memory: {error}");
+                };
+                // What the output's arrays already hold is not asked for again.
+                assert_eq!((what, needed_bytes), ("Loop output", needed - held));
+                assert_eq!((out.vertex_count(), out.face_count()), (0, 0));
+                subdivider.subdivide_into(&icosahedron, 1, &mut out).unwrap();
+                assert_eq!(out.face_count(), 80);
+            }
+            _ => eprintln!("this machine may have room for {needed} bytes: the refusal is not tried"),
+        }
     }
 }
