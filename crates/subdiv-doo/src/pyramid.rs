@@ -783,6 +783,13 @@ impl DooPyramid {
     /// # Ok::<(), subdiv_doo::DooError>(())
     /// ```
     ///
+    /// Memory: unlike [`subdivide`](crate::subdivide), whose few input bytes can ask for
+    /// an output of any size, a reconstruction makes no check against the memory
+    /// available: a level's coarse vertices and details are as many as its fine
+    /// vertices, so the mesh of a level takes about twice (less than two and a half
+    /// times) the pyramid's arrays up to that level, which are in memory already (and
+    /// whose lengths are checked first).
+    ///
     /// # Errors
     /// [`DooError::InvalidPyramid`] if `level` is out of range, `keep` is not in `[0, 1]`,
     /// or the pyramid is inconsistent (wrong array lengths, bad permutations).
@@ -1229,6 +1236,33 @@ mod tests {
     use crate::canonical::tests::without;
     use crate::{DooOptions, subdivide};
     use mesh_topo::shapes;
+
+    /// The bound the docs of [`DooPyramid::reconstruct`] give for making no memory check:
+    /// a level's mesh takes about twice the pyramid's arrays up to that level (less than
+    /// 2.5 times).
+    #[test]
+    fn a_reconstruction_takes_about_twice_the_pyramid() {
+        let soup_bytes = |soup: &PolygonSoup| 24 * soup.positions.len() + 4 * (soup.indices.len() + soup.offsets.len());
+        let cases = [
+            shapes::tetrahedron(),
+            shapes::cube(),
+            shapes::torus(6, 4, shapes::CellKind::Mixed).unwrap(),
+            shapes::grid(8, 8, shapes::CellKind::Quads).unwrap(),
+        ];
+        let mut largest: f64 = 0.0;
+        for soup in cases {
+            let coarse = HalfedgeMesh::from_soup(&soup).unwrap();
+            let fine = subdivide(&coarse, &DooOptions::new(FaceRule::DooSabin, 3)).unwrap().to_mesh().unwrap();
+            let pyramid = decompose(&fine, &DecomposeOptions::levels(FaceRule::DooSabin, 3)).unwrap().pyramid;
+            for level in 0..=3 {
+                let details: usize = pyramid.levels[..level].iter().map(|l| 24 * l.details.len()).sum();
+                let held = soup_bytes(&pyramid.base) + details;
+                let made = soup_bytes(&pyramid.reconstruct(level, None).unwrap());
+                largest = largest.max(made as f64 / held as f64);
+            }
+        }
+        assert!(largest <= 2.5 && largest > 1.5, "{largest}");
+    }
 
     #[test]
     fn version_1_files_are_read_as_shrinking_pyramids() {

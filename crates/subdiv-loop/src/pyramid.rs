@@ -438,6 +438,12 @@ impl LoopPyramid {
     /// # Ok::<(), subdiv_loop::LoopError>(())
     /// ```
     ///
+    /// Memory: unlike [`subdivide`](crate::forward::subdivide), whose few input bytes
+    /// can ask for an output of any size, a reconstruction makes no check against the
+    /// memory available: the pyramid holds a detail per coarse edge of every level, so
+    /// the mesh of a level takes at most about three and a half times the pyramid's
+    /// arrays up to that level, which are in memory already.
+    ///
     /// # Errors
     /// [`LoopError::InvalidParameter`] if `level > level_count()`, the errors of
     /// [`validate`](Self::validate), and [`LoopError::NonFiniteResult`] if a position
@@ -776,6 +782,32 @@ mod tests {
     use crate::reverse::{ReverseOptions, all_valences_regular, reverse};
     use mesh_topo::shapes::{self, CellKind};
     use proptest::prelude::*;
+
+    /// The bound the docs of [`LoopPyramid::reconstruct`] give for making no memory check:
+    /// a level's mesh takes at most 3.5 times the pyramid's arrays up to that level.
+    #[test]
+    fn a_reconstruction_takes_at_most_three_and_a_half_times_the_pyramid() {
+        let soup_bytes = |soup: &PolygonSoup| 24 * soup.positions.len() + 4 * (soup.indices.len() + soup.offsets.len());
+        let mut with_isolated = shapes::grid(3, 2, CellKind::Triangles).unwrap();
+        with_isolated.positions.extend([DVec3::splat(9.0); 20]);
+        let cases = [
+            shapes::tetrahedron(),
+            shapes::icosahedron(),
+            shapes::grid(5, 1, CellKind::Triangles).unwrap(),
+            with_isolated,
+        ];
+        let mut largest: f64 = 0.0;
+        for soup in cases {
+            let pyramid = LoopPyramid::smooth(soup, LoopOptions::default(), 4).unwrap();
+            for level in 0..=4 {
+                let details: usize = pyramid.levels[..level].iter().map(|l| 24 * l.details.len()).sum();
+                let held = soup_bytes(&pyramid.base) + details;
+                let made = soup_bytes(&pyramid.reconstruct(level).unwrap());
+                largest = largest.max(made as f64 / held as f64);
+            }
+        }
+        assert!(largest <= 3.5 && largest > 2.0, "{largest}");
+    }
 
     fn mesh(soup: &PolygonSoup) -> HalfedgeMesh {
         HalfedgeMesh::from_soup(soup).expect("valid test mesh")
