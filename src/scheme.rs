@@ -184,7 +184,7 @@ impl SurfaceScheme {
     /// [`closed_counts`](Self::closed_counts) of one step.
     fn counts_after_step(self, counts: ElementCounts) -> ElementCounts {
         let ElementCounts { vertices: v, edges: e, faces: f } = counts;
-        let m: usize = match self {
+        let arity = match self {
             SurfaceScheme::Loop | SurfaceScheme::LoopWarren => 2,
             SurfaceScheme::TernaryLoop => 3,
             SurfaceScheme::QuaternaryLoop => 4,
@@ -197,13 +197,10 @@ impl SurfaceScheme {
                 };
             }
         };
-        ElementCounts {
-            // New vertices: M - 1 inside each edge, (M-1)(M-2)/2 inside each triangle.
-            vertices: v.saturating_add(e.saturating_mul(m - 1)).saturating_add(f.saturating_mul((m - 1) * (m - 2) / 2)),
-            // Each edge into M, and 3 M(M-1)/2 edges inside each triangle.
-            edges: e.saturating_mul(m).saturating_add(f.saturating_mul(3 * m * (m - 1) / 2)),
-            faces: f.saturating_mul(m * m),
-        }
+        // The member crate's recurrence, on which its own size checks run.
+        let [vertices, edges, faces] = subdiv_loop::mband::counts_after_step(arity, [v, e, f].map(|n| n as u64))
+            .map(|n| usize::try_from(n).unwrap_or(usize::MAX));
+        ElementCounts { vertices, edges, faces }
     }
 
     /// Bytes an output soup of `counts` holds (see [`Self::closed_counts`]): three `f64`

@@ -526,9 +526,12 @@ pub(crate) fn check_level_limit(levels: u32) -> Result<(), LoopError> {
 /// Checks that every level of `levels` steps from a mesh of `vertices`, `edges` and
 /// `faces` fits the `u32` layout: half-edge indices and edge counts of the levels that
 /// are refined further, vertex indices of the last (from the counts alone, before any
-/// work: `V + E`, `2E + 3F` and `4F` per step); then that `levels` is at most
+/// work: `V + E`, `2E + 3F` and `4F` per step, [`counts_after_step`]); then that
+/// `levels` is at most
 /// [`MAX_LEVELS`] (so that a mesh with a face, which fails the sizes first, is told its
 /// size). Returns the vertices and faces of the last level.
+///
+/// [`counts_after_step`]: crate::mband::counts_after_step
 pub(crate) fn check_sizes(vertices: usize, edges: usize, faces: usize, levels: u32) -> Result<(u64, u64), LoopError> {
     let (mut v, mut e, mut f) = (vertices as u64, edges as u64, faces as u64);
     let too_large = |what: &'static str, count: u64, max: u64| {
@@ -541,7 +544,7 @@ pub(crate) fn check_sizes(vertices: usize, edges: usize, faces: usize, levels: u
         if e > BASE_MASK as u64 {
             return too_large("edges", e, BASE_MASK as u64);
         }
-        (v, e, f) = (v.saturating_add(e), e.saturating_mul(2).saturating_add(f.saturating_mul(3)), f.saturating_mul(4));
+        [v, e, f] = crate::mband::counts_after_step(2, [v, e, f]);
     }
     if v >= u32::MAX as u64 {
         return too_large("vertices", v, u32::MAX as u64 - 1);

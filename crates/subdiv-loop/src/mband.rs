@@ -71,6 +71,36 @@ use crate::forward::{
 /// Largest arity [`box_spline_masks`] accepts (numerators then stay far below `u64`).
 pub const MAX_ARITY: u32 = 64;
 
+/// The vertices, edges and faces of a triangle mesh after one `arity`-band step (2:
+/// Loop, 3: ternary, 4: quaternary) from `[vertices, edges, faces]`: every edge split
+/// into `M`, every triangle into `M^2`, so `V' = V + (M-1) E + (M-1)(M-2)/2 F`,
+/// `E' = M E + 3 M(M-1)/2 F` and `F' = M^2 F`, exact on any triangle mesh, closed or not
+/// (isolated vertices stay). Saturates at `u64::MAX`. The one count recurrence of the
+/// Loop family: the size checks of [`subdivide`], [`ternary_subdivide`] and the facade's
+/// counts follow it.
+///
+/// ```
+/// use subdiv_loop::mband::counts_after_step;
+///
+/// // The tetrahedron (4 vertices, 6 edges, 4 faces) after a Loop, a ternary and a
+/// // quaternary step (two Loop steps: 4 -> 10 -> 34 vertices).
+/// assert_eq!(counts_after_step(2, [4, 6, 4]), [10, 24, 16]);
+/// assert_eq!(counts_after_step(3, [4, 6, 4]), [20, 54, 36]);
+/// assert_eq!(counts_after_step(4, [4, 6, 4]), counts_after_step(2, [10, 24, 16]));
+/// assert_eq!(counts_after_step(2, [u64::MAX, 1, 1])[0], u64::MAX);
+/// ```
+pub fn counts_after_step(arity: u32, [vertices, edges, faces]: [u64; 3]) -> [u64; 3] {
+    let m = u64::from(arity);
+    let (m1, m2) = (m.saturating_sub(1), m.saturating_sub(2));
+    let inner_vertices = m1.saturating_mul(m2) / 2;
+    let inner_edges = m.saturating_mul(m1) / 2 * 3;
+    [
+        vertices.saturating_add(edges.saturating_mul(m1)).saturating_add(faces.saturating_mul(inner_vertices)),
+        edges.saturating_mul(m).saturating_add(faces.saturating_mul(inner_edges)),
+        faces.saturating_mul(m.saturating_mul(m)),
+    ]
+}
+
 /// One weight of a regular stencil: the coarse lattice point (relative to the fine
 /// point's coarse cell corner) and the integer numerator (over `M^4`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -571,17 +601,14 @@ pub(crate) fn ternary_levels<T: Attribute>(
 /// memory. A step makes `V + 2E + F` vertices (two per edge, one per face), `3E + 9F`
 /// edges and `9F` faces, boundary or not.
 fn check_ternary_sizes(mesh: &HalfedgeMesh, levels: u32) -> Result<(usize, usize), LoopError> {
-    let (mut vertices, mut edges, mut faces) = (mesh.vertex_count(), mesh.edge_count(), mesh.face_count());
+    let mut counts = [mesh.vertex_count(), mesh.edge_count(), mesh.face_count()].map(|n| n as u64);
+    let as_usize = |n: u64| usize::try_from(n).unwrap_or(usize::MAX);
     // A mesh with a face fails by level 11; then the level limit.
     for _ in 0..levels.min(MAX_LEVELS + 1) {
-        (vertices, edges, faces) = (
-            vertices.saturating_add(edges.saturating_mul(2)).saturating_add(faces),
-            edges.saturating_mul(3).saturating_add(faces.saturating_mul(9)),
-            faces.saturating_mul(9),
-        );
-        mesh_topo::check_capacity(vertices, faces.saturating_mul(3))?;
+        counts = counts_after_step(3, counts);
+        mesh_topo::check_capacity(as_usize(counts[0]), as_usize(counts[2]).saturating_mul(3))?;
     }
-    check_level_limit(levels).map(|()| (vertices, faces))
+    check_level_limit(levels).map(|()| (as_usize(counts[0]), as_usize(counts[2])))
 }
 
 fn face_corners(mesh: &HalfedgeMesh, f: mesh_topo::FaceId) -> [u32; 3] {

@@ -413,20 +413,27 @@ fn ternary_weights_at_valence_six_are_the_regular_ones() {
 
 #[test]
 fn counts_for_ternary_and_quaternary() {
+    // Closed, open, and with a vertex on no face (which each step keeps).
+    let mut with_isolated = shapes::grid(2, 2, CellKind::Triangles).unwrap();
+    with_isolated.positions.push(DVec3::splat(5.0));
     for soup in [
         shapes::icosahedron(),
         shapes::grid(3, 2, CellKind::Triangles).unwrap(),
         shapes::torus(4, 3, CellKind::Triangles).unwrap(),
+        with_isolated,
     ] {
         let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+        let counts = |mesh: &HalfedgeMesh| [mesh.vertex_count(), mesh.edge_count(), mesh.face_count()].map(|n| n as u64);
         let (v, e, f) = (mesh.vertex_count(), mesh.edge_count(), mesh.face_count());
         for (m, fine) in [
+            (2, crate::forward::subdivide(&mesh, 1, &LoopOptions::default()).unwrap()),
             (3, ternary_subdivide(&mesh, 1, &TernaryOptions::default()).unwrap()),
             (4, quaternary_subdivide(&mesh, 1, &LoopOptions::default()).unwrap()),
         ] {
             assert_eq!(fine.vertex_count(), v + (m - 1) * e + f * (m - 1) * (m - 2) / 2);
             assert_eq!(fine.face_count(), m * m * f);
             let fine_mesh = fine.to_halfedge_mesh().unwrap();
+            assert_eq!(counts_after_step(m as u32, counts(&mesh)), counts(&fine_mesh), "M = {m}");
             assert_eq!(fine_mesh.euler_characteristic(), mesh.euler_characteristic());
         }
         let two = ternary_subdivide(&mesh, 2, &TernaryOptions::default()).unwrap();
