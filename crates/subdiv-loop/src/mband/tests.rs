@@ -423,7 +423,8 @@ fn counts_for_ternary_and_quaternary() {
         with_isolated,
     ] {
         let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
-        let counts = |mesh: &HalfedgeMesh| [mesh.vertex_count(), mesh.edge_count(), mesh.face_count()].map(|n| n as u64);
+        let counts =
+            |mesh: &HalfedgeMesh| [mesh.vertex_count(), mesh.edge_count(), mesh.face_count()].map(|n| n as u64);
         let (v, e, f) = (mesh.vertex_count(), mesh.edge_count(), mesh.face_count());
         for (m, fine) in [
             (2, crate::forward::subdivide(&mesh, 1, &LoopOptions::default()).unwrap()),
