@@ -527,9 +527,8 @@ pub(crate) fn check_level_limit(levels: u32) -> Result<(), LoopError> {
 /// `faces` fits the `u32` layout: half-edge indices and edge counts of the levels that
 /// are refined further, vertex indices of the last (from the counts alone, before any
 /// work: `V + E`, `2E + 3F` and `4F` per step, [`counts_after_step`]); then that
-/// `levels` is at most
-/// [`MAX_LEVELS`] (so that a mesh with a face, which fails the sizes first, is told its
-/// size). Returns the vertices and faces of the last level.
+/// `levels` is at most [`MAX_LEVELS`] (so that a mesh with a face, which fails the sizes
+/// first, is told its size). Returns the vertices and faces of the last level.
 ///
 /// [`counts_after_step`]: crate::mband::counts_after_step
 pub(crate) fn check_sizes(vertices: usize, edges: usize, faces: usize, levels: u32) -> Result<(u64, u64), LoopError> {
