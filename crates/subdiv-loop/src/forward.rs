@@ -307,7 +307,7 @@ pub fn subdivide(mesh: &HalfedgeMesh, levels: u32, options: &LoopOptions) -> Res
     let largest = check_finite_largest(mesh.positions())?;
     let topology = Topology::from_mesh(mesh)?;
     let (vertices, faces) = check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels)?;
-    check_output_memory(vertices, faces, size_of::<DVec3>())?;
+    check_output_memory(vertices, faces, size_of::<DVec3>(), 0)?;
     let (positions, topology) = refine(topology, mesh.positions(), levels, &Rules::new(options));
     check_no_overflow(&positions, largest)?;
     Ok(LoopMesh { positions, triangles: topology.triangles })
@@ -377,7 +377,7 @@ pub fn refine_attribute<T: Attribute>(
     attribute::check_finite_values(values)?;
     let topology = Topology::from_mesh(mesh)?;
     let (vertices, faces) = check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels)?;
-    check_output_memory(vertices, faces, size_of::<T>())?;
+    check_output_memory(vertices, faces, size_of::<T>(), 0)?;
     attribute::checked_refined(refine(topology, values, levels, &Rules::new(options)).0)
 }
 
@@ -552,10 +552,17 @@ pub(crate) fn check_sizes(vertices: usize, edges: usize, faces: usize, levels: u
 }
 
 /// Fails with [`MeshError::OutOfMemory`] (before any work) when an output of `vertices`
-/// values of `value_bytes` each and `faces` triangles would not fit in the memory the
+/// values of `value_bytes` each and `faces` triangles, less the `held_bytes` already
+/// allocated for it (arrays it will be written into), would not fit in the memory the
 /// system has available ([`mesh_topo::memory::check_available`]).
-pub(crate) fn check_output_memory(vertices: u64, faces: u64, value_bytes: usize) -> Result<(), LoopError> {
-    Ok(mesh_topo::memory::check_available("Loop output", output_bytes(vertices, faces, value_bytes))?)
+pub(crate) fn check_output_memory(
+    vertices: u64,
+    faces: u64,
+    value_bytes: usize,
+    held_bytes: u128,
+) -> Result<(), LoopError> {
+    let needed = output_bytes(vertices, faces, value_bytes).saturating_sub(held_bytes);
+    Ok(mesh_topo::memory::check_available("Loop output", needed)?)
 }
 
 /// The bytes of an output of `vertices` values of `value_bytes` each and `faces`

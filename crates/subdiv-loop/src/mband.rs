@@ -577,7 +577,7 @@ pub(crate) fn ternary_levels<T: Attribute>(
     options.validate()?;
     Topology::from_mesh(mesh)?; // triangles only, no pillows
     let (vertices, faces) = check_ternary_sizes(mesh, levels)?;
-    crate::forward::check_output_memory(vertices as u64, faces as u64, size_of::<T>())?;
+    crate::forward::check_output_memory(vertices as u64, faces as u64, size_of::<T>(), 0)?;
     let mut triangles: Vec<[u32; 3]> = mesh.faces().map(|f| face_corners(mesh, f)).collect();
     if levels == 0 {
         return Ok((values.to_vec(), triangles));

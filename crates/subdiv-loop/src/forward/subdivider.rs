@@ -8,7 +8,9 @@ use mesh_topo::HalfedgeMesh;
 
 use super::kernel::{self, Buffers, Rules};
 use super::topology::Topology;
-use super::{LoopMesh, LoopOptions, check_finite_largest, check_no_overflow, check_sizes, output_bytes};
+use super::{
+    LoopMesh, LoopOptions, check_finite_largest, check_no_overflow, check_output_memory, check_sizes, output_bytes,
+};
 use crate::LoopError;
 
 /// Loop subdivision that reuses its memory from one call to the next.
@@ -148,10 +150,7 @@ impl Subdivider {
         let built = topology
             .rebuild(mesh, &mut scratch.compact)
             .and_then(|()| check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels))
-            .and_then(|(vertices, faces)| {
-                let needed = output_bytes(vertices, faces, size_of::<DVec3>()).saturating_sub(held_bytes);
-                Ok(mesh_topo::memory::check_available("Loop output", needed)?)
-            });
+            .and_then(|(vertices, faces)| check_output_memory(vertices, faces, size_of::<DVec3>(), held_bytes));
         if let Err(error) = built {
             park(topology, None, 0, levels, out, scratch);
             return Err(error);

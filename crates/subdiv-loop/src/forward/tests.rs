@@ -275,14 +275,14 @@ fn the_counts_checked_before_the_work_are_those_of_the_output() {
     }
     // No machine has 2^40 positions and triangles (40 TB); where the memory cannot be
     // read, nothing is refused.
-    match check_output_memory(1 << 40, 1 << 40, size_of::<DVec3>()) {
+    match check_output_memory(1 << 40, 1 << 40, size_of::<DVec3>(), 0) {
         Err(LoopError::Mesh(MeshError::OutOfMemory { what, needed_bytes, .. })) => {
             assert_eq!((what, needed_bytes), ("Loop output", 36 << 40));
         }
         other => assert!(other.is_ok() && mesh_topo::memory::available_bytes().is_none(), "{other:?}"),
     }
     // Small outputs are made without asking.
-    assert!(check_output_memory(1000, 2000, size_of::<DVec3>()).is_ok());
+    assert!(check_output_memory(1000, 2000, size_of::<DVec3>(), 0).is_ok());
 }
 
 #[test]
