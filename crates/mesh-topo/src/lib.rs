@@ -4,8 +4,9 @@
 //! subdivision schemes: it turns a polygon soup (positions plus faces as vertex index
 //! lists, any face size, with boundaries) into a validated [`HalfedgeMesh`], answers
 //! adjacency queries in constant time, circulates around vertices and faces in a
-//! documented order, traverses the mesh and its dual graph, and reads and writes meshes
-//! without losing anything the user gave.
+//! documented order, traverses the mesh and its dual graph, cuts out ring
+//! neighbourhoods and face subsets, and reads and writes meshes without losing anything
+//! the user gave.
 //!
 //! # Example
 //! ```

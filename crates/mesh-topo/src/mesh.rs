@@ -793,6 +793,40 @@ impl HalfedgeMesh {
         soup
     }
 
+    /// The faces that `keep` selects, as a soup of their own: the vertices they use,
+    /// numbered in order of first use (faces in order, each from its first corner), and
+    /// for every vertex of this mesh its number in the soup (`None` if no kept face uses
+    /// it). Corner order and positions are kept as they are. With
+    /// [`ring_distances`](Self::ring_distances) it cuts out a neighbourhood, say the
+    /// faces around a vertex to subdivide or fit on their own.
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    ///
+    /// // The cube's face 1, [4, 5, 7, 6], alone.
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::cube())?;
+    /// let (soup, new_index) = mesh.extract_faces(|f| f.raw() == 1);
+    /// assert_eq!((soup.vertex_count(), soup.face(0)), (4, &[0, 1, 2, 3][..]));
+    /// assert_eq!((new_index[4], new_index[7], new_index[0]), (Some(0), Some(2), None));
+    /// assert_eq!(soup.positions[2], mesh.positions()[7]);
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    pub fn extract_faces(&self, mut keep: impl FnMut(FaceId) -> bool) -> (PolygonSoup, Vec<Option<u32>>) {
+        let mut new_index: Vec<Option<u32>> = vec![None; self.vertex_count()];
+        let mut soup = PolygonSoup::with_capacity(0, 0, 0);
+        for f in self.faces().filter(|&f| keep(f)) {
+            for v in self.face_vertices(f) {
+                let index = *new_index[v.index()].get_or_insert_with(|| {
+                    soup.positions.push(self.positions[v.index()]);
+                    (soup.positions.len() - 1) as u32
+                });
+                soup.indices.push(index);
+            }
+            soup.offsets.push(soup.indices.len() as u32);
+        }
+        (soup, new_index)
+    }
+
     /// Checks every internal invariant of the half-edge structure (twins, next/prev
     /// cycles, face and vertex references, boundary conventions, manifold fans, finite
     /// positions). Building from a soup always gives a valid mesh; this exists for tests

@@ -1,5 +1,5 @@
 //! Global topology: boundary loops, connected components, Euler characteristic, genus,
-//! histograms, and the face-adjacency (dual) graph.
+//! histograms, the face-adjacency (dual) graph, searches and ring neighbourhoods.
 
 use std::collections::BTreeMap;
 
@@ -346,5 +346,51 @@ impl HalfedgeMesh {
             }
         }
         order
+    }
+
+    /// The edge distance from `start` of every vertex within `rings` edges of it (the
+    /// `k`-ring neighbourhood for `k = rings`): `Some(d)` for the vertices of ring `d`,
+    /// `None` for those farther away or in another component. A breadth-first search that
+    /// stops after ring `rings` (or when the component is exhausted).
+    ///
+    /// ```
+    /// use mesh_topo::{HalfedgeMesh, shapes};
+    ///
+    /// // Octahedron: the top vertex 4, its ring of four, then the bottom vertex 5.
+    /// let mesh = HalfedgeMesh::from_soup(&shapes::octahedron())?;
+    /// let top = mesh.vertex(4).unwrap();
+    /// assert_eq!(mesh.ring_distances(top, 1), [Some(1), Some(1), Some(1), Some(1), Some(0), None]);
+    /// assert_eq!(mesh.ring_distances(top, 5)[5], Some(2));
+    /// // The faces around the top vertex (its star): those with a corner in ring 0.
+    /// let near = mesh.ring_distances(top, 0);
+    /// let (star, _) = mesh.extract_faces(|f| mesh.face_vertices(f).any(|v| near[v.index()].is_some()));
+    /// assert_eq!((star.vertex_count(), star.face_count()), (5, 4));
+    /// # Ok::<(), mesh_topo::MeshError>(())
+    /// ```
+    ///
+    /// # Panics
+    /// If `start` is not a vertex of this mesh (see [Handles](HalfedgeMesh#handles)).
+    pub fn ring_distances(&self, start: VertexId, rings: usize) -> Vec<Option<u32>> {
+        let mut distance = vec![None; self.vertex_count()];
+        distance[start.index()] = Some(0);
+        let mut frontier = vec![start];
+        let mut next = Vec::new();
+        // (Distances are below the vertex count, so they fit in `u32`.)
+        for d in (1..=rings.min(self.vertex_count())).map(|d| d as u32) {
+            if frontier.is_empty() {
+                break;
+            }
+            for &v in &frontier {
+                for w in self.vertex_neighbors(v) {
+                    if distance[w.index()].is_none() {
+                        distance[w.index()] = Some(d);
+                        next.push(w);
+                    }
+                }
+            }
+            std::mem::swap(&mut frontier, &mut next);
+            next.clear();
+        }
+        distance
     }
 }

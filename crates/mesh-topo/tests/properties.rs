@@ -60,4 +60,48 @@ proptest! {
             prop_assert!(binary::decode_mesh(&bytes[..cut]).is_err());
         }
     }
+
+    /// Ring distances are the breadth-first layers cut at `rings`: neighbours differ by
+    /// at most one ring, and every vertex inside the last ring has all its neighbours
+    /// counted. The faces that touch the rings, cut out, name the same vertices at the
+    /// same places; a vertex no kept face uses has no number.
+    #[test]
+    fn rings_and_extracted_faces(soup in arb_mesh(), start in any::<prop::sample::Index>(), rings in 0usize..5) {
+        let mesh = HalfedgeMesh::from_soup(&soup).unwrap();
+        let start = mesh.vertex(start.index(mesh.vertex_count())).unwrap();
+        let distance = mesh.ring_distances(start, rings);
+        let unlimited = mesh.ring_distances(start, usize::MAX);
+        prop_assert_eq!(distance[start.index()], Some(0));
+        for v in mesh.vertices() {
+            // The cut layers are the unlimited ones up to `rings`.
+            let expected = unlimited[v.index()].filter(|&d| d as usize <= rings);
+            prop_assert_eq!(distance[v.index()], expected);
+            if let Some(d) = unlimited[v.index()] {
+                for w in mesh.vertex_neighbors(v) {
+                    let e = unlimited[w.index()].expect("a neighbour is in the same component");
+                    prop_assert!(e.abs_diff(d) <= 1);
+                }
+            }
+        }
+        // The reached vertices are those of the breadth-first search.
+        let reached = unlimited.iter().filter(|d| d.is_some()).count();
+        prop_assert_eq!(reached, mesh.vertex_bfs(start).len());
+
+        let touches = |f| mesh.face_vertices(f).any(|v| distance[v.index()].is_some());
+        let (cut, new_index) = mesh.extract_faces(touches);
+        let kept: Vec<_> = mesh.faces().filter(|&f| touches(f)).collect();
+        prop_assert_eq!(cut.face_count(), kept.len());
+        for (k, &f) in kept.iter().enumerate() {
+            let names: Vec<u32> = mesh.face_vertices(f).map(|v| new_index[v.index()].unwrap()).collect();
+            prop_assert_eq!(cut.face(k), &names[..]);
+            for v in mesh.face_vertices(f) {
+                prop_assert_eq!(cut.positions[new_index[v.index()].unwrap() as usize], mesh.position(v));
+            }
+        }
+        let used = new_index.iter().filter(|i| i.is_some()).count();
+        prop_assert_eq!(used, cut.vertex_count());
+        // Every face kept: the soup back, in order of first use.
+        let (all, _) = mesh.extract_faces(|_| true);
+        prop_assert_eq!(all.face_count(), soup.face_count());
+    }
 }

@@ -237,41 +237,10 @@ mod tests {
     /// The disk of the `rings`-ring around `v`: the faces touching a vertex closer than
     /// `rings` edges to `v`, renumbered; returns the soup and the new index of `v`.
     fn disk(mesh: &HalfedgeMesh, v: VertexId, rings: usize) -> (PolygonSoup, u32) {
-        let mut distance = vec![usize::MAX; mesh.vertex_count()];
-        distance[v.index()] = 0;
-        let mut frontier = vec![v];
-        for d in 1..=rings {
-            let mut next = Vec::new();
-            for &u in &frontier {
-                for w in mesh.vertex_neighbors(u) {
-                    if distance[w.index()] == usize::MAX {
-                        distance[w.index()] = d;
-                        next.push(w);
-                    }
-                }
-            }
-            frontier = next;
-        }
-        let mut index = vec![u32::MAX; mesh.vertex_count()];
-        let mut positions = Vec::new();
-        let mut faces = Vec::new();
-        for f in mesh.faces() {
-            let corners: Vec<VertexId> = mesh.face_vertices(f).collect();
-            if corners.iter().any(|c| distance[c.index()] < rings) {
-                let face: Vec<u32> = corners
-                    .iter()
-                    .map(|c| {
-                        if index[c.index()] == u32::MAX {
-                            index[c.index()] = positions.len() as u32;
-                            positions.push(mesh.position(*c));
-                        }
-                        index[c.index()]
-                    })
-                    .collect();
-                faces.push(face);
-            }
-        }
-        (PolygonSoup::from_faces(positions, faces), index[v.index()])
+        let distance = mesh.ring_distances(v, rings);
+        let near = |f| mesh.face_vertices(f).any(|c| distance[c.index()].is_some_and(|d| (d as usize) < rings));
+        let (soup, new_index) = mesh.extract_faces(near);
+        (soup, new_index[v.index()].expect("the disk holds its centre"))
     }
 
     /// Subdivides the `rings`-disk around `v` `levels` times, cutting it back to the

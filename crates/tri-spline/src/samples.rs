@@ -98,50 +98,16 @@ pub fn try_triangle_grid(n: usize, f: impl Fn(f64, f64) -> DVec3) -> Result<Poly
 /// ```
 pub fn disk_patch(mesh: &HalfedgeMesh, seed_vertex: usize, rings: usize) -> Option<PolygonSoup> {
     let seed = mesh.vertex(seed_vertex)?;
-    let mut distance = vec![usize::MAX; mesh.vertex_count()];
-    distance[seed.index()] = 0;
-    let mut frontier = vec![seed];
-    for d in 1..=rings {
-        // The whole component is reached: more rings add nothing (and usize::MAX never ends).
-        if frontier.is_empty() {
-            break;
-        }
-        let mut next = Vec::new();
-        for v in frontier {
-            for w in mesh.vertex_neighbors(v) {
-                if distance[w.index()] == usize::MAX {
-                    distance[w.index()] = d;
-                    next.push(w);
-                }
-            }
-        }
-        frontier = next;
-    }
-    let mut index = vec![u32::MAX; mesh.vertex_count()];
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for f in mesh.faces() {
-        let corners: Vec<_> = mesh.face_vertices(f).collect();
-        if corners.len() != 3 || corners.iter().all(|v| distance[v.index()] == usize::MAX) {
-            continue;
-        }
-        let tri: Vec<u32> = corners
-            .iter()
-            .map(|&v| {
-                if index[v.index()] == u32::MAX {
-                    index[v.index()] = positions.len() as u32;
-                    positions.push(mesh.position(v));
-                }
-                index[v.index()]
-            })
-            .collect();
-        triangles.push([tri[0], tri[1], tri[2]]);
-    }
-    let (lo, hi) = positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), &p| (l.min(p), h.max(p)));
+    let distance = mesh.ring_distances(seed, rings);
+    let (mut soup, _) = mesh
+        .extract_faces(|f| mesh.face_degree(f) == 3 && mesh.face_vertices(f).any(|v| distance[v.index()].is_some()));
+    let (lo, hi) =
+        soup.positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), &p| (l.min(p), h.max(p)));
     let centre = (lo + hi) * 0.5;
     let scale = 1.0 / (hi - lo).max_element().max(f64::MIN_POSITIVE);
-    let positions: Vec<DVec3> = positions.into_iter().map(|p| (p - centre) * scale).collect();
-    let soup = PolygonSoup::from_faces(positions, triangles);
+    for p in &mut soup.positions {
+        *p = (*p - centre) * scale;
+    }
     let patch = HalfedgeMesh::from_soup(&soup).ok()?;
     let stats = patch.topology_stats();
     let ears = patch.vertices().filter(|&v| patch.vertex_faces(v).count() == 1).count();
