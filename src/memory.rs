@@ -28,6 +28,8 @@ use std::fmt;
 
 pub use mesh_topo::memory::available_bytes;
 
+use mesh_topo::PolygonSoup;
+
 use crate::{ElementCounts, SurfaceScheme};
 
 /// A subdivision whose output alone needs more memory than is available (see
@@ -84,10 +86,9 @@ fn corners(scheme: SurfaceScheme, counts: ElementCounts) -> u128 {
     if scheme.accepts_polygons() { 2 * counts.edges as u128 } else { 3 * counts.faces as u128 }
 }
 
-/// Bytes an output soup of `counts` holds: positions (three `f64`), one `u32` index per
-/// corner and one offset per face.
+/// Bytes an output soup of `counts` holds ([`PolygonSoup::array_bytes_for`]).
 pub(crate) fn soup_bytes(scheme: SurfaceScheme, counts: ElementCounts) -> u128 {
-    24 * counts.vertices as u128 + 4 * corners(scheme, counts) + 4 * (counts.faces as u128 + 1)
+    PolygonSoup::array_bytes_for(counts.vertices as u128, corners(scheme, counts), counts.faces as u128)
 }
 
 /// [`SurfaceScheme::check_output_fits`].

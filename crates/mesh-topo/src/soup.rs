@@ -53,6 +53,32 @@ impl PolygonSoup {
         Self { positions: Vec::with_capacity(vertices), offsets, indices: Vec::with_capacity(corners) }
     }
 
+    /// The bytes of the arrays of a soup of `vertices` positions, `corners` face corners
+    /// and `faces` faces (a position of three `f64` per vertex, a `u32` index per corner,
+    /// a `u32` offset per face and one more): what an output of those counts will hold,
+    /// to check against the memory available before it is made.
+    ///
+    /// ```
+    /// use mesh_topo::{PolygonSoup, shapes};
+    ///
+    /// let cube = shapes::cube(); // 8 vertices, 24 corners, 6 faces
+    /// assert_eq!(PolygonSoup::array_bytes_for(8, 24, 6), 8 * 24 + 24 * 4 + 7 * 4);
+    /// assert_eq!(cube.array_bytes(), PolygonSoup::array_bytes_for(8, 24, 6));
+    /// ```
+    pub fn array_bytes_for(vertices: u128, corners: u128, faces: u128) -> u128 {
+        const POSITION: u128 = size_of::<DVec3>() as u128;
+        const INDEX: u128 = size_of::<u32>() as u128;
+        POSITION * vertices + INDEX * corners + INDEX * (faces + 1)
+    }
+
+    /// The bytes this soup's arrays hold (their lengths, not their capacities): for a
+    /// soup with faces, [`array_bytes_for`](Self::array_bytes_for) of its counts.
+    pub fn array_bytes(&self) -> u128 {
+        let count = |n: usize| n as u128;
+        count(size_of::<DVec3>()) * count(self.positions.len())
+            + count(size_of::<u32>()) * count(self.indices.len() + self.offsets.len())
+    }
+
     /// A soup from positions and per-face index lists.
     ///
     /// ```

@@ -504,7 +504,7 @@ fn output_bytes(mesh: &CornerMesh, levels: u32, boundary: BoundaryRule) -> u128 
             }
         };
     }
-    24 * vertices as u128 + 4 * counts.corners as u128 + 4 * (counts.faces as u128 + 1)
+    PolygonSoup::array_bytes_for(vertices as u128, counts.corners as u128, counts.faces as u128)
 }
 
 /// Before any work, a level count whose output cannot be indexed fails at once, not

@@ -234,12 +234,12 @@ mod tests {
         }
     }
 
-    /// The disk of the `rings`-ring around `v`: the faces touching a vertex closer than
-    /// `rings` edges to `v`, renumbered; returns the soup and the new index of `v`.
+    /// The disk of the `rings`-ring around `v` (`rings >= 1`): the faces touching a
+    /// vertex closer than `rings` edges to `v`, renumbered; returns the soup and the new
+    /// index of `v`.
     fn disk(mesh: &HalfedgeMesh, v: VertexId, rings: usize) -> (PolygonSoup, u32) {
-        let distance = mesh.ring_distances(v, rings);
-        let near = |f| mesh.face_vertices(f).any(|c| distance[c.index()].is_some_and(|d| (d as usize) < rings));
-        let (soup, new_index) = mesh.extract_faces(near);
+        let closer = mesh.ring_distances(v, rings - 1);
+        let (soup, new_index) = mesh.extract_faces(|f| mesh.face_vertices(f).any(|c| closer[c.index()].is_some()));
         (soup, new_index[v.index()].expect("the disk holds its centre"))
     }
 
