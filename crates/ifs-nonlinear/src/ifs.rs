@@ -299,16 +299,7 @@ impl AffineIfs {
     /// # Ok::<(), IfsError>(())
     /// ```
     pub fn require_contractive(&self) -> Result<ContractivityReport> {
-        let report = self.contractivity();
-        if report.is_contractive() {
-            Ok(report)
-        } else {
-            Err(IfsError::NotContractive {
-                jsr_lower: report.jsr_lower,
-                jsr_upper: report.jsr_upper,
-                detail: report.capped_detail(),
-            })
-        }
+        self.contractivity().require()
     }
 }
 

@@ -147,16 +147,7 @@ impl<T: ComplexField<RealField = f64>> SubdivisionRule<T> {
     /// # Ok::<(), IfsError>(())
     /// ```
     pub fn require_contractive(&self) -> Result<ContractivityReport> {
-        let report = self.contractivity();
-        if report.is_contractive() {
-            Ok(report)
-        } else {
-            Err(IfsError::NotContractive {
-                jsr_lower: report.jsr_lower,
-                jsr_upper: report.jsr_upper,
-                detail: report.capped_detail(),
-            })
-        }
+        self.contractivity().require()
     }
 
     /// |det D_i| for each map: the volume factor on the difference space, used for the
@@ -235,6 +226,20 @@ impl ContractivityReport {
     /// True when the upper bound certifies a joint spectral radius below 1.
     pub fn is_contractive(&self) -> bool {
         self.jsr_upper < 1.0
+    }
+
+    /// The report itself when it certifies contraction, else the
+    /// [`IfsError::NotContractive`] it stands for (what both `require_contractive`s give).
+    pub(crate) fn require(self) -> Result<Self> {
+        if self.is_contractive() {
+            Ok(self)
+        } else {
+            Err(IfsError::NotContractive {
+                jsr_lower: self.jsr_lower,
+                jsr_upper: self.jsr_upper,
+                detail: self.capped_detail(),
+            })
+        }
     }
 
     /// The explanation that [`IfsError::NotContractive`] appends when the search was capped

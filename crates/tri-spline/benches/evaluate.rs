@@ -10,6 +10,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
 use tri_spline::index::tri_count;
+use tri_spline::samples::square_triangulation;
 use tri_spline::{BPatch, DmsBasis, DmsScratch, DmsSpline, DomainTriangle, KnotPlacement, KnotSequences, TriBezier};
 
 const POINTS: usize = 1000;
@@ -62,22 +63,7 @@ fn bench_bezier_and_bpatch(c: &mut Criterion) {
 fn bench_dms(c: &mut Criterion) {
     let mut group = c.benchmark_group("evaluate");
     group.throughput(Throughput::Elements(POINTS as u64));
-    let cells = 8u32;
-    let mut vertices = Vec::new();
-    for j in 0..=cells {
-        for i in 0..=cells {
-            vertices.push(DVec2::new(i as f64, j as f64));
-        }
-    }
-    let row = cells + 1;
-    let mut triangles = Vec::new();
-    for j in 0..cells {
-        for i in 0..cells {
-            let a = j * row + i;
-            triangles.push([a, a + 1, a + row + 1]);
-            triangles.push([a, a + row + 1, a + row]);
-        }
-    }
+    let (vertices, triangles) = square_triangulation(8);
     let mut rng = ChaCha8Rng::seed_from_u64(2);
     let points: Vec<DVec2> =
         (0..POINTS).map(|_| DVec2::new(rng.random_range(0.5..7.5), rng.random_range(0.5..7.5))).collect();

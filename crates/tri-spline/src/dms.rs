@@ -971,30 +971,11 @@ impl DmsSpline<DVec3> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::samples::square_triangulation;
     use crate::{DomainTriangle, TriBezier, index::tri_count};
 
-    /// A `cells x cells` square grid split into 2 cells² triangles.
-    pub(crate) fn square_grid(cells: u32) -> (Vec<DVec2>, Vec<[u32; 3]>) {
-        let mut vertices = Vec::new();
-        for j in 0..=cells {
-            for i in 0..=cells {
-                vertices.push(DVec2::new(i as f64, j as f64));
-            }
-        }
-        let row = cells + 1;
-        let mut triangles = Vec::new();
-        for j in 0..cells {
-            for i in 0..cells {
-                let a = j * row + i;
-                triangles.push([a, a + 1, a + row + 1]);
-                triangles.push([a, a + row + 1, a + row]);
-            }
-        }
-        (vertices, triangles)
-    }
-
     fn basis(n: usize, seed: u64) -> DmsBasis {
-        let (v, t) = square_grid(4);
+        let (v, t) = square_triangulation(4);
         DmsBasis::with_generated_knots(n, v, t, KnotPlacement { radius: 0.12, seed, boundary_outward: true }).unwrap()
     }
 
@@ -1050,7 +1031,7 @@ mod tests {
             x in 1.0f64..3.0,
             y in 1.0f64..3.0,
         ) {
-            let (v, t) = square_grid(4);
+            let (v, t) = square_triangulation(4);
             let placement = KnotPlacement { radius, seed, boundary_outward: true };
             let b = match DmsBasis::with_generated_knots(degree, v, t, placement) {
                 Ok(b) => b,
@@ -1134,7 +1115,7 @@ mod tests {
 
     #[test]
     fn knot_conditions_are_checked() {
-        let (v, t) = square_grid(2);
+        let (v, t) = square_triangulation(2);
         let n = 2;
         let good = generate_knots(n, &v, &t, 0.1, 1, true).unwrap();
         assert!(DmsBasis::new(n, v.clone(), t.clone(), good.clone()).is_ok());

@@ -21,6 +21,32 @@ pub fn smooth_surface(a: f64, b: f64) -> DVec3 {
     DVec3::new(a, b, 0.3 * (3.0 * a).sin() * (2.0 * b).cos() + 0.2 * a * b)
 }
 
+/// The plane domain `[0, cells]²` cut into unit squares, each split along its diagonal
+/// from `(i, j)` to `(i + 1, j + 1)`: `(cells + 1)²` vertices, row by row, and `2 cells²`
+/// counter-clockwise triangles, the kind of triangulation a [`DmsBasis`](crate::DmsBasis)
+/// is built on.
+///
+/// ```
+/// use tri_spline::samples::square_triangulation;
+/// let (vertices, triangles) = square_triangulation(2);
+/// assert_eq!((vertices.len(), triangles.len()), (9, 8));
+/// assert_eq!((vertices[4].x, vertices[4].y), (1.0, 1.0));
+/// assert_eq!(triangles[..2], [[0, 1, 4], [0, 4, 3]]);
+/// ```
+pub fn square_triangulation(cells: u32) -> (Vec<DVec2>, Vec<[u32; 3]>) {
+    let row = cells + 1;
+    let vertices = (0..row).flat_map(|j| (0..row).map(move |i| DVec2::new(i as f64, j as f64))).collect();
+    let mut triangles = Vec::with_capacity(2 * (cells * cells) as usize);
+    for j in 0..cells {
+        for i in 0..cells {
+            let a = j * row + i;
+            triangles.push([a, a + 1, a + row + 1]);
+            triangles.push([a, a + row + 1, a + row]);
+        }
+    }
+    (vertices, triangles)
+}
+
 /// Most segments per side of the grids made here ([`triangle_grid`],
 /// [`resample_on_grid`]): about 8.4 million vertices and 16.8 million triangles, beyond
 /// any grid the fitting pipeline can use.

@@ -601,12 +601,7 @@ mod tests {
             at in proptest::prelude::any::<usize>(),
         ) {
             let text = obj_text(&soup, &noise, damage, at);
-            let one_pass = format!("{:?}", read_obj_split(text.as_bytes(), usize::MAX));
-            for threads in [2, 3, 5] {
-                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-                let pieces = format!("{:?}", pool.install(|| read_obj_split(text.as_bytes(), 0)));
-                proptest::prop_assert_eq!(&pieces, &one_pass);
-            }
+            crate::io::test_support::pieces_read_as_one_pass(&text, read_obj_split)?;
             if damage == 0 {
                 let (read, _) = read_obj_split(text.as_bytes(), usize::MAX).unwrap();
                 proptest::prop_assert_eq!(read.face_count(), soup.face_count());

@@ -987,12 +987,7 @@ mod tests {
             at in proptest::prelude::any::<usize>(),
         ) {
             let text = ply_text(&soup, extras, damage, at);
-            let one_pass = format!("{:?}", read_ply_split(text.as_bytes(), usize::MAX));
-            for threads in [2, 3, 5] {
-                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-                let pieces = format!("{:?}", pool.install(|| read_ply_split(text.as_bytes(), 0)));
-                proptest::prop_assert_eq!(&pieces, &one_pass);
-            }
+            crate::io::test_support::pieces_read_as_one_pass(&text, read_ply_split)?;
             if damage == 0 {
                 let (read, _) = read_ply_split(text.as_bytes(), usize::MAX).unwrap();
                 proptest::prop_assert_eq!(read.face_count(), soup.face_count());
