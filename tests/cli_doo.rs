@@ -316,7 +316,10 @@ fn bad_input_gives_one_error_line_and_no_output() {
     // Broken pyramids and bad reconstruct options.
     std::fs::write(d.join("truncated.mres"), &bytes[..bytes.len() / 2]).unwrap();
     let line = fails(&["reconstruct", "truncated.mres", "out.obj"], d, "out.obj");
-    assert!(line.contains("truncated.mres"), "{line}");
+    // Named, and said where the data ends (not at the start of the payload).
+    let half = bytes.len() / 2;
+    assert!(line.contains("truncated.mres") && line.contains(&format!("({half} bytes, at least")), "{line}");
+    assert!(line.contains("it is truncated") && !line.contains("at byte 12:"), "{line}");
     let mut corrupted = bytes.clone();
     let middle = corrupted.len() / 2;
     for b in &mut corrupted[middle..middle + 16] {

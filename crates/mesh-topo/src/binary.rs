@@ -10,6 +10,7 @@
 //! reserves more memory than the input can fill, so a corrupted length prefix cannot
 //! exhaust memory.
 
+use bincode::error::DecodeError;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 use thiserror::Error;
@@ -135,12 +136,73 @@ pub fn decode<T: DeserializeOwned>(bytes: &[u8], magic: [u8; 8], version: u32, w
     let payload = &bytes[12..];
     // serde pre-allocates sequences cautiously (bounded by a small constant), so a
     // corrupted length prefix runs out of input and fails instead of reserving memory.
-    let (value, used): (T, usize) = bincode::serde::decode_from_slice(payload, config())
-        .map_err(|e| BinaryError::Corrupted { offset: 12, message: e.to_string() })?;
-    if used != payload.len() {
-        return Err(BinaryError::TrailingBytes { extra: payload.len() - used });
+    let mut reader = TrackedSlice { rest: payload, len: payload.len() };
+    let value: T = bincode::serde::decode_from_reader(&mut reader, config())
+        .map_err(|e| BinaryError::Corrupted { offset: 12 + reader.position(), message: describe(&e, bytes.len()) })?;
+    if !reader.rest.is_empty() {
+        return Err(BinaryError::TrailingBytes { extra: reader.rest.len() });
     }
     Ok(value)
+}
+
+/// A reader of the payload that knows how far decoding got, so that an error can say
+/// where the payload stopped making sense (bincode's slice reader, counting).
+struct TrackedSlice<'a> {
+    /// What is left to read.
+    rest: &'a [u8],
+    /// The payload's length.
+    len: usize,
+}
+
+impl TrackedSlice<'_> {
+    /// Bytes consumed so far.
+    fn position(&self) -> usize {
+        self.len - self.rest.len()
+    }
+}
+
+impl bincode::de::read::Reader for TrackedSlice<'_> {
+    #[inline(always)]
+    fn read(&mut self, out: &mut [u8]) -> Result<(), DecodeError> {
+        if out.len() > self.rest.len() {
+            return Err(DecodeError::UnexpectedEnd { additional: out.len() - self.rest.len() });
+        }
+        let (read, rest) = self.rest.split_at(out.len());
+        out.copy_from_slice(read);
+        self.rest = rest;
+        Ok(())
+    }
+
+    #[inline]
+    fn peek_read(&mut self, n: usize) -> Option<&[u8]> {
+        self.rest.get(..n)
+    }
+
+    #[inline]
+    fn consume(&mut self, n: usize) {
+        self.rest = self.rest.get(n..).unwrap_or_default();
+    }
+}
+
+/// What went wrong in words (the decoder's own `Display` is its `Debug`), for a file of
+/// `file_len` bytes.
+fn describe(error: &DecodeError, file_len: usize) -> String {
+    match error {
+        DecodeError::UnexpectedEnd { additional } => format!(
+            "the file ends in the middle of a value ({file_len} bytes, at least {additional} more expected): it is \
+             truncated"
+        ),
+        DecodeError::UnexpectedVariant { type_name, found, .. } => {
+            format!("variant number {found} of `{type_name}` does not exist")
+        }
+        DecodeError::InvalidBooleanValue(value) => format!("byte {value} where a boolean (0 or 1) was expected"),
+        DecodeError::Utf8 { .. } => "a text field is not valid UTF-8".to_string(),
+        DecodeError::OutsideUsizeRange(value) => format!("the length {value} does not fit in memory addresses"),
+        DecodeError::LimitExceeded => "a length exceeds the decoder's limit".to_string(),
+        DecodeError::OtherString(message) => message.clone(),
+        DecodeError::Other(message) => (*message).to_string(),
+        other => format!("{other:?}"),
+    }
 }
 
 /// Encodes a mesh (as its polygon soup: positions and faces in order).

@@ -49,10 +49,20 @@ fn binary_unsupported_version() {
 #[test]
 fn binary_truncated_payload_is_corrupted() {
     let bytes = encoded_cube();
+    let mut offsets = Vec::new();
     for cut in 12..bytes.len() {
         let e = binary::decode_mesh(&bytes[..cut]).unwrap_err();
-        assert!(matches!(e, BinaryError::Corrupted { offset: 12, .. }), "cut at {cut}: {e}");
+        // Named where decoding stopped: inside the data that is there, and as a truncation.
+        match &e {
+            BinaryError::Corrupted { offset, message } => {
+                assert!((12..=cut).contains(offset) && message.contains("truncated"), "cut at {cut}: {e}");
+                offsets.push(*offset);
+            }
+            _ => panic!("cut at {cut}: {e}"),
+        }
     }
+    // The later the cut, the later the place named (not always the start of the payload).
+    assert!(offsets.windows(2).all(|w| w[0] <= w[1]) && offsets.last() > offsets.first(), "{offsets:?}");
 }
 
 #[test]
