@@ -96,3 +96,22 @@ fn binary_payload_that_is_not_a_mesh_is_invalid() {
     assert!(matches!(&e, BinaryError::Invalid(message) if message.contains("non-manifold edge")), "{e}");
     assert!(HalfedgeMesh::from_soup(&soup).is_err());
 }
+
+#[test]
+fn binary_bad_values_are_named_with_their_place() {
+    const MAGIC: [u8; 8] = *b"EXAMPLE\0";
+    // (u32, bool, u32): the boolean is the payload's second byte, the file's 14th.
+    let mut bytes = binary::encode(MAGIC, 1, &(7u32, true, 9u32)).unwrap();
+    assert_eq!(bytes[13], 1);
+    bytes[13] = 5;
+    let e = binary::decode::<(u32, bool, u32)>(&bytes, MAGIC, 1, "example").unwrap_err();
+    assert!(
+        matches!(&e, BinaryError::Corrupted { offset: 14, message } if message.contains("byte 5 where a boolean")),
+        "{e}"
+    );
+    // A string that is not UTF-8, after its length prefix.
+    let mut bytes = binary::encode(MAGIC, 1, &"abc".to_string()).unwrap();
+    bytes[14] = 0xff;
+    let e = binary::decode::<String>(&bytes, MAGIC, 1, "example").unwrap_err();
+    assert!(matches!(&e, BinaryError::Corrupted { offset: 16, message } if message.contains("not valid UTF-8")), "{e}");
+}

@@ -66,26 +66,6 @@ mod report;
 mod text;
 mod write;
 
-/// What the readers' tests share.
-#[cfg(test)]
-mod test_support {
-    /// Checks that `read(bytes, parallel_min_bytes)` gives for `text`, forced into
-    /// parallel pieces (a threshold of 0) on two, three and five threads, what one pass
-    /// gives (no threshold reached): the same soup and report, or the same error.
-    pub(crate) fn pieces_read_as_one_pass<T: std::fmt::Debug + Send>(
-        text: &str,
-        read: impl Fn(&[u8], usize) -> T + Sync,
-    ) -> Result<(), proptest::test_runner::TestCaseError> {
-        let one_pass = format!("{:?}", read(text.as_bytes(), usize::MAX));
-        for threads in [2, 3, 5] {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            let pieces = format!("{:?}", pool.install(|| read(text.as_bytes(), 0)));
-            proptest::prop_assert_eq!(&pieces, &one_pass, "{} threads", threads);
-        }
-        Ok(())
-    }
-}
-
 use std::fmt;
 use std::fs::File;
 use std::io::Write;
@@ -529,5 +509,25 @@ pub fn write_to(out: impl Write, soup: &PolygonSoup, format: Format, options: &W
         Format::Obj => write_obj(out, soup),
         Format::Off => write_off(out, soup),
         Format::Ply => write_ply(out, soup, options.ply_encoding),
+    }
+}
+
+/// What the readers' tests share.
+#[cfg(test)]
+mod test_support {
+    /// Checks that `read(bytes, parallel_min_bytes)` gives for `text`, forced into
+    /// parallel pieces (a threshold of 0) on two, three and five threads, what one pass
+    /// gives (no threshold reached): the same soup and report, or the same error.
+    pub(crate) fn pieces_read_as_one_pass<T: std::fmt::Debug + Send>(
+        text: &str,
+        read: impl Fn(&[u8], usize) -> T + Sync,
+    ) -> Result<(), proptest::test_runner::TestCaseError> {
+        let one_pass = format!("{:?}", read(text.as_bytes(), usize::MAX));
+        for threads in [2, 3, 5] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let pieces = format!("{:?}", pool.install(|| read(text.as_bytes(), 0)));
+            proptest::prop_assert_eq!(&pieces, &one_pass, "{} threads", threads);
+        }
+        Ok(())
     }
 }
