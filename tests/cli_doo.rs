@@ -82,6 +82,43 @@ fn subdivide_three_times_move_a_vertex_decompose_and_reconstruct_exactly() {
     assert!(error > 1e-4 && error < 0.1, "{error}");
 }
 
+/// `info` on a pyramid: what each level stores, from the pyramid alone; the counts are
+/// those of the meshes it rebuilds, the detail lengths those of its own details.
+#[test]
+fn info_describes_a_pyramid_level_by_level() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    moved_fine_cube(d);
+    ok(&["decompose", "moved.obj", "moved.mres", "--scheme", "doo", "--max"], d);
+    let info: serde_json::Value = serde_json::from_str(&ok(&["info", "moved.mres", "--json"], d)).unwrap();
+    assert_eq!((info["scheme"].as_str(), info["boundary_rule"].as_str()), (Some("doo-sabin"), Some("shrink")));
+    assert_eq!(info["bytes"], std::fs::metadata(d.join("moved.mres")).unwrap().len());
+    assert_eq!((info["base"]["vertices"].as_u64(), info["base"]["faces"].as_u64()), (Some(8), Some(6)));
+    let pyramid =
+        multires::doo::pyramid::DooPyramid::from_bytes(&std::fs::read(d.join("moved.mres")).unwrap()).unwrap();
+    let levels = info["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 3);
+    for (k, row) in levels.iter().enumerate() {
+        // The vertex count of the mesh rebuilt at this level.
+        let rebuilt = pyramid.reconstruct(k + 1, None).unwrap();
+        assert_eq!(row["vertices"].as_u64(), Some(rebuilt.vertex_count() as u64), "level {}", k + 1);
+        assert!(row["faces"].is_null() && row["canonical_order"] == true);
+        let details = &pyramid.levels[k].details;
+        assert_eq!(row["details"].as_u64(), Some(details.len() as u64));
+        let largest = details.iter().map(|v| v.length()).fold(0.0, f64::max);
+        assert_eq!(row["largest_detail"].as_f64(), Some(largest));
+    }
+    assert_eq!((info["details"].as_u64(), info["finest_vertices"].as_u64()), (Some(376), Some(384)));
+    // The text says the same.
+    let text = ok(&["info", "moved.mres"], d);
+    assert!(text.contains("doo-sabin, shrink boundary: a base mesh and 3 level(s) of details"), "{text}");
+    assert!(text.contains("level 3       384 vertices: "), "{text}");
+    // A pyramid cut short is an error that says where.
+    std::fs::write(d.join("cut.mres"), &std::fs::read(d.join("moved.mres")).unwrap()[..200]).unwrap();
+    let line = fails(&["info", "cut.mres"], d, "none");
+    assert!(line.contains("cut.mres") && line.contains("truncated"), "{line}");
+}
+
 #[test]
 fn reverse_finds_the_coarse_mesh_and_reports_the_seed() {
     let dir = tempfile::tempdir().unwrap();

@@ -281,3 +281,31 @@ fn seed_vertices_are_given_one_per_component() {
     let line = fails(&["reverse", "two.off", "out.off", "--scheme", "loop", "--seed-vertex", &seeds], d, "out.off");
     assert!(line.contains(&format!("seed vertex {neighbour} would be an edge point")), "{line}");
 }
+
+/// `info` on a Loop pyramid: per level the vertex and face counts of the mesh it
+/// rebuilds and the lengths of its details.
+#[test]
+fn info_describes_a_loop_pyramid_level_by_level() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = loop_mesh();
+    io::write_soup(dir.path().join("fine.obj"), &input, &WriteOptions::default()).unwrap();
+    ok(&["decompose", "fine.obj", "fine.mres", "--scheme", "loop", "--max"], dir.path());
+    let info: serde_json::Value = serde_json::from_str(&ok(&["info", "fine.mres", "--json"], dir.path())).unwrap();
+    assert_eq!((info["scheme"].as_str(), info["boundary_rule"].is_null()), (Some("loop"), true));
+    let pyramid = LoopPyramid::from_bytes(&std::fs::read(dir.path().join("fine.mres")).unwrap()).unwrap();
+    let levels = info["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 3);
+    for (k, row) in levels.iter().enumerate() {
+        let rebuilt = pyramid.reconstruct(k + 1).unwrap();
+        let counts = (row["vertices"].as_u64(), row["faces"].as_u64());
+        assert_eq!(counts, (Some(rebuilt.vertex_count() as u64), Some(rebuilt.face_count() as u64)), "level {}", k + 1);
+        let details = &pyramid.levels[k].details;
+        let rms = (details.iter().map(|v| v.length_squared()).sum::<f64>() / details.len() as f64).sqrt();
+        let measured = row["rms_detail"].as_f64().unwrap();
+        assert!((measured - rms).abs() <= 1e-15 * rms && rms > 0.0, "{measured} {rms}");
+    }
+    assert_eq!(info["finest_vertices"].as_u64(), Some(input.vertex_count() as u64));
+    let text = ok(&["info", "fine.mres"], dir.path());
+    assert!(text.contains("loop: a base mesh and 3 level(s) of details"), "{text}");
+    assert!(text.contains(&format!("level 3       {} vertices, 512 faces: ", input.vertex_count())), "{text}");
+}

@@ -18,7 +18,7 @@ use super::{CliError, CliResult, input_error};
 /// Options of `info`.
 #[derive(Debug, Args)]
 pub struct InfoArgs {
-    /// The mesh (OBJ, OFF or PLY).
+    /// The mesh (OBJ, OFF or PLY), or a `.mres` pyramid (what it stores, level by level).
     pub mesh: PathBuf,
     /// Print one JSON object instead of text.
     #[arg(long)]
@@ -300,15 +300,111 @@ pub fn mesh_info_text(info: &Value) -> String {
     text
 }
 
-/// `multires info`.
+/// `multires info`: a mesh, or a `.mres` pyramid.
 pub fn info(args: &InfoArgs) -> CliResult {
-    let (soup, report) = read_soup(&args.mesh)?;
-    let info = mesh_info(&args.mesh.display().to_string(), &soup, &report);
+    let is_pyramid = args.mesh.extension().is_some_and(|e| e.eq_ignore_ascii_case("mres"));
+    let (info, text): (Value, fn(&Value) -> String) = if is_pyramid {
+        let bytes = std::fs::read(&args.mesh).map_err(|source| CliError::Io { path: args.mesh.clone(), source })?;
+        let pyramid = multires::Pyramid::from_bytes(&bytes)
+            .map_err(|e| CliError::Input(format!("{}: {e}", args.mesh.display())))?;
+        (pyramid_info(&args.mesh.display().to_string(), bytes.len(), &pyramid), pyramid_info_text)
+    } else {
+        let (soup, report) = read_soup(&args.mesh)?;
+        (mesh_info(&args.mesh.display().to_string(), &soup, &report), mesh_info_text)
+    };
     if args.json {
         print_out(&(serde_json::to_string_pretty(&info).expect("internal: JSON of plain values") + "\n"))
     } else {
-        print_out(&mesh_info_text(&info))
+        print_out(&text(&info))
     }
+}
+
+/// What a pyramid holds, level by level, read from the pyramid alone (nothing is
+/// rebuilt): the base mesh, then for each level its detail vectors (count, largest and
+/// root-mean-square length) and the vertex count they bring the mesh to (coarser
+/// vertices plus details: both reversals store exactly one vector per fine vertex),
+/// with the face count where the scheme fixes it (Loop: four times the coarser one) and
+/// whether the level keeps a vertex and face order of its own (a mesh that was not in
+/// the canonical order when decomposed).
+pub fn pyramid_info(file: &str, bytes: usize, pyramid: &multires::Pyramid) -> Value {
+    let base = pyramid.base();
+    let levels: Vec<(&[DVec3], bool)> = match pyramid {
+        multires::Pyramid::Loop(p) => p.levels.iter().map(|l| (&l.details[..], l.order.is_none())).collect(),
+        multires::Pyramid::Doo(p) => p.levels.iter().map(|l| (&l.details[..], l.order.is_identity())).collect(),
+    };
+    let (mut vertices, mut faces) = (base.vertex_count(), Some(base.face_count()));
+    let mut rows = Vec::with_capacity(levels.len());
+    for (k, (details, canonical)) in levels.into_iter().enumerate() {
+        vertices += details.len();
+        faces = match pyramid {
+            multires::Pyramid::Loop(_) => faces.and_then(|f| f.checked_mul(4)),
+            multires::Pyramid::Doo(_) => None,
+        };
+        let (largest, sum_sq) =
+            details.iter().fold((0.0f64, 0.0f64), |(m, s), d| (m.max(d.length()), s + d.length_squared()));
+        let rms = if details.is_empty() { 0.0 } else { (sum_sq / details.len() as f64).sqrt() };
+        rows.push(json!({
+            "level": k + 1,
+            "vertices": vertices,
+            "faces": faces,
+            "details": details.len(),
+            "largest_detail": largest,
+            "rms_detail": rms,
+            "canonical_order": canonical,
+        }));
+    }
+    let boundary = match pyramid {
+        multires::Pyramid::Loop(_) => Value::Null,
+        multires::Pyramid::Doo(p) => json!(p.boundary.to_string()),
+    };
+    json!({
+        "file": file,
+        "bytes": bytes,
+        "kind": "pyramid",
+        "scheme": pyramid.scheme().name(),
+        "boundary_rule": boundary,
+        "base": { "vertices": base.vertex_count(), "faces": base.face_count() },
+        "levels": rows,
+        "details": pyramid.detail_count(),
+        "finest_vertices": vertices,
+    })
+}
+
+/// The text of [`pyramid_info`], laid out as [`mesh_info_text`].
+fn pyramid_info_text(info: &Value) -> String {
+    let mut text = String::new();
+    let mut line = |label: &str, value: String| {
+        let _ = writeln!(text, "{label:<14}{value}");
+    };
+    let levels = info["levels"].as_array().map_or(&[][..], Vec::as_slice);
+    let boundary = info["boundary_rule"].as_str().map_or(String::new(), |rule| format!(", {rule} boundary"));
+    line("file", format!("{} ({} bytes)", info["file"].as_str().unwrap_or("?"), info["bytes"]));
+    let scheme = info["scheme"].as_str().unwrap_or("?");
+    line("pyramid", format!("{scheme}{boundary}: a base mesh and {} level(s) of details", levels.len()));
+    line("level 0", format!("{} vertices, {} faces (the base mesh)", info["base"]["vertices"], info["base"]["faces"]));
+    for row in levels {
+        let faces = row["faces"].as_u64().map_or(String::new(), |f| format!(", {f} faces"));
+        let order = if row["canonical_order"] == false { "; keeps its own vertex and face order" } else { "" };
+        let length = |key: &str| row[key].as_f64().unwrap_or(f64::NAN);
+        line(
+            &format!("level {}", row["level"]),
+            format!(
+                "{} vertices{faces}: {} details, largest {:.3e}, rms {:.3e}{order}",
+                row["vertices"],
+                row["details"],
+                length("largest_detail"),
+                length("rms_detail")
+            ),
+        );
+    }
+    line(
+        "details",
+        format!(
+            "{} in all (base vertices + details = {}, the finest mesh's vertex count)",
+            info["details"], info["finest_vertices"]
+        ),
+    );
+    text
 }
 
 // ---------------------------------------------------------------------------------------

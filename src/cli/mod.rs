@@ -86,7 +86,7 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Print counts, histograms, boundary loops, components, Euler characteristic, genus
-    /// and manifold status of a mesh.
+    /// and manifold status of a mesh, or what a `.mres` pyramid holds level by level.
     Info(mesh_cmds::InfoArgs),
     /// Compare two meshes: counts and symmetric nearest-vertex distances.
     Compare(mesh_cmds::CompareArgs),
