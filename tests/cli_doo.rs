@@ -102,7 +102,9 @@ fn info_describes_a_pyramid_level_by_level() {
         // The vertex count of the mesh rebuilt at this level.
         let rebuilt = pyramid.reconstruct(k + 1, None).unwrap();
         assert_eq!(row["vertices"].as_u64(), Some(rebuilt.vertex_count() as u64), "level {}", k + 1);
-        assert!(row["faces"].is_null() && row["canonical_order"] == true);
+        // A closed base: the face counts follow from the scheme's counts.
+        assert_eq!(row["faces"].as_u64(), Some(rebuilt.face_count() as u64), "level {}", k + 1);
+        assert!(row["canonical_order"] == true);
         let details = &pyramid.levels[k].details;
         assert_eq!(row["details"].as_u64(), Some(details.len() as u64));
         let largest = details.iter().map(|v| v.length()).fold(0.0, f64::max);
@@ -112,7 +114,13 @@ fn info_describes_a_pyramid_level_by_level() {
     // The text says the same.
     let text = ok(&["info", "moved.mres"], d);
     assert!(text.contains("doo-sabin, shrink boundary: a base mesh and 3 level(s) of details"), "{text}");
-    assert!(text.contains("level 3       384 vertices: "), "{text}");
+    assert!(text.contains("level 3       384 vertices, 386 faces: "), "{text}");
+    // An open base: the face counts depend on the boundary, and are not given.
+    write(&d.join("grid.off"), &shapes::grid(3, 2, shapes::CellKind::Quads).unwrap());
+    ok(&["subdivide", "grid.off", "grid1.obj", "--scheme", "doo-sabin"], d);
+    ok(&["decompose", "grid1.obj", "grid1.mres", "--scheme", "doo"], d);
+    let info: serde_json::Value = serde_json::from_str(&ok(&["info", "grid1.mres", "--json"], d)).unwrap();
+    assert!(info["levels"][0]["faces"].is_null() && info["levels"][0]["vertices"].as_u64() == Some(24), "{info}");
     // A pyramid cut short is an error that says where.
     std::fs::write(d.join("cut.mres"), &std::fs::read(d.join("moved.mres")).unwrap()[..200]).unwrap();
     let line = fails(&["info", "cut.mres"], d, "none");

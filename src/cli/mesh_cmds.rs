@@ -10,6 +10,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use mesh_topo::graph::UnionFind;
 use mesh_topo::io::{Format, PlyEncoding, ReadReport, WriteOptions};
 use mesh_topo::{DVec3, HalfedgeMesh, PolygonSoup};
+use multires::ElementCounts;
 use serde_json::{Value, json};
 
 use super::common::{io_error, note_dropped, print_out, read_soup, write_soup};
@@ -323,32 +324,39 @@ pub fn info(args: &InfoArgs) -> CliResult {
 /// rebuilt): the base mesh, then for each level its detail vectors (count, largest and
 /// root-mean-square length) and the vertex count they bring the mesh to (coarser
 /// vertices plus details: both reversals store exactly one vector per fine vertex),
-/// with the face count where the scheme fixes it (Loop: four times the coarser one) and
-/// whether the level keeps a vertex and face order of its own (a mesh that was not in
-/// the canonical order when decomposed).
+/// with the face count where the counts of the scheme's steps fix it
+/// ([`SurfaceScheme::closed_counts`](multires::SurfaceScheme::closed_counts): on a closed
+/// base mesh without isolated vertices, and for Loop on any, as its face count only
+/// quadruples) and whether the level keeps a vertex and face order of its own (a mesh
+/// that was not in the canonical order when decomposed).
 pub fn pyramid_info(file: &str, bytes: usize, pyramid: &multires::Pyramid) -> Value {
     let base = pyramid.base();
     let levels: Vec<(&[DVec3], bool)> = match pyramid {
         multires::Pyramid::Loop(p) => p.levels.iter().map(|l| (&l.details[..], l.order.is_none())).collect(),
         multires::Pyramid::Doo(p) => p.levels.iter().map(|l| (&l.details[..], l.order.is_identity())).collect(),
     };
-    let (mut vertices, mut faces) = (base.vertex_count(), Some(base.face_count()));
+    // The base's counts, if its faces follow from them at every level.
+    let base_counts = HalfedgeMesh::from_soup(base).ok().and_then(|mesh| {
+        let closed = mesh.vertices().all(|v| mesh.vertex_halfedge(v).is_some() && !mesh.is_boundary_vertex(v));
+        let loop_family = matches!(pyramid, multires::Pyramid::Loop(_));
+        (closed || loop_family).then(|| ElementCounts::of(&mesh))
+    });
+    let mut vertices = base.vertex_count();
     let mut rows = Vec::with_capacity(levels.len());
     for (k, (details, canonical)) in levels.into_iter().enumerate() {
         vertices += details.len();
-        faces = match pyramid {
-            multires::Pyramid::Loop(_) => faces.and_then(|f| f.checked_mul(4)),
-            multires::Pyramid::Doo(_) => None,
-        };
-        let (largest, sum_sq) =
-            details.iter().fold((0.0f64, 0.0f64), |(m, s), d| (m.max(d.length()), s + d.length_squared()));
-        let rms = if details.is_empty() { 0.0 } else { (sum_sq / details.len() as f64).sqrt() };
+        let faces = base_counts.map(|counts| pyramid.scheme().closed_counts(counts, k as u32 + 1).faces);
+        let (largest_squared, sum_squared) = details
+            .iter()
+            .map(|d| d.length_squared())
+            .fold((0.0f64, 0.0f64), |(largest, sum), squared| (largest.max(squared), sum + squared));
+        let rms = if details.is_empty() { 0.0 } else { (sum_squared / details.len() as f64).sqrt() };
         rows.push(json!({
             "level": k + 1,
             "vertices": vertices,
             "faces": faces,
             "details": details.len(),
-            "largest_detail": largest,
+            "largest_detail": largest_squared.sqrt(),
             "rms_detail": rms,
             "canonical_order": canonical,
         }));
