@@ -12,10 +12,19 @@
 //! once the buffer outgrows the caches; `cargo xtask bench` prints it beside the
 //! subdivision speed-ups of the same run.
 //!
-//! Benchmark ids are `machine/stream-<threads>t/<MiB>`, throughput in elements (`f64`s).
+//! The other thing two threads cost is waking the second one. A `rayon` worker that
+//! finds no work sleeps after a few microseconds of looking, and the first fork after
+//! that waits for it to wake. `fork-after-idle` times a fork into two halves of 10 µs
+//! of busy work each, every one after the second thread has had nothing to do for
+//! 0.2 ms: ideally 10 µs on two threads (20 µs on one); what it takes over that is the
+//! wake-up, which a small level (about 0.1 ms of work) pays whenever its second thread
+//! has fallen asleep, at the start of a call or between its passes.
+//!
+//! Benchmark ids are `machine/stream-<threads>t/<MiB>` (throughput in elements, `f64`s)
+//! and `machine/fork-after-idle-<threads>t`.
 
 use std::hint::black_box;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rayon::prelude::*;
@@ -49,5 +58,45 @@ fn stream(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, stream);
+/// Busy work of each half of a fork in `fork-after-idle`.
+const HALF: Duration = Duration::from_micros(10);
+
+/// How long the second thread has nothing to do before each fork: far longer than a
+/// `rayon` worker looks for work before it sleeps.
+const IDLE: Duration = Duration::from_micros(200);
+
+/// Keeps the calling thread busy for `time` (a loop, not a sleep: the thread stays on
+/// its core, as a thread doing work does).
+fn busy(time: Duration) {
+    let start = Instant::now();
+    while start.elapsed() < time {
+        std::hint::spin_loop();
+    }
+}
+
+fn fork_after_idle(c: &mut Criterion) {
+    let mut group = c.benchmark_group("machine");
+    group.sample_size(10).warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(2));
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
+        group.bench_function(format!("fork-after-idle-{threads}t"), |b| {
+            pool.install(|| {
+                b.iter_custom(|calls| {
+                    let mut total = Duration::ZERO;
+                    for _ in 0..calls {
+                        // Only the fork is timed, not the idle time before it.
+                        busy(IDLE);
+                        let start = Instant::now();
+                        rayon::join(|| busy(HALF), || busy(HALF));
+                        total += start.elapsed();
+                    }
+                    total
+                })
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, stream, fork_after_idle);
 criterion_main!(benches);

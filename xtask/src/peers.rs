@@ -194,6 +194,9 @@ pub fn comparison(rows: &BTreeMap<String, Measurement>, mesh_file: impl Fn(&str)
     if let Some(ceiling) = two_thread_ceiling(rows) {
         text.push_str(&ceiling);
     }
+    if let Some(wake_up) = wake_up_cost(rows) {
+        text.push_str(&wake_up);
+    }
     let mut peer_runs = PeerRuns::default();
     text.push_str(
         "| mesh | scheme | level | faces | ours 1 thread | ours 2 threads | 2t / 1t | peers | ratio 1t | ratio 2t |\n",
@@ -290,6 +293,24 @@ fn two_thread_ceiling(rows: &BTreeMap<String, Measurement>) -> Option<String> {
             speed_ups.join(", ")
         )
     })
+}
+
+/// The paragraph on the `machine/fork-after-idle-<n>t` rows (`benches/machine.rs`): what
+/// a fork into two 10 µs halves takes on one thread and on two when the second thread
+/// has idled, and so what waking it costs. `None` without both rows.
+fn wake_up_cost(rows: &BTreeMap<String, Measurement>) -> Option<String> {
+    let micros = |threads: usize| {
+        let row = rows.get(&format!("machine/fork-after-idle-{threads}t"))?;
+        Some(row.best_ns.unwrap_or(row.mean_ns) / 1e3)
+    };
+    let (one, two) = (micros(1)?, micros(2)?);
+    Some(format!(
+        "Waking the second thread (`machine/fork-after-idle`, fastest samples, same run): a fork into two \
+         halves of 10 µs of work after the second thread has idled 0.2 ms takes {one:.1} µs on one thread \
+         and {two:.1} µs on two (ideally 10 µs), so about {:.0} µs go to the wake-up, which a small level \
+         (about 0.1 ms of work) pays whenever its second thread has fallen asleep.\n\n",
+        (two - one / 2.0).max(0.0)
+    ))
 }
 
 /// `subdivide-<mesh>/<scheme>-<threads>t/<level>` → its parts.
@@ -390,9 +411,26 @@ mod tests {
         assert!(text.contains("2 MiB 2.00x, 512 MiB 1.50x."), "{text}");
         assert!(!text.contains("32 MiB"));
         assert_eq!(two_thread_ceiling(&BTreeMap::new()), None);
+        assert_eq!(wake_up_cost(&rows), None);
         let times = |best: f64, mean: f64| Some(OurTimes { best, mean });
         assert_eq!(speed_up(times(4.0, 6.0), times(2.0, 4.0)), "2.00 (1.50)");
         assert_eq!(speed_up(times(4.0, 6.0), None), "–");
+    }
+
+    #[test]
+    fn the_fork_rows_give_the_wake_up_cost() {
+        let row = |ns: f64| Measurement { mean_ns: 2.0 * ns, best_ns: Some(ns), elements: None };
+        let mut rows: BTreeMap<String, Measurement> =
+            [("machine/fork-after-idle-1t", row(20_400.0)), ("machine/fork-after-idle-2t", row(26_200.0))]
+                .into_iter()
+                .map(|(id, m)| (id.to_string(), m))
+                .collect();
+        let text = wake_up_cost(&rows).unwrap();
+        // 26.2 µs against the 10.2 µs that half of the one-thread time would be.
+        assert!(text.contains("takes 20.4 µs on one thread and 26.2 µs on two"), "{text}");
+        assert!(text.contains("about 16 µs go to the wake-up"), "{text}");
+        rows.remove("machine/fork-after-idle-1t");
+        assert_eq!(wake_up_cost(&rows), None);
     }
 
     #[test]
