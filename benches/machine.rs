@@ -13,8 +13,8 @@
 //! subdivision speed-ups of the same run.
 //!
 //! The other thing two threads cost is waking the second one. A `rayon` worker that
-//! finds no work sleeps after a few microseconds of looking, and the first fork after
-//! that waits for it to wake. `fork-after-idle` times a fork into two halves of 10 µs
+//! runs out of work sleeps soon after (on this machine within 20 µs), and the first
+//! fork after that waits for it to wake. `fork-after-idle` times a fork into two halves of 10 µs
 //! of busy work each, every one after the second thread has had nothing to do for
 //! 0.2 ms: ideally 10 µs on two threads (20 µs on one); what it takes over that is the
 //! wake-up, which a small level (about 0.1 ms of work) pays whenever its second thread
