@@ -19,6 +19,11 @@ pub fn io_error(path: &Path, error: IoError) -> CliError {
     }
 }
 
+/// Reads a whole file (a `.mres` pyramid, say); an error names the file.
+pub fn read_file(path: &Path) -> CliResult<Vec<u8>> {
+    std::fs::read(path).map_err(|source| CliError::Io { path: path.to_path_buf(), source })
+}
+
 /// Reads a mesh file as a polygon soup (format from the extension), with the reader's
 /// report of what it did not keep.
 pub fn read_soup(path: &Path) -> CliResult<(PolygonSoup, ReadReport)> {

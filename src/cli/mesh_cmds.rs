@@ -13,7 +13,7 @@ use mesh_topo::{DVec3, HalfedgeMesh, PolygonSoup};
 use multires::ElementCounts;
 use serde_json::{Value, json};
 
-use super::common::{io_error, note_dropped, print_out, read_soup, write_soup};
+use super::common::{io_error, note_dropped, print_out, read_file, read_soup, write_soup};
 use super::{CliError, CliResult, input_error};
 
 /// Options of `info`.
@@ -305,7 +305,7 @@ pub fn mesh_info_text(info: &Value) -> String {
 pub fn info(args: &InfoArgs) -> CliResult {
     let is_pyramid = args.mesh.extension().is_some_and(|e| e.eq_ignore_ascii_case("mres"));
     let (info, text): (Value, fn(&Value) -> String) = if is_pyramid {
-        let bytes = std::fs::read(&args.mesh).map_err(|source| CliError::Io { path: args.mesh.clone(), source })?;
+        let bytes = read_file(&args.mesh)?;
         let pyramid = multires::Pyramid::from_bytes(&bytes)
             .map_err(|e| CliError::Input(format!("{}: {e}", args.mesh.display())))?;
         (pyramid_info(&args.mesh.display().to_string(), bytes.len(), &pyramid), pyramid_info_text)
@@ -337,7 +337,7 @@ pub fn pyramid_info(file: &str, bytes: usize, pyramid: &multires::Pyramid) -> Va
     };
     // The base's counts, if its faces follow from them at every level.
     let base_counts = HalfedgeMesh::from_soup(base).ok().and_then(|mesh| {
-        let closed = mesh.vertices().all(|v| mesh.vertex_halfedge(v).is_some() && !mesh.is_boundary_vertex(v));
+        let closed = mesh.vertices().all(|v| !mesh.is_isolated(v) && !mesh.is_boundary_vertex(v));
         let loop_family = matches!(pyramid, multires::Pyramid::Loop(_));
         (closed || loop_family).then(|| ElementCounts::of(&mesh))
     });

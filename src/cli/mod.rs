@@ -428,7 +428,7 @@ fn kept_details(kept: usize, total: usize, fraction: f64) -> String {
 
 /// `.mres` files say which scheme wrote them; dispatch on that.
 fn reconstruct(args: &ReconstructArgs) -> CliResult {
-    let bytes = std::fs::read(&args.input).map_err(|source| CliError::Io { path: args.input.clone(), source })?;
+    let bytes = common::read_file(&args.input)?;
     if doo_cmds::is_doo_pyramid(&bytes) {
         doo_cmds::reconstruct(args, &bytes)
     } else {
