@@ -11,6 +11,14 @@
 //! first reuses the memory of the one before (the first call is reported apart). The
 //! last line gives the process's peak resident memory (Linux `VmHWM`, reset once the input
 //! mesh is built) and the output size.
+//!
+//! The peak counts what the allocator keeps resident, not only what the subdivision
+//! holds. Under glibc, whose mmap threshold grows as large blocks are freed (as they are
+//! while the input is read), the base level's arrays, built on the worker thread, come
+//! from the heap of its arena and stay resident once freed: at level 2 of `bunny00.off` that arena
+//! held 3.2 MB with 10 kB in use after the call, and (peak - before) / output read 1.52;
+//! run with `MALLOC_MMAP_THRESHOLD_=131072` (the threshold fixed at its default) it read
+//! 1.30, 1.42, 1.42 and 1.42 at levels 1-4.
 
 #[path = "support/mesh_file.rs"]
 mod mesh_file;
