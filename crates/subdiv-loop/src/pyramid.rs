@@ -37,8 +37,8 @@ use crate::corner_table::CornerTable;
 use crate::detect::{FineOrder, reverse_canonical_soup};
 use crate::forward::LoopOptions;
 use crate::reverse::{
-    CanonicalLevel, FineLevel, LevelParts, canonical_reading_is_settled, check_level, non_finite_bits,
-    reconstruct_levels, reverse_level,
+    CanonicalLevel, FineLevel, LevelParts, canonical_reading_is_settled, check_level, first_reading_is_clearly_best,
+    non_finite_bits, reconstruct_levels, reverse_level,
 };
 
 /// Magic number of a Loop pyramid file.
@@ -228,9 +228,12 @@ fn decompose_soup_as_given(soup: &PolygonSoup, options: &DecomposeOptions) -> Re
         && level.coarse.fans_are_single()
         // A mesh of regular valences only (so is the fine mesh, then: edge points are
         // regular, vertex points keep their valence) reads several ways, which
-        // `decompose` compares (see `reverse_level`), unless this reading is settled.
+        // `decompose` compares (see `reverse_level`), unless this reading is settled or,
+        // without seeds, clearly the best.
         && (!level.valences_regular
-            || canonical_reading_is_settled(&level.coarse, &level.details, &soup.positions))
+            || canonical_reading_is_settled(&level.coarse, &level.details, &soup.positions)
+            || (options.seed_vertices.is_empty()
+                && first_reading_is_clearly_best(&level.coarse, &soup.positions, &options.rules)))
     {
         let CanonicalLevel { coarse, positions, details, .. } = level;
         return decompose_below(
@@ -1214,7 +1217,9 @@ mod tests {
                 if *name == "torus" {
                     // Regular valences: the exact refinement's reading is settled, so its
                     // soup is read from its faces too (compared above); the moved one's is
-                    // not (it goes through the mesh, whose readings are compared).
+                    // not settled (it is read from its faces only where the sums of
+                    // `lattice` find it clearly the best, else through the mesh, whose
+                    // readings are compared in turn).
                     let exact = reverse_canonical_soup(&refined, &[], &rules).expect(name);
                     assert!(exact.valences_regular && all_valences_regular(&exact.coarse));
                     assert!(canonical_reading_is_settled(&exact.coarse, &exact.details, &refined.positions));

@@ -1,0 +1,311 @@
+//! The readings of a closed mesh of valence 6 everywhere, summed from its first reading.
+//!
+//! Such a mesh is a piece of the regular triangular lattice, and reads four ways: the
+//! vertex points of a reading are one coset of the lattice's sublattice of index 4 (the
+//! points of even coordinates and its three translates by half a coarse edge). When the
+//! mesh is in the canonical order its first reading is known (vertex points `0..V`, edge
+//! point `V + e` of coarse edge `e`), and so are the other three: the coarse edges take
+//! three colours, the lattice's directions, one of each on every coarse face, and the
+//! reading of colour `k` has the edge points of the edges of colour `k` as its vertex
+//! points. Every fine vertex is a vertex point in exactly one reading, where its coarse
+//! position is the inverse vertex rule on its ring; in each of the other three it is the
+//! edge point of a coarse edge whose ends and opposite vertices are fine vertices found
+//! from the first reading's corners by index arithmetic. So one pass over the coarse
+//! corners gives every reading's sum of squared details, without the searches and
+//! reversals of the readings in turn.
+//!
+//! The lattice, with the first reading's coarse face `(a, b, c)` over corner `c0` (the
+//! half-edge `a -> b`, its edge point `m`) and the face `(b, a, d)` of its twin `t0`:
+//! the edge of `next(t0)` (`a -> d`) is parallel to that of `next(c0)` (`b -> c`) and has
+//! its colour, the edge of `prev(t0)` that of `prev(c0)`. Seen from `m`, whose ring is
+//! `a, b` and the four other edge points of the two faces:
+//! - in the reading of `prev(c0)`'s colour, `m` is the edge point between the edge points
+//!   of `prev(c0)` and `prev(t0)`, with opposite vertices the edge points of
+//!   `next(twin(next(c0)))` and `next(twin(next(t0)))`;
+//! - in the reading of `next(c0)`'s colour, between those of `next(c0)` and `next(t0)`,
+//!   opposite `prev(twin(prev(t0)))` and `prev(twin(prev(c0)))`;
+//! - in the first reading, between `a` and `b`, opposite `c` and `d`.
+//!
+//! A vertex point `x` is, in the reading of colour `k`, the edge point between the edge
+//! points of its two edges of colour `k`, opposite the edge points of the edges of colour
+//! `k` across `x` in its faces.
+
+use glam::DVec3;
+
+use super::{InverseWeights, coarse_position};
+use crate::corner_table::{CornerTable, NONE, next, prev};
+use crate::forward::LoopOptions;
+
+/// The first reading is taken without comparing the readings in turn only where its sum
+/// of squared details is below this fraction of every other reading's: the sums here are
+/// those of the reversals up to round-off, which is far smaller than this margin (the
+/// readings in turn, which decide the closer cases, are the reference).
+const CLEAR_MARGIN: f64 = 0.01;
+
+/// Whether, in every component, the first reading of a closed mesh of valence 6
+/// everywhere in the canonical order (`coarse`: its coarse mesh, `fine`: the fine
+/// positions) has a sum of squared details clearly smaller than the other three
+/// readings' (see [`CLEAR_MARGIN`]), so that comparing the readings in turn would keep
+/// it. `false` when the sums cannot be formed (a boundary, edges without a lattice
+/// colouring) or are not clear.
+pub(super) fn first_reading_is_clearly_best(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions) -> bool {
+    energies(coarse, fine, rules).is_some_and(|components| {
+        components.iter().all(|&[first, a, b, c]| first < (1.0 - CLEAR_MARGIN) * a.min(b).min(c))
+    })
+}
+
+/// Per component of `coarse` (in order of its lowest face), the sums of squared details
+/// of the first reading (at 0) and of the readings of the three edge colours (at `1 + k`);
+/// `None` for an open mesh, a vertex of valence other than 6, a fine mesh of another
+/// size, or edges that take no lattice colouring.
+pub(super) fn energies(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions) -> Option<Vec<[f64; 4]>> {
+    let (vertex, twin, edge) = (coarse.corner_vertices(), coarse.twins(), coarse.corner_edges());
+    let first_odd = coarse.vertex_count();
+    if twin.contains(&NONE) || fine.len() != first_odd + coarse.edge_count() {
+        return None;
+    }
+    // Closed: a vertex's valence is its number of corners.
+    let mut valence = vec![0u32; first_odd];
+    for &v in vertex {
+        valence[v as usize] += 1;
+    }
+    if valence.iter().any(|&n| n != 6) {
+        return None;
+    }
+    drop(valence);
+    let colouring = Colouring::of(twin)?;
+    let (colour, component) = (|c: u32| colouring.colour(c), &colouring.component);
+    let edge_point = |c: u32| first_odd + edge[c as usize] as usize;
+
+    // Every fine vertex's coarse position in the reading where it is a vertex point.
+    let mut ring = vec![DVec3::ZERO; fine.len()];
+    for c in 0..vertex.len() as u32 {
+        let m = edge_point(c);
+        // Each edge once, from its first corner (the twin's is higher).
+        ring[vertex[c as usize] as usize] += fine[m];
+        if c < twin[c as usize] {
+            let t = twin[c as usize];
+            ring[m] += fine[vertex[c as usize] as usize]
+                + fine[vertex[next(c) as usize] as usize]
+                + fine[edge_point(next(c))]
+                + fine[edge_point(prev(c))]
+                + fine[edge_point(next(t))]
+                + fine[edge_point(prev(t))];
+        }
+    }
+    let weights = InverseWeights::new(rules.weights);
+    let position: Vec<DVec3> =
+        fine.iter().zip(&ring).map(|(&p, &sum)| coarse_position(p, sum, 6, false, rules, &weights)).collect();
+    drop(ring);
+    let predicted = |ends: [usize; 2], across: [usize; 2]| {
+        0.375 * (position[ends[0]] + position[ends[1]]) + 0.125 * (position[across[0]] + position[across[1]])
+    };
+
+    let mut sums = vec![[0.0; 4]; colouring.components];
+    // Vertex points, reading `1 + k`: their two edges of colour `k` and the two edges of
+    // colour `k` across them, summed per vertex first.
+    let mut ends = vec![[DVec3::ZERO; 3]; first_odd];
+    let mut across = vec![[DVec3::ZERO; 3]; first_odd];
+    let mut vertex_component = vec![0u32; first_odd];
+    for c in 0..vertex.len() as u32 {
+        let x = vertex[c as usize] as usize;
+        ends[x][colour(c)] += position[edge_point(c)];
+        across[x][colour(next(c))] += position[edge_point(next(c))];
+        vertex_component[x] = component[(c / 3) as usize];
+    }
+    for x in 0..first_odd {
+        let sum = &mut sums[vertex_component[x] as usize];
+        for k in 0..3 {
+            let detail = fine[x] - (0.375 * ends[x][k] + 0.125 * across[x][k]);
+            sum[1 + k] += detail.length_squared();
+        }
+    }
+    // Edge points, from the first corner of each edge: the first reading and the readings
+    // of the colours of the face's two other edges.
+    for c in (0..vertex.len() as u32).filter(|&c| c < twin[c as usize]) {
+        let t = twin[c as usize];
+        let m = edge_point(c);
+        let point = |c: u32| edge_point(c);
+        let corner = |c: u32| vertex[c as usize] as usize;
+        let sum = &mut sums[component[(c / 3) as usize] as usize];
+        let first = fine[m] - predicted([corner(c), corner(next(c))], [corner(prev(c)), corner(prev(t))]);
+        sum[0] += first.length_squared();
+        let by_prev = fine[m]
+            - predicted(
+                [point(prev(c)), point(prev(t))],
+                [point(next(twin[next(c) as usize])), point(next(twin[next(t) as usize]))],
+            );
+        sum[1 + colour(prev(c))] += by_prev.length_squared();
+        let by_next = fine[m]
+            - predicted(
+                [point(next(c)), point(next(t))],
+                [point(prev(twin[prev(t) as usize])), point(prev(twin[prev(c) as usize]))],
+            );
+        sum[1 + colour(next(c))] += by_next.length_squared();
+    }
+    Some(sums)
+}
+
+/// A colouring of the edges of a closed triangle mesh by three lattice directions: every
+/// face has the three colours, in the same cyclic order on every face (corner `k` of face
+/// `f` has colour `k + shift(f)` modulo 3), and the two corners of an edge one colour.
+struct Colouring {
+    /// The colour of corner 0 of every face.
+    shift: Vec<u8>,
+    /// Component of every face (by a search from its lowest face).
+    component: Vec<u32>,
+    components: usize,
+}
+
+impl Colouring {
+    /// `None` where a face is reached with two shifts (no lattice colouring).
+    fn of(twin: &[u32]) -> Option<Self> {
+        let faces = twin.len() / 3;
+        let mut shift = vec![u8::MAX; faces];
+        let mut component = vec![0u32; faces];
+        let mut components = 0;
+        let mut stack = Vec::new();
+        for start in 0..faces {
+            if shift[start] != u8::MAX {
+                continue;
+            }
+            shift[start] = 0;
+            component[start] = components as u32;
+            stack.push(start as u32);
+            while let Some(f) = stack.pop() {
+                for k in 0..3 {
+                    let c = 3 * f + k;
+                    let colour = (k + shift[f as usize] as u32) % 3;
+                    let t = twin[c as usize];
+                    let g = (t / 3) as usize;
+                    // The twin's corner takes the same colour.
+                    let wanted = ((colour + 3 - t % 3) % 3) as u8;
+                    if shift[g] == u8::MAX {
+                        shift[g] = wanted;
+                        component[g] = components as u32;
+                        stack.push(g as u32);
+                    } else if shift[g] != wanted {
+                        return None;
+                    }
+                }
+            }
+            components += 1;
+        }
+        Some(Self { shift, component, components })
+    }
+
+    /// The colour of corner `c`.
+    #[inline]
+    fn colour(&self, c: u32) -> usize {
+        ((c % 3 + self.shift[(c / 3) as usize] as u32) % 3) as usize
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::forward::{VertexWeights, subdivide};
+    use crate::reference::perturb;
+    use crate::reverse::{FineLevel, ReverseOptions, reverse, reverse_level_fast};
+    use mesh_topo::shapes::{self, CellKind};
+    use mesh_topo::{HalfedgeMesh, PolygonSoup};
+
+    /// A torus of `columns x rows x 2` triangles refined `levels` times (the canonical
+    /// order), every vertex moved at random by up to `amount`.
+    fn moved_torus(columns: u32, rows: u32, levels: u32, rules: &LoopOptions, amount: f64, seed: u64) -> HalfedgeMesh {
+        let base = HalfedgeMesh::from_soup(&shapes::torus(columns, rows, CellKind::Triangles).unwrap()).unwrap();
+        let fine = subdivide(&base, levels, rules).unwrap();
+        let soup = PolygonSoup::from_faces(fine.positions, fine.triangles);
+        HalfedgeMesh::from_soup(&perturb(&soup, amount, seed)).unwrap()
+    }
+
+    /// The first reading of a mesh in the canonical order, as `reverse_level` has it.
+    fn first_reading(fine: &HalfedgeMesh, rules: &LoopOptions) -> CornerTable {
+        let level = reverse_level_fast(FineLevel::Mesh(fine), fine.positions(), &[], rules).unwrap().unwrap();
+        assert!(level.order.is_none() && level.several_readings, "a canonical reading of a regular mesh");
+        level.coarse
+    }
+
+    /// The sums are those of the reversals of the four readings (each seeded with one of
+    /// its vertex points), under both vertex weights, on tori of several sizes.
+    #[test]
+    fn the_sums_are_those_of_the_readings_reversed() {
+        for weights in [VertexWeights::Loop, VertexWeights::Warren] {
+            let rules = LoopOptions { weights, keep_corners: false };
+            for (columns, rows, levels, seed) in [(6, 4, 1, 1), (8, 6, 2, 2), (12, 8, 1, 3), (9, 7, 1, 4)] {
+                let fine = moved_torus(columns, rows, levels, &rules, 0.05, seed);
+                let coarse = first_reading(&fine, &rules);
+                let sums = energies(&coarse, fine.positions(), &rules).expect("a lattice");
+                assert_eq!(sums.len(), 1, "one component");
+                let colouring = Colouring::of(coarse.twins()).unwrap();
+                let first_odd = coarse.vertex_count() as u32;
+                let mut compared = 0;
+                for (reading, &by_lattice) in sums[0].iter().enumerate() {
+                    // A vertex point of the reading: vertex 0, or the edge point of an
+                    // edge of its colour.
+                    let seed = match reading {
+                        0 => 0,
+                        _ => {
+                            let c = (0..coarse.corner_count() as u32).find(|&c| colouring.colour(c) + 1 == reading);
+                            first_odd + coarse.corner_edges()[c.unwrap() as usize]
+                        }
+                    };
+                    let options = ReverseOptions { rules, seed_vertices: vec![seed] };
+                    let Ok(level) = reverse(&fine, &options) else { continue };
+                    let energy: f64 = level.details.iter().map(|d| d.length_squared()).sum();
+                    assert!(
+                        (by_lattice - energy).abs() <= 1e-12 * energy,
+                        "{columns} x {rows}, {levels} level(s), {weights:?}, reading {reading}: {by_lattice} vs {energy}"
+                    );
+                    compared += 1;
+                }
+                assert!(compared >= 3, "{columns} x {rows}: several readings ({compared})");
+            }
+        }
+    }
+
+    /// Two tori refined together: one sum per component, each that of the torus alone.
+    #[test]
+    fn components_are_summed_apart() {
+        let rules = LoopOptions::default();
+        let (a, b) =
+            (shapes::torus(6, 4, CellKind::Triangles).unwrap(), shapes::torus(8, 6, CellKind::Triangles).unwrap());
+        let mut both = a.clone();
+        let offset = a.vertex_count() as u32;
+        both.positions.extend(b.positions.iter().map(|&p| p + DVec3::splat(10.0)));
+        for face in b.faces() {
+            both.push_face(&face.iter().map(|&v| v + offset).collect::<Vec<u32>>());
+        }
+        let refine = |soup: &PolygonSoup| {
+            let fine = subdivide(&HalfedgeMesh::from_soup(soup).unwrap(), 1, &rules).unwrap();
+            HalfedgeMesh::from_soup(&perturb(&PolygonSoup::from_faces(fine.positions, fine.triangles), 0.05, 7))
+                .unwrap()
+        };
+        let fine = refine(&both);
+        let sums = energies(&first_reading(&fine, &rules), fine.positions(), &rules).unwrap();
+        assert_eq!(sums.len(), 2);
+        assert!(sums.iter().all(|s| s.iter().all(|&e| e > 0.0)));
+    }
+
+    /// A closed mesh with a vertex of valence other than 6 has no sums.
+    #[test]
+    fn irregular_valences_have_no_sums() {
+        let rules = LoopOptions::default();
+        let fine = subdivide(&HalfedgeMesh::from_soup(&shapes::octahedron()).unwrap(), 1, &rules).unwrap();
+        let fine = HalfedgeMesh::from_soup(&PolygonSoup::from_faces(fine.positions, fine.triangles)).unwrap();
+        let level = reverse_level_fast(FineLevel::Mesh(&fine), fine.positions(), &[], &rules).unwrap().unwrap();
+        assert!(energies(&level.coarse, fine.positions(), &rules).is_none());
+    }
+
+    /// A mesh with a boundary has no sums here (the readings in turn decide it).
+    #[test]
+    fn an_open_mesh_has_no_sums() {
+        let rules = LoopOptions::default();
+        let grid = shapes::grid(4, 4, CellKind::Triangles).unwrap();
+        let fine = subdivide(&HalfedgeMesh::from_soup(&grid).unwrap(), 1, &rules).unwrap();
+        let fine = HalfedgeMesh::from_soup(&PolygonSoup::from_faces(fine.positions, fine.triangles)).unwrap();
+        let level = reverse_level_fast(FineLevel::Mesh(&fine), fine.positions(), &[], &rules).unwrap().unwrap();
+        assert!(energies(&level.coarse, fine.positions(), &rules).is_none());
+        assert!(!first_reading_is_clearly_best(&level.coarse, fine.positions(), &rules));
+    }
+}
