@@ -125,21 +125,20 @@ pub(super) fn energies(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions
     for c in (0..vertex.len() as u32).filter(|&c| c < twin[c as usize]) {
         let t = twin[c as usize];
         let m = edge_point(c);
-        let point = |c: u32| edge_point(c);
         let corner = |c: u32| vertex[c as usize] as usize;
         let sum = &mut sums[component[(c / 3) as usize] as usize];
         let first = fine[m] - predicted([corner(c), corner(next(c))], [corner(prev(c)), corner(prev(t))]);
         sum[0] += first.length_squared();
         let by_prev = fine[m]
             - predicted(
-                [point(prev(c)), point(prev(t))],
-                [point(next(twin[next(c) as usize])), point(next(twin[next(t) as usize]))],
+                [edge_point(prev(c)), edge_point(prev(t))],
+                [edge_point(next(twin[next(c) as usize])), edge_point(next(twin[next(t) as usize]))],
             );
         sum[1 + colour(prev(c))] += by_prev.length_squared();
         let by_next = fine[m]
             - predicted(
-                [point(next(c)), point(next(t))],
-                [point(prev(twin[prev(t) as usize])), point(prev(twin[prev(c) as usize]))],
+                [edge_point(next(c)), edge_point(next(t))],
+                [edge_point(prev(twin[prev(t) as usize])), edge_point(prev(twin[prev(c) as usize]))],
             );
         sum[1 + colour(next(c))] += by_next.length_squared();
     }
