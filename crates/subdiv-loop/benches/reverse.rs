@@ -53,9 +53,9 @@
 //! it has several readings and the automatic choice compares them) with and without a
 //! seed vertex, in the canonical order and renumbered, beside the forward step to it;
 //! the `exact_` rows time the torus refined exactly (zero details), whose first exact
-//! reading settles the choice. In the canonical order the moved torus's first reading
-//! is kept by the one-pass sums of all four readings (it is clearly the best there);
-//! renumbered, the readings are reversed in turn.
+//! reading settles the choice. The moved torus's readings are compared by their
+//! one-pass sums (from its canonical reading, or renumbered from the first reading
+//! found), which find one clearly the best, so no other is reversed.
 //!
 //! Ratios are only meaningful within one run (the machine is shared): group `levelL`
 //! times the operations of size `L` back to back; compare `levelL/decompose` with

@@ -538,19 +538,20 @@ pub(crate) struct LevelParts {
 /// the first irregular vertex. So a canonical mesh of a torus beside a mesh with
 /// irregular vertices keeps the torus's canonical reading, the one it was made with.
 ///
-/// A closed mesh of valence 6 everywhere in the canonical order, without seeds, first
-/// has the sums of squared details of all four readings of every component computed
-/// from its first reading's corners in one pass ([`lattice`]): where the first reading's
-/// sum is below 99% of every other's in every component, the readings in turn would keep
-/// it, and it is returned without them; closer cases are decided in turn as above, so
-/// the result is the same either way (a test compares the two on moved tori).
+/// A closed mesh of valence 6 everywhere without seeds has the sums of squared details
+/// of all four readings of every component computed from one reading's corners in one
+/// pass ([`lattice`]): from the canonical reading (before any other is reversed), or
+/// else from the first round's reading. Where one reading's sum is below 99% of every
+/// other's in every component, the readings in turn would choose it (see
+/// `lattice_choice`), and it is returned (reversed, if it is not the one at hand)
+/// without them; closer cases are decided in turn as above, so the result is the same
+/// either way (a test compares the two on moved tori, bit for bit).
 /// (Bench group `regular_torus`, one thread, a refined torus of 131 072 vertices, moved:
-/// the forward step 2.6 ms; seeded 4.2 ms in the canonical order and 12.6 ms renumbered;
-/// automatic 9.5 ms in the canonical order (the one-pass sums; 40 ms with the readings
-/// reversed in turn) and 63 ms renumbered: three more readings, each through the search,
-/// which reads the fine corners once for all of them. The torus refined exactly,
-/// automatic: 4.6 ms in the canonical order, 30 ms renumbered: its first exact reading
-/// settles it.)
+/// the forward step 2.6 ms; seeded 4.2 ms in the canonical order and 12.5 ms
+/// renumbered; automatic 8.8 ms and 39 ms (40 ms and 63 ms with the readings reversed in
+/// turn: three more readings, each through the search, which reads the fine corners
+/// once for all of them). The torus refined exactly, automatic: 4.8 ms in the canonical
+/// order, 32 ms renumbered: its first exact reading settles it.)
 pub(crate) fn reverse_level(
     fine: FineLevel<'_>,
     positions: &[DVec3],
@@ -688,6 +689,26 @@ pub(crate) fn reverse_level(
                 }
             }
         }
+        // No canonical reading and no seeds: from the first round's reading of every
+        // component, the sums of [`lattice`] may name each component's reading clearly
+        // the best, which the later rounds would choose (see `lattice_choice`).
+        // (Where every component's reading is settled, the later rounds try nothing.)
+        if round == 0
+            && first.is_none()
+            && seeds.is_empty()
+            && tried.len() == readings.candidates.len()
+            && !readings.candidates.iter().all(|&(c, _)| settled(best[c].0, zero[c]))
+            && let Some(level) = &best_level
+            && let Some(chosen) = lattice_choice(level, positions, &readings, rules)
+        {
+            if chosen.iter().zip(&tried).all(|(&seed, &(_, tried))| seed == tried) {
+                return Ok(best_level.expect("checked above"));
+            }
+            // (A reversal that fails leaves the choice to the later rounds.)
+            if let Ok(level) = reverse_reading(&chosen) {
+                return Ok(level);
+            }
+        }
     }
     let chosen: Vec<Option<u32>> = readings.candidates.iter().map(|&(c, _)| best[c].1).collect();
     if let Some(level) = best_level {
@@ -736,6 +757,51 @@ thread_local! {
 /// clear.
 pub(crate) fn first_reading_is_clearly_best(coarse: &CornerTable, positions: &[DVec3], rules: &LoopOptions) -> bool {
     compares_by_lattice() && lattice::first_reading_is_clearly_best(coarse, positions, rules)
+}
+
+/// The seeds (one per component of `readings`, in its order) that reversing the readings
+/// of a closed mesh of valence 6 everywhere in turn would choose, from `level`, the
+/// reading of the first candidate of every component, where the sums of [`lattice`]
+/// name one reading clearly the best in each: the first candidate that is one of its
+/// vertex points (the candidates before it are not, and none of them is passed over
+/// as a vertex point of a reading found before: only a candidate of that reading could
+/// be). `None` where the sums do not apply or some component has no clear best.
+fn lattice_choice(
+    level: &LevelParts,
+    positions: &[DVec3],
+    readings: &RegularReadings,
+    rules: &LoopOptions,
+) -> Option<Vec<u32>> {
+    if !compares_by_lattice() {
+        return None;
+    }
+    let sums = lattice::Readings::of(&level.coarse, &in_canonical_order(level, positions), rules)?;
+    // The canonical number of every fine vertex.
+    let numbers = level.order.as_ref().map(|order| {
+        let mut number = vec![0u32; positions.len()];
+        for (canonical, &v) in order.vertex_of_canonical.iter().enumerate() {
+            number[v as usize] = canonical as u32;
+        }
+        number
+    });
+    let canonical = |v: u32| numbers.as_ref().map_or(v, |number| number[v as usize]) as usize;
+    let mut chosen = Vec::with_capacity(readings.candidates.len());
+    for (_, candidates) in &readings.candidates {
+        let lowest = canonical(*candidates.first()?);
+        let winner = sums.clear_winner(sums.component_of(lowest))?;
+        let seed = candidates.iter().find(|&&v| sums.reading_of(canonical(v)) == winner)?;
+        chosen.push(*seed);
+    }
+    Some(chosen)
+}
+
+/// The fine `positions` in the canonical order of `level` (the fine vertex of each
+/// canonical one), borrowed when the fine mesh is in that order.
+fn in_canonical_order<'a>(level: &LevelParts, positions: &'a [DVec3]) -> Cow<'a, [DVec3]> {
+    match &level.order {
+        None => Cow::Borrowed(positions),
+        Some(order) => Cow::Owned(order.vertex_of_canonical.iter().map(|&v| positions[v as usize]).collect()),
+    }
 }
 
 /// Whether the readings of a closed regular mesh in the canonical order are compared by
@@ -1689,10 +1755,12 @@ mod tests {
     /// in turn, bit for bit: moved tori of several sizes, one and two components, both
     /// vertex weights, moved a little (the first reading clearly the best: no other
     /// reading reversed) and a lot (some other reading the best: the readings in turn
-    /// decide). Renumbered meshes never take the lattice's sums.
+    /// decide). Renumbered, the reading of the first round (one reversal) is the one the
+    /// sums judge.
     #[test]
     fn readings_compared_by_the_lattice_are_those_reversed_in_turn() {
-        let (mut kept_by_lattice, mut decided_in_turn) = (0, 0);
+        // Kept from the first round's reading: itself, and another reading.
+        let (mut kept_by_lattice, mut kept_renumbered, mut decided_in_turn) = (0, [0, 0], 0);
         for weights in [VertexWeights::Loop, VertexWeights::Warren] {
             let rules = LoopOptions { weights, keep_corners: false };
             let torus = shapes::torus(6, 4, CellKind::Triangles).unwrap();
@@ -1704,9 +1772,14 @@ mod tests {
             let fines = [canonical(&torus, 1), canonical(&wide, 2), canonical(&side_by_side(&torus, &wide), 1)];
             for (i, fine) in fines.iter().enumerate() {
                 for (seed, amount) in [(1, 0.01), (2, 0.05), (3, 0.3), (4, 1.0)] {
-                    for renumber in [false, true] {
+                    // In the canonical order, and renumbered four ways (the first round's
+                    // reading, from the lowest vertex, is then any of the four).
+                    for renumber in [None, Some(0), Some(1), Some(2), Some(3)] {
                         let moved = perturb(fine, amount, seed);
-                        let moved = mesh(&if renumber { scramble(&moved, seed) } else { moved });
+                        let moved = mesh(&match renumber {
+                            Some(k) => scramble(&moved, 10 * seed + k),
+                            None => moved,
+                        });
                         let reversed = |by_lattice: bool| {
                             BY_LATTICE.set(by_lattice);
                             MORE_READINGS.set(0);
@@ -1715,13 +1788,20 @@ mod tests {
                             (level, MORE_READINGS.get())
                         };
                         let ((level, more), (in_turn, more_in_turn)) = (reversed(true), reversed(false));
-                        let case = format!("{weights:?}, mesh {i}, moved {amount}, renumbered {renumber}");
+                        let case = format!("{weights:?}, mesh {i}, moved {amount}, renumbered {renumber:?}");
                         assert_eq!(level.details, in_turn.details, "{case}");
                         assert_eq!(level.coarse.positions(), in_turn.coarse.positions(), "{case}");
                         assert_eq!(level.coarse.to_soup().indices, in_turn.coarse.to_soup().indices, "{case}");
                         assert_eq!(level.order, in_turn.order, "{case}");
-                        if renumber {
-                            assert_eq!(more, more_in_turn, "{case}: the lattice's sums are not taken");
+                        if renumber.is_some() {
+                            // The first round's reading, and the best one if another:
+                            // fewer than in turn; or the readings in turn.
+                            if more < more_in_turn {
+                                assert!(more <= 2, "{case}: {more} readings with the sums");
+                                kept_renumbered[more - 1] += 1;
+                            } else {
+                                assert_eq!(more, more_in_turn, "{case}");
+                            }
                         } else if more == 0 {
                             assert!(more_in_turn >= 3, "{case}: kept by the sums, not by the readings in turn");
                             kept_by_lattice += 1;
@@ -1733,8 +1813,11 @@ mod tests {
                 }
             }
         }
-        // Both ways were exercised.
-        assert!(kept_by_lattice > 0 && decided_in_turn > 0, "{kept_by_lattice} kept, {decided_in_turn} in turn");
+        // Every way was exercised.
+        assert!(
+            kept_by_lattice > 0 && kept_renumbered.iter().all(|&n| n > 0) && decided_in_turn > 0,
+            "{kept_by_lattice} kept, {kept_renumbered:?} kept renumbered, {decided_in_turn} in turn"
+        );
     }
 
     /// A component whose reading has zero details is settled: no other reading is

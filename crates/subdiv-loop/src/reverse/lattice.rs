@@ -49,25 +49,77 @@ const CLEAR_MARGIN: f64 = 0.01;
 /// it. `false` when the sums cannot be formed (a boundary, edges without a lattice
 /// colouring) or are not clear.
 pub(super) fn first_reading_is_clearly_best(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions) -> bool {
-    energies(coarse, fine, rules).is_some_and(|components| {
-        components.iter().all(|&[first, a, b, c]| first < (1.0 - CLEAR_MARGIN) * a.min(b).min(c))
-    })
+    Readings::of(coarse, fine, rules)
+        .is_some_and(|readings| (0..readings.sums.len()).all(|k| readings.clear_winner(k) == Some(0)))
+}
+
+/// The four readings of every component of a closed mesh of valence 6 everywhere, seen
+/// from one of them (the first reading: `coarse` and the fine mesh in its canonical
+/// order): their sums of squared details and which reading each fine vertex is a vertex
+/// point of.
+pub(super) struct Readings<'a> {
+    coarse: &'a CornerTable,
+    colouring: Colouring,
+    /// Per component, see [`sums_and_colouring`].
+    sums: Vec<[f64; 4]>,
+}
+
+impl<'a> Readings<'a> {
+    /// `None` where [`sums_and_colouring`] is.
+    pub(super) fn of(coarse: &'a CornerTable, fine: &[DVec3], rules: &LoopOptions) -> Option<Self> {
+        let (sums, colouring) = sums_and_colouring(coarse, fine, rules)?;
+        Some(Self { coarse, colouring, sums })
+    }
+
+    /// The reading whose vertex point canonical fine vertex `v` is: 0 for the first
+    /// reading (`v` below the coarse vertex count), `1 + k` for the edge points of colour
+    /// `k`.
+    pub(super) fn reading_of(&self, v: usize) -> usize {
+        match v.checked_sub(self.coarse.vertex_count()) {
+            None => 0,
+            Some(e) => 1 + self.colouring.colour(self.coarse.edge_corners()[e]),
+        }
+    }
+
+    /// The component of canonical fine vertex `v` (as [`sums_and_colouring`] numbers them).
+    pub(super) fn component_of(&self, v: usize) -> usize {
+        let corner = match v.checked_sub(self.coarse.vertex_count()) {
+            None => self.coarse.vertex_corners()[v],
+            Some(e) => self.coarse.edge_corners()[e],
+        };
+        self.colouring.component[(corner / 3) as usize] as usize
+    }
+
+    /// The reading of component `k` whose sum is clearly the smallest (below
+    /// `1 - CLEAR_MARGIN` times every other), if one is.
+    pub(super) fn clear_winner(&self, k: usize) -> Option<usize> {
+        let sums = self.sums[k];
+        let (winner, &least) = sums.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1))?;
+        let clear = sums.iter().enumerate().all(|(r, &sum)| r == winner || least < (1.0 - CLEAR_MARGIN) * sum);
+        clear.then_some(winner)
+    }
+}
+
+/// [`sums_and_colouring`] without the colouring.
+#[cfg(test)]
+pub(super) fn energies(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions) -> Option<Vec<[f64; 4]>> {
+    sums_and_colouring(coarse, fine, rules).map(|(sums, _)| sums)
 }
 
 /// Per component of `coarse` (in order of its lowest face), the sums of squared details
 /// of the first reading (at 0) and of the readings of the three edge colours (at `1 + k`);
 /// `None` for an open mesh, a vertex of valence other than 6, a fine mesh of another
-/// size, or edges that take no lattice colouring.
-pub(super) fn energies(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions) -> Option<Vec<[f64; 4]>> {
+/// size, or edges that take no lattice colouring; with the colouring found.
+fn sums_and_colouring(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions) -> Option<(Vec<[f64; 4]>, Colouring)> {
     let (vertex, twin, edge) = (coarse.corner_vertices(), coarse.twins(), coarse.corner_edges());
     let first_odd = coarse.vertex_count();
     if twin.contains(&NONE) || fine.len() != first_odd + coarse.edge_count() {
         return None;
     }
     // Closed: a vertex's valence is its number of corners.
-    let mut valence = vec![0u32; first_odd];
+    let mut valence = vec![0u8; first_odd];
     for &v in vertex {
-        valence[v as usize] += 1;
+        valence[v as usize] = valence[v as usize].saturating_add(1);
     }
     if valence.iter().any(|&n| n != 6) {
         return None;
@@ -94,30 +146,31 @@ pub(super) fn energies(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions
         }
     }
     let weights = InverseWeights::new(rules.weights);
-    let position: Vec<DVec3> =
-        fine.iter().zip(&ring).map(|(&p, &sum)| coarse_position(p, sum, 6, false, rules, &weights)).collect();
-    drop(ring);
+    // (The ring sums become the positions in place.)
+    let mut position = ring;
+    for (sum, &p) in position.iter_mut().zip(fine) {
+        *sum = coarse_position(p, *sum, 6, false, rules, &weights);
+    }
+    let position = position;
     let predicted = |ends: [usize; 2], across: [usize; 2]| {
         0.375 * (position[ends[0]] + position[ends[1]]) + 0.125 * (position[across[0]] + position[across[1]])
     };
 
     let mut sums = vec![[0.0; 4]; colouring.components];
-    // Vertex points, reading `1 + k`: their two edges of colour `k` and the two edges of
-    // colour `k` across them, summed per vertex first.
-    let mut ends = vec![[DVec3::ZERO; 3]; first_odd];
-    let mut across = vec![[DVec3::ZERO; 3]; first_odd];
+    // Vertex points, reading `1 + k`: the edge rule on their two edges of colour `k`
+    // (weight 3/8) and the two edges of colour `k` across them (1/8), summed per vertex.
+    let mut predicted_at = vec![[DVec3::ZERO; 3]; first_odd];
     let mut vertex_component = vec![0u32; first_odd];
     for c in 0..vertex.len() as u32 {
         let x = vertex[c as usize] as usize;
-        ends[x][colour(c)] += position[edge_point(c)];
-        across[x][colour(next(c))] += position[edge_point(next(c))];
+        predicted_at[x][colour(c)] += 0.375 * position[edge_point(c)];
+        predicted_at[x][colour(next(c))] += 0.125 * position[edge_point(next(c))];
         vertex_component[x] = component[(c / 3) as usize];
     }
-    for x in 0..first_odd {
+    for (x, predicted) in predicted_at.iter().enumerate() {
         let sum = &mut sums[vertex_component[x] as usize];
-        for k in 0..3 {
-            let detail = fine[x] - (0.375 * ends[x][k] + 0.125 * across[x][k]);
-            sum[1 + k] += detail.length_squared();
+        for (k, &predicted) in predicted.iter().enumerate() {
+            sum[1 + k] += (fine[x] - predicted).length_squared();
         }
     }
     // Edge points, from the first corner of each edge: the first reading and the readings
@@ -142,15 +195,15 @@ pub(super) fn energies(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions
             );
         sum[1 + colour(next(c))] += by_next.length_squared();
     }
-    Some(sums)
+    Some((sums, colouring))
 }
 
 /// A colouring of the edges of a closed triangle mesh by three lattice directions: every
 /// face has the three colours, in the same cyclic order on every face (corner `k` of face
 /// `f` has colour `k + shift(f)` modulo 3), and the two corners of an edge one colour.
 struct Colouring {
-    /// The colour of corner 0 of every face.
-    shift: Vec<u8>,
+    /// The colour of every corner.
+    corner_colour: Vec<u8>,
     /// Component of every face (by a search from its lowest face).
     component: Vec<u32>,
     components: usize,
@@ -190,13 +243,14 @@ impl Colouring {
             }
             components += 1;
         }
-        Some(Self { shift, component, components })
+        let corner_colour = (0..twin.len()).map(|c| ((c % 3 + shift[c / 3] as usize) % 3) as u8).collect();
+        Some(Self { corner_colour, component, components })
     }
 
     /// The colour of corner `c`.
     #[inline]
     fn colour(&self, c: u32) -> usize {
-        ((c % 3 + self.shift[(c / 3) as usize] as u32) % 3) as usize
+        self.corner_colour[c as usize] as usize
     }
 }
 
