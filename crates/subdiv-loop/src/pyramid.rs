@@ -37,8 +37,8 @@ use crate::corner_table::CornerTable;
 use crate::detect::{FineOrder, reverse_canonical_soup};
 use crate::forward::LoopOptions;
 use crate::reverse::{
-    CanonicalLevel, FineLevel, LevelParts, canonical_reading_is_settled, check_level, first_reading_is_clearly_best,
-    non_finite_bits, reconstruct_levels, reverse_level,
+    CanonicalLevel, FineLevel, LevelParts, canonical_reading_stands, check_level, non_finite_bits, reconstruct_levels,
+    reverse_level,
 };
 
 /// Magic number of a Loop pyramid file.
@@ -228,12 +228,15 @@ fn decompose_soup_as_given(soup: &PolygonSoup, options: &DecomposeOptions) -> Re
         && level.coarse.fans_are_single()
         // A mesh of regular valences only (so is the fine mesh, then: edge points are
         // regular, vertex points keep their valence) reads several ways, which
-        // `decompose` compares (see `reverse_level`), unless this reading is settled or,
-        // without seeds, clearly the best.
+        // `decompose` compares (see `reverse_level`), unless this reading stands.
         && (!level.valences_regular
-            || canonical_reading_is_settled(&level.coarse, &level.details, &soup.positions)
-            || (options.seed_vertices.is_empty()
-                && first_reading_is_clearly_best(&level.coarse, &soup.positions, &options.rules)))
+            || canonical_reading_stands(
+                &level.coarse,
+                &level.details,
+                &soup.positions,
+                &options.seed_vertices,
+                &options.rules,
+            ))
     {
         let CanonicalLevel { coarse, positions, details, .. } = level;
         return decompose_below(
@@ -782,6 +785,7 @@ mod tests {
     use super::*;
     use crate::forward::VertexWeights;
     use crate::reference::{cylinder, loop_steps, open_fan, perturb, relative_distance, scramble};
+    use crate::reverse::canonical_reading_is_settled;
     use crate::reverse::{ReverseOptions, all_valences_regular, reverse};
     use mesh_topo::shapes::{self, CellKind};
     use proptest::prelude::*;

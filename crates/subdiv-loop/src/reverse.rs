@@ -567,21 +567,11 @@ pub(crate) fn reverse_level(
     // (Energies and zero thresholds are squares: `reverse` and `decompose` hand this
     // function meshes far from 1 at unit scale, where they neither overflow nor
     // underflow.)
-    // A canonical reading of a connected mesh with zero details is settled (see below)
-    // without the fine connectivity that comparing readings needs.
+    // A canonical reading that settles the choice or is clearly the best needs none of
+    // the fine connectivity that comparing readings needs.
     if let Some(level) = &first
         && level.order.is_none()
-        && canonical_reading_is_settled(&level.coarse, &level.details, positions)
-    {
-        return Ok(first.expect("checked above"));
-    }
-    // A closed mesh of valence 6 everywhere, in the canonical order and without seeds: the
-    // other readings' sums come from the first reading's corners (see [`lattice`]), and
-    // where the first is clearly the best the readings in turn would keep it.
-    if seeds.is_empty()
-        && let Some(level) = &first
-        && level.order.is_none()
-        && first_reading_is_clearly_best(&level.coarse, positions, rules)
+        && canonical_reading_stands(&level.coarse, &level.details, positions, seeds, rules)
     {
         return Ok(first.expect("checked above"));
     }
@@ -750,13 +740,22 @@ thread_local! {
     static BY_LATTICE: std::cell::Cell<bool> = const { std::cell::Cell::new(true) };
 }
 
-/// Whether the first reading of a closed mesh of valence 6 everywhere in the canonical
-/// order (`coarse`, of the fine `positions`), read without seeds, is clearly the one with
-/// the smallest details in every component by the sums of [`lattice`]: then comparing
-/// the readings in turn would keep it. `false` where those sums do not apply or are not
-/// clear.
-pub(crate) fn first_reading_is_clearly_best(coarse: &CornerTable, positions: &[DVec3], rules: &LoopOptions) -> bool {
-    compares_by_lattice() && lattice::first_reading_is_clearly_best(coarse, positions, rules)
+/// Whether the canonical reading of a fine mesh (`positions`, read with `seeds`), of
+/// coarse mesh `coarse` and details `details`, is the one comparing the readings in turn
+/// would keep, known without comparing them: it settles the choice
+/// ([`canonical_reading_is_settled`]), or, without seeds, the sums of [`lattice`] find
+/// it clearly the best in every component (a closed mesh of valence 6 everywhere).
+pub(crate) fn canonical_reading_stands(
+    coarse: &CornerTable,
+    details: &[DVec3],
+    positions: &[DVec3],
+    seeds: &[u32],
+    rules: &LoopOptions,
+) -> bool {
+    canonical_reading_is_settled(coarse, details, positions)
+        || (seeds.is_empty()
+            && compares_by_lattice()
+            && lattice::first_reading_is_clearly_best(coarse, positions, rules))
 }
 
 /// The seeds (one per component of `readings`, in its order) that reversing the readings
@@ -800,7 +799,7 @@ fn lattice_choice(
 fn in_canonical_order<'a>(level: &LevelParts, positions: &'a [DVec3]) -> Cow<'a, [DVec3]> {
     match &level.order {
         None => Cow::Borrowed(positions),
-        Some(order) => Cow::Owned(order.vertex_of_canonical.iter().map(|&v| positions[v as usize]).collect()),
+        Some(order) => Cow::Owned(gather(positions, &order.vertex_of_canonical)),
     }
 }
 
