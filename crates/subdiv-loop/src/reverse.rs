@@ -844,32 +844,61 @@ pub(crate) fn canonical_reading_is_settled(coarse: &CornerTable, details: &[DVec
 /// Whether `table` has a face and is one connected component, every vertex on a face (so
 /// that the canonical refinement of it is one component too, with no isolated vertex).
 fn spans_one_component(table: &CornerTable) -> bool {
-    table.face_count() > 0
-        && (0..table.vertex_count() as u32).all(|v| !table.is_isolated(v))
-        && every_component_has_one(table, &[table.vertex(0)])
+    let corner_vertex = table.corner_vertices();
+    let mut on_a_face = vec![false; table.vertex_count()];
+    for &v in corner_vertex {
+        on_a_face[v as usize] = true;
+    }
+    table.face_count() > 0 && on_a_face.iter().all(|&on| on) && every_component_has_one(table, &corner_vertex[..1])
 }
 
 /// Whether every connected component of `table` with a face holds one of `vertices`
-/// (all in range): a search from them across edges reaches every vertex with a face.
+/// (all in range): a search across edges from the faces at them reaches every face.
+///
+/// Components are joined by edges here, by faces across their twins: the same
+/// components as by vertices wherever the faces at every vertex form a single fan, as
+/// on every table the reversal reads (those of manifold meshes, and of soups that
+/// passed [`CornerTable::fans_are_single`]). Faces by twins read one array in face
+/// order; the search by vertices that this replaces circulated every star, and took a
+/// fifth of the seeded reversal of a regular torus.
 fn every_component_has_one(table: &CornerTable, vertices: &[u32]) -> bool {
     if vertices.is_empty() {
         return false;
     }
-    let mut reached = vec![false; table.vertex_count()];
-    let mut stack = Vec::new();
+    let (corner_vertex, twin) = (table.corner_vertices(), table.twins());
+    let mut wanted = vec![false; table.vertex_count()];
     for &v in vertices {
-        if !std::mem::replace(&mut reached[v as usize], true) {
-            stack.push(v);
+        wanted[v as usize] = true;
+    }
+    let faces = table.face_count();
+    let mut reached = vec![false; faces];
+    // A breadth-first search, its queue in one array (every face is queued once at most,
+    // when first reached), with a branch-free push (the slot past the end is written, and
+    // kept only for a face not reached before: whether a neighbour was reached follows no
+    // pattern the processor could predict). The face taken next was queued long before,
+    // so the reads of successive faces overlap instead of waiting for one another.
+    let mut queue = vec![0u32; faces + 1];
+    let mut end = 0;
+    for (c, &v) in corner_vertex.iter().enumerate() {
+        let f = c / 3;
+        if !wanted[v as usize] || std::mem::replace(&mut reached[f], true) {
+            continue;
+        }
+        let mut head = end;
+        queue[end] = f as u32;
+        end += 1;
+        while head < end {
+            let f = queue[head] as usize;
+            head += 1;
+            for &t in &twin[3 * f..3 * f + 3] {
+                // (Across the boundary: the face itself, reached.)
+                let g = if t == NONE { f } else { t as usize / 3 };
+                queue[end] = g as u32;
+                end += usize::from(!std::mem::replace(&mut reached[g], true));
+            }
         }
     }
-    while let Some(v) = stack.pop() {
-        table.visit_star(v, |_, u| {
-            if !std::mem::replace(&mut reached[u as usize], true) {
-                stack.push(u);
-            }
-        });
-    }
-    (0..table.vertex_count() as u32).all(|v| reached[v as usize] || table.is_isolated(v))
+    reached.iter().all(|&r| r)
 }
 
 /// The components of a fine mesh whose readings [`reverse_level`] compares, and how to
@@ -1747,6 +1776,51 @@ mod tests {
         assert!(every_component_has_one(&two, &[n + 1, 3]));
         assert!(!all_valences_regular(&CornerTable::from_soup(&octahedron).unwrap()));
         assert!(all_valences_regular(&CornerTable::from_soup(&side_by_side(&fine, &fine)).unwrap()));
+    }
+
+    /// The search of `every_component_has_one` across faces finds the components that a
+    /// search across the edges at every vertex finds (meshes whose fans are single): open
+    /// and closed meshes side by side, an isolated vertex, every choice of one or two
+    /// vertices.
+    #[test]
+    fn components_by_faces_are_those_by_vertices() {
+        let by_vertices = |table: &CornerTable, vertices: &[u32]| {
+            let mut reached = vec![false; table.vertex_count()];
+            let mut stack = vertices.to_vec();
+            for &v in vertices {
+                reached[v as usize] = true;
+            }
+            while let Some(v) = stack.pop() {
+                table.visit_star(v, |_, u| {
+                    if !std::mem::replace(&mut reached[u as usize], true) {
+                        stack.push(u);
+                    }
+                });
+            }
+            !vertices.is_empty()
+                && (0..table.vertex_count() as u32).all(|v| reached[v as usize] || table.is_isolated(v))
+        };
+        let grid = shapes::grid(3, 2, CellKind::Triangles).unwrap();
+        let torus = shapes::torus(4, 3, CellKind::Triangles).unwrap();
+        let mut with_isolated = side_by_side(&grid, &shapes::octahedron());
+        with_isolated.positions.push(DVec3::ZERO);
+        for soup in [
+            grid.clone(),
+            side_by_side(&grid, &torus),
+            side_by_side(&torus, &side_by_side(&shapes::octahedron(), &grid)),
+            with_isolated,
+        ] {
+            let table = CornerTable::from_soup(&soup).unwrap();
+            let n = table.vertex_count() as u32;
+            for a in 0..n {
+                assert_eq!(every_component_has_one(&table, &[a]), by_vertices(&table, &[a]), "{a}");
+                for b in a..n {
+                    assert_eq!(every_component_has_one(&table, &[a, b]), by_vertices(&table, &[a, b]), "{a} {b}");
+                }
+            }
+        }
+        assert!(spans_one_component(&CornerTable::from_soup(&grid).unwrap()));
+        assert!(!spans_one_component(&CornerTable::from_soup(&side_by_side(&grid, &torus)).unwrap()));
     }
 
     /// `reverse` keeps the same reading whether the readings of a closed regular mesh in
