@@ -743,7 +743,7 @@ thread_local! {
 /// Whether the canonical reading of a fine mesh (`positions`, read with `seeds`), of
 /// coarse mesh `coarse` and details `details`, is the one comparing the readings in turn
 /// would keep, known without comparing them: it settles the choice
-/// ([`canonical_reading_is_settled`]), or, without seeds, the sums of [`lattice`] find
+/// ([`reading_is_settled`]), or, without seeds, the sums of [`lattice`] find
 /// it clearly the best in every component (a closed mesh of valence 6 everywhere).
 pub(crate) fn canonical_reading_stands(
     coarse: &CornerTable,
@@ -752,10 +752,11 @@ pub(crate) fn canonical_reading_stands(
     seeds: &[u32],
     rules: &LoopOptions,
 ) -> bool {
-    canonical_reading_is_settled(coarse, details, positions)
+    let energy = details.iter().map(|d| d.length_squared()).sum();
+    reading_is_settled(coarse, energy, positions)
         || (seeds.is_empty()
             && compares_by_lattice()
-            && lattice::first_reading_is_clearly_best(coarse, positions, rules))
+            && lattice::first_reading_is_clearly_best(coarse, positions, energy, rules))
 }
 
 /// The seeds (one per component of `readings`, in its order) that reversing the readings
@@ -829,13 +830,18 @@ pub(crate) fn all_valences_regular(table: &CornerTable) -> bool {
         })
 }
 
+/// [`reading_is_settled`] from the details (the tests' entry).
+#[cfg(test)]
+pub(crate) fn canonical_reading_is_settled(coarse: &CornerTable, details: &[DVec3], positions: &[DVec3]) -> bool {
+    reading_is_settled(coarse, details.iter().map(|d| d.length_squared()).sum(), positions)
+}
+
 /// Whether the canonical reading of a fine mesh (`positions`), of coarse mesh `coarse`
-/// and details `details`, settles the choice among its readings without comparing them
-/// (see [`reverse_level`]): its details are zero at the scale of the mesh
+/// and sum of squared details `energy`, settles the choice among its readings without
+/// comparing them (see [`reverse_level`]): its details are zero at the scale of the mesh
 /// ([`zero_energy`]), and the coarse mesh is one component with no isolated vertex, so
 /// that the mesh's scale is its component's.
-pub(crate) fn canonical_reading_is_settled(coarse: &CornerTable, details: &[DVec3], positions: &[DVec3]) -> bool {
-    let energy = details.iter().map(|d| d.length_squared()).sum();
+fn reading_is_settled(coarse: &CornerTable, energy: f64, positions: &[DVec3]) -> bool {
     let (lo, hi) = positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
     let diagonal = if positions.is_empty() { 0.0 } else { lo.distance(hi) };
     settled(energy, zero_energy(diagonal, positions.len())) && spans_one_component(coarse)

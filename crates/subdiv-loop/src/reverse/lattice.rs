@@ -44,13 +44,35 @@ const CLEAR_MARGIN: f64 = 0.01;
 
 /// Whether, in every component, the first reading of a closed mesh of valence 6
 /// everywhere in the canonical order (`coarse`: its coarse mesh, `fine`: the fine
-/// positions) has a sum of squared details clearly smaller than the other three
-/// readings' (see [`CLEAR_MARGIN`]), so that comparing the readings in turn would keep
-/// it. `false` when the sums cannot be formed (a boundary, edges without a lattice
-/// colouring) or are not clear.
-pub(super) fn first_reading_is_clearly_best(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions) -> bool {
-    Readings::of(coarse, fine, rules)
-        .is_some_and(|readings| (0..readings.sums.len()).all(|k| readings.clear_winner(k) == Some(0)))
+/// positions, `first_energy`: the sum of squared details of that reading's reversal)
+/// has a sum of squared details clearly smaller than the other three readings' (see
+/// [`CLEAR_MARGIN`]), so that comparing the readings in turn would keep it. `false` when
+/// the sums cannot be formed (a boundary, edges without a lattice colouring) or are not
+/// clear.
+///
+/// On a mesh of one component the pass stops as soon as the other readings' partial
+/// sums all exceed `first_energy / (1 - CLEAR_MARGIN)`: a partial sum is a lower bound
+/// of the whole, so the answer is already known.
+pub(super) fn first_reading_is_clearly_best(
+    coarse: &CornerTable,
+    fine: &[DVec3],
+    first_energy: f64,
+    rules: &LoopOptions,
+) -> bool {
+    let enough = first_energy / (1.0 - CLEAR_MARGIN);
+    match summed(coarse, fine, rules, Some(enough)) {
+        None => false,
+        Some(Summed::Enough) => true,
+        Some(Summed::All(sums, _)) => (0..sums.len()).all(|k| clear_winner(sums[k]) == Some(0)),
+    }
+}
+
+/// What [`summed`] found.
+enum Summed {
+    /// The sums of every component, and the colouring (see [`sums_and_colouring`]).
+    All(Vec<[f64; 4]>, Colouring),
+    /// One component, whose other readings' partial sums all passed the bound given.
+    Enough,
 }
 
 /// The four readings of every component of a closed mesh of valence 6 everywhere, seen
@@ -90,14 +112,19 @@ impl<'a> Readings<'a> {
         self.colouring.component[(corner / 3) as usize] as usize
     }
 
-    /// The reading of component `k` whose sum is clearly the smallest (below
-    /// `1 - CLEAR_MARGIN` times every other), if one is.
+    /// The reading of component `k` whose sum is clearly the smallest (see
+    /// [`clear_winner`]), if one is.
     pub(super) fn clear_winner(&self, k: usize) -> Option<usize> {
-        let sums = self.sums[k];
-        let (winner, &least) = sums.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1))?;
-        let clear = sums.iter().enumerate().all(|(r, &sum)| r == winner || least < (1.0 - CLEAR_MARGIN) * sum);
-        clear.then_some(winner)
+        clear_winner(self.sums[k])
     }
+}
+
+/// The reading whose sum is clearly the smallest of `sums` (below `1 - CLEAR_MARGIN`
+/// times every other), if one is.
+fn clear_winner(sums: [f64; 4]) -> Option<usize> {
+    let (winner, &least) = sums.iter().enumerate().min_by(|a, b| a.1.total_cmp(b.1))?;
+    let clear = sums.iter().enumerate().all(|(r, &sum)| r == winner || least < (1.0 - CLEAR_MARGIN) * sum);
+    clear.then_some(winner)
 }
 
 /// [`sums_and_colouring`] without the colouring.
@@ -111,6 +138,20 @@ pub(super) fn energies(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions
 /// `None` for an open mesh, a vertex of valence other than 6, a fine mesh of another
 /// size, or edges that take no lattice colouring; with the colouring found.
 fn sums_and_colouring(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions) -> Option<(Vec<[f64; 4]>, Colouring)> {
+    match summed(coarse, fine, rules, None)? {
+        Summed::All(sums, colouring) => Some((sums, colouring)),
+        Summed::Enough => unreachable!("no bound, no early stop"),
+    }
+}
+
+/// Corners of the pass over the edge points between two looks at the partial sums.
+const CORNERS_BETWEEN_LOOKS: usize = 3 << 10;
+
+/// [`sums_and_colouring`], stopped early on a mesh of one component once the sums of
+/// readings 1 to 3 all exceed `enough`: the edge points' terms come first, by chunks of
+/// corners (three quarters of the fine vertices, and the pass that reads the most), then
+/// the vertex points'.
+fn summed(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions, enough: Option<f64>) -> Option<Summed> {
     let (vertex, twin, edge) = (coarse.corner_vertices(), coarse.twins(), coarse.corner_edges());
     let first_odd = coarse.vertex_count();
     if twin.contains(&NONE) || fine.len() != first_odd + coarse.edge_count() {
@@ -157,25 +198,9 @@ fn sums_and_colouring(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions)
     };
 
     let mut sums = vec![[0.0; 4]; colouring.components];
-    // Vertex points, reading `1 + k`: the edge rule on their two edges of colour `k`
-    // (weight 3/8) and the two edges of colour `k` across them (1/8), summed per vertex.
-    let mut predicted_at = vec![[DVec3::ZERO; 3]; first_odd];
-    let mut vertex_component = vec![0u32; first_odd];
-    for c in 0..vertex.len() as u32 {
-        let x = vertex[c as usize] as usize;
-        predicted_at[x][colour(c)] += 0.375 * position[edge_point(c)];
-        predicted_at[x][colour(next(c))] += 0.125 * position[edge_point(next(c))];
-        vertex_component[x] = component[(c / 3) as usize];
-    }
-    for (x, predicted) in predicted_at.iter().enumerate() {
-        let sum = &mut sums[vertex_component[x] as usize];
-        for (k, &predicted) in predicted.iter().enumerate() {
-            sum[1 + k] += (fine[x] - predicted).length_squared();
-        }
-    }
     // Edge points, from the first corner of each edge: the first reading and the readings
     // of the colours of the face's two other edges.
-    for c in (0..vertex.len() as u32).filter(|&c| c < twin[c as usize]) {
+    let add_edge_point = |c: u32, sums: &mut [[f64; 4]]| {
         let t = twin[c as usize];
         let m = edge_point(c);
         let corner = |c: u32| vertex[c as usize] as usize;
@@ -194,8 +219,38 @@ fn sums_and_colouring(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions)
                 [edge_point(prev(twin[prev(t) as usize])), edge_point(prev(twin[prev(c) as usize]))],
             );
         sum[1 + colour(next(c))] += by_next.length_squared();
+    };
+    let enough = enough.filter(|_| colouring.components == 1);
+    let corners = vertex.len() as u32;
+    let looks = (0..corners).step_by(CORNERS_BETWEEN_LOOKS);
+    for first_corner in looks {
+        let last_corner = corners.min(first_corner + CORNERS_BETWEEN_LOOKS as u32);
+        for c in (first_corner..last_corner).filter(|&c| c < twin[c as usize]) {
+            add_edge_point(c, &mut sums);
+        }
+        if let Some(enough) = enough
+            && sums[0][1..].iter().all(|&sum| sum > enough)
+        {
+            return Some(Summed::Enough);
+        }
     }
-    Some((sums, colouring))
+    // Vertex points, reading `1 + k`: the edge rule on their two edges of colour `k`
+    // (weight 3/8) and the two edges of colour `k` across them (1/8), summed per vertex.
+    let mut predicted_at = vec![[DVec3::ZERO; 3]; first_odd];
+    let mut vertex_component = vec![0u32; first_odd];
+    for c in 0..vertex.len() as u32 {
+        let x = vertex[c as usize] as usize;
+        predicted_at[x][colour(c)] += 0.375 * position[edge_point(c)];
+        predicted_at[x][colour(next(c))] += 0.125 * position[edge_point(next(c))];
+        vertex_component[x] = component[(c / 3) as usize];
+    }
+    for (x, predicted) in predicted_at.iter().enumerate() {
+        let sum = &mut sums[vertex_component[x] as usize];
+        for (k, &predicted) in predicted.iter().enumerate() {
+            sum[1 + k] += (fine[x] - predicted).length_squared();
+        }
+    }
+    Some(Summed::All(sums, colouring))
 }
 
 /// A colouring of the edges of a closed triangle mesh by three lattice directions: every
@@ -317,6 +372,39 @@ mod tests {
         }
     }
 
+    /// The answer of the pass that stops once the other readings' partial sums pass the
+    /// bound is that of the full sums, on tori moved a little (the first reading clearly
+    /// the best: the pass stops early on the larger tori) and a lot (it is not).
+    #[test]
+    fn stopping_early_gives_the_answer_of_the_full_sums() {
+        let (mut early, mut clear, mut unclear) = (0, 0, 0);
+        for weights in [VertexWeights::Loop, VertexWeights::Warren] {
+            let rules = LoopOptions { weights, keep_corners: false };
+            for (columns, rows, levels) in [(8, 6, 1), (32, 16, 2), (48, 24, 1)] {
+                for (k, amount) in [1e-4, 1e-3, 0.01, 0.05, 0.3, 1.0].into_iter().enumerate() {
+                    let fine = moved_torus(columns, rows, levels, &rules, amount, 10 + k as u64);
+                    let level = reverse_level_fast(FineLevel::Mesh(&fine), fine.positions(), &[], &rules);
+                    let level = level.unwrap().unwrap();
+                    let first_energy: f64 = level.details.iter().map(|d| d.length_squared()).sum();
+                    let sums = energies(&level.coarse, fine.positions(), &rules).expect("a lattice");
+                    let by_full_sums = clear_winner(sums[0]) == Some(0);
+                    let answer = first_reading_is_clearly_best(&level.coarse, fine.positions(), first_energy, &rules);
+                    assert_eq!(
+                        answer, by_full_sums,
+                        "{columns} x {rows}, moved by {amount}: {sums:?} vs {first_energy}"
+                    );
+                    let bound = Some(first_energy / (1.0 - CLEAR_MARGIN));
+                    early += usize::from(matches!(
+                        summed(&level.coarse, fine.positions(), &rules, bound),
+                        Some(Summed::Enough)
+                    ));
+                    (clear, unclear) = if by_full_sums { (clear + 1, unclear) } else { (clear, unclear + 1) };
+                }
+            }
+        }
+        assert!(early > 0 && clear > early && unclear > 0, "{early} early of {clear} clear, {unclear} not");
+    }
+
     /// Two tori refined together: one sum per component, each that of the torus alone.
     #[test]
     fn components_are_summed_apart() {
@@ -359,6 +447,7 @@ mod tests {
         let fine = HalfedgeMesh::from_soup(&PolygonSoup::from_faces(fine.positions, fine.triangles)).unwrap();
         let level = reverse_level_fast(FineLevel::Mesh(&fine), fine.positions(), &[], &rules).unwrap().unwrap();
         assert!(energies(&level.coarse, fine.positions(), &rules).is_none());
-        assert!(!first_reading_is_clearly_best(&level.coarse, fine.positions(), &rules));
+        // (Not even with a first reading of no detail at all.)
+        assert!(!first_reading_is_clearly_best(&level.coarse, fine.positions(), 0.0, &rules));
     }
 }
