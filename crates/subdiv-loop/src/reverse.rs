@@ -575,15 +575,26 @@ pub(crate) fn reverse_level(
     {
         return Ok(first.expect("checked above"));
     }
-    let built;
-    let table = match fine {
-        FineLevel::Table(table) => table,
-        FineLevel::Mesh(mesh) => {
-            built = CornerTable::from_mesh(mesh)?;
-            &built
+    // The fine corners, read once for the searches of the readings compared, give the
+    // components and their candidates too (no table of edges is built for them).
+    let fine_corners = FineCorners::of(fine);
+    let readings = match (fine, &fine_corners) {
+        (FineLevel::Table(table), _) => RegularReadings::of(table, seeds),
+        (FineLevel::Mesh(mesh), FineCorners::Mesh(Some(mesh_corners))) => {
+            let corners = &mesh_corners.corners;
+            let arrays = FineCornerArrays {
+                vertex: |c: usize| corners[c].vertex,
+                twin: |c: usize| corners[c].twin,
+                start: |v| mesh_corners.corner_at(mesh, v),
+            };
+            RegularReadings::of_corners(mesh.vertex_count(), corners.len(), &arrays, seeds)
+        }
+        // A face that is not a triangle: the table names it.
+        (FineLevel::Mesh(mesh), _) => {
+            CornerTable::from_mesh(mesh)?;
+            return reverse_level_general(fine, positions, seeds, rules);
         }
     };
-    let readings = RegularReadings::of(table, seeds);
     if readings.candidates.is_empty() {
         return match first {
             Some(first) => Ok(first),
@@ -609,7 +620,6 @@ pub(crate) fn reverse_level(
     // vertex points are passed over, see `covered`), which the canonical order does not
     // allow; else it failed with the caller's seeds alone, and more seeds only add to
     // what it requires. The positions were checked by the first attempt.
-    let fine_corners = FineCorners::of(fine);
     let reverse_reading = |all: &[u32]| {
         #[cfg(test)]
         MORE_READINGS.set(MORE_READINGS.get() + 1);
@@ -907,6 +917,33 @@ fn every_component_has_one(table: &CornerTable, vertices: &[u32]) -> bool {
     reached.iter().all(|&r| r)
 }
 
+/// The corners of a fine mesh as closures over its arrays, whichever holds them (a
+/// corner table, or the corners of a half-edge mesh): `vertex(c)` and `twin(c)` of
+/// every corner, `start(v)` the circulation start of every vertex (as
+/// [`CornerTable::vertex_corners`] has it, [`NONE`] for an isolated vertex).
+struct FineCornerArrays<V, T, S> {
+    vertex: V,
+    twin: T,
+    start: S,
+}
+
+impl<V: Fn(usize) -> u32, T: Fn(usize) -> u32, S: Fn(u32) -> u32> FineCornerArrays<V, T, S> {
+    /// The neighbour across every corner of `v` in circulation order (as
+    /// [`CornerTable::outgoing`] lists the corners): the other end of each corner's
+    /// half-edge.
+    fn neighbours(&self, v: u32) -> Vec<u32> {
+        let start = (self.start)(v);
+        let mut neighbours = Vec::new();
+        let mut c = start;
+        while c != NONE {
+            neighbours.push((self.vertex)(next(c) as usize));
+            let following = (self.twin)(prev(c) as usize);
+            c = if following == start { NONE } else { following };
+        }
+        neighbours
+    }
+}
+
 /// The components of a fine mesh whose readings [`reverse_level`] compares, and how to
 /// tell each component's details apart.
 struct RegularReadings {
@@ -924,9 +961,21 @@ impl RegularReadings {
     /// twice cost as much as a reversal): component labels in order of lowest vertex, an
     /// isolated vertex a component of its own that is not regular.
     fn of(table: &CornerTable, seeds: &[u32]) -> Self {
-        let vertices = table.vertex_count();
-        let (corner_vertex, twin) = (table.corner_vertices(), table.twins());
-        let valences = Valences::of(vertices, corner_vertex.iter().copied().zip(twin.iter().copied()));
+        let (corner_vertex, twin, starts) = (table.corner_vertices(), table.twins(), table.vertex_corners());
+        let corners =
+            FineCornerArrays { vertex: |c| corner_vertex[c], twin: |c| twin[c], start: |v| starts[v as usize] };
+        Self::of_corners(table.vertex_count(), table.corner_count(), &corners, seeds)
+    }
+
+    /// [`RegularReadings::of`] from the corners of the fine mesh alone, as the searches
+    /// of the readings read them (no table of edges built for this).
+    fn of_corners(
+        vertices: usize,
+        corner_count: usize,
+        corners: &FineCornerArrays<impl Fn(usize) -> u32, impl Fn(usize) -> u32, impl Fn(u32) -> u32>,
+        seeds: &[u32],
+    ) -> Self {
+        let valences = Valences::of(vertices, (0..corner_count).map(|c| ((corners.vertex)(c), (corners.twin)(c))));
         let mut parent: Vec<u32> = (0..vertices as u32).collect();
         let root = |parent: &mut [u32], mut v: u32| {
             while parent[v as usize] != v {
@@ -936,9 +985,10 @@ impl RegularReadings {
             }
             v
         };
-        for face in corner_vertex.chunks_exact(3) {
-            for pair in face.windows(2) {
-                let (a, b) = (root(&mut parent, pair[0]), root(&mut parent, pair[1]));
+        for c0 in (0..corner_count).step_by(3) {
+            for k in 0..2 {
+                let (a, b) =
+                    (root(&mut parent, (corners.vertex)(c0 + k)), root(&mut parent, (corners.vertex)(c0 + k + 1)));
                 // The lower root stays the root (any choice works; this one is cheap).
                 let (low, high) = (a.min(b), a.max(b));
                 parent[high as usize] = low;
@@ -958,14 +1008,15 @@ impl RegularReadings {
             component[v as usize] = label;
             regular[label as usize] &= !valences.is_irregular(v);
         }
-        Self::of_components(table, component, regular, &lowest, seeds)
+        Self::of_components(|v| corners.neighbours(v), component, regular, &lowest, seeds)
     }
 
     /// The readings of the components `component` (of every vertex) given, per
     /// component, whether its valences are all `regular` and its `lowest` vertex: the
-    /// regular components without a seed, each with its candidate seeds.
+    /// regular components without a seed, each with its candidate seeds (`neighbours`:
+    /// the neighbours of a vertex, as detection circulates them).
     fn of_components(
-        table: &CornerTable,
+        neighbours: impl Fn(u32) -> Vec<u32>,
         component: Vec<u32>,
         mut regular: Vec<bool>,
         lowest: &[u32],
@@ -980,7 +1031,7 @@ impl RegularReadings {
             .filter(|&c| regular[c])
             .map(|c| {
                 let v = lowest[c];
-                (c, std::iter::once(v).chain(table.outgoing(v).map(|corner| table.vertex(next(corner)))).collect())
+                (c, std::iter::once(v).chain(neighbours(v)).collect())
             })
             .collect();
         Self { component, candidates }
@@ -1992,7 +2043,8 @@ mod tests {
             }
             regular.push(all_regular);
         }
-        RegularReadings::of_components(table, component, regular, &lowest, seeds)
+        let neighbours = |v: u32| table.outgoing(v).map(|corner| table.vertex(next(corner))).collect();
+        RegularReadings::of_components(neighbours, component, regular, &lowest, seeds)
     }
 
     #[test]
@@ -2025,6 +2077,18 @@ mod tests {
                 let (fast, searched) = (RegularReadings::of(&table, &seeds), readings_by_search(&table, &seeds));
                 assert_eq!(fast.component, searched.component, "soup {i}, seeds {seeds:?}");
                 assert_eq!(fast.candidates, searched.candidates, "soup {i}, seeds {seeds:?}");
+                // From the corners of the half-edge mesh, as `reverse_level` reads them.
+                let mesh = HalfedgeMesh::from_soup(soup).unwrap();
+                let mesh_corners = CornerTable::mesh_corners(&mesh).unwrap();
+                let corners = &mesh_corners.corners;
+                let arrays = FineCornerArrays {
+                    vertex: |c: usize| corners[c].vertex,
+                    twin: |c: usize| corners[c].twin,
+                    start: |v| mesh_corners.corner_at(&mesh, v),
+                };
+                let from_mesh = RegularReadings::of_corners(mesh.vertex_count(), corners.len(), &arrays, &seeds);
+                assert_eq!(from_mesh.component, searched.component, "soup {i}, seeds {seeds:?}");
+                assert_eq!(from_mesh.candidates, searched.candidates, "soup {i}, seeds {seeds:?}");
             }
         }
     }
