@@ -785,7 +785,15 @@ fn lattice_choice(
     if !compares_by_lattice() {
         return None;
     }
-    let sums = lattice::Readings::of(&level.coarse, &in_canonical_order(level, positions), rules)?;
+    let first_energy = level.details.iter().map(|d| d.length_squared()).sum();
+    let sums =
+        match lattice::Readings::judged(&level.coarse, &in_canonical_order(level, positions), first_energy, rules)? {
+            // One component, clearly best in the reading at hand: its first candidate's.
+            lattice::Judged::FirstClearlyBest => {
+                return readings.candidates.iter().map(|(_, candidates)| candidates.first().copied()).collect();
+            }
+            lattice::Judged::Summed(sums) => sums,
+        };
     // The canonical number of every fine vertex.
     let numbers = level.order.as_ref().map(|order| {
         let mut number = vec![0u32; positions.len()];

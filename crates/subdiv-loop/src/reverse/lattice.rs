@@ -12,7 +12,9 @@
 //! edge point of a coarse edge whose ends and opposite vertices are fine vertices found
 //! from the first reading's corners by index arithmetic. So one pass over the coarse
 //! corners gives every reading's sum of squared details, without the searches and
-//! reversals of the readings in turn.
+//! reversals of the readings in turn. The reading at hand is reversed already, so its
+//! own sum is known: on a mesh of one component the pass stops as soon as the other
+//! readings' partial sums (lower bounds of their sums) show it clearly the best.
 //!
 //! The lattice, with the first reading's coarse face `(a, b, c)` over corner `c0` (the
 //! half-edge `a -> b`, its edge point `m`) and the face `(b, a, d)` of its twin `t0`:
@@ -49,27 +51,30 @@ const CLEAR_MARGIN: f64 = 0.01;
 /// [`CLEAR_MARGIN`]), so that comparing the readings in turn would keep it. `false` when
 /// the sums cannot be formed (a boundary, edges without a lattice colouring) or are not
 /// clear.
-///
-/// On a mesh of one component the pass stops as soon as the other readings' partial
-/// sums all exceed `first_energy / (1 - CLEAR_MARGIN)`: a partial sum is a lower bound
-/// of the whole, so the answer is already known.
 pub(super) fn first_reading_is_clearly_best(
     coarse: &CornerTable,
     fine: &[DVec3],
     first_energy: f64,
     rules: &LoopOptions,
 ) -> bool {
-    let enough = first_energy / (1.0 - CLEAR_MARGIN);
-    match summed(coarse, fine, rules, Some(enough)) {
+    match Readings::judged(coarse, fine, first_energy, rules) {
         None => false,
-        Some(Summed::Enough) => true,
-        Some(Summed::All(sums, _)) => (0..sums.len()).all(|k| clear_winner(sums[k]) == Some(0)),
+        Some(Judged::FirstClearlyBest) => true,
+        Some(Judged::Summed(readings)) => (0..readings.sums.len()).all(|k| readings.clear_winner(k) == Some(0)),
     }
+}
+
+/// What [`Readings::judged`] found.
+pub(super) enum Judged<'a> {
+    /// The mesh is one component, and its first reading is clearly the best.
+    FirstClearlyBest,
+    /// The sums of every reading of every component.
+    Summed(Readings<'a>),
 }
 
 /// What [`summed`] found.
 enum Summed {
-    /// The sums of every component, and the colouring (see [`sums_and_colouring`]).
+    /// The sums of every component, and the colouring (see [`summed`]).
     All(Vec<[f64; 4]>, Colouring),
     /// One component, whose other readings' partial sums all passed the bound given.
     Enough,
@@ -82,15 +87,28 @@ enum Summed {
 pub(super) struct Readings<'a> {
     coarse: &'a CornerTable,
     colouring: Colouring,
-    /// Per component, see [`sums_and_colouring`].
+    /// Per component, see [`summed`].
     sums: Vec<[f64; 4]>,
 }
 
 impl<'a> Readings<'a> {
-    /// `None` where [`sums_and_colouring`] is.
-    pub(super) fn of(coarse: &'a CornerTable, fine: &[DVec3], rules: &LoopOptions) -> Option<Self> {
-        let (sums, colouring) = sums_and_colouring(coarse, fine, rules)?;
-        Some(Self { coarse, colouring, sums })
+    /// The readings seen from the first one (`coarse`, `fine` in its canonical order),
+    /// whose sum of squared details (of its reversal) is `first_energy`. On a mesh of one
+    /// component the pass stops as soon as the other readings' partial sums all exceed
+    /// `first_energy / (1 - CLEAR_MARGIN)`: a partial sum is a lower bound of the whole,
+    /// so the first reading is then known to be clearly the best. `None` where
+    /// [`summed`] is.
+    pub(super) fn judged(
+        coarse: &'a CornerTable,
+        fine: &[DVec3],
+        first_energy: f64,
+        rules: &LoopOptions,
+    ) -> Option<Judged<'a>> {
+        let enough = first_energy / (1.0 - CLEAR_MARGIN);
+        Some(match summed(coarse, fine, rules, Some(enough))? {
+            Summed::Enough => Judged::FirstClearlyBest,
+            Summed::All(sums, colouring) => Judged::Summed(Self { coarse, colouring, sums }),
+        })
     }
 
     /// The reading whose vertex point canonical fine vertex `v` is: 0 for the first
@@ -103,7 +121,7 @@ impl<'a> Readings<'a> {
         }
     }
 
-    /// The component of canonical fine vertex `v` (as [`sums_and_colouring`] numbers them).
+    /// The component of canonical fine vertex `v` (as [`summed`] numbers them).
     pub(super) fn component_of(&self, v: usize) -> usize {
         let corner = match v.checked_sub(self.coarse.vertex_count()) {
             None => self.coarse.vertex_corners()[v],
@@ -127,30 +145,27 @@ fn clear_winner(sums: [f64; 4]) -> Option<usize> {
     clear.then_some(winner)
 }
 
-/// [`sums_and_colouring`] without the colouring.
+/// The sums of [`summed`] without a bound.
 #[cfg(test)]
 pub(super) fn energies(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions) -> Option<Vec<[f64; 4]>> {
-    sums_and_colouring(coarse, fine, rules).map(|(sums, _)| sums)
-}
-
-/// Per component of `coarse` (in order of its lowest face), the sums of squared details
-/// of the first reading (at 0) and of the readings of the three edge colours (at `1 + k`);
-/// `None` for an open mesh, a vertex of valence other than 6, a fine mesh of another
-/// size, or edges that take no lattice colouring; with the colouring found.
-fn sums_and_colouring(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions) -> Option<(Vec<[f64; 4]>, Colouring)> {
     match summed(coarse, fine, rules, None)? {
-        Summed::All(sums, colouring) => Some((sums, colouring)),
-        Summed::Enough => unreachable!("no bound, no early stop"),
+        Summed::All(sums, _) => Some(sums),
+        Summed::Enough => None,
     }
 }
 
 /// Corners of the pass over the edge points between two looks at the partial sums.
 const CORNERS_BETWEEN_LOOKS: usize = 3 << 10;
 
-/// [`sums_and_colouring`], stopped early on a mesh of one component once the sums of
-/// readings 1 to 3 all exceed `enough`: the edge points' terms come first, by chunks of
-/// corners (three quarters of the fine vertices, and the pass that reads the most), then
-/// the vertex points'.
+/// Per component of `coarse` (in order of its lowest face), the sums of squared details
+/// of the first reading (at 0) and of the readings of the three edge colours (at `1 + k`),
+/// with the colouring found; `None` for an open mesh, a vertex of valence other than 6, a
+/// fine mesh of another size, or edges that take no lattice colouring.
+///
+/// Given `enough`, a mesh of one component is only summed until the sums of readings 1
+/// to 3 all exceed it ([`Summed::Enough`]): the edge points' terms come first, by chunks
+/// of corners (three quarters of the fine vertices, and the pass that reads the most),
+/// then the vertex points'.
 fn summed(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions, enough: Option<f64>) -> Option<Summed> {
     let (vertex, twin, edge) = (coarse.corner_vertices(), coarse.twins(), coarse.corner_edges());
     let first_odd = coarse.vertex_count();
