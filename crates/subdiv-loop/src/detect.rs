@@ -1076,7 +1076,7 @@ pub(crate) fn renumber_to_canonical(
         if search.label[v as usize] != UNKNOWN {
             continue;
         }
-        let c = corner_at(v);
+        let c = irregularity.start(v).unwrap_or_else(|| corner_at(v));
         if c == NONE {
             search.label[v as usize] = EVEN;
         } else if irregularity.is_irregular(v, c) {
@@ -1249,8 +1249,8 @@ struct Irregularity<'a> {
     corners: &'a [Corner],
     vertex_count: usize,
     asked: usize,
-    /// Counted once circulation stops.
-    counts: Option<Valences>,
+    /// Counted once circulation stops, with the circulation start of every vertex.
+    counts: Option<(Valences, Vec<u32>)>,
 }
 
 /// The valence class of every vertex of a triangle mesh, from one sequential pass over
@@ -1275,6 +1275,28 @@ impl Valences {
         Self { outgoing, boundary }
     }
 
+    /// [`Valences::of`] the corners, in the same pass the circulation start of every
+    /// vertex: its first corner, or its corner whose half-edge lies on the boundary (the
+    /// rule of [`CornerTable::vertex_corners`], which a half-edge mesh's vertex half-edges
+    /// follow too), [`NONE`] for an isolated vertex. A search over a mesh of regular
+    /// valences asks for the start of every vertex, which read from the half-edge mesh is
+    /// three scattered reads each.
+    fn with_starts(vertex_count: usize, corners: &[Corner]) -> (Self, Vec<u32>) {
+        let mut outgoing = vec![0u8; vertex_count];
+        let mut boundary = vec![false; vertex_count];
+        let mut starts = vec![NONE; vertex_count];
+        for (c, corner) in corners.iter().enumerate() {
+            let v = corner.vertex as usize;
+            outgoing[v] = outgoing[v].saturating_add(1);
+            let on_boundary = corner.twin == NONE;
+            boundary[v] |= on_boundary;
+            if starts[v] == NONE || on_boundary {
+                starts[v] = c as u32;
+            }
+        }
+        (Self { outgoing, boundary }, starts)
+    }
+
     /// True if vertex `v` cannot be an edge point: its valence is not 6 inside or 4 on
     /// the boundary (an isolated vertex included).
     pub(crate) fn is_irregular(&self, v: u32) -> bool {
@@ -1294,10 +1316,14 @@ impl<'a> Irregularity<'a> {
             return is_irregular(self.corners, c);
         }
         let (corners, vertex_count) = (self.corners, self.vertex_count);
-        let counts = self.counts.get_or_insert_with(|| {
-            Valences::of(vertex_count, corners.iter().map(|corner| (corner.vertex, corner.twin)))
-        });
+        let (counts, _) = self.counts.get_or_insert_with(|| Valences::with_starts(vertex_count, corners));
         counts.is_irregular(v)
+    }
+
+    /// The circulation start of vertex `v` (as [`CornerTable::vertex_corners`] has it,
+    /// [`NONE`] for an isolated vertex) once the valences are counted, `None` before.
+    fn start(&self, v: u32) -> Option<u32> {
+        self.counts.as_ref().map(|(_, starts)| starts[v as usize])
     }
 }
 
@@ -1885,7 +1911,9 @@ mod tests {
 
     /// The corner counts of `Irregularity` (every vertex at once) and the circulation
     /// give the same answer at every vertex of manifold meshes, closed and open, regular
-    /// and not, refined or not, renumbered; and the first vertices asked are circulated.
+    /// and not, refined or not, renumbered, and the circulation starts counted with them
+    /// are those of the corner table and of the half-edge mesh; and the first vertices
+    /// asked are circulated.
     #[test]
     fn counted_and_circulated_irregularity_agree() {
         let rules = LoopOptions::default();
@@ -1900,6 +1928,8 @@ mod tests {
             cylinder(5, 2),
             loop_step(&mesh(&cylinder(5, 2)), &rules),
             scramble(&loop_step(&mesh(&open_fan(5)), &rules), 3),
+            scramble(&loop_step(&mesh(&torus), &rules), 4),
+            scramble(&loop_step(&mesh(&cylinder(5, 2)), &rules), 5),
         ];
         let mut irregular = 0;
         for (i, soup) in soups.iter().enumerate() {
@@ -1914,6 +1944,16 @@ mod tests {
                 irregular += usize::from(circulated);
             }
             assert!(counted.counts.is_some(), "soup {i}: counted");
+            // The starts counted beside the valences are the table's circulation starts,
+            // and the half-edge mesh's, read from the mesh's own corners too.
+            let starts: Vec<u32> = (0..table.vertex_count() as u32).map(|v| counted.start(v).unwrap()).collect();
+            assert_eq!(starts, table.vertex_corners(), "soup {i}");
+            let half_edges = mesh(soup);
+            let mesh_corners = CornerTable::mesh_corners(&half_edges).unwrap();
+            let (_, from_mesh) = Valences::with_starts(half_edges.vertex_count(), &mesh_corners.corners);
+            for (v, &start) in from_mesh.iter().enumerate() {
+                assert_eq!(start, mesh_corners.corner_at(&half_edges, v as u32), "soup {i}, vertex {v}");
+            }
             let mut fresh = Irregularity::new(&corners, table.vertex_count());
             fresh.is_irregular(0, table.vertex_corners()[0]);
             assert!(fresh.counts.is_none() && fresh.asked == 1, "soup {i}: circulated first");

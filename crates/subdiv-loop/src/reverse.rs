@@ -45,6 +45,7 @@
 //!   with the same options is still exact.
 
 use std::borrow::Cow;
+use std::cell::OnceCell;
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -560,7 +561,9 @@ pub(crate) fn reverse_level(
 ) -> Result<LevelParts, LoopError> {
     // The fast paths' reading; `None` when the general detection would have to run, as
     // for a component without a seed or an irregular vertex (or an error).
-    let first = match reverse_level_fast(fine, positions, seeds, rules)? {
+    // The fine corners, read at most once: by the renumbering path, or below.
+    let fine_corners = OnceCell::new();
+    let first = match reverse_level_fast_reading(fine, &fine_corners, positions, seeds, rules)? {
         Some(level) if !level.several_readings => return Ok(level),
         first => first,
     };
@@ -577,8 +580,8 @@ pub(crate) fn reverse_level(
     }
     // The fine corners, read once for the searches of the readings compared, give the
     // components and their candidates too (no table of edges is built for them).
-    let fine_corners = FineCorners::of(fine);
-    let readings = match (fine, &fine_corners) {
+    let fine_corners = fine_corners.get_or_init(|| FineCorners::of(fine));
+    let readings = match (fine, fine_corners) {
         (FineLevel::Table(table), _) => RegularReadings::of(table, seeds),
         (FineLevel::Mesh(mesh), FineCorners::Mesh(Some(mesh_corners))) => {
             let corners = &mesh_corners.corners;
@@ -623,7 +626,7 @@ pub(crate) fn reverse_level(
     let reverse_reading = |all: &[u32]| {
         #[cfg(test)]
         MORE_READINGS.set(MORE_READINGS.get() + 1);
-        match reverse_searched(fine, &fine_corners, positions, all, rules) {
+        match reverse_searched(fine, fine_corners, positions, all, rules) {
             Some(level) => Ok(level),
             None => reverse_level_general(fine, positions, all, rules),
         }
@@ -1108,10 +1111,24 @@ fn reverse_level_from(
     }
 }
 
-/// The fast paths of `reverse_level_from`: `None` when neither applies (the general
-/// detection then decides); an error only for a non-finite position of a user's mesh.
+/// [`reverse_level_fast_reading`] with corners of its own.
+#[cfg(test)]
 fn reverse_level_fast(
     fine: FineLevel<'_>,
+    positions: &[DVec3],
+    seeds: &[u32],
+    rules: &LoopOptions,
+) -> Result<Option<LevelParts>, LoopError> {
+    reverse_level_fast_reading(fine, &OnceCell::new(), positions, seeds, rules)
+}
+
+/// The fast paths of `reverse_level_from`: `None` when neither applies (the general
+/// detection then decides); an error only for a non-finite position of a user's mesh.
+/// The fine corners are read into `corners` if the renumbering path reads them (for the
+/// caller, which may need them too, to read them once).
+fn reverse_level_fast_reading(
+    fine: FineLevel<'_>,
+    corners: &OnceCell<FineCorners>,
     positions: &[DVec3],
     seeds: &[u32],
     rules: &LoopOptions,
@@ -1146,7 +1163,7 @@ fn reverse_level_fast(
     // A mesh in any other order: renumbered into the canonical order of the coarse mesh
     // that detection finds, and reversed by the canonical path, which also checks it.
     // Anything else (errors included) goes through the general detection.
-    Ok(reverse_searched(fine, &FineCorners::of(fine), positions, seeds, rules))
+    Ok(reverse_searched(fine, corners.get_or_init(|| FineCorners::of(fine)), positions, seeds, rules))
 }
 
 /// [`LoopError::Overflow`] for a reversal of finite `input` positions whose coarse
@@ -1178,7 +1195,7 @@ impl FineCorners {
     }
 }
 
-/// The renumbering path of [`reverse_level_fast`]: a mesh in any order renumbered into
+/// The renumbering path of [`reverse_level_fast_reading`]: a mesh in any order renumbered into
 /// the canonical order of the coarse mesh that detection finds from `seeds` and the
 /// irregular vertices, and reversed by the canonical path, which also checks it; `None`
 /// if that fails. `corners`: [`FineCorners::of`] `fine`.
