@@ -546,13 +546,15 @@ pub(crate) struct LevelParts {
 /// other's in every component, the readings in turn would choose it (see
 /// `lattice_choice`), and it is returned (reversed, if it is not the one at hand)
 /// without them; closer cases are decided in turn as above, so the result is the same
-/// either way (a test compares the two on moved tori, bit for bit).
+/// either way (a test compares the two on moved tori, bit for bit). On a mesh of one
+/// component the pass stops once the reading at hand is known to be clearly the best.
 /// (Bench group `regular_torus`, one thread, a refined torus of 131 072 vertices, moved:
-/// the forward step 2.6 ms; seeded 4.2 ms in the canonical order and 12.5 ms
-/// renumbered; automatic 8.8 ms and 39 ms (40 ms and 63 ms with the readings reversed in
-/// turn: three more readings, each through the search, which reads the fine corners
-/// once for all of them). The torus refined exactly, automatic: 4.8 ms in the canonical
-/// order, 32 ms renumbered: its first exact reading settles it.)
+/// the forward step 2.1 ms; seeded 3.4 ms in the canonical order and 11.9 ms
+/// renumbered; automatic 6.3 ms and 25 ms (40 ms and 63 ms, with a forward step of 2.5
+/// ms, when the readings were reversed in turn: three more readings, each through the
+/// search, which reads the fine corners once for all of them). The torus refined
+/// exactly, automatic: 3.8 ms in the canonical order, 20 ms renumbered: its first exact
+/// reading settles it.)
 pub(crate) fn reverse_level(
     fine: FineLevel<'_>,
     positions: &[DVec3],
