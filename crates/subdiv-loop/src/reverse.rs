@@ -584,21 +584,16 @@ pub(crate) fn reverse_level(
     // components and their candidates too (no table of edges is built for them).
     let fine_corners = fine_corners.get_or_init(|| FineCorners::of(fine));
     let readings = match (fine, fine_corners) {
-        (FineLevel::Table(table), _) => RegularReadings::of(table, seeds),
+        (FineLevel::Table(table), FineCorners::Table(corners)) => {
+            let starts = table.vertex_corners();
+            RegularReadings::of_corners(table.vertex_count(), corners, |v| starts[v as usize], seeds)
+        }
         (FineLevel::Mesh(mesh), FineCorners::Mesh(Some(mesh_corners))) => {
-            let corners = &mesh_corners.corners;
-            let arrays = FineCornerArrays {
-                vertex: |c: usize| corners[c].vertex,
-                twin: |c: usize| corners[c].twin,
-                start: |v| mesh_corners.corner_at(mesh, v),
-            };
-            RegularReadings::of_corners(mesh.vertex_count(), corners.len(), &arrays, seeds)
+            let start = |v| mesh_corners.corner_at(mesh, v);
+            RegularReadings::of_corners(mesh.vertex_count(), &mesh_corners.corners, start, seeds)
         }
-        // A face that is not a triangle: the table names it.
-        (FineLevel::Mesh(mesh), _) => {
-            CornerTable::from_mesh(mesh)?;
-            return reverse_level_general(fine, positions, seeds, rules);
-        }
+        // A face that is not a triangle: the general detection names it.
+        _ => return reverse_level_general(fine, positions, seeds, rules),
     };
     if readings.candidates.is_empty() {
         return match first {
@@ -930,31 +925,18 @@ fn every_component_has_one(table: &CornerTable, vertices: &[u32]) -> bool {
     reached.iter().all(|&r| r)
 }
 
-/// The corners of a fine mesh as closures over its arrays, whichever holds them (a
-/// corner table, or the corners of a half-edge mesh): `vertex(c)` and `twin(c)` of
-/// every corner, `start(v)` the circulation start of every vertex (as
-/// [`CornerTable::vertex_corners`] has it, [`NONE`] for an isolated vertex).
-struct FineCornerArrays<V, T, S> {
-    vertex: V,
-    twin: T,
-    start: S,
-}
-
-impl<V: Fn(usize) -> u32, T: Fn(usize) -> u32, S: Fn(u32) -> u32> FineCornerArrays<V, T, S> {
-    /// The neighbour across every corner of `v` in circulation order (as
-    /// [`CornerTable::outgoing`] lists the corners): the other end of each corner's
-    /// half-edge.
-    fn neighbours(&self, v: u32) -> Vec<u32> {
-        let start = (self.start)(v);
-        let mut neighbours = Vec::new();
-        let mut c = start;
-        while c != NONE {
-            neighbours.push((self.vertex)(next(c) as usize));
-            let following = (self.twin)(prev(c) as usize);
-            c = if following == start { NONE } else { following };
-        }
-        neighbours
+/// The neighbour across every corner of the vertex whose circulation starts at corner
+/// `start` ([`NONE`]: an isolated vertex), in circulation order (as
+/// [`CornerTable::outgoing`] lists the corners): the other end of each corner's half-edge.
+fn neighbours(corners: &[Corner], start: u32) -> Vec<u32> {
+    let mut neighbours = Vec::new();
+    let mut c = start;
+    while c != NONE {
+        neighbours.push(corners[next(c) as usize].vertex);
+        let following = corners[prev(c) as usize].twin;
+        c = if following == start { NONE } else { following };
     }
+    neighbours
 }
 
 /// The components of a fine mesh whose readings [`reverse_level`] compares, and how to
@@ -969,26 +951,22 @@ struct RegularReadings {
 }
 
 impl RegularReadings {
+    /// [`RegularReadings::of_corners`] of a corner table.
+    #[cfg(test)]
+    fn of(table: &CornerTable, seeds: &[u32]) -> Self {
+        let starts = table.vertex_corners();
+        Self::of_corners(table.vertex_count(), &table.corners(), |v| starts[v as usize], seeds)
+    }
+
+    /// The readings of a fine mesh of `vertices` vertices from its `corners` alone, as the
+    /// searches of the readings read them (no table of edges built for this); `start(v)`:
+    /// the circulation start of vertex `v` (as [`CornerTable::vertex_corners`] has it).
     /// Components by a union-find over the faces' corners and regularity by a count of
     /// outgoing corners, two sequential passes (a search circulating every vertex's star
     /// twice cost as much as a reversal): component labels in order of lowest vertex, an
     /// isolated vertex a component of its own that is not regular.
-    fn of(table: &CornerTable, seeds: &[u32]) -> Self {
-        let (corner_vertex, twin, starts) = (table.corner_vertices(), table.twins(), table.vertex_corners());
-        let corners =
-            FineCornerArrays { vertex: |c| corner_vertex[c], twin: |c| twin[c], start: |v| starts[v as usize] };
-        Self::of_corners(table.vertex_count(), table.corner_count(), &corners, seeds)
-    }
-
-    /// [`RegularReadings::of`] from the corners of the fine mesh alone, as the searches
-    /// of the readings read them (no table of edges built for this).
-    fn of_corners(
-        vertices: usize,
-        corner_count: usize,
-        corners: &FineCornerArrays<impl Fn(usize) -> u32, impl Fn(usize) -> u32, impl Fn(u32) -> u32>,
-        seeds: &[u32],
-    ) -> Self {
-        let valences = Valences::of(vertices, (0..corner_count).map(|c| ((corners.vertex)(c), (corners.twin)(c))));
+    fn of_corners(vertices: usize, corners: &[Corner], start: impl Fn(u32) -> u32, seeds: &[u32]) -> Self {
+        let valences = Valences::of(vertices, corners.iter().map(|corner| (corner.vertex, corner.twin)));
         let mut parent: Vec<u32> = (0..vertices as u32).collect();
         let root = |parent: &mut [u32], mut v: u32| {
             while parent[v as usize] != v {
@@ -998,10 +976,9 @@ impl RegularReadings {
             }
             v
         };
-        for c0 in (0..corner_count).step_by(3) {
-            for k in 0..2 {
-                let (a, b) =
-                    (root(&mut parent, (corners.vertex)(c0 + k)), root(&mut parent, (corners.vertex)(c0 + k + 1)));
+        for face in corners.chunks_exact(3) {
+            for pair in face.windows(2) {
+                let (a, b) = (root(&mut parent, pair[0].vertex), root(&mut parent, pair[1].vertex));
                 // The lower root stays the root (any choice works; this one is cheap).
                 let (low, high) = (a.min(b), a.max(b));
                 parent[high as usize] = low;
@@ -1021,7 +998,7 @@ impl RegularReadings {
             component[v as usize] = label;
             regular[label as usize] &= !valences.is_irregular(v);
         }
-        Self::of_components(|v| corners.neighbours(v), component, regular, &lowest, seeds)
+        Self::of_components(|v| neighbours(corners, start(v)), component, regular, &lowest, seeds)
     }
 
     /// The readings of the components `component` (of every vertex) given, per
@@ -2107,13 +2084,8 @@ mod tests {
                 // From the corners of the half-edge mesh, as `reverse_level` reads them.
                 let mesh = HalfedgeMesh::from_soup(soup).unwrap();
                 let mesh_corners = CornerTable::mesh_corners(&mesh).unwrap();
-                let corners = &mesh_corners.corners;
-                let arrays = FineCornerArrays {
-                    vertex: |c: usize| corners[c].vertex,
-                    twin: |c: usize| corners[c].twin,
-                    start: |v| mesh_corners.corner_at(&mesh, v),
-                };
-                let from_mesh = RegularReadings::of_corners(mesh.vertex_count(), corners.len(), &arrays, &seeds);
+                let start = |v| mesh_corners.corner_at(&mesh, v);
+                let from_mesh = RegularReadings::of_corners(mesh.vertex_count(), &mesh_corners.corners, start, &seeds);
                 assert_eq!(from_mesh.component, searched.component, "soup {i}, seeds {seeds:?}");
                 assert_eq!(from_mesh.candidates, searched.candidates, "soup {i}, seeds {seeds:?}");
             }
