@@ -574,15 +574,12 @@ impl CornerTable {
         Self::from_parts(topology.vertex_count, corner_vertex, twin)
     }
 
-    /// The faces as a polygon soup with the given positions.
-    pub(crate) fn to_soup(&self, positions: Vec<DVec3>) -> PolygonSoup {
+    /// The faces as a polygon soup with the given positions (the corners' vertices are
+    /// its indices as they are, not copied).
+    pub(crate) fn into_soup(self, positions: Vec<DVec3>) -> PolygonSoup {
         debug_assert_eq!(positions.len(), self.vertex_count);
         let faces = self.face_count();
-        PolygonSoup {
-            positions,
-            offsets: (0..=faces as u32).map(|f| 3 * f).collect(),
-            indices: self.corner_vertex.clone(),
-        }
+        PolygonSoup { positions, offsets: (0..=faces as u32).map(|f| 3 * f).collect(), indices: self.corner_vertex }
     }
 }
 
@@ -614,7 +611,7 @@ mod tests {
     use mesh_topo::shapes::{self, CellKind};
 
     fn check_against_mesh_topo(table: &CornerTable) {
-        let soup = table.to_soup(vec![DVec3::ZERO; table.vertex_count()]);
+        let soup = table.clone().into_soup(vec![DVec3::ZERO; table.vertex_count()]);
         let mesh = HalfedgeMesh::from_soup(&soup).expect("refined mesh is valid");
         let rebuilt = CornerTable::from_mesh(&mesh).unwrap();
         assert_eq!(&rebuilt, table);

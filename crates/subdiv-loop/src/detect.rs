@@ -2249,14 +2249,14 @@ mod tests {
             let soup = flip_random_edges(soup, flips, seed);
             let soup = perturb(&soup, 0.01, seed);
             if let Ok(structure) = detect_soup(&soup, None) {
-                let coarse = structure.coarsening.coarse.to_soup(vec![DVec3::ZERO; structure.coarse_vertex_count()]);
+                let coarse = structure.coarsening.coarse.clone().into_soup(vec![DVec3::ZERO; structure.coarse_vertex_count()]);
                 prop_assert!(HalfedgeMesh::from_soup(&coarse).is_ok());
                 let canonical = structure.coarsening.coarse.refine();
                 let actual = match structure.fine_order() {
                     None => canonical,
                     Some(order) => canonical.permuted(&order.vertex_of_canonical, &order.face_of_canonical),
                 };
-                prop_assert_eq!(actual.to_soup(soup.positions.clone()), soup);
+                prop_assert_eq!(actual.into_soup(soup.positions.clone()), soup);
             }
         }
     }

@@ -166,7 +166,7 @@ fn decompose_as_given(mesh: &HalfedgeMesh, options: &DecomposeOptions) -> Result
         // not exist is an error at any level count, as detection reports it).
         check_input_positions(mesh.positions())?;
         crate::detect::check_seeds(&options.seed_vertices, mesh.vertex_count())?;
-        let base = CornerTable::from_mesh(mesh)?.to_soup(mesh.positions().to_vec());
+        let base = CornerTable::from_mesh(mesh)?.into_soup(mesh.positions().to_vec());
         return Ok(LoopPyramid { rules: options.rules, base, levels: Vec::new() });
     }
     // The input is read as it is (see `detect_mesh`), its positions in place.
@@ -275,7 +275,7 @@ fn decompose_below(first: LevelParts, options: &DecomposeOptions) -> Result<Loop
         positions = coarse_positions;
     }
     levels.reverse();
-    Ok(LoopPyramid { rules: options.rules, base: table.to_soup(positions), levels })
+    Ok(LoopPyramid { rules: options.rules, base: table.into_soup(positions), levels })
 }
 
 /// The number of details that [`LoopPyramid::compressed`] keeps of `total` for

@@ -191,8 +191,8 @@ pub fn reverse(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<Reversed
 fn reverse_as_given(fine: &HalfedgeMesh, options: &ReverseOptions) -> Result<ReversedLevel, LoopError> {
     let LevelParts { coarse, order, positions, details, .. } =
         reverse_level(FineLevel::Mesh(fine), fine.positions(), &options.seed_vertices, &options.rules)?;
-    let coarse =
-        HalfedgeMesh::from_soup(&coarse.to_soup(positions)).expect("internal: a detected coarse mesh is a valid mesh");
+    let coarse = HalfedgeMesh::from_soup(&coarse.into_soup(positions))
+        .expect("internal: a detected coarse mesh is a valid mesh");
     Ok(ReversedLevel { coarse, details, order })
 }
 
