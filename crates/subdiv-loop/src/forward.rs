@@ -82,6 +82,8 @@ mod matrix;
 mod subdivider;
 pub(crate) mod topology;
 
+use std::mem::take;
+
 use glam::DVec3;
 use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 use serde::{Deserialize, Serialize};
@@ -305,7 +307,7 @@ impl LoopMesh {
 /// that the result is not.
 pub fn subdivide(mesh: &HalfedgeMesh, levels: u32, options: &LoopOptions) -> Result<LoopMesh, LoopError> {
     let largest = check_finite_largest(mesh.positions())?;
-    let topology = Topology::from_mesh(mesh)?;
+    let topology = Topology::from_mesh_with_room(mesh, base_triangle_room(mesh, levels, size_of::<DVec3>()))?;
     let (vertices, faces) = check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels)?;
     check_output_memory(vertices, faces, size_of::<DVec3>(), 0)?;
     let (positions, topology) = refine(topology, mesh.positions(), levels, &Rules::new(options));
@@ -375,7 +377,7 @@ pub fn refine_attribute<T: Attribute>(
         return Err(LoopError::AttributeCount { expected: mesh.vertex_count(), found: values.len() });
     }
     attribute::check_finite_values(values)?;
-    let topology = Topology::from_mesh(mesh)?;
+    let topology = Topology::from_mesh_with_room(mesh, base_triangle_room(mesh, levels, size_of::<T>()))?;
     let (vertices, faces) = check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels)?;
     check_output_memory(vertices, faces, size_of::<T>(), 0)?;
     attribute::checked_refined(refine(topology, values, levels, &Rules::new(options)).0)
@@ -411,8 +413,37 @@ pub fn subdivision_matrix(
     Ok(SubdivisionMatrix::from_rows(rows, mesh.vertex_count()))
 }
 
+/// The room to reserve for the base level's triangles of `levels` steps of `mesh` (see
+/// [`refine`]): the triangles of the finest level of the same parity, the output for
+/// an even count, if there are two levels or more, the counts are valid and the output
+/// (of `value_bytes` per vertex) fits in memory; else its own (the errors are then
+/// reported in their order by the checks after the base level is built).
+pub(crate) fn base_triangle_room(mesh: &HalfedgeMesh, levels: u32, value_bytes: usize) -> usize {
+    let faces = mesh.face_count();
+    if levels < 2 {
+        return faces;
+    }
+    match check_sizes(mesh.vertex_count(), mesh.edge_count(), faces, levels) {
+        Ok((vertices, last_faces)) if check_output_memory(vertices, last_faces, value_bytes, 0).is_ok() => {
+            // Faces multiply by 4 per level: the finest even level has `4^(levels & !1)`
+            // times as many as the base.
+            (last_faces >> (2 * (levels & 1))) as usize
+        }
+        _ => faces,
+    }
+}
+
 /// Runs `levels` steps; the returned topology is complete except at the last level
 /// (triangles and counts only).
+///
+/// Each step writes into the arrays of the level two before it, which are no longer
+/// needed (its values, triangles, links and starts, each only if large enough; the last
+/// step takes the values and triangles only). A base level whose triangles were made
+/// with the room of the finest level of the same parity ([`base_triangle_room`]) thus
+/// hands its memory on to that level: to the output for an even count. Otherwise the
+/// base level's arrays, freed after the first step, could stay resident: glibc raises
+/// its mmap threshold as large blocks are freed (a file read before, say), so arrays
+/// the size of the base level come from its heap and are kept there once freed.
 pub(crate) fn refine<T: Attribute>(
     mut topology: Topology,
     values: &[T],
@@ -420,12 +451,23 @@ pub(crate) fn refine<T: Attribute>(
     rules: &Rules,
 ) -> (Vec<T>, Topology) {
     let mut current: Option<Vec<T>> = None;
+    // The arrays of the level before `current`.
+    let mut spare = kernel::Buffers::default();
     for level in 0..levels {
         let last = level + 1 == levels;
-        let step = kernel::step(&topology, current.as_deref().unwrap_or(values), rules, !last);
-        // The coarser level is dropped here, before the next step allocates.
-        current = Some(step.values);
-        topology = step.topology;
+        if last {
+            // The last level has no links or starts: the spare ones are freed now, not
+            // held through the step.
+            (spare.links, spare.starts) = (Vec::new(), Vec::new());
+        }
+        let step = kernel::step_into(&topology, current.as_deref().unwrap_or(values), rules, !last, take(&mut spare));
+        let coarser = std::mem::replace(&mut topology, step.topology);
+        spare = kernel::Buffers {
+            values: current.replace(step.values).unwrap_or_default(),
+            triangles: coarser.triangles,
+            links: coarser.links,
+            starts: coarser.vertex_halfedge,
+        };
     }
     (current.unwrap_or_else(|| values.to_vec()), topology)
 }

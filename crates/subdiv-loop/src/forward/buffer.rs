@@ -58,11 +58,21 @@ impl<T> Output<T> {
     /// its capacity suffices: memory that was written before is already mapped, so
     /// writing it again takes no page fault. A vector that is too small is released
     /// before a new one is allocated, as by [`Output::new`].
+    ///
+    /// Room beyond what `vec` holds (its length, the elements a previous use wrote) is
+    /// mapped as [`Output::new`] maps it: a vector made larger than its first use (the
+    /// base level's triangles in `forward::refine`) is written there for the first time.
     pub(crate) fn reuse(mut vec: Vec<T>, len: usize) -> Self {
+        let written = vec.len();
         vec.clear();
         if vec.capacity() < len {
             drop(vec);
             return Self::new(len);
+        }
+        if written < len {
+            let (start, bytes) = (vec.as_ptr().wrapping_add(written).cast(), (len - written) * size_of::<T>());
+            advise_huge_pages(start, bytes);
+            map_pages(start, bytes);
         }
         Self { vec, len, filled: AtomicUsize::new(0), handed_out: false }
     }

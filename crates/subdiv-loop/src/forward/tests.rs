@@ -124,6 +124,37 @@ fn several_levels_are_repeated_single_steps() {
 }
 
 #[test]
+fn each_level_is_written_in_the_memory_of_the_level_two_before_it() {
+    let icosahedron = mesh(&shapes::icosahedron());
+    let options = LoopOptions::default();
+    let rules = Rules::new(&options);
+    for levels in 0..5u32 {
+        // The base triangles have the room of the finest level of their parity.
+        let room = base_triangle_room(&icosahedron, levels, size_of::<DVec3>());
+        let expected_room = if levels < 2 { 20 } else { 20 << (2 * (levels & !1)) };
+        assert_eq!(room, expected_room, "{levels} levels");
+        let topology = Topology::from_mesh_with_room(&icosahedron, room).unwrap();
+        let base_triangles = topology.triangles.as_ptr();
+        let (positions, fine) = refine(topology, icosahedron.positions(), levels, &rules);
+        // An even count writes its output in that memory.
+        if levels >= 2 && levels % 2 == 0 {
+            assert_eq!(fine.triangles.as_ptr(), base_triangles, "{levels} levels");
+        }
+        // The same bits as the steps each into fresh arrays.
+        let (mut fresh, mut values) = (Topology::from_mesh(&icosahedron).unwrap(), icosahedron.positions().to_vec());
+        for level in 0..levels {
+            let step = kernel::step(&fresh, &values, &rules, level + 1 < levels);
+            (fresh, values) = (step.topology, step.values);
+        }
+        assert_eq!(fine.triangles, fresh.triangles, "{levels} levels");
+        let bits = |p: &[DVec3]| p.iter().map(|q| q.to_array().map(f64::to_bits)).collect::<Vec<_>>();
+        assert_eq!(bits(&positions), bits(&values), "{levels} levels");
+    }
+    // No room is reserved for an output that is refused.
+    assert_eq!(base_triangle_room(&icosahedron, 20, size_of::<DVec3>()), 20);
+}
+
+#[test]
 fn counts_and_euler_characteristic() {
     for (name, soup) in test_meshes() {
         let m = mesh(&soup);

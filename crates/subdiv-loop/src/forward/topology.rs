@@ -91,7 +91,14 @@ impl Topology {
     /// [`LoopError::InteriorValenceTwo`] for two triangles glued along all three edges;
     /// [`MeshError::TooLarge`] if the mesh has too many faces or edges for the layout.
     pub(crate) fn from_mesh(mesh: &HalfedgeMesh) -> Result<Self, LoopError> {
-        let mut topology = Self::default();
+        Self::from_mesh_with_room(mesh, 0)
+    }
+
+    /// [`Topology::from_mesh`] with its triangles in an array with room for
+    /// `triangle_room` of them (reserved, not touched): the array that a later level of
+    /// the same parity writes into (see `forward::refine`).
+    pub(crate) fn from_mesh_with_room(mesh: &HalfedgeMesh, triangle_room: usize) -> Result<Self, LoopError> {
+        let mut topology = Self { triangles: Vec::with_capacity(triangle_room), ..Self::default() };
         topology.rebuild(mesh, &mut Vec::new())?;
         Ok(topology)
     }
