@@ -1266,13 +1266,7 @@ impl Valences {
     /// From the `(vertex, twin)` of every corner (a corner's twin is that of the
     /// half-edge leaving its vertex, [`NONE`] on the boundary).
     pub(crate) fn of(vertex_count: usize, corners: impl Iterator<Item = (u32, u32)>) -> Self {
-        let mut outgoing = vec![0u8; vertex_count];
-        let mut boundary = vec![false; vertex_count];
-        for (v, twin) in corners {
-            outgoing[v as usize] = outgoing[v as usize].saturating_add(1);
-            boundary[v as usize] |= twin == NONE;
-        }
-        Self { outgoing, boundary }
+        Self::counted(vertex_count, corners, |_, _, _| ())
     }
 
     /// [`Valences::of`] the corners, in the same pass the circulation start of every
@@ -1282,19 +1276,36 @@ impl Valences {
     /// valences asks for the start of every vertex, which read from the half-edge mesh is
     /// three scattered reads each.
     fn with_starts(vertex_count: usize, corners: &[Corner]) -> (Self, Vec<u32>) {
+        let mut starts = vec![NONE; vertex_count];
+        let valences = Self::counted(
+            vertex_count,
+            corners.iter().map(|corner| (corner.vertex, corner.twin)),
+            |c, v, on_boundary| {
+                if starts[v] == NONE || on_boundary {
+                    starts[v] = c;
+                }
+            },
+        );
+        (valences, starts)
+    }
+
+    /// The pass of [`Valences::of`], calling `each(corner, vertex, on_boundary)` for
+    /// every corner in order.
+    #[inline(always)]
+    fn counted(
+        vertex_count: usize,
+        corners: impl Iterator<Item = (u32, u32)>,
+        mut each: impl FnMut(u32, usize, bool),
+    ) -> Self {
         let mut outgoing = vec![0u8; vertex_count];
         let mut boundary = vec![false; vertex_count];
-        let mut starts = vec![NONE; vertex_count];
-        for (c, corner) in corners.iter().enumerate() {
-            let v = corner.vertex as usize;
+        for (c, (v, twin)) in (0u32..).zip(corners) {
+            let (v, on_boundary) = (v as usize, twin == NONE);
             outgoing[v] = outgoing[v].saturating_add(1);
-            let on_boundary = corner.twin == NONE;
             boundary[v] |= on_boundary;
-            if starts[v] == NONE || on_boundary {
-                starts[v] = c as u32;
-            }
+            each(c, v, on_boundary);
         }
-        (Self { outgoing, boundary }, starts)
+        Self { outgoing, boundary }
     }
 
     /// True if vertex `v` cannot be an edge point: its valence is not 6 inside or 4 on

@@ -307,9 +307,7 @@ impl LoopMesh {
 /// that the result is not.
 pub fn subdivide(mesh: &HalfedgeMesh, levels: u32, options: &LoopOptions) -> Result<LoopMesh, LoopError> {
     let largest = check_finite_largest(mesh.positions())?;
-    let topology = Topology::from_mesh_with_room(mesh, base_triangle_room(mesh, levels, size_of::<DVec3>()))?;
-    let (vertices, faces) = check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels)?;
-    check_output_memory(vertices, faces, size_of::<DVec3>(), 0)?;
+    let topology = checked_base(mesh, levels, size_of::<DVec3>())?;
     let (positions, topology) = refine(topology, mesh.positions(), levels, &Rules::new(options));
     check_no_overflow(&positions, largest)?;
     Ok(LoopMesh { positions, triangles: topology.triangles })
@@ -377,9 +375,7 @@ pub fn refine_attribute<T: Attribute>(
         return Err(LoopError::AttributeCount { expected: mesh.vertex_count(), found: values.len() });
     }
     attribute::check_finite_values(values)?;
-    let topology = Topology::from_mesh_with_room(mesh, base_triangle_room(mesh, levels, size_of::<T>()))?;
-    let (vertices, faces) = check_sizes(topology.vertex_count, topology.edge_count, topology.face_count(), levels)?;
-    check_output_memory(vertices, faces, size_of::<T>(), 0)?;
+    let topology = checked_base(mesh, levels, size_of::<T>())?;
     attribute::checked_refined(refine(topology, values, levels, &Rules::new(options)).0)
 }
 
@@ -413,22 +409,29 @@ pub fn subdivision_matrix(
     Ok(SubdivisionMatrix::from_rows(rows, mesh.vertex_count()))
 }
 
-/// The room to reserve for the base level's triangles of `levels` steps of `mesh` (see
-/// [`refine`]): the triangles of the finest level of the same parity, the output for
-/// an even count, if there are two levels or more, the counts are valid and the output
-/// (of `value_bytes` per vertex) fits in memory; else its own (the errors are then
-/// reported in their order by the checks after the base level is built).
-pub(crate) fn base_triangle_room(mesh: &HalfedgeMesh, levels: u32, value_bytes: usize) -> usize {
-    let faces = mesh.face_count();
-    if levels < 2 {
-        return faces;
-    }
-    match check_sizes(mesh.vertex_count(), mesh.edge_count(), faces, levels) {
-        Ok((vertices, last_faces)) if check_output_memory(vertices, last_faces, value_bytes, 0).is_ok() => {
-            // Faces multiply by 4 per level: the finest even level has `4^(levels & !1)`
-            // times as many as the base.
-            (last_faces >> (2 * (levels & 1))) as usize
-        }
+/// The base level of `levels` steps of `mesh` (values of `value_bytes` each), once the
+/// sizes of the output are checked: errors in the order of [`subdivide`]'s docs, the
+/// base level's own (not a triangle, a pillow) before the sizes'. The sizes are checked
+/// first all the same, once (the memory check reads system files), because they give
+/// the room of the base level's triangles: those of the finest level of the same
+/// parity, the output for an even count (see [`refine`]); a count that is refused
+/// reserves no room beyond the base's own.
+fn checked_base(mesh: &HalfedgeMesh, levels: u32, value_bytes: usize) -> Result<Topology, LoopError> {
+    // The counts of the mesh are those of its topology once built (one triangle per face).
+    let last_faces = check_sizes(mesh.vertex_count(), mesh.edge_count(), mesh.face_count(), levels)
+        .and_then(|(vertices, faces)| check_output_memory(vertices, faces, value_bytes, 0).map(|()| faces));
+    let topology = Topology::from_mesh_with_room(mesh, base_triangle_room(mesh.face_count(), levels, &last_faces))?;
+    last_faces.map(|_| topology)
+}
+
+/// The room to reserve for the base level's triangles (`faces` of them) of `levels`
+/// steps whose last level has `last_faces` (if accepted): that of the finest level of
+/// the same parity, if there are two levels or more; else its own.
+fn base_triangle_room(faces: usize, levels: u32, last_faces: &Result<u64, LoopError>) -> usize {
+    match last_faces {
+        // Faces multiply by 4 per level: the finest level of even count has
+        // `4^(levels & !1)` times as many as the base.
+        Ok(last_faces) if levels >= 2 => (last_faces >> (2 * (levels & 1))) as usize,
         _ => faces,
     }
 }

@@ -750,6 +750,11 @@ thread_local! {
     static BY_LATTICE: std::cell::Cell<bool> = const { std::cell::Cell::new(true) };
 }
 
+/// The sum of squared details of a reading.
+fn detail_energy(details: &[DVec3]) -> f64 {
+    details.iter().map(|d| d.length_squared()).sum()
+}
+
 /// Whether the canonical reading of a fine mesh (`positions`, read with `seeds`), of
 /// coarse mesh `coarse` and details `details`, is the one comparing the readings in turn
 /// would keep, known without comparing them: it settles the choice
@@ -762,7 +767,7 @@ pub(crate) fn canonical_reading_stands(
     seeds: &[u32],
     rules: &LoopOptions,
 ) -> bool {
-    let energy = details.iter().map(|d| d.length_squared()).sum();
+    let energy = detail_energy(details);
     reading_is_settled(coarse, energy, positions)
         || (seeds.is_empty()
             && compares_by_lattice()
@@ -785,7 +790,7 @@ fn lattice_choice(
     if !compares_by_lattice() {
         return None;
     }
-    let first_energy = level.details.iter().map(|d| d.length_squared()).sum();
+    let first_energy = detail_energy(&level.details);
     let sums =
         match lattice::Readings::judged(&level.coarse, &in_canonical_order(level, positions), first_energy, rules)? {
             // One component, clearly best in the reading at hand: its first candidate's.
@@ -851,7 +856,7 @@ pub(crate) fn all_valences_regular(table: &CornerTable) -> bool {
 /// [`reading_is_settled`] from the details (the tests' entry).
 #[cfg(test)]
 pub(crate) fn canonical_reading_is_settled(coarse: &CornerTable, details: &[DVec3], positions: &[DVec3]) -> bool {
-    reading_is_settled(coarse, details.iter().map(|d| d.length_squared()).sum(), positions)
+    reading_is_settled(coarse, detail_energy(details), positions)
 }
 
 /// Whether the canonical reading of a fine mesh (`positions`), of coarse mesh `coarse`

@@ -130,10 +130,9 @@ fn each_level_is_written_in_the_memory_of_the_level_two_before_it() {
     let rules = Rules::new(&options);
     for levels in 0..5u32 {
         // The base triangles have the room of the finest level of their parity.
-        let room = base_triangle_room(&icosahedron, levels, size_of::<DVec3>());
         let expected_room = if levels < 2 { 20 } else { 20 << (2 * (levels & !1)) };
-        assert_eq!(room, expected_room, "{levels} levels");
-        let topology = Topology::from_mesh_with_room(&icosahedron, room).unwrap();
+        let topology = checked_base(&icosahedron, levels, size_of::<DVec3>()).unwrap();
+        assert!(topology.triangles.capacity() >= expected_room, "{levels} levels");
         let base_triangles = topology.triangles.as_ptr();
         let (positions, fine) = refine(topology, icosahedron.positions(), levels, &rules);
         // An even count writes its output in that memory.
@@ -150,8 +149,11 @@ fn each_level_is_written_in_the_memory_of_the_level_two_before_it() {
         let bits = |p: &[DVec3]| p.iter().map(|q| q.to_array().map(f64::to_bits)).collect::<Vec<_>>();
         assert_eq!(bits(&positions), bits(&values), "{levels} levels");
     }
-    // No room is reserved for an output that is refused.
-    assert_eq!(base_triangle_room(&icosahedron, 20, size_of::<DVec3>()), 20);
+    // A count that is refused reserves only the base's own room (and is refused).
+    let refused = check_sizes(12, 30, 20, 20).map(|(_, faces)| faces);
+    assert!(refused.is_err());
+    assert_eq!(base_triangle_room(20, 20, &refused), 20);
+    assert!(checked_base(&icosahedron, 20, size_of::<DVec3>()).is_err());
 }
 
 #[test]

@@ -329,7 +329,7 @@ mod tests {
     use super::*;
     use crate::forward::{VertexWeights, subdivide};
     use crate::reference::perturb;
-    use crate::reverse::{FineLevel, ReverseOptions, reverse, reverse_level_fast};
+    use crate::reverse::{FineLevel, ReverseOptions, detail_energy, reverse, reverse_level_fast};
     use mesh_topo::shapes::{self, CellKind};
     use mesh_topo::{HalfedgeMesh, PolygonSoup};
 
@@ -375,7 +375,7 @@ mod tests {
                     };
                     let options = ReverseOptions { rules, seed_vertices: vec![seed] };
                     let Ok(level) = reverse(&fine, &options) else { continue };
-                    let energy: f64 = level.details.iter().map(|d| d.length_squared()).sum();
+                    let energy = detail_energy(&level.details);
                     assert!(
                         (by_lattice - energy).abs() <= 1e-12 * energy,
                         "{columns} x {rows}, {levels} level(s), {weights:?}, reading {reading}: {by_lattice} vs {energy}"
@@ -400,7 +400,7 @@ mod tests {
                     let fine = moved_torus(columns, rows, levels, &rules, amount, 10 + k as u64);
                     let level = reverse_level_fast(FineLevel::Mesh(&fine), fine.positions(), &[], &rules);
                     let level = level.unwrap().unwrap();
-                    let first_energy: f64 = level.details.iter().map(|d| d.length_squared()).sum();
+                    let first_energy = detail_energy(&level.details);
                     let sums = energies(&level.coarse, fine.positions(), &rules).expect("a lattice");
                     let by_full_sums = clear_winner(sums[0]) == Some(0);
                     let answer = first_reading_is_clearly_best(&level.coarse, fine.positions(), first_energy, &rules);
