@@ -57,7 +57,24 @@ pub fn unit_scale_of(largest: f64) -> f64 {
 /// [`unit_scale_of`] the largest coordinate magnitude of `points` (NaN coordinates are
 /// passed over).
 pub fn unit_scale<'a>(points: impl IntoIterator<Item = &'a DVec3>) -> f64 {
-    unit_scale_of_magnitudes(points.into_iter().fold(DVec3::ZERO, |largest, &p| fold_magnitudes(largest, p)))
+    unit_scale_of_magnitudes(largest_magnitudes(points))
+}
+
+/// The running maxima of [`fold_magnitudes`] over `points`, from `DVec3::ZERO`, in four
+/// lanes (points `4i + k` in lane `k`) joined at the end: one running maximum is a chain
+/// of dependent vector maxima, about four cycles a point, which made this pass 4% of a
+/// two-level Loop decomposition; four chains run side by side at the speed of the loads.
+/// The maximum does not depend on the order, so the result is that of one chain.
+fn largest_magnitudes<'a>(points: impl IntoIterator<Item = &'a DVec3>) -> DVec3 {
+    let mut points = points.into_iter();
+    let mut lanes = [DVec3::ZERO; 4];
+    'points: loop {
+        for lane in &mut lanes {
+            let Some(&p) = points.next() else { break 'points };
+            *lane = fold_magnitudes(*lane, p);
+        }
+    }
+    lanes.into_iter().fold(DVec3::ZERO, fold_magnitudes)
 }
 
 /// One step of the running maximum that [`unit_scale`] folds over its points: each
@@ -168,6 +185,20 @@ mod tests {
         assert!(rescale(&mut values, 2f64.powi(996)));
         assert_eq!(values, [DVec3::new(1e300, -2.0, 0.0)]);
         assert!(!rescale(&mut values, 2f64.powi(100)));
+    }
+
+    #[test]
+    fn the_lanes_of_the_largest_magnitudes_agree_with_one_chain() {
+        let values = [1.0, -3e300, f64::NAN, 0.5, -7.0, 2e-300, f64::INFINITY, -0.0, 4.0, -1e10, 3.0];
+        for n in 0..=values.len() {
+            for shift in 0..3 {
+                let points: Vec<DVec3> = (0..n)
+                    .map(|i| DVec3::new(values[i], values[(i + shift) % n], values[(i + 2 * shift + 1) % n]))
+                    .collect();
+                let one_chain = points.iter().fold(DVec3::ZERO, |largest, &p| fold_magnitudes(largest, p));
+                assert_eq!(largest_magnitudes(&points), one_chain, "{n} points, shift {shift}");
+            }
+        }
     }
 
     #[test]

@@ -610,7 +610,7 @@ fn coarse_mesh_is_valid(coarse: &CornerTable) -> bool {
 /// The face part of [`coarse_mesh_is_valid`] for one face (its corner vertices and
 /// twins): no repeated vertex, no two edges shared with the same other face.
 #[inline]
-pub(crate) fn coarse_face_is_valid([a, b, d]: [u32; 3], twins: [u32; 3]) -> bool {
+fn coarse_face_is_valid([a, b, d]: [u32; 3], twins: [u32; 3]) -> bool {
     let other = |k: usize| if twins[k] == NONE { NONE - k as u32 } else { twins[k] / 3 };
     a != b && b != d && d != a && other(0) != other(1) && other(1) != other(2) && other(2) != other(0)
 }
@@ -850,12 +850,12 @@ impl CanonicalGroups {
 #[derive(Clone, Copy)]
 pub(crate) struct PairedEdge {
     /// The vertices of the edge's first half-edge, from and to.
-    ends: [u32; 2],
+    pub(crate) ends: [u32; 2],
     /// The vertex across the edge in its second face, [`NONE`] on the boundary (and
     /// until the second half-edge is seen).
     pub(crate) opposite: u32,
     /// The edge's first corner.
-    first: u32,
+    pub(crate) first: u32,
 }
 
 /// The edge points of the coarse corners as the twin pairing reads them, corner by
@@ -903,8 +903,12 @@ pub(crate) const PAIRING_AHEAD: usize = 16;
 /// The twin pairing of [`CanonicalGroups::into_table`]: the twins, the first corner
 /// of every edge and what [`PairedEdge`] keeps, or `None` if the edge points are not
 /// numbered in order of first appearance, or an edge has more than two half-edges or
-/// two in the same direction. `new_edge(state, ends, edge_point)` is called when a
-/// corner starts an edge, `ahead(state, v)` for the vertex of the corner
+/// two in the same direction, or a coarse face fails [`coarse_face_is_valid`] (checked
+/// on the way, which every caller needs: a face's vertices are distinct when each of
+/// its edges joins two; two of its edges shared with the same face show when the later
+/// of the two faces pairs them, as two of its corners in a row take their twins there,
+/// or one takes its twin in its own face). `new_edge(state, ends, edge_point)` is
+/// called when a corner starts an edge, `ahead(state, v)` for the vertex of the corner
 /// [`PAIRING_AHEAD`] places ahead.
 fn pair_twins<S>(
     coarse_vertex: &[u32],
@@ -920,6 +924,8 @@ fn pair_twins<S>(
     let mut twin = vec![NONE; corners];
     let mut edge_corner: Vec<u32> = Vec::with_capacity(edge_count);
     let mut edges: Vec<PairedEdge> = Vec::with_capacity(edge_count);
+    // The two latest pairings, as (face of the second half-edge, face of the first).
+    let mut latest = [(NONE, NONE); 2];
     for c in 0..corners as u32 {
         let later = c as usize + PAIRING_AHEAD;
         if prefetching && let Some(m) = corner_edge.edge_point_ahead(later) {
@@ -929,6 +935,9 @@ fn pair_twins<S>(
         }
         let e = corner_edge.edge(c as usize, first_odd);
         let ends = [coarse_vertex[c as usize], coarse_vertex[next(c) as usize]];
+        if ends[0] == ends[1] {
+            return None;
+        }
         if e as usize == edges.len() {
             edge_corner.push(c);
             edges.push(PairedEdge { ends, opposite: NONE, first: c });
@@ -939,6 +948,11 @@ fn pair_twins<S>(
         if edge.opposite != NONE || edge.ends != [ends[1], ends[0]] {
             return None;
         }
+        let pairing = (c / 3, edge.first / 3);
+        if pairing.0 == pairing.1 || latest.contains(&pairing) {
+            return None;
+        }
+        latest = [latest[1], pairing];
         edge.opposite = coarse_vertex[prev(c) as usize];
         twin[edge.first as usize] = c;
         twin[c as usize] = edge.first;
@@ -2122,6 +2136,22 @@ mod tests {
             assert_eq!(detect_canonical(&twice, &[]), Some(detect_general(&twice, &[]).unwrap()));
         }
         assert!(detect_canonical(&CornerTable::from_soup(&shapes::icosahedron()).unwrap(), &[]).is_none());
+    }
+
+    /// Two triangles glued along all three edges (a pillow) refine, in the canonical
+    /// order, to a soup whose faces meet four at an edge: the canonical reading of a
+    /// soup no one validated must not take it, and the pairing declines it because the
+    /// coarse faces are not valid (each has two edges, indeed three, shared with the
+    /// other), before any other check.
+    #[test]
+    fn the_pairing_declines_coarse_faces_glued_along_two_edges() {
+        let pillow = PolygonSoup::from_faces(vec![DVec3::X, DVec3::Y, DVec3::Z], vec![[0u32, 1, 2], [1, 0, 2]]);
+        let fine = refined(&pillow);
+        assert!(matches!(HalfedgeMesh::from_soup(&fine), Err(mesh_topo::MeshError::NonManifoldEdge { .. })));
+        let indices = &fine.indices;
+        let groups = canonical_groups(fine.face_count(), &[], |f| indices[3 * f..3 * f + 3].try_into().ok())
+            .expect("the faces are in the canonical order");
+        assert!(groups.into_table(fine.vertex_count(), (), |_, _, _| (), |_, _| ()).is_none());
     }
 
     #[test]

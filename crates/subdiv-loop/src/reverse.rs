@@ -56,8 +56,8 @@ use mesh_topo::{HalfedgeMesh, MeshError, PolygonSoup};
 use crate::LoopError;
 use crate::corner_table::{Corner, CornerTable, MeshCorners, NONE, VertexStar, next, prev};
 use crate::detect::{
-    CanonicalGroups, Coarsening, FineOrder, PairedEdge, Renumbering, Valences, canonical_groups, coarse_face_is_valid,
-    detect_mesh, detect_table, renumber_to_canonical, reverse_canonical_mesh, reverse_canonical_table,
+    CanonicalGroups, Coarsening, FineOrder, PairedEdge, Renumbering, Valences, canonical_groups, detect_mesh,
+    detect_table, renumber_to_canonical, reverse_canonical_mesh, reverse_canonical_table,
 };
 use crate::forward::buffer::{Output, Slots, prefetch, worth_prefetching};
 use crate::forward::kernel::{self, Rules, loop_beta, warren_beta};
@@ -1373,7 +1373,7 @@ fn reverse_canonical_groups(
     let valences_regular = coarse.face_count() > 0
         && records.iter().all(|record| matches!(record.valence, 0 | 6) || record.valence == 4 | VertexRecord::BOUNDARY);
     drop(records);
-    let (details, details_finite) = canonical_details(&coarse, &edges, &positions, edge_position)?;
+    let (details, details_finite) = canonical_details(&coarse, &edges, &positions, edge_position);
     let finite = details_finite && crate::pyramid::all_finite(&positions);
     Some(CanonicalLevel { coarse, positions, details, finite, valences_regular })
 }
@@ -1465,89 +1465,71 @@ pub(crate) fn non_finite_bits(p: DVec3) -> u64 {
 /// Faces ahead whose positions [`canonical_details`] prefetches.
 const DETAILS_AHEAD: usize = 8;
 
-/// Coarse faces per parallel work item of [`canonical_details`].
+/// Coarse edges (and faces, in its check) per parallel work item of [`canonical_details`].
 const DETAIL_CHUNK: usize = 2048;
 
-/// The detail of every coarse edge, by chunks of faces (each edge at its first corner,
-/// so each chunk writes a contiguous run of edges), checking every face on the way
-/// (the face part of the coarse mesh check): `None` if one is not valid. The same
-/// formula as [`edge_rule`], on the face's three positions read once and the vertex
-/// across edge `e`, `edges[e].opposite` (see [`CanonicalGroups::into_table`](crate::detect::CanonicalGroups::into_table)).
+/// The detail of every coarse edge, in edge order by chunks of edges (the coarse faces
+/// were checked by the pairing that numbered the edges). The same formula as
+/// [`edge_rule`], on the end points and the vertex across the first half-edge that
+/// [`PairedEdge`] keeps (see
+/// [`CanonicalGroups::into_table`](crate::detect::CanonicalGroups::into_table)) and the
+/// third vertex of its face. Edge by edge rather than face by face: a face's corners
+/// alternate unpredictably between the first half-edge of an edge and the second, and
+/// the branch on it cost a two-level decomposition of the bunny a tenth of its time.
 fn canonical_details(
     coarse: &CornerTable,
     edges: &[PairedEdge],
     positions: &[DVec3],
     edge_position: impl Fn(u32) -> DVec3 + Sync,
-) -> Option<(Vec<DVec3>, bool)> {
-    let (corner_vertex, twin, edge_corner) = (coarse.corner_vertices(), coarse.twins(), coarse.edge_corners());
-    let faces = coarse.face_count();
+) -> (Vec<DVec3>, bool) {
+    let corner_vertex = coarse.corner_vertices();
+    let parallel = edges.len() >= PARALLEL_THRESHOLD / 4 && kernel::pool_has_threads();
     let prefetching = worth_prefetching(size_of_val(positions));
-    let mut output = Output::<DVec3>::new(coarse.edge_count());
+    let third = |edge: &PairedEdge| corner_vertex[prev(edge.first) as usize];
+    let mut output = Output::<DVec3>::new(edges.len());
     let finite = {
         let mut slots = output.slots();
-        let first_edge = |f: usize| edge_corner.partition_point(|&c| (c as usize) < 3 * f);
-        let pieces: Vec<_> = (0..faces)
+        let pieces: Vec<_> = (0..edges.len())
             .step_by(DETAIL_CHUNK)
-            .map(|f0| {
-                let f1 = (f0 + DETAIL_CHUNK).min(faces);
-                let e0 = first_edge(f0);
-                (f0..f1, e0, slots.take_front(first_edge(f1) - e0))
+            .map(|e0| {
+                let n = DETAIL_CHUNK.min(edges.len() - e0);
+                (e0, slots.take_front(n))
             })
             .collect();
-        let run = |(range, e0, mut piece): (std::ops::Range<usize>, usize, Slots<'_, DVec3>)| {
+        let run = |(e0, mut piece): (usize, Slots<'_, DVec3>)| {
             // Zero times every detail, summed: zero (of either sign) unless a detail is
             // not finite (`0 * inf` and `0 * NaN` are NaN), in two instructions a detail.
             let mut zeros = DVec3::ZERO;
-            for f in range {
+            for e in e0..e0 + piece.len() {
                 // The coarse vertices are in any order when the fine mesh was renumbered:
-                // the positions of the faces and far ends a few places ahead are
-                // prefetched.
-                if prefetching
-                    && let Some(ahead) = corner_vertex.get(3 * (f + DETAILS_AHEAD)..3 * (f + DETAILS_AHEAD) + 3)
-                {
-                    for &v in ahead {
+                // the positions of the edges a few places ahead are prefetched.
+                if prefetching && let Some(ahead) = edges.get(e + DETAILS_AHEAD) {
+                    for v in [ahead.ends[0], ahead.ends[1], third(ahead), ahead.opposite] {
                         prefetch(positions, v as usize);
                     }
                 }
-                if prefetching && let Some(edge) = edges.get(e0 + piece.written() + 2 * DETAILS_AHEAD) {
-                    prefetch(positions, edge.opposite as usize);
-                }
-                let c0 = 3 * f;
-                let x = [corner_vertex[c0], corner_vertex[c0 + 1], corner_vertex[c0 + 2]];
-                let t = [twin[c0], twin[c0 + 1], twin[c0 + 2]];
-                if !coarse_face_is_valid(x, t) {
-                    return None;
-                }
-                let p = [positions[x[0] as usize], positions[x[1] as usize], positions[x[2] as usize]];
-                for k in 0..3 {
-                    let c = (c0 + k) as u32;
-                    if t[k] != NONE && t[k] < c {
-                        continue;
-                    }
-                    let (a, b) = (p[k], p[(k + 1) % 3]);
-                    let e = (e0 + piece.written()) as u32;
-                    let predicted = if t[k] == NONE {
-                        0.5 * (a + b)
-                    } else {
-                        let (r, s) = (p[(k + 2) % 3], positions[edges[e as usize].opposite as usize]);
-                        0.375 * (a + b) + 0.125 * (r + s)
-                    };
-                    let detail = edge_position(e) - predicted;
-                    zeros += 0.0 * detail;
-                    piece.push(detail);
-                }
+                let edge = &edges[e];
+                let (a, b) = (positions[edge.ends[0] as usize], positions[edge.ends[1] as usize]);
+                let predicted = if edge.opposite == NONE {
+                    0.5 * (a + b)
+                } else {
+                    let (r, s) = (positions[third(edge) as usize], positions[edge.opposite as usize]);
+                    0.375 * (a + b) + 0.125 * (r + s)
+                };
+                let detail = edge_position(e as u32) - predicted;
+                zeros += 0.0 * detail;
+                piece.push(detail);
             }
-            Some(zeros.is_finite())
+            zeros.is_finite()
         };
-        let both = |a: bool, b: bool| Some(a && b);
-        if faces >= PARALLEL_THRESHOLD / 4 && kernel::pool_has_threads() {
-            pieces.into_par_iter().map(run).try_reduce(|| true, both)
+        if parallel {
+            pieces.into_par_iter().map(run).reduce(|| true, |a, b| a && b)
         } else {
-            pieces.into_iter().map(run).try_fold(true, |a, b| both(a, b?))
+            // Every piece is written, whatever the others hold (no short circuit).
+            pieces.into_iter().map(run).fold(true, |a, b| a & b)
         }
     };
-    let finite = finite?;
-    Some((output.into_vec(), finite))
+    (output.into_vec(), finite)
 }
 
 /// The coarse position of a vertex from its vertex point and the sum of its edge
