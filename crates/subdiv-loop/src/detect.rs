@@ -485,8 +485,10 @@ pub(crate) fn reverse_canonical_soup(soup: &PolygonSoup, seeds: &[u32], rules: &
     let faces = offsets.len().saturating_sub(1);
     // Only triangles (face `f` at `3f..3f + 3`, checked in one pass that vectorises), so
     // that each face is read without its offsets.
-    let triangles = indices.len() == 3 * faces && offsets.iter().enumerate().all(|(f, &o)| o as usize == 3 * f);
-    if !triangles || vertices >= NONE as usize || indices.len() >= NONE as usize {
+    if vertices >= NONE as usize || indices.len() >= NONE as usize || indices.len() != 3 * faces {
+        return None;
+    }
+    if !offsets_are_triangles(offsets) {
         return None;
     }
     let face = |f: usize| -> Option<[u32; 3]> {
@@ -494,6 +496,19 @@ pub(crate) fn reverse_canonical_soup(soup: &PolygonSoup, seeds: &[u32], rules: &
         face.iter().all(|&v| (v as usize) < vertices).then_some(face)
     };
     reverse_canonical(faces, vertices, seeds, face, &soup.positions, rules)
+}
+
+/// True if `offsets` are `0, 3, 6, …` (face `f` a triangle at `3f`), whose last one,
+/// `3 × faces`, the caller has checked to fit in a `u32`. Compared by chunks without a
+/// branch, which vectorises: one early exit per offset did not, and took 4% of
+/// decomposing a soup of 940k faces.
+fn offsets_are_triangles(offsets: &[u32]) -> bool {
+    const CHUNK: usize = 1024;
+    offsets.chunks(CHUNK).enumerate().all(|(i, chunk)| {
+        let first = (3 * CHUNK * i) as u32;
+        let expected = (0..chunk.len() as u32).map(|k| first + 3 * k);
+        chunk.iter().zip(expected).fold(0, |differ, (&o, e)| differ | (o ^ e)) == 0
+    })
 }
 
 /// [`reverse_canonical`] on a corner table.
@@ -2136,6 +2151,18 @@ mod tests {
             assert_eq!(detect_canonical(&twice, &[]), Some(detect_general(&twice, &[]).unwrap()));
         }
         assert!(detect_canonical(&CornerTable::from_soup(&shapes::icosahedron()).unwrap(), &[]).is_none());
+    }
+
+    #[test]
+    fn triangle_offsets_are_told_from_others() {
+        let triangles: Vec<u32> = (0..3000).map(|f| 3 * f).collect();
+        assert!(offsets_are_triangles(&triangles) && offsets_are_triangles(&[0]) && offsets_are_triangles(&[]));
+        for changed in [0, 1, 1023, 1024, 1025, 2999] {
+            let mut offsets = triangles.clone();
+            offsets[changed] += 1;
+            assert!(!offsets_are_triangles(&offsets), "offset {changed}");
+        }
+        assert!(!offsets_are_triangles(&[1, 4]));
     }
 
     /// Two triangles glued along all three edges (a pillow) refine, in the canonical

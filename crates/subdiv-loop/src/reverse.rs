@@ -1305,12 +1305,12 @@ pub(crate) struct CanonicalLevel {
 /// also names the error.
 ///
 /// Passes: the groups of four faces (parallel); the coarse corners in order, which
-/// number the edges, pair the twins and sum the edge points around every coarse vertex
-/// in edge order (sequential: these sums are what [`reverse_positions`] adds, in the
-/// same order; on two threads a second pass beside the pairing, else in the same
-/// loop), checking on the way that no two edges join the same two vertices; the
-/// boundary edges, if any; the coarse positions (parallel); the details by chunks of
-/// coarse faces (parallel), which also check the faces.
+/// number the edges, pair the twins (checking the coarse faces as they pair) and sum
+/// the edge points around every coarse vertex in edge order (sequential: these sums are
+/// what [`reverse_positions`] adds, in the same order; on two threads a second pass
+/// beside the pairing, else in the same loop), checking on the way that no two edges
+/// join the same two vertices; the boundary edges, if any; the coarse positions
+/// (parallel); the details by chunks of coarse edges (parallel).
 pub(crate) fn reverse_canonical(
     faces: usize,
     vertex_count: usize,
