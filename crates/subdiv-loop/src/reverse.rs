@@ -1373,7 +1373,7 @@ fn reverse_canonical_groups(
     let valences_regular = coarse.face_count() > 0
         && records.iter().all(|record| matches!(record.valence, 0 | 6) || record.valence == 4 | VertexRecord::BOUNDARY);
     drop(records);
-    let (details, details_finite) = canonical_details(&coarse, &edges, &positions, edge_position);
+    let (details, details_finite) = canonical_details(coarse.corner_vertices(), &edges, &positions, edge_position);
     let finite = details_finite && crate::pyramid::all_finite(&positions);
     Some(CanonicalLevel { coarse, positions, details, finite, valences_regular })
 }
@@ -1462,10 +1462,10 @@ pub(crate) fn non_finite_bits(p: DVec3) -> u64 {
     bits(p.x) | bits(p.y) | bits(p.z)
 }
 
-/// Faces ahead whose positions [`canonical_details`] prefetches.
+/// Edges ahead whose positions [`canonical_details`] prefetches.
 const DETAILS_AHEAD: usize = 8;
 
-/// Coarse edges (and faces, in its check) per parallel work item of [`canonical_details`].
+/// Coarse edges per parallel work item of [`canonical_details`].
 const DETAIL_CHUNK: usize = 2048;
 
 /// The detail of every coarse edge, in edge order by chunks of edges (the coarse faces
@@ -1473,16 +1473,15 @@ const DETAIL_CHUNK: usize = 2048;
 /// [`edge_rule`], on the end points and the vertex across the first half-edge that
 /// [`PairedEdge`] keeps (see
 /// [`CanonicalGroups::into_table`](crate::detect::CanonicalGroups::into_table)) and the
-/// third vertex of its face. Edge by edge rather than face by face: a face's corners
+/// third vertex of its face (`corner_vertex`: the coarse corners' vertices). Edge by edge rather than face by face: a face's corners
 /// alternate unpredictably between the first half-edge of an edge and the second, and
 /// the branch on it cost a two-level decomposition of the bunny a tenth of its time.
 fn canonical_details(
-    coarse: &CornerTable,
+    corner_vertex: &[u32],
     edges: &[PairedEdge],
     positions: &[DVec3],
     edge_position: impl Fn(u32) -> DVec3 + Sync,
 ) -> (Vec<DVec3>, bool) {
-    let corner_vertex = coarse.corner_vertices();
     let parallel = edges.len() >= PARALLEL_THRESHOLD / 4 && kernel::pool_has_threads();
     let prefetching = worth_prefetching(size_of_val(positions));
     let third = |edge: &PairedEdge| corner_vertex[prev(edge.first) as usize];
