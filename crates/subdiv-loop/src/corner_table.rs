@@ -579,7 +579,7 @@ impl CornerTable {
     pub(crate) fn into_soup(self, positions: Vec<DVec3>) -> PolygonSoup {
         debug_assert_eq!(positions.len(), self.vertex_count);
         let faces = self.face_count();
-        PolygonSoup { positions, offsets: (0..=faces as u32).map(|f| 3 * f).collect(), indices: self.corner_vertex }
+        PolygonSoup { positions, offsets: crate::forward::triangle_offsets(faces), indices: self.corner_vertex }
     }
 }
 

@@ -425,20 +425,23 @@ pub(crate) fn detect_mesh(fine: &HalfedgeMesh, seeds: &[u32]) -> Result<Coarseni
 /// The coarsening of a mesh in the canonical order, from its face corners alone; `None`
 /// for any other mesh.
 fn detect_canonical_mesh(fine: &HalfedgeMesh, seeds: &[u32]) -> Option<Coarsening> {
+    // (The pairing checked the coarse faces: the edges are left.)
     detect_canonical_faces(fine.face_count(), fine.vertex_count(), seeds, mesh_face_corners(fine))
-        .filter(|coarsening| coarse_mesh_is_valid(&coarsening.coarse))
+        .filter(|coarsening| coarse_edges_are_simple(&coarsening.coarse))
 }
 
 /// The coarsening of a mesh in any order through [`renumber_to_canonical`], checked as
-/// the canonical path checks (the coarse twins paired from the renumbered faces, then
-/// [`coarse_mesh_is_valid`]): the very coarsening [`detect_general`] finds. `None` when
+/// the canonical path checks (the coarse twins paired from the renumbered faces, which
+/// checks the coarse faces, then the coarse edges: together [`coarse_mesh_is_valid`]):
+/// the very coarsening [`detect_general`] finds. `None` when
 /// the renumbering is not found or does not check out.
 fn detect_renumbered(fine: &HalfedgeMesh, seeds: &[u32]) -> Option<Coarsening> {
     let corners = CornerTable::mesh_corners(fine)?;
     let corner_at = |v| corners.corner_at(fine, v);
     let Renumbering { order, groups } = renumber_to_canonical(fine.vertex_count(), &corners.corners, corner_at, seeds)?;
     let (coarse, _, ()) = groups.into_table(fine.vertex_count(), (), |_, _, _| (), |_, _| ())?;
-    if !coarse_mesh_is_valid(&coarse) {
+    // (The pairing checked the coarse faces: the edges are left.)
+    if !coarse_edges_are_simple(&coarse) {
         return None;
     }
     let FineOrder { vertex_of_canonical: mut vertex_point, face_of_canonical } = order;
@@ -485,10 +488,11 @@ pub(crate) fn reverse_canonical_soup(soup: &PolygonSoup, seeds: &[u32], rules: &
     let faces = offsets.len().saturating_sub(1);
     // Only triangles (face `f` at `3f..3f + 3`, checked in one pass that vectorises), so
     // that each face is read without its offsets.
-    if vertices >= NONE as usize || indices.len() >= NONE as usize || indices.len() != 3 * faces {
-        return None;
-    }
-    if !offsets_are_triangles(offsets) {
+    if vertices >= NONE as usize
+        || indices.len() >= NONE as usize
+        || indices.len() != 3 * faces
+        || !offsets_are_triangles(offsets)
+    {
         return None;
     }
     let face = |f: usize| -> Option<[u32; 3]> {
