@@ -22,10 +22,14 @@ const FACE_CHUNK: usize = 2048;
 /// Vertices per parallel work item.
 const VERTEX_CHUNK: usize = 4096;
 /// Steps on fewer coarse faces than this run on the calling thread: handing a few
-/// chunks to the thread pool costs more than it saves. (At 4096, the bunny's first
-/// level, 3674 faces, ran on one thread; split, it takes 0.21-0.26 ms on two threads
-/// against 0.26-0.34 ms, best of 300 calls, and its second level 8% less.)
-pub(crate) const PARALLEL_MIN_FACES: usize = 1024;
+/// chunks to the thread pool costs more than it saves. Waking the pool's other thread,
+/// and its first touches of fresh output pages (which contend with the calling thread's
+/// in the kernel), cost tens to hundreds of microseconds on a 2-core virtual machine:
+/// at 1024 the bunny's first level (3674 faces, 0.12 ms on one thread) took 0.23 ms on
+/// two, and its first two levels 0.59 ms against 0.53 ms (criterion means); with the
+/// second step (14 696 faces) split too, 0.57 ms against 0.49 ms. From 16 384 faces
+/// on (the bunny's third step, 58 784 faces, about 2 ms) two threads gain.
+pub(crate) const PARALLEL_MIN_FACES: usize = 16_384;
 /// Whether a pass over `faces` faces is split over the current `rayon` pool: only for
 /// [`PARALLEL_MIN_FACES`] faces or more, and on more than one thread.
 pub(crate) fn runs_in_parallel(faces: usize) -> bool {

@@ -246,7 +246,7 @@ mod tests {
                 "triangle and isolated vertex",
                 PolygonSoup::from_faces(vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z], [[0u32, 1, 2]]),
             ),
-            // Large enough that its levels take the parallel path.
+            // Large enough that its second level takes the parallel path.
             ("large grid", shapes::grid(60, 50, CellKind::Triangles).unwrap()),
         ];
         soups.into_iter().map(|(name, soup)| (name, HalfedgeMesh::from_soup(&soup).unwrap())).collect()

@@ -197,15 +197,17 @@ fn soups_hold_the_triangles_in_order() {
 
 #[test]
 fn results_do_not_depend_on_the_number_of_threads() {
-    // 20 * 4^4 = 5120 faces at the last input level: several face and vertex chunks.
+    // 20 * 4^5 = 20 480 faces at the last input level: split into several face and
+    // vertex chunks on a pool of several threads.
     let m = mesh(&mesh_topo::testing::scramble(shapes::icosahedron(), 11, 0.2));
+    assert!(20 * 4usize.pow(5) >= super::kernel::PARALLEL_MIN_FACES);
     let run = |threads| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| subdivide(&m, 5, &LoopOptions::default()).unwrap())
+        pool.install(|| subdivide(&m, 6, &LoopOptions::default()).unwrap())
     };
     let one = run(1);
     assert_eq!(one, run(3));
-    assert_eq!(one.face_count(), 20 * 4usize.pow(5));
+    assert_eq!(one.face_count(), 20 * 4usize.pow(6));
 }
 
 #[test]
