@@ -52,6 +52,10 @@
 //! so the automatic choice's time per fine vertex grows with the size here. A mesh
 //! whose two readings differ more stops sooner; on a mesh refined without noise the
 //! first reading's details are zero and no other reading is tried.
+//! `decompose_edited` times the automatic choice on the refinement with one fine vertex
+//! moved by `0.5 / n` (the reverse Doo paper's figure): the first reading's details are
+//! zero but around that vertex, and the dual reading's sum stops after 33-34 of its
+//! 4096-262 144 groups, so this row costs about what the seeded one does.
 //!
 //! Run with `cargo bench -p subdiv-doo --bench doo`. The inputs are built before timing;
 //! the timed call is `subdivide` on an already built half-edge mesh (the counterpart of
@@ -128,8 +132,9 @@ fn forward(c: &mut Criterion) {
 
 /// A triangulated torus of `n x m x 2` faces with every vertex moved at random (fixed
 /// seed), and its Doo-Sabin refinement with every fine vertex moved too: a fine mesh with
-/// non-zero details at every vertex.
-fn multires_pair(n: u32, m: u32) -> (HalfedgeMesh, HalfedgeMesh) {
+/// non-zero details at every vertex. Also the refinement with one fine vertex moved
+/// instead (the reverse Doo paper's figure: subdivide, move one vertex, reverse).
+fn multires_meshes(n: u32, m: u32) -> (HalfedgeMesh, HalfedgeMesh, HalfedgeMesh) {
     let mut rng = ChaCha8Rng::seed_from_u64(0x0d00_5ab1 + n as u64);
     let mut jitter = |positions: &mut [DVec3], amount: f64| {
         for p in positions {
@@ -138,9 +143,12 @@ fn multires_pair(n: u32, m: u32) -> (HalfedgeMesh, HalfedgeMesh) {
     };
     let mut coarse = HalfedgeMesh::from_soup(&shapes::torus(n, m, CellKind::Triangles).unwrap()).unwrap();
     jitter(coarse.positions_mut(), 0.2 / n as f64);
-    let mut fine = subdivide(&coarse, &DooOptions::new(FaceRule::DooSabin, 1)).unwrap().to_mesh().unwrap();
+    let refined = subdivide(&coarse, &DooOptions::new(FaceRule::DooSabin, 1)).unwrap().to_mesh().unwrap();
+    let mut fine = refined.clone();
     jitter(fine.positions_mut(), 0.05 / n as f64);
-    (coarse, fine)
+    let mut edited = refined;
+    edited.positions_mut()[100].z += 0.5 / n as f64;
+    (coarse, fine, edited)
 }
 
 fn multires(c: &mut Criterion) {
@@ -148,7 +156,7 @@ fn multires(c: &mut Criterion) {
     let mut group = c.benchmark_group("doo_multires");
     group.sample_size(10).measurement_time(Duration::from_secs(3)).warm_up_time(Duration::from_secs(1));
     for (n, m) in [(64u32, 32u32), (128, 64), (256, 128), (512, 256)] {
-        let (coarse, fine) = multires_pair(n, m);
+        let (coarse, fine, edited) = multires_meshes(n, m);
         let fine_vertices = fine.vertex_count();
         group.throughput(Throughput::Elements(fine_vertices as u64));
         let forward_options = DooOptions::new(FaceRule::DooSabin, 1);
@@ -164,6 +172,9 @@ fn multires(c: &mut Criterion) {
         });
         group.bench_with_input(BenchmarkId::new("decompose_seed_1thread", fine_vertices), &fine, |b, fine| {
             b.iter(|| one.install(|| decompose(black_box(fine), &seeded).unwrap()))
+        });
+        group.bench_with_input(BenchmarkId::new("decompose_edited_1thread", fine_vertices), &edited, |b, edited| {
+            b.iter(|| one.install(|| decompose(black_box(edited), &options).unwrap()))
         });
         // The same mesh with its vertices renumbered and its faces rotated: not in the
         // canonical order, so the general path (search and face matching) runs.
@@ -252,7 +263,7 @@ fn boundary_rules(c: &mut Criterion) {
 }
 
 /// Three levels: a torus of `n x m x 2` triangles, refined three times with every finest
-/// vertex moved (the pyramid of `multires_pair`'s one level, three levels deep).
+/// vertex moved (the pyramid of `multires_meshes`'s one level, three levels deep).
 fn multilevel(c: &mut Criterion) {
     let one = single_thread();
     let mut group = c.benchmark_group("doo_multilevel");
