@@ -819,6 +819,32 @@ mod tests {
         HalfedgeMesh::from_soup(soup).expect("valid test mesh")
     }
 
+    /// The twin pairing of a level of [`PARALLEL_MIN_FACES`] coarse faces or more is
+    /// split over a pool of several threads: the same pyramid on one thread and on two,
+    /// in the canonical order (the fast path) and renumbered (the general path).
+    ///
+    /// [`PARALLEL_MIN_FACES`]: crate::forward::kernel::PARALLEL_MIN_FACES
+    #[test]
+    fn decompositions_do_not_depend_on_the_number_of_threads() {
+        // 20 * 4^6 = 81 920 fine faces over 20 480 coarse ones, every vertex moved.
+        let base = perturb(&shapes::icosahedron(), 0.1, 3);
+        let smooth = LoopPyramid::smooth(base, LoopOptions::default(), 6).unwrap();
+        let fine = perturb(&smooth.reconstruct(6).unwrap(), 1e-3, 4);
+        assert!(fine.face_count() / 4 >= crate::forward::kernel::PARALLEL_MIN_FACES);
+        let options =
+            DecomposeOptions { rules: LoopOptions::default(), levels: Levels::Max, seed_vertices: Vec::new() };
+        for soup in [fine.clone(), scramble(&fine, 5)] {
+            let fine = mesh(&soup);
+            let on = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                pool.install(|| decompose(&fine, &options).unwrap())
+            };
+            let one = on(1);
+            assert_eq!(one.levels.len(), 6);
+            assert_eq!(on(2), one);
+        }
+    }
+
     #[test]
     fn a_smooth_pyramid_of_too_many_levels_fails_before_any_work() {
         let options = LoopOptions::default();
