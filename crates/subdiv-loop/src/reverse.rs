@@ -432,8 +432,15 @@ fn edge_rule(coarse: &CornerTable, positions: &[DVec3], e: u32) -> DVec3 {
     } else {
         let r = positions[coarse.vertex(prev(c)) as usize];
         let s = positions[coarse.vertex(prev(t)) as usize];
-        0.375 * (a + b) + 0.125 * (r + s)
+        interior_edge_point(a, b, r, s)
     }
+}
+
+/// Loop's edge rule inside the mesh: the edge point of the edge from `a` to `b`, whose
+/// two faces have their third vertices at `r` and `s`.
+#[inline(always)]
+fn interior_edge_point(a: DVec3, b: DVec3, r: DVec3, s: DVec3) -> DVec3 {
+    0.375 * (a + b) + 0.125 * (r + s)
 }
 
 /// Maps `f` over `0..n`, in parallel for large `n` (see [`kernel::map_indices`]).
@@ -1469,13 +1476,13 @@ const DETAILS_AHEAD: usize = 8;
 const DETAIL_CHUNK: usize = 2048;
 
 /// The detail of every coarse edge, in edge order by chunks of edges (the coarse faces
-/// were checked by the pairing that numbered the edges). The same formula as
-/// [`edge_rule`], on the end points and the vertex across the first half-edge that
-/// [`PairedEdge`] keeps (see
-/// [`CanonicalGroups::into_table`](crate::detect::CanonicalGroups::into_table)) and the
-/// third vertex of its face (`corner_vertex`: the coarse corners' vertices). Edge by edge rather than face by face: a face's corners
-/// alternate unpredictably between the first half-edge of an edge and the second, and
-/// the branch on it cost a two-level decomposition of the bunny a tenth of its time.
+/// were checked by the pairing that numbered the edges). The formula of [`edge_rule`],
+/// on the end points and the vertex across the first half-edge that [`PairedEdge`]
+/// keeps (see [`CanonicalGroups::into_table`](crate::detect::CanonicalGroups::into_table))
+/// and the third vertex of its face (`corner_vertex`: the coarse corners' vertices).
+/// Edge by edge rather than face by face: a face's corners alternate unpredictably
+/// between the first half-edge of an edge and the second, and the branch on it cost a
+/// two-level decomposition of the bunny a tenth of its time.
 fn canonical_details(
     corner_vertex: &[u32],
     edges: &[PairedEdge],
@@ -1512,8 +1519,7 @@ fn canonical_details(
                 let predicted = if edge.opposite == NONE {
                     0.5 * (a + b)
                 } else {
-                    let (r, s) = (positions[third(edge) as usize], positions[edge.opposite as usize]);
-                    0.375 * (a + b) + 0.125 * (r + s)
+                    interior_edge_point(a, b, positions[third(edge) as usize], positions[edge.opposite as usize])
                 };
                 let detail = edge_position(e as u32) - predicted;
                 zeros += 0.0 * detail;

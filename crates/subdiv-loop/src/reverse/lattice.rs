@@ -34,7 +34,7 @@
 
 use glam::DVec3;
 
-use super::{InverseWeights, coarse_position};
+use super::{InverseWeights, coarse_position, interior_edge_point};
 use crate::corner_table::{CornerTable, NONE, next, prev};
 use crate::forward::LoopOptions;
 
@@ -209,7 +209,7 @@ fn summed(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions, enough: Opt
     }
     let position = position;
     let predicted = |ends: [usize; 2], across: [usize; 2]| {
-        0.375 * (position[ends[0]] + position[ends[1]]) + 0.125 * (position[across[0]] + position[across[1]])
+        interior_edge_point(position[ends[0]], position[ends[1]], position[across[0]], position[across[1]])
     };
 
     let mut sums = vec![[0.0; 4]; colouring.components];
