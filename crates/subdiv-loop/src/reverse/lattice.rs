@@ -281,40 +281,63 @@ struct Colouring {
 
 impl Colouring {
     /// `None` where a face is reached with two shifts (no lattice colouring).
+    ///
+    /// A breadth-first search whose steps do not branch on what they find: the next face
+    /// read is the next in the queue whatever the last one found, so the reads of
+    /// successive faces overlap (a stack's top would wait on the last read), and whether
+    /// a face across was reached before, as likely as not, decides no branch: it is
+    /// written at the queue's tail, which only advances for a new face, and the check of
+    /// its shift is folded into one flag per component.
     fn of(twin: &[u32]) -> Option<Self> {
+        const UNSET: u8 = u8::MAX;
         let faces = twin.len() / 3;
-        let mut shift = vec![u8::MAX; faces];
+        let mut shift = vec![UNSET; faces];
         let mut component = vec![0u32; faces];
-        let mut components = 0;
-        let mut stack = Vec::new();
+        let mut components = 0u32;
+        // A face is queued once, when first reached: `faces` slots, plus one for the
+        // write of a face reached before.
+        let mut queue = vec![0u32; faces + 1];
+        let mut tail = 0;
         for start in 0..faces {
-            if shift[start] != u8::MAX {
+            if shift[start] != UNSET {
                 continue;
             }
             shift[start] = 0;
-            component[start] = components as u32;
-            stack.push(start as u32);
-            while let Some(f) = stack.pop() {
+            component[start] = components;
+            let mut head = tail;
+            queue[tail] = start as u32;
+            tail += 1;
+            let mut consistent = true;
+            while head < tail {
+                let f = queue[head] as usize;
+                head += 1;
+                let s = u32::from(shift[f]);
                 for k in 0..3 {
-                    let c = 3 * f + k;
-                    let colour = (k + shift[f as usize] as u32) % 3;
-                    let t = twin[c as usize];
+                    let t = *twin.get(3 * f + k)?;
                     let g = (t / 3) as usize;
-                    // The twin's corner takes the same colour.
-                    let wanted = ((colour + 3 - t % 3) % 3) as u8;
-                    if shift[g] == u8::MAX {
-                        shift[g] = wanted;
-                        component[g] = components as u32;
-                        stack.push(g as u32);
-                    } else if shift[g] != wanted {
-                        return None;
-                    }
+                    // The twin's corner takes the same colour, `k + s`.
+                    let wanted = ((k as u32 + s + 3 - t % 3) % 3) as u8;
+                    let seen = *shift.get(g)?;
+                    let new = seen == UNSET;
+                    consistent &= new | (seen == wanted);
+                    shift[g] = if new { wanted } else { seen };
+                    // A face reached before is of this component already.
+                    component[g] = components;
+                    queue[tail] = g as u32;
+                    tail += usize::from(new);
                 }
+            }
+            if !consistent {
+                return None;
             }
             components += 1;
         }
-        let corner_colour = (0..twin.len()).map(|c| ((c % 3 + shift[c / 3] as usize) % 3) as u8).collect();
-        Some(Self { corner_colour, component, components })
+        const ROTATED: [[u8; 3]; 3] = [[0, 1, 2], [1, 2, 0], [2, 0, 1]];
+        let mut corner_colour = Vec::with_capacity(twin.len());
+        for &s in &shift {
+            corner_colour.extend_from_slice(&ROTATED[s as usize]);
+        }
+        Some(Self { corner_colour, component, components: components as usize })
     }
 
     /// The colour of corner `c`.
@@ -441,6 +464,43 @@ mod tests {
         let sums = energies(&first_reading(&fine, &rules), fine.positions(), &rules).unwrap();
         assert_eq!(sums.len(), 2);
         assert!(sums.iter().all(|s| s.iter().all(|&e| e > 0.0)));
+    }
+
+    /// The colouring gives the two corners of every edge one colour and every face the
+    /// three, one component per torus; two edges of different colours with their twins
+    /// crossed (every valence still 6) leave none.
+    #[test]
+    fn the_colouring_is_the_lattice_one_and_crossed_edges_have_none() {
+        let torus = |columns, rows| CornerTable::from_soup(&shapes::torus(columns, rows, CellKind::Triangles).unwrap());
+        for (columns, rows) in [(6, 4), (9, 7), (32, 16)] {
+            let table = torus(columns, rows).unwrap();
+            let twin = table.twins();
+            let colouring = Colouring::of(twin).expect("a lattice colouring");
+            assert_eq!(colouring.components, 1);
+            for c in 0..twin.len() as u32 {
+                assert_eq!(colouring.colour(c), colouring.colour(twin[c as usize]), "corner {c}");
+                let f = 3 * (c / 3);
+                let mut face = [0, 1, 2].map(|k| colouring.colour(f + k));
+                face.sort_unstable();
+                assert_eq!(face, [0, 1, 2], "face {}", c / 3);
+            }
+            let first = 0u32;
+            let other = (1..twin.len() as u32)
+                .find(|&c| c / 3 != 0 && twin[c as usize] / 3 != 0 && colouring.colour(c) != colouring.colour(first))
+                .unwrap();
+            let mut crossed = twin.to_vec();
+            let (t_first, t_other) = (twin[first as usize], twin[other as usize]);
+            crossed[first as usize] = t_other;
+            crossed[t_other as usize] = first;
+            crossed[other as usize] = t_first;
+            crossed[t_first as usize] = other;
+            assert!(Colouring::of(&crossed).is_none(), "{columns} x {rows}: corners {first} and {other} crossed");
+        }
+        // Two tori side by side: two components.
+        let (a, b) = (torus(6, 4).unwrap(), torus(8, 6).unwrap());
+        let offset = a.corner_count() as u32;
+        let both: Vec<u32> = a.twins().iter().copied().chain(b.twins().iter().map(|&t| t + offset)).collect();
+        assert_eq!(Colouring::of(&both).unwrap().components, 2);
     }
 
     /// A closed mesh with a vertex of valence other than 6 has no sums.
