@@ -154,8 +154,8 @@ pub(super) fn energies(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions
     }
 }
 
-/// Corners of the pass over the edge points between two looks at the partial sums.
-const CORNERS_BETWEEN_LOOKS: usize = 3 << 10;
+/// Edges of the pass over the edge points between two looks at the partial sums.
+const EDGES_BETWEEN_LOOKS: usize = 3 << 9;
 
 /// Per component of `coarse` (in order of its lowest face), the sums of squared details
 /// of the first reading (at 0) and of the readings of the three edge colours (at `1 + k`),
@@ -164,7 +164,7 @@ const CORNERS_BETWEEN_LOOKS: usize = 3 << 10;
 ///
 /// Given `enough`, a mesh of one component is only summed until the sums of readings 1
 /// to 3 all exceed it ([`Summed::Enough`]): the edge points' terms come first, by chunks
-/// of corners (three quarters of the fine vertices, and the pass that reads the most),
+/// of edges (three quarters of the fine vertices, and the pass that reads the most),
 /// then the vertex points'.
 fn summed(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions, enough: Option<f64>) -> Option<Summed> {
     let (vertex, twin, edge) = (coarse.corner_vertices(), coarse.twins(), coarse.corner_edges());
@@ -185,20 +185,17 @@ fn summed(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions, enough: Opt
     let (colour, component) = (|c: u32| colouring.colour(c), &colouring.component);
     let edge_point = |c: u32| first_odd + edge[c as usize] as usize;
 
-    // Every fine vertex's coarse position in the reading where it is a vertex point.
+    // Every fine vertex's coarse position in the reading where it is a vertex point, from
+    // its ring, summed face by face (no walk through the twins): corner `c`'s edge point
+    // `m` has on its ring the face's two other edge points and the vertex at `c` (the
+    // face across gives the rest), and that vertex has `m`.
     let mut ring = vec![DVec3::ZERO; fine.len()];
-    for c in 0..vertex.len() as u32 {
-        let m = edge_point(c);
-        // Each edge once, from its first corner (the twin's is higher).
-        ring[vertex[c as usize] as usize] += fine[m];
-        if c < twin[c as usize] {
-            let t = twin[c as usize];
-            ring[m] += fine[vertex[c as usize] as usize]
-                + fine[vertex[next(c) as usize] as usize]
-                + fine[edge_point(next(c))]
-                + fine[edge_point(prev(c))]
-                + fine[edge_point(next(t))]
-                + fine[edge_point(prev(t))];
+    for (corners, edges) in vertex.chunks_exact(3).zip(edge.chunks_exact(3)) {
+        let m = [0, 1, 2].map(|k| first_odd + edges[k] as usize);
+        let [p0, p1, p2] = m.map(|m| fine[m]);
+        for (k, (&x, others)) in corners.iter().zip([p1 + p2, p2 + p0, p0 + p1]).enumerate() {
+            ring[m[k]] += others + fine[x as usize];
+            ring[x as usize] += fine[m[k]];
         }
     }
     let weights = InverseWeights::new(rules.weights);
@@ -236,11 +233,10 @@ fn summed(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions, enough: Opt
         sum[1 + colour(next(c))] += by_next.length_squared();
     };
     let enough = enough.filter(|_| colouring.components == 1);
-    let corners = vertex.len() as u32;
-    let looks = (0..corners).step_by(CORNERS_BETWEEN_LOOKS);
-    for first_corner in looks {
-        let last_corner = corners.min(first_corner + CORNERS_BETWEEN_LOOKS as u32);
-        for c in (first_corner..last_corner).filter(|&c| c < twin[c as usize]) {
+    // Edge by edge from its first corner, in corner order (not every corner with a test
+    // of its twin, as likely to fail as not).
+    for first_corners in coarse.edge_corners().chunks(EDGES_BETWEEN_LOOKS) {
+        for &c in first_corners {
             add_edge_point(c, &mut sums);
         }
         if let Some(enough) = enough
