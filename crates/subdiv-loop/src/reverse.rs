@@ -556,12 +556,12 @@ pub(crate) struct LevelParts {
 /// either way (a test compares the two on moved tori, bit for bit). On a mesh of one
 /// component the pass stops once the reading at hand is known to be clearly the best.
 /// (Bench group `regular_torus`, one thread, a refined torus of 131 072 vertices, moved:
-/// the forward step 2.1 ms; seeded 3.4 ms in the canonical order and 11.9 ms
-/// renumbered; automatic 6.3 ms and 25 ms (40 ms and 63 ms, with a forward step of 2.5
-/// ms, when the readings were reversed in turn: three more readings, each through the
-/// search, which reads the fine corners once for all of them). The torus refined
-/// exactly, automatic: 3.8 ms in the canonical order, 20 ms renumbered: its first exact
-/// reading settles it.)
+/// the forward step 2.16 ms; seeded 3.17 ms in the canonical order and 10.2 ms
+/// renumbered; automatic 5.80 ms and 25.8 ms (40 ms and 63 ms, with a forward step of
+/// 2.5 ms, when the readings were reversed in turn: three more readings, each through
+/// the search, which reads the fine corners once for all of them). The torus refined
+/// exactly, automatic: 3.47 ms in the canonical order, 20.5 ms renumbered: its first
+/// exact reading settles it.)
 pub(crate) fn reverse_level(
     fine: FineLevel<'_>,
     positions: &[DVec3],
