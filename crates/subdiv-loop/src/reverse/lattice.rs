@@ -192,10 +192,13 @@ fn summed(coarse: &CornerTable, fine: &[DVec3], rules: &LoopOptions, enough: Opt
     let mut ring = vec![DVec3::ZERO; fine.len()];
     for (corners, edges) in vertex.chunks_exact(3).zip(edge.chunks_exact(3)) {
         let m = [0, 1, 2].map(|k| first_odd + edges[k] as usize);
-        let [p0, p1, p2] = m.map(|m| fine[m]);
-        for (k, (&x, others)) in corners.iter().zip([p1 + p2, p2 + p0, p0 + p1]).enumerate() {
-            ring[m[k]] += others + fine[x as usize];
-            ring[x as usize] += fine[m[k]];
+        let points = m.map(|m| fine[m]);
+        let [p0, p1, p2] = points;
+        let others = [p1 + p2, p2 + p0, p0 + p1];
+        for k in 0..3 {
+            let x = corners[k] as usize;
+            ring[m[k]] += others[k] + fine[x];
+            ring[x] += points[k];
         }
     }
     let weights = InverseWeights::new(rules.weights);
